@@ -1,0 +1,119 @@
+#pragma once
+// The homing engine: a pure step function. Given the settings, the inputs
+// sampled this period and the time since the last period, it advances its
+// state and returns motion commands, outputs and status. No clocks, threads,
+// sleeps, I/O or allocation in here: the runtime owns all of that.
+#include <array>
+#include <cstdint>
+
+#include "debounce.hpp"
+#include "io.hpp"
+#include "settings.hpp"
+#include "status.hpp"
+
+namespace homing {
+
+struct StepResult {
+  const Outputs& outputs;
+  const Status& status;
+};
+
+class Engine {
+ public:
+  Engine();
+  StepResult step(const Settings& settings, const Inputs& inputs, double dt_s);
+  const Outputs& outputs() const { return outputs_; }
+  const Status& status() const { return status_; }
+
+  // Per-axis run state, public so that phase functions stay free functions.
+  struct AxisRun {
+    Phase phase = Phase::idle;
+    Alarm alarm{};
+    MotionState motor{};          // motor position now (never jumps: steps counted)
+    MotionState period_start{};   // motor at the start of the period that just ended
+    MotionCommand command{};      // what runs until the next period
+    MotionCommand last_command{}; // what ran during the period that just ended
+    double offset_mm = 0;         // machine position = motor + offset
+    bool homed = false;
+    bool in_cycle = false;
+    bool entered = false;         // the current phase has run its entry action
+    bool sensor_active = false;   // debounced, polarity applied
+    double phase_start_mm = 0;    // motor position at phase entry
+    double cycle_start_mm = 0;
+    double trigger_mm = 0;        // motor position at the seek trigger
+    bool triggered = false;
+    double reference_mm = 0;      // motor position at the reference edge
+    double release_mm = 0;
+    double target_mm = 0;         // of the current move_to
+    bool push_output = false;
+    bool commutator_output = false;
+    bool follow_master = false;   // locked to the master's motion
+    std::int8_t jog_dir = 0;
+    bool slave_aligned = false;   // commutator slave finished its own edge
+    double trigger_position_mm = 0;
+    double home_correction_mm = 0;
+  };
+
+ private:
+  friend struct EngineAccess;
+  struct SensorEvent {
+    bool edge = false;
+    AcceptedEdge accepted{};
+    bool index = false;
+    double index_mm = 0;
+  };
+
+  void advance_motion(double dt_s);
+  void read_inputs(const Settings& settings, const Inputs& inputs, double dt_s);
+  void check_safety(const Settings& settings, const Inputs& inputs);
+  void handle_commands(const Settings& settings, const Inputs& inputs);
+  void run_cycle(const Settings& settings);
+  void run_motion(const Settings& settings);
+  void follow_masters(const Settings& settings);
+  void publish(const Settings& settings, const Inputs& inputs);
+
+  void start_cycle(const Settings& settings, AxisMask requested, bool all);
+  bool start_step(const Settings& settings);
+  void finish_cycle(const Settings& settings);
+  void raise(const Settings& settings, std::size_t axis, Alarm alarm);
+  void raise_global(const Settings& settings, AlarmCode code);
+  void stop_all(const Settings& settings);
+  CommandResult motion_refusal(const Settings& settings, const Inputs& inputs) const;
+  bool any_alarm() const;
+  bool any_motion() const;
+  int sensor_channel(const Settings& settings, std::size_t axis) const;
+  int channel_owner(const Settings& settings, std::size_t channel) const;
+
+  std::array<AxisRun, kAxisCount> axes_{};
+  std::array<Debouncer, kAxisCount> sensor_filter_{};
+  std::array<bool, kAxisCount> filter_reset_{};
+  std::array<SensorEvent, kAxisCount> events_{};  // per input channel, this period
+  std::array<bool, kAxisCount> drive_fault_{};
+  std::array<bool, kAxisCount> absolute_valid_{};
+  std::array<double, kAxisCount> absolute_mm_{};
+
+  double time_s_ = 0;
+  bool first_step_ = true;
+  bool cycle_active_ = false;
+  bool cycle_all_ = false;
+  AxisMask cycle_requested_ = 0;
+  std::array<AxisMask, 6> steps_{};
+  int step_index_ = -1;          // index into steps_ of the running step
+  AxisMask unsequenced_ = 0;     // assigned their home position at the end
+  AlarmCode global_alarm_ = AlarmCode::none;
+  bool estop_ = false;
+  bool prev_start_button_ = false;
+  bool comm_lost_ = false;
+  bool permit_ = false;
+  std::uint32_t homing_cycles_ = 0;
+  std::uint32_t heartbeat_ = 0;
+  CommandResult last_result_ = CommandResult::none;
+
+  Outputs outputs_{};
+  Status status_{};
+
+  friend void run_axis_phase(Engine& engine, const Settings& settings, std::size_t axis);
+  friend struct PhaseContext;
+};
+
+}  // namespace homing

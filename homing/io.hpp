@@ -1,0 +1,70 @@
+#pragma once
+// What the engine reads each control period and what it emits.
+#include <array>
+#include <cstdint>
+
+#include "axes.hpp"
+#include "motion.hpp"
+
+namespace homing {
+
+// Timed transitions of a digital input during the period that just ended.
+// Times are seconds from the start of that period (0..dt). A backend without
+// timestamps reports only the level; the engine then places the edge at the
+// middle of the period and the precision is ±v·dt/2.
+struct InputEdges {
+  static constexpr std::size_t kMax = 8;
+  std::array<double, kMax> time_s{};
+  std::uint8_t count = 0;
+  bool overflow = false;  // more transitions than kMax happened (bounce storm)
+  void add(double t) {
+    if (count < kMax) time_s[count++] = t; else overflow = true;
+  }
+};
+
+struct AxisInputs {
+  bool sensor_level = false;    // electrical level of the home input now (before polarity)
+  InputEdges sensor_edges{};
+  bool index_level = false;
+  InputEdges index_edges{};     // rising edges of the encoder index pulse
+  bool absolute_valid = false;
+  double absolute_position_mm = 0;  // absolute encoder reading
+  bool drive_fault = false;
+};
+
+// Commands arrive as one-period requests (the runtime turns a coil write into
+// one request). Jog is a level held by the runtime while its coil is held.
+struct Commands {
+  bool home_all = false;
+  AxisMask home_axes = 0;
+  bool abort = false;
+  bool reset_alarm = false;
+  std::array<std::int8_t, kAxisCount> jog{};  // -1, 0, +1 while held
+  AxisMask move_axes = 0;
+  std::array<double, kAxisCount> move_target_mm{};
+};
+
+struct Inputs {
+  std::array<AxisInputs, kAxisCount> axes{};
+  bool estop = false;
+  bool start_button = false;
+  bool homing_permit = false;
+  bool communication_lost = false;  // set by the runtime when the watchdog expires
+  bool settings_lost = false;       // set by the runtime when settings had to be reset
+  Commands commands{};
+};
+
+struct AxisOutputs {
+  MotionCommand motion{};        // what the pulse generator runs until the next period
+  MotionState motor{};           // motor position/velocity now (for checks and step counting)
+  bool enable = false;
+  bool push_output = false;      // lowers motor current while pushing into the stop
+  bool commutator_output = false;  // master axis only: route the output to the slave
+};
+
+struct Outputs {
+  std::array<AxisOutputs, kAxisCount> axes{};
+  bool homing_done_lamp = false;
+};
+
+}  // namespace homing

@@ -1,0 +1,131 @@
+#pragma once
+// Homing settings in engineering units. The register codec (registers/) is the
+// only place that converts raw Modbus integers into these values; defaults also
+// live in the register table, so these structs start neutral.
+#include <array>
+#include <cstdint>
+#include <string_view>
+
+#include "axes.hpp"
+
+namespace homing {
+
+// Numeric values are register values: never renumber.
+enum class HomingMode : std::uint8_t {
+  disabled = 0,
+  manual = 1,
+  switch_release = 2,
+  switch_reapproach = 3,
+  switch_index = 4,
+  absolute = 5,
+  absolute_final = 6,
+  pushing_release = 7,
+  pushing_reapproach = 8,
+};
+inline constexpr std::uint8_t kHomingModeCount = 9;
+
+enum class Direction : std::uint8_t { negative = 0, positive = 1 };
+enum class PreMove : std::uint8_t { none = 0, if_sensor_active = 1, always = 2 };
+enum class SlaveMode : std::uint8_t { own_output = 0, external_commutator = 1 };
+enum class AllowedWithoutHoming : std::uint8_t { all = 0, jog_reduced = 1, none = 2 };
+
+struct AxisSettings {
+  HomingMode mode = HomingMode::disabled;
+  Direction direction = Direction::negative;
+  double seek_feedrate_mm_per_min = 0;
+  double latch_feedrate_mm_per_min = 0;
+  double acceleration_mm_per_s2 = 0;
+  double max_seek_travel_mm = 0;
+  double max_stop_distance_mm = 0;
+  double max_backoff_mm = 0;
+  double pull_off_mm = 0;
+  double home_position_mm = 0;
+  double final_position_mm = 0;
+  bool final_move_enable = false;
+  bool sensor_nc = false;
+  double debounce_ms = 0;
+  PreMove pre_move_mode = PreMove::none;
+  double pre_move_distance_mm = 0;
+  double push_distance_mm = 0;
+  double index_pitch_mm = 0;  // travel per encoder index pulse; bounds the index phase
+  std::uint8_t slave_of = 0;  // 0 none, 1..6 = master X..C (register value)
+  SlaveMode slave_mode = SlaveMode::own_output;
+  double max_misalignment_mm = 0;
+  double switch_compensation_mm = 0;
+  double soft_limit_min_mm = 0;
+  double soft_limit_max_mm = 0;
+  bool soft_limits_enable = false;
+  bool shared_limit = false;
+  double jog_feedrate_mm_per_min = 0;
+};
+
+struct GlobalSettings {
+  std::array<AxisMask, 6> sequence_steps{};
+  AllowedWithoutHoming allowed_without_homing = AllowedWithoutHoming::all;
+  bool alarm_clears_homed = true;
+  std::uint32_t watchdog_ms = 0;
+  bool permit_required = false;
+};
+
+struct Settings {
+  std::array<AxisSettings, kAxisCount> axes{};
+  GlobalSettings global{};
+};
+
+// Identifies one per-axis setting, so a settings fault can name it. The names
+// are the suffixes of the register names (axis.<a>.<name>).
+enum class AxisField : std::uint8_t {
+  none = 0,
+  mode,
+  direction,
+  seek_feedrate,
+  latch_feedrate,
+  acceleration,
+  max_seek_travel,
+  max_stop_distance,
+  max_backoff,
+  pull_off,
+  home_position,
+  final_position,
+  final_move_enable,
+  sensor_nc,
+  debounce_ms,
+  pre_move_mode,
+  pre_move_distance,
+  push_distance,
+  index_pitch,
+  slave_of,
+  slave_mode,
+  max_misalignment,
+  switch_compensation,
+  soft_limit_min,
+  soft_limit_max,
+  soft_limits_enable,
+  shared_limit,
+  jog_feedrate,
+};
+
+std::string_view field_name(AxisField field);
+std::string_view mode_name(HomingMode mode);
+
+constexpr bool mode_uses_switch(HomingMode m) {
+  return m == HomingMode::switch_release || m == HomingMode::switch_reapproach ||
+         m == HomingMode::switch_index || m == HomingMode::pushing_release ||
+         m == HomingMode::pushing_reapproach;
+}
+constexpr bool mode_is_pushing(HomingMode m) {
+  return m == HomingMode::pushing_release || m == HomingMode::pushing_reapproach;
+}
+constexpr bool mode_reapproaches(HomingMode m) {
+  return m == HomingMode::switch_reapproach || m == HomingMode::pushing_reapproach;
+}
+constexpr bool mode_is_absolute(HomingMode m) {
+  return m == HomingMode::absolute || m == HomingMode::absolute_final;
+}
+
+// -1 when the axis is not a slave, else the master's index.
+constexpr int master_of(const AxisSettings& s) {
+  return s.slave_of == 0 ? -1 : static_cast<int>(s.slave_of) - 1;
+}
+
+}  // namespace homing
