@@ -50,6 +50,13 @@ class Engine {
     bool follow_master = false;   // locked to the master's motion
     std::int8_t jog_dir = 0;
     bool slave_aligned = false;   // commutator slave finished its own edge
+    bool stopped_after_trigger = false;  // seek trigger found and the axis came to rest
+    bool assigned = false;        // home position assigned in this cycle
+    bool partner_marked = false;  // gantry partner triggered first: mark_mm is where we were
+    double mark_mm = 0;
+    Phase next_phase = Phase::idle;  // where waiting goes once the partner is ready
+    enum class Wait : std::uint8_t { none, partner_stopped, partner_assigned, slave_aligned } wait = Wait::none;
+    bool aligning = false;        // commutator slave running its own edge search
     double trigger_position_mm = 0;
     double home_correction_mm = 0;
   };
@@ -78,7 +85,11 @@ class Engine {
   void raise(const Settings& settings, std::size_t axis, Alarm alarm);
   void raise_global(const Settings& settings, AlarmCode code);
   void stop_all(const Settings& settings);
-  CommandResult motion_refusal(const Settings& settings, const Inputs& inputs) const;
+  CommandResult motion_refusal(const Settings& settings, std::size_t axis) const;
+  CommandResult homing_refusal(const Settings& settings) const;
+  void begin_axis(const Settings& settings, std::size_t axis);
+  void run_axis(const Settings& settings, std::size_t axis);  // axis_phases.cpp
+  int partner_of(const Settings& settings, std::size_t axis) const;
   bool any_alarm() const;
   bool any_motion() const;
   int sensor_channel(const Settings& settings, std::size_t axis) const;
@@ -90,6 +101,8 @@ class Engine {
   std::array<SensorEvent, kAxisCount> events_{};  // per input channel, this period
   std::array<bool, kAxisCount> drive_fault_{};
   std::array<bool, kAxisCount> absolute_valid_{};
+  std::array<std::int8_t, kAxisCount> prev_jog_request_{};
+  double last_dt_s_ = 0.001;
   std::array<double, kAxisCount> absolute_mm_{};
 
   double time_s_ = 0;
@@ -112,8 +125,7 @@ class Engine {
   Outputs outputs_{};
   Status status_{};
 
-  friend void run_axis_phase(Engine& engine, const Settings& settings, std::size_t axis);
-  friend struct PhaseContext;
+  friend struct PhaseRunner;
 };
 
 }  // namespace homing

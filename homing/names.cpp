@@ -130,6 +130,7 @@ std::string_view command_result_name(CommandResult r) {
     case CommandResult::refused_cause_present: return "refused_cause_present";
     case CommandResult::refused_invalid: return "refused_invalid";
     case CommandResult::refused_communication_lost: return "refused_communication_lost";
+    case CommandResult::refused_settings_fault: return "refused_settings_fault";
   }
   return "?";
 }

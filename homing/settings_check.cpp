@@ -62,6 +62,9 @@ std::optional<SettingsFault> check_slave(const Settings& settings, std::size_t a
   const AxisSettings& master = settings.axes[static_cast<std::size_t>(m)];
   if (master_of(master) >= 0 || !mode_uses_switch(master.mode))
     return fault(axis, AxisField::slave_of, CheckRule::slave_invalid, s.slave_of);
+  for (std::size_t other = 0; other < axis; ++other)  // one slave per master
+    if (master_of(settings.axes[other]) == m)
+      return fault(axis, AxisField::slave_of, CheckRule::slave_invalid, s.slave_of);
   if (s.slave_mode == SlaveMode::own_output && !mode_uses_switch(s.mode))
     return fault(axis, AxisField::mode, CheckRule::slave_needs_sensor, static_cast<double>(s.mode));
   if (s.max_misalignment_mm <= 0)

@@ -27,8 +27,9 @@ enum class CommandResult : std::uint8_t {
   refused_cause_present = 11,  // reset refused: e-stop, drive fault or watchdog still active
   refused_invalid = 12,      // the command itself makes no sense (bad axis, bad target)
   refused_communication_lost = 13,
+  refused_settings_fault = 14,  // the configuration check refused the cycle: see the axis alarm
 };
-inline constexpr std::uint8_t kCommandResultCount = 14;
+inline constexpr std::uint8_t kCommandResultCount = 15;
 
 // status.interlocks: what blocks homing or motion now; 0 = free to move.
 namespace interlock {

@@ -1,0 +1,562 @@
+// The engine's period: motion, inputs, safety, commands, homing phases, status.
+#include "engine.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "settings_check.hpp"
+
+namespace homing {
+
+Engine::Engine() = default;
+
+StepResult Engine::step(const Settings& settings, const Inputs& inputs, double dt_s) {
+  dt_s = std::isfinite(dt_s) ? std::max(dt_s, 0.0) : 0.0;
+  if (dt_s > 0) last_dt_s_ = dt_s;
+  ++heartbeat_;
+  time_s_ += dt_s;
+  advance_motion(dt_s);
+  read_inputs(settings, inputs, dt_s);
+  check_safety(settings, inputs);
+  handle_commands(settings, inputs);
+  run_cycle(settings);
+  run_motion(settings);
+  follow_masters(settings);
+  publish(settings, inputs);
+  first_step_ = false;
+  return StepResult{outputs_, status_};
+}
+
+void Engine::advance_motion(double dt_s) {
+  for (AxisRun& run : axes_) {
+    run.period_start = run.motor;
+    run.last_command = run.command;
+    run.motor = integrate(run.motor, run.command, dt_s);
+  }
+}
+
+int Engine::partner_of(const Settings& settings, std::size_t axis) const {
+  const int m = master_of(settings.axes[axis]);
+  if (m >= 0) return m;
+  for (std::size_t s = 0; s < kAxisCount; ++s)
+    if (master_of(settings.axes[s]) == static_cast<int>(axis)) return static_cast<int>(s);
+  return -1;
+}
+
+// The input channel an axis reads its home sensor from: a commutator slave's
+// sensor is diverted onto its master's input.
+int Engine::sensor_channel(const Settings& settings, std::size_t axis) const {
+  const AxisSettings& s = settings.axes[axis];
+  if (master_of(s) >= 0 && s.slave_mode == SlaveMode::external_commutator) return master_of(s);
+  return static_cast<int>(axis);
+}
+
+// The axis whose motor moves the carriage seen on an input channel.
+int Engine::channel_owner(const Settings& settings, std::size_t channel) const {
+  if (axes_[channel].commutator_output) {
+    const int s = partner_of(settings, channel);
+    if (s >= 0 && master_of(settings.axes[static_cast<std::size_t>(s)]) == static_cast<int>(channel))
+      return s;
+  }
+  return static_cast<int>(channel);
+}
+
+void Engine::read_inputs(const Settings& settings, const Inputs& inputs, double dt_s) {
+  const double period_start_s = time_s_ - dt_s;
+  for (std::size_t c = 0; c < kAxisCount; ++c) {
+    const AxisInputs& in = inputs.axes[c];
+    SensorEvent& ev = events_[c];
+    ev = SensorEvent{};
+    const AxisRun& owner = axes_[static_cast<std::size_t>(channel_owner(settings, c))];
+    const bool nc = settings.axes[c].sensor_nc;
+    Debouncer& filter = sensor_filter_[c];
+    if (first_step_ || filter_reset_[c]) {
+      // A new source on this input (start-up, commutator switched): take its
+      // level as it is, without inventing an edge.
+      filter.reset(in.sensor_level, time_s_);
+      filter_reset_[c] = false;
+    } else {
+      auto position_at_offset = [&](double tau) {
+        return position_at(owner.period_start, owner.last_command, std::clamp(tau, 0.0, dt_s));
+      };
+      for (std::uint8_t i = 0; i < in.sensor_edges.count; ++i) {
+        const double tau = in.sensor_edges.time_s[i];
+        filter.transition(period_start_s + tau, position_at_offset(tau));
+      }
+      // No timestamps, or more edges than reported: the level still wins,
+      // placed in the middle of the period.
+      if (filter.raw() != in.sensor_level) filter.transition(period_start_s + dt_s / 2, position_at_offset(dt_s / 2));
+      AcceptedEdge edge;
+      if (filter.settle(time_s_, settings.axes[c].debounce_ms / 1000.0, edge)) {
+        ev.edge = true;
+        ev.accepted = edge;
+        ev.accepted.to_level = edge.to_level != nc;  // now means "to active"
+      }
+      if (in.index_edges.count > 0) {
+        ev.index = true;
+        ev.index_mm = position_at_offset(in.index_edges.time_s[0]);
+      }
+    }
+    axes_[c].sensor_active = filter.stable() != nc;
+    drive_fault_[c] = in.drive_fault;
+    absolute_valid_[c] = in.absolute_valid;
+    absolute_mm_[c] = in.absolute_position_mm;
+  }
+}
+
+bool Engine::any_alarm() const {
+  if (global_alarm_ != AlarmCode::none) return true;
+  return std::any_of(axes_.begin(), axes_.end(), [](const AxisRun& r) { return bool(r.alarm); });
+}
+
+bool Engine::any_motion() const {
+  return std::any_of(axes_.begin(), axes_.end(), [](const AxisRun& r) {
+    return r.motor.velocity_mm_per_s != 0 || r.command.target_velocity_mm_per_s != 0 ||
+           r.phase == Phase::jog || r.phase == Phase::move;
+  });
+}
+
+void Engine::stop_all(const Settings& settings) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    AxisRun& run = axes_[a];
+    run.command = stop_command(settings.axes[a].acceleration_mm_per_s2);
+    run.push_output = false;
+    run.commutator_output = false;
+    run.in_cycle = false;
+    run.aligning = false;
+    run.jog_dir = 0;
+    const bool moving = run.motor.velocity_mm_per_s != 0;
+    if (moving) run.phase = Phase::stopping;
+    else if (run.phase != Phase::done) run.phase = Phase::idle;
+  }
+  if (cycle_active_) {
+    for (std::size_t c = 0; c < kAxisCount; ++c) filter_reset_[c] = filter_reset_[c] || false;
+  }
+  cycle_active_ = false;
+  step_index_ = -1;
+}
+
+void Engine::raise(const Settings& settings, std::size_t axis, Alarm alarm) {
+  AxisRun& run = axes_[axis];
+  if (run.alarm) return;  // the first alarm on an axis wins; it names the cause
+  alarm.phase = run.phase;
+  run.alarm = alarm;
+  if (settings.global.alarm_clears_homed) {
+    for (std::size_t a = 0; a < kAxisCount; ++a) axes_[a].homed = false;
+  }
+  stop_all(settings);
+}
+
+void Engine::raise_global(const Settings& settings, AlarmCode code) {
+  if (global_alarm_ == AlarmCode::none) global_alarm_ = code;
+  if (settings.global.alarm_clears_homed) {
+    for (AxisRun& run : axes_) run.homed = false;
+  }
+  stop_all(settings);
+}
+
+void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
+  if (inputs.estop && !estop_) {
+    for (std::size_t a = 0; a < kAxisCount; ++a) {
+      AxisRun& run = axes_[a];
+      const bool busy = run.in_cycle || run.motor.velocity_mm_per_s != 0 || run.phase == Phase::jog ||
+                        run.phase == Phase::move;
+      if (busy && !run.alarm) run.alarm = Alarm{AlarmCode::emergency_stop, run.phase};
+    }
+    raise_global(settings, AlarmCode::emergency_stop);
+  }
+  estop_ = inputs.estop;
+
+  if (inputs.settings_lost) raise_global(settings, AlarmCode::settings_lost);
+
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (drive_fault_[a] && axes_[a].alarm.code != AlarmCode::drive_fault && !axes_[a].alarm)
+      raise(settings, a, Alarm{AlarmCode::drive_fault});
+  }
+
+  comm_lost_ = inputs.communication_lost;
+  if (comm_lost_ && any_motion()) {
+    for (std::size_t a = 0; a < kAxisCount; ++a) {
+      const AxisRun& run = axes_[a];
+      if (run.in_cycle || run.phase == Phase::jog || run.phase == Phase::move ||
+          run.motor.velocity_mm_per_s != 0) {
+        raise(settings, a, Alarm{AlarmCode::communication_lost});
+      }
+    }
+  }
+
+  permit_ = inputs.homing_permit;
+  if (cycle_active_ && settings.global.permit_required && !permit_) {
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if (axes_[a].in_cycle && axes_[a].phase != Phase::done) {
+        raise(settings, a, Alarm{AlarmCode::permit_withdrawn});
+        break;
+      }
+  }
+
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    AxisRun& run = axes_[a];
+    const AxisSettings& s = settings.axes[a];
+    if (run.alarm || run.in_cycle || !run.homed) continue;
+    const double pos = run.motor.position_mm + run.offset_mm;
+    if (s.shared_limit && run.sensor_active && sensor_channel(settings, a) == static_cast<int>(a)) {
+      raise(settings, a, Alarm{AlarmCode::hard_limit, Phase::idle, AxisField::shared_limit, 0, 0});
+      axes_[a].alarm.value = pos;
+      continue;
+    }
+    const double tol = 1e-6;
+    if (s.soft_limits_enable && run.motor.velocity_mm_per_s != 0 &&
+        (pos < s.soft_limit_min_mm - tol || pos > s.soft_limit_max_mm + tol)) {
+      raise(settings, a, Alarm{AlarmCode::soft_limit});
+      axes_[a].alarm.value = pos;
+    }
+  }
+}
+
+CommandResult Engine::homing_refusal(const Settings& settings) const {
+  if (estop_) return CommandResult::refused_estop;
+  if (std::any_of(drive_fault_.begin(), drive_fault_.end(), [](bool f) { return f; }))
+    return CommandResult::refused_drive_fault;
+  if (any_alarm()) return CommandResult::refused_alarm;
+  if (comm_lost_) return CommandResult::refused_communication_lost;
+  if (settings.global.permit_required && !permit_) return CommandResult::refused_no_permit;
+  if (any_motion()) return CommandResult::refused_busy;
+  return CommandResult::accepted;
+}
+
+CommandResult Engine::motion_refusal(const Settings& settings, std::size_t axis) const {
+  if (estop_) return CommandResult::refused_estop;
+  if (any_alarm()) return CommandResult::refused_alarm;
+  if (drive_fault_[axis]) return CommandResult::refused_drive_fault;
+  if (comm_lost_) return CommandResult::refused_communication_lost;
+  if (cycle_active_) return CommandResult::refused_busy;
+  if (master_of(settings.axes[axis]) >= 0) return CommandResult::refused_slave_axis;
+  return CommandResult::accepted;
+}
+
+void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
+  const Commands& c = inputs.commands;
+  if (c.reset_alarm) {
+    const bool fault = std::any_of(drive_fault_.begin(), drive_fault_.end(), [](bool f) { return f; });
+    if (estop_ || fault || comm_lost_) {
+      last_result_ = CommandResult::refused_cause_present;
+    } else {
+      global_alarm_ = AlarmCode::none;
+      for (AxisRun& run : axes_) run.alarm = Alarm{};
+      last_result_ = CommandResult::accepted;
+    }
+  }
+  if (c.abort) {
+    if (cycle_active_) {
+      for (std::size_t a = 0; a < kAxisCount; ++a) {
+        AxisRun& run = axes_[a];
+        if (run.in_cycle && run.phase != Phase::done && !run.alarm)
+          run.alarm = Alarm{AlarmCode::aborted, run.phase};
+      }
+      if (settings.global.alarm_clears_homed)
+        for (AxisRun& run : axes_) run.homed = false;
+    }
+    stop_all(settings);
+    last_result_ = CommandResult::accepted;
+  }
+
+  const bool start_edge = inputs.start_button && !prev_start_button_;
+  prev_start_button_ = inputs.start_button;
+  const bool home_all = c.home_all || start_edge;
+  const AxisMask home_axes = c.home_axes & kAllAxes;
+  if (home_all || home_axes) {
+    if (cycle_active_) {
+      const bool same = home_all ? cycle_all_ : (!cycle_all_ && home_axes == cycle_requested_);
+      last_result_ = same ? CommandResult::already_running : CommandResult::refused_busy;
+    } else if (const CommandResult r = homing_refusal(settings); r != CommandResult::accepted) {
+      last_result_ = r;
+    } else {
+      start_cycle(settings, home_all ? kAllAxes : home_axes, home_all);
+    }
+  }
+
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const std::int8_t req = c.jog[a] > 0 ? 1 : (c.jog[a] < 0 ? -1 : 0);
+    AxisRun& run = axes_[a];
+    if (req == 0) {
+      if (run.phase == Phase::jog) {
+        run.phase = Phase::stopping;
+        run.jog_dir = 0;
+      }
+    } else if (req != prev_jog_request_[a] || (run.phase != Phase::jog && run.phase != Phase::stopping)) {
+      if (run.phase == Phase::jog && run.jog_dir == req) {
+        // still held
+      } else if (req != prev_jog_request_[a]) {
+        CommandResult r = motion_refusal(settings, a);
+        const bool homed = run.homed || settings.axes[a].mode == HomingMode::disabled;
+        if (r == CommandResult::accepted && !homed &&
+            settings.global.allowed_without_homing == AllowedWithoutHoming::none)
+          r = CommandResult::refused_not_homed;
+        if (r == CommandResult::accepted && run.phase == Phase::move) r = CommandResult::refused_busy;
+        last_result_ = r;
+        if (r == CommandResult::accepted) {
+          run.phase = Phase::jog;
+          run.jog_dir = req;
+          run.phase_start_mm = run.motor.position_mm;
+        }
+      }
+    }
+    prev_jog_request_[a] = req;
+  }
+
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (!(c.move_axes & axis_bit(a))) continue;
+    AxisRun& run = axes_[a];
+    const AxisSettings& s = settings.axes[a];
+    const double target = c.move_target_mm[a];
+    CommandResult r = motion_refusal(settings, a);
+    const bool homed = run.homed || s.mode == HomingMode::disabled;
+    if (r == CommandResult::accepted && !std::isfinite(target)) r = CommandResult::refused_invalid;
+    if (r == CommandResult::accepted && !homed &&
+        settings.global.allowed_without_homing != AllowedWithoutHoming::all)
+      r = CommandResult::refused_not_homed;
+    if (r == CommandResult::accepted && homed && s.soft_limits_enable &&
+        (target < s.soft_limit_min_mm || target > s.soft_limit_max_mm))
+      r = CommandResult::refused_soft_limit;
+    if (r == CommandResult::accepted && run.phase == Phase::jog) r = CommandResult::refused_busy;
+    if (r == CommandResult::accepted && s.jog_feedrate_mm_per_min <= 0) r = CommandResult::refused_invalid;
+    last_result_ = r;
+    if (r == CommandResult::accepted) {
+      run.phase = Phase::move;
+      run.target_mm = target - run.offset_mm;
+      run.phase_start_mm = run.motor.position_mm;
+    }
+  }
+}
+
+// Builds the steps of a cycle: slaves go with their master whatever their own
+// bit says; homing one axis homes its gantry partner too.
+void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all) {
+  steps_.fill(0);
+  unsequenced_ = 0;
+  auto with_partners = [&](AxisMask mask) {
+    AxisMask out = 0;
+    for (std::size_t a = 0; a < kAxisCount; ++a) {
+      if (!(mask & axis_bit(a))) continue;
+      const int m = master_of(settings.axes[a]);
+      const std::size_t master = m >= 0 ? static_cast<std::size_t>(m) : a;
+      if (m >= 0 && all) continue;  // in a sequence, a slave's own bit is ignored
+      out |= axis_bit(master);
+      const int s = partner_of(settings, master);
+      if (s >= 0 && master_of(settings.axes[static_cast<std::size_t>(s)]) == static_cast<int>(master))
+        out |= axis_bit(static_cast<std::size_t>(s));
+    }
+    return out;
+  };
+  AxisMask covered = 0;
+  if (all) {
+    for (std::size_t i = 0; i < steps_.size(); ++i) {
+      steps_[i] = with_partners(settings.global.sequence_steps[i]) & static_cast<AxisMask>(~covered);
+      covered |= steps_[i];
+    }
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if (!(covered & axis_bit(a)) && master_of(settings.axes[a]) < 0 &&
+          settings.axes[a].mode != HomingMode::disabled)
+        unsequenced_ |= axis_bit(a);
+  } else {
+    steps_[0] = with_partners(requested);
+    covered = steps_[0];
+  }
+
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (!(covered & axis_bit(a))) continue;
+    if (auto fault = check_axis(settings, a)) {
+      AxisRun& run = axes_[fault->axis];
+      run.alarm = Alarm{fault->code(), Phase::idle, fault->field, fault->value,
+                        static_cast<std::uint8_t>(fault->rule)};
+      last_result_ = CommandResult::refused_settings_fault;
+      return;
+    }
+  }
+
+  cycle_active_ = true;
+  cycle_all_ = all;
+  cycle_requested_ = requested;
+  step_index_ = -1;
+  last_result_ = CommandResult::accepted;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    AxisRun& run = axes_[a];
+    if (!(covered & axis_bit(a))) continue;
+    run.in_cycle = true;
+    run.homed = false;
+    run.phase = Phase::waiting;
+    run.wait = AxisRun::Wait::none;
+    run.entered = false;
+    run.triggered = false;
+    run.stopped_after_trigger = false;
+    run.assigned = false;
+    run.partner_marked = false;
+    run.slave_aligned = false;
+    run.aligning = false;
+    run.follow_master = false;
+    run.cycle_start_mm = run.motor.position_mm;
+  }
+  start_step(settings);
+}
+
+bool Engine::start_step(const Settings& settings) {
+  while (++step_index_ < static_cast<int>(steps_.size())) {
+    const AxisMask mask = steps_[static_cast<std::size_t>(step_index_)];
+    if (!mask) continue;
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if (mask & axis_bit(a)) begin_axis(settings, a);
+    return true;
+  }
+  finish_cycle(settings);
+  return false;
+}
+
+void Engine::finish_cycle(const Settings& settings) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (!(unsequenced_ & axis_bit(a))) continue;
+    AxisRun& run = axes_[a];
+    const double new_offset = settings.axes[a].home_position_mm - run.motor.position_mm;
+    run.home_correction_mm = new_offset - run.offset_mm;
+    run.trigger_position_mm = run.motor.position_mm + run.offset_mm;
+    run.offset_mm = new_offset;
+    run.homed = true;
+    run.phase = Phase::done;
+  }
+  for (AxisRun& run : axes_) run.in_cycle = false;
+  cycle_active_ = false;
+  step_index_ = -1;
+  ++homing_cycles_;
+}
+
+void Engine::run_cycle(const Settings& settings) {
+  if (!cycle_active_ || step_index_ < 0) return;
+  const AxisMask mask = steps_[static_cast<std::size_t>(step_index_)];
+  for (std::size_t a = 0; a < kAxisCount && cycle_active_; ++a)
+    if (mask & axis_bit(a)) run_axis(settings, a);
+  if (!cycle_active_) return;
+  bool all_done = true;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if ((mask & axis_bit(a)) && axes_[a].phase != Phase::done) all_done = false;
+  if (all_done) start_step(settings);
+}
+
+void Engine::run_motion(const Settings& settings) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    AxisRun& run = axes_[a];
+    const AxisSettings& s = settings.axes[a];
+    const double accel = s.acceleration_mm_per_s2;
+    const bool homed = run.homed || s.mode == HomingMode::disabled;
+    switch (run.phase) {
+      case Phase::jog: {
+        double v = mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min);
+        if (!homed && settings.global.allowed_without_homing == AllowedWithoutHoming::jog_reduced)
+          v = std::min(v, mm_per_min_to_mm_per_s(100.0));
+        if (homed && s.soft_limits_enable) {
+          const double limit = (run.jog_dir > 0 ? s.soft_limit_max_mm : s.soft_limit_min_mm) - run.offset_mm;
+          run.command = move_to_command(run.motor, limit, v, accel, last_dt_s_);
+        } else {
+          run.command = velocity_command(run.jog_dir * v, accel);
+        }
+        break;
+      }
+      case Phase::move: {
+        const double v = mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min);
+        run.command = move_to_command(run.motor, run.target_mm, v, accel, last_dt_s_);
+        if (run.motor.position_mm == run.target_mm && run.motor.velocity_mm_per_s == 0) {
+          run.phase = Phase::idle;
+          run.command = stop_command(accel);
+        }
+        break;
+      }
+      case Phase::stopping:
+        run.command = stop_command(accel);
+        if (run.motor.velocity_mm_per_s == 0) run.phase = Phase::idle;
+        break;
+      case Phase::idle:
+      case Phase::done:
+        if (!run.in_cycle) run.command = stop_command(accel);
+        break;
+      default:
+        break;
+    }
+  }
+}
+
+// A slave is locked to its master except while it homes on its own sensor.
+void Engine::follow_masters(const Settings& settings) {
+  for (std::size_t s = 0; s < kAxisCount; ++s) {
+    const int m = master_of(settings.axes[s]);
+    if (m < 0 || m >= static_cast<int>(kAxisCount)) continue;
+    AxisRun& slave = axes_[s];
+    const AxisRun& master = axes_[static_cast<std::size_t>(m)];
+    const bool independent = slave.in_cycle && !slave.follow_master;
+    if (independent) continue;
+    MotionCommand cmd = master.command;
+    const double delta = slave.motor.position_mm - master.motor.position_mm;
+    if (cmd.has_limit) cmd.limit_mm += delta;
+    slave.command = cmd;
+  }
+}
+
+void Engine::publish(const Settings& settings, const Inputs& inputs) {
+  Status& st = status_;
+  bool all_homed = true;
+  bool moving = false;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const AxisRun& run = axes_[a];
+    const AxisSettings& s = settings.axes[a];
+    AxisStatus& as = st.axes[a];
+    as.phase = run.phase;
+    as.alarm = run.alarm;
+    as.position_mm = run.motor.position_mm + run.offset_mm;
+    as.velocity_mm_per_s = run.motor.velocity_mm_per_s;
+    as.homed = run.homed || s.mode == HomingMode::disabled;
+    as.sensor = run.sensor_active;
+    as.busy = run.in_cycle || run.phase == Phase::jog || run.phase == Phase::move ||
+              run.phase == Phase::stopping || run.motor.velocity_mm_per_s != 0;
+    as.trigger_position_mm = run.trigger_position_mm;
+    as.home_correction_mm = run.home_correction_mm;
+    as.stop_distance_mm =
+        stop_distance_mm(mm_per_min_to_mm_per_s(s.seek_feedrate_mm_per_min), s.acceleration_mm_per_s2);
+    if (!std::isfinite(as.stop_distance_mm)) as.stop_distance_mm = 0;
+    as.phase_distance_mm = std::abs(run.motor.position_mm - run.phase_start_mm);
+    all_homed = all_homed && as.homed;
+    moving = moving || (!run.in_cycle && as.busy);
+
+    AxisOutputs& out = outputs_.axes[a];
+    out.motion = run.command;
+    out.motor = run.motor;
+    out.enable = !estop_;
+    out.push_output = run.push_output;
+    out.commutator_output = run.commutator_output;
+  }
+  const bool alarm = any_alarm();
+  st.alarm = alarm;
+  st.homing = cycle_active_;
+  st.estop = inputs.estop;
+  st.global_alarm = global_alarm_;
+  st.sequence_step = cycle_active_ && step_index_ >= 0 ? static_cast<std::uint8_t>(step_index_ + 1) : 0;
+  st.homing_cycles = homing_cycles_;
+  st.heartbeat = heartbeat_;
+  st.last_command_result = last_result_;
+  if (alarm) st.state = MachineState::alarm;
+  else if (cycle_active_) st.state = MachineState::homing;
+  else if (moving) st.state = MachineState::moving;
+  else if (all_homed) st.state = MachineState::homed;
+  else st.state = MachineState::not_homed;
+
+  std::uint16_t il = 0;
+  if (estop_) il |= interlock::estop;
+  if (std::any_of(drive_fault_.begin(), drive_fault_.end(), [](bool f) { return f; })) il |= interlock::drive_fault;
+  if (alarm) il |= interlock::alarm_latched;
+  if (global_alarm_ == AlarmCode::settings_lost) il |= interlock::settings_lost;
+  if (comm_lost_) il |= interlock::communication_lost;
+  if (settings.global.permit_required && !permit_) il |= interlock::permit_missing;
+  if (!all_homed && settings.global.allowed_without_homing != AllowedWithoutHoming::all) il |= interlock::not_homed;
+  if (cycle_active_) il |= interlock::homing_active;
+  if (moving) il |= interlock::motion_active;
+  st.interlocks = il;
+  outputs_.homing_done_lamp = all_homed && !alarm;
+}
+
+}  // namespace homing
