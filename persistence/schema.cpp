@@ -1,0 +1,84 @@
+#include "persistence/schema.hpp"
+
+#include "persistence/settings_store.hpp"
+
+namespace persistence::schema {
+
+namespace {
+
+// v1 (first release): settings only.
+constexpr std::string_view kV1 = R"sql(
+CREATE TABLE settings(
+  name  TEXT PRIMARY KEY NOT NULL,
+  value INTEGER NOT NULL
+) WITHOUT ROWID;
+)sql";
+
+// v2: audit log, with transport and client in one "source" text ("tcp 10.0.0.5").
+constexpr std::string_view kV2 = R"sql(
+CREATE TABLE audit(
+  id        INTEGER PRIMARY KEY AUTOINCREMENT,
+  time_ms   INTEGER NOT NULL,
+  source    TEXT NOT NULL,
+  name      TEXT NOT NULL,
+  old_value INTEGER,
+  new_value INTEGER NOT NULL
+);
+)sql";
+
+// v3: audit source split into transport + client; homing history; meta flags.
+constexpr std::string_view kV3 = R"sql(
+CREATE TABLE audit_v3(
+  id        INTEGER PRIMARY KEY AUTOINCREMENT,
+  time_ms   INTEGER NOT NULL,
+  transport TEXT NOT NULL,
+  client    TEXT NOT NULL,
+  name      TEXT NOT NULL,
+  old_value INTEGER NOT NULL,
+  new_value INTEGER NOT NULL
+);
+INSERT INTO audit_v3(id, time_ms, transport, client, name, old_value, new_value)
+  SELECT id, time_ms,
+         CASE WHEN instr(source, ' ') > 0 THEN substr(source, 1, instr(source, ' ') - 1) ELSE source END,
+         CASE WHEN instr(source, ' ') > 0 THEN substr(source, instr(source, ' ') + 1) ELSE '' END,
+         name, coalesce(old_value, new_value), new_value
+  FROM audit ORDER BY id;
+DROP TABLE audit;
+ALTER TABLE audit_v3 RENAME TO audit;
+
+CREATE TABLE meta(
+  key   TEXT PRIMARY KEY NOT NULL,
+  value TEXT NOT NULL
+) WITHOUT ROWID;
+
+CREATE TABLE homing_runs(
+  id         INTEGER PRIMARY KEY AUTOINCREMENT,
+  start_ms   INTEGER NOT NULL,
+  end_ms     INTEGER NOT NULL,
+  axes       INTEGER NOT NULL,
+  result     INTEGER NOT NULL,
+  alarm_axis INTEGER NOT NULL
+);
+CREATE TABLE homing_axes(
+  run_id        INTEGER NOT NULL,
+  axis          INTEGER NOT NULL,
+  correction_mm REAL,
+  duration_ms   INTEGER NOT NULL,
+  PRIMARY KEY(run_id, axis)
+) WITHOUT ROWID;
+CREATE INDEX homing_axes_by_axis ON homing_axes(axis, run_id);
+)sql";
+
+}  // namespace
+
+const std::vector<Step>& steps() {
+  static const std::vector<Step> all{
+      {1, "settings table", kV1},
+      {2, "audit log", kV2},
+      {3, "audit transport/client, homing history, meta", kV3},
+  };
+  static_assert(kSchemaVersion == 3, "append a migration step when raising kSchemaVersion");
+  return all;
+}
+
+}  // namespace persistence::schema

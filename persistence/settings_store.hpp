@@ -1,0 +1,189 @@
+#pragma once
+// Durable module settings, audit log and homing history in one SQLite file.
+//
+// Settings are keyed rows (register name -> raw register integer). The list of
+// registers and their defaults is an input (the register table owns it), so a
+// register added later only needs to appear in that list: open() inserts it
+// with its default. Every write is committed (WAL, synchronous=FULL) before
+// commit() returns. See persistence/README.md.
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "persistence/error.hpp"
+
+namespace spdlog {
+class logger;
+}
+
+namespace persistence {
+
+inline constexpr int kSchemaVersion = 3;       // see schema.cpp for the history
+inline constexpr std::size_t kHistoryAxes = 6;  // X Y Z A B C
+
+struct SettingDefault {
+  std::string name;
+  std::int64_t value = 0;
+};
+
+// One register write as the server received it.
+struct SettingWrite {
+  std::string name;
+  std::int64_t value = 0;
+};
+
+// One applied change (what the audit log records).
+struct Change {
+  std::string name;
+  std::int64_t old_value = 0;
+  std::int64_t new_value = 0;
+};
+
+struct ChangeSource {
+  std::string transport;  // "tcp", "rtu", "cli", "import"
+  std::string client;     // "192.168.0.20:50122", "unit 5", a file name...
+};
+
+struct StoreOptions {
+  std::size_t audit_max_rows = 10000;    // oldest rows pruned beyond this
+  std::size_t history_max_rows = 10000;  // homing runs kept
+  // A verified backup (<db>.bak) is written after a commit batch unless the
+  // previous one is younger than this; a later commit, backup_if_due() or
+  // close() then writes it. 0 = after every commit.
+  std::chrono::milliseconds backup_min_interval{1000};
+  bool read_only = false;  // for tools: no migration, no defaults, no restore
+  std::string vfs;         // SQLite VFS name; empty = default (tests inject faults)
+  std::shared_ptr<spdlog::logger> logger;  // default: spdlog::default_logger()
+  std::function<std::int64_t()> now_ms;    // default: system clock, unix ms
+};
+
+enum class OpenOutcome {
+  created,                 // no database existed: created from the defaults
+  opened,                  // opened and intact
+  restored_from_backup,    // damaged: a backup was verified and restored
+  defaults_settings_lost,  // damaged and no good backup: defaults, settings_lost
+};
+std::string_view outcome_name(OpenOutcome o);
+
+struct OpenReport {
+  OpenOutcome outcome = OpenOutcome::opened;
+  bool settings_lost = false;           // latched until acknowledge_settings_lost()
+  int schema_version_found = 0;         // before migration (0 = new file)
+  std::string restored_from;            // backup file used, if any
+  std::string damaged_copy;             // where the damaged file was moved
+  std::vector<std::string> added_defaults;  // registers new to this database
+  std::vector<std::string> unknown_names;   // rows no register claims (kept, ignored)
+  std::vector<std::string> messages;        // what happened, also logged
+};
+
+struct AuditEntry {
+  std::int64_t id = 0;
+  std::int64_t time_ms = 0;
+  std::string transport;
+  std::string client;
+  std::string name;
+  std::int64_t old_value = 0;
+  std::int64_t new_value = 0;
+};
+
+struct AxisRun {
+  bool present = false;                 // axis took part and reported
+  std::optional<double> correction_mm;  // assigned - believed at the reference edge
+  std::int64_t duration_ms = 0;
+};
+
+struct HomingRun {
+  std::int64_t id = 0;  // assigned by record_homing_run
+  std::int64_t start_ms = 0;
+  std::int64_t end_ms = 0;
+  std::uint8_t axes = 0;     // bit 0 = X ... bit 5 = C
+  std::int32_t result = 0;   // 0 ok, else the alarm code
+  std::int32_t alarm_axis = -1;  // -1 none / global
+  std::array<AxisRun, kHistoryAxes> axis{};
+};
+
+struct CorrectionSummary {
+  std::size_t count = 0;
+  double mean = 0;
+  double spread = 0;  // max - min
+  double stddev = 0;  // sample standard deviation (0 for fewer than 2)
+  double min = 0;
+  double max = 0;
+};
+
+// Validation of a whole proposed settings set, supplied by the register layer
+// so an import follows exactly the Modbus rules. nullopt = accepted.
+struct Rejection {
+  std::string name;     // the register at fault, empty if none in particular
+  std::string message;  // why
+};
+using Validator = std::function<std::optional<Rejection>(const std::map<std::string, std::int64_t>&)>;
+
+struct ImportReport {
+  std::vector<Change> changes;          // what the import changed (also audited)
+  std::vector<std::string> not_in_file; // registers the file does not mention (kept)
+};
+
+class SettingsStore {
+ public:
+  // Opens (creating, migrating, or repairing) the database at `path`.
+  // `report` says what happened; it is filled also when an error is returned.
+  static Result<SettingsStore> open(const std::string& path, const std::vector<SettingDefault>& defaults,
+                                    OpenReport& report, StoreOptions options = {});
+
+  SettingsStore(SettingsStore&&) noexcept;
+  SettingsStore& operator=(SettingsStore&&) noexcept;
+  ~SettingsStore();  // calls close()
+
+  // Writes a pending backup and closes the database. Idempotent.
+  void close();
+
+  const std::string& path() const;
+
+  // The committed settings of every known register (no I/O).
+  std::map<std::string, std::int64_t> load() const;
+  std::optional<std::int64_t> value(const std::string& name) const;
+
+  // Applies all writes in one transaction together with their audit rows and
+  // returns after COMMIT is durable. Writes that do not change a value are not
+  // audited. On any error nothing changes, on disk or in load().
+  Result<std::vector<Change>> commit(const std::vector<SettingWrite>& writes, const ChangeSource& source);
+
+  bool settings_lost() const;
+  Status acknowledge_settings_lost(const ChangeSource& source);
+
+  Status set_limits(std::size_t audit_max_rows, std::size_t history_max_rows);
+
+  // Homing history.
+  Result<std::int64_t> record_homing_run(const HomingRun& run);
+  Result<std::vector<HomingRun>> recent_runs(std::size_t n) const;
+  Result<std::vector<AuditEntry>> recent_changes(std::size_t n) const;
+  Result<CorrectionSummary> correction_summary(std::size_t axis, std::size_t last_n) const;
+
+  // Backups: `<db>.bak` (newest) and `<db>.bak.1`.
+  Status backup_if_due();  // writes a pending backup if the interval passed
+  Status backup_now();
+  bool backup_pending() const;
+
+  // Full integrity check of the open database.
+  Status check_integrity() const;
+
+  // Export/import (TOML, keys are register names). Import validates the whole
+  // merged set with `validate` and applies it in one transaction (source "import").
+  Status export_file(const std::string& file) const;
+  Result<ImportReport> import_file(const std::string& file, const Validator& validate);
+
+  struct Impl;
+
+ private:
+  explicit SettingsStore(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace persistence
