@@ -1,0 +1,41 @@
+#pragma once
+// Knobs of the simulated machine: the spec's sim.<a>.* registers in engineering
+// units (mm, or deg on rotary axes).
+#include <array>
+#include <cstdint>
+
+#include "homing/axes.hpp"
+
+namespace homing::sim {
+
+// Numeric values are the sim.<a>.fault register values: never renumber.
+enum class Fault : std::uint8_t {
+  none = 0,
+  sensor_stuck_active = 1,
+  sensor_stuck_inactive = 2,
+  wire_break = 3,
+  drive_fault = 4,
+};
+
+struct AxisConfig {
+  double actual_position_mm = 0;  // where the carriage starts / is placed
+  double sensor_min_mm = 0, sensor_max_mm = 0;  // cam holding the home sensor active; max < min = no cam
+  double hysteresis_mm = 0;
+  double noise_mm = 0;            // std deviation of each edge's position
+  double bounce_ms = 0;           // contact bounce after each edge
+  bool sensor_nc = false;         // how the simulated switch is wired
+  double hard_stop_min_mm = -1e9, hard_stop_max_mm = 1e9;  // mechanical stops
+  double index_pitch_mm = 0;      // 0 = no index
+  double index_offset_mm = 0;
+  double absolute_offset_mm = 0;  // absolute encoder reads actual + offset
+  Fault fault = Fault::none;
+};
+
+struct MachineConfig {
+  std::array<AxisConfig, kAxisCount> axes{};
+  std::uint64_t seed = 1;
+  // commutator_slave[m] = s when axis s is an external-commutator slave of master m (else -1).
+  std::array<int, kAxisCount> commutator_slave{-1, -1, -1, -1, -1, -1};
+};
+
+}  // namespace homing::sim

@@ -1,0 +1,213 @@
+#include "simulator.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "carriage.hpp"
+#include "index_pulses.hpp"
+
+namespace homing::sim {
+namespace {
+
+constexpr double kTouch_mm = 1e-9;
+
+// Crossed stops (a half-written pair of registers) act as one wall at the minimum.
+Stops stops_of(const AxisConfig& c) {
+  return Stops{c.hard_stop_min_mm, std::max(c.hard_stop_min_mm, c.hard_stop_max_mm)};
+}
+
+double clamp_to_stops(double x_mm, const AxisConfig& c) {
+  const Stops s = stops_of(c);
+  return std::clamp(x_mm, s.min_mm, s.max_mm);
+}
+
+}  // namespace
+
+Simulator::Simulator(const MachineConfig& config) : config_(config) {
+  reseed();
+  for (std::size_t i = 0; i < kAxisCount; ++i) {
+    AxisConfig& c = config_.axes[i];
+    Axis& ax = axes_[i];
+    c.actual_position_mm = ax.actual_mm = clamp_to_stops(c.actual_position_mm, c);
+    ax.sensor.configure(c);
+    ax.sensor.settle_at(ax.actual_mm);  // the starting state, not an edge
+    ax.reported_level = electrical_level(i);
+    own_[i].sensor_level = ax.reported_level;
+    own_[i].absolute_valid = true;
+    own_[i].absolute_position_mm = ax.actual_mm + c.absolute_offset_mm;
+    own_[i].drive_fault = c.fault == Fault::drive_fault;
+  }
+  route_sensors(Outputs{});
+}
+
+void Simulator::reseed() {
+  for (std::size_t i = 0; i < kAxisCount; ++i) {
+    axes_[i].sensor.reseed(config_.seed, i);
+    axes_[i].bounce.reseed(config_.seed, i);
+  }
+}
+
+void Simulator::set_seed(std::uint64_t seed) {
+  config_.seed = seed;
+  reseed();
+  // Fresh thresholds too, so what follows depends on the new seed alone.
+  for (std::size_t i = 0; i < kAxisCount; ++i) axes_[i].sensor.configure(config_.axes[i]);
+}
+
+void Simulator::set_axis_config(std::size_t axis, const AxisConfig& config) {
+  AxisConfig& c = config_.axes[axis];
+  const bool sensor_changed = config.sensor_min_mm != c.sensor_min_mm ||
+                              config.sensor_max_mm != c.sensor_max_mm ||
+                              config.hysteresis_mm != c.hysteresis_mm ||
+                              config.noise_mm != c.noise_mm;
+  c = config;
+  Axis& ax = axes_[axis];
+  // Moving a stop onto the carriage pushes it along.
+  c.actual_position_mm = ax.actual_mm = clamp_to_stops(ax.actual_mm, c);
+  // Only a changed cam gets fresh thresholds: a fault or wiring write must not
+  // move the edges. The state is corrected at the start of the next period.
+  if (sensor_changed) ax.sensor.configure(c);
+}
+
+bool Simulator::place(std::size_t axis, double actual_mm) {
+  if (axes_[axis].moving) return false;
+  AxisConfig& c = config_.axes[axis];
+  c.actual_position_mm = axes_[axis].actual_mm = clamp_to_stops(actual_mm, c);
+  return true;
+}
+
+void Simulator::lose_steps(std::size_t axis, double mm) {
+  AxisConfig& c = config_.axes[axis];
+  c.actual_position_mm = axes_[axis].actual_mm = clamp_to_stops(axes_[axis].actual_mm + mm, c);
+}
+
+void Simulator::set_commutator_slave(std::size_t master, int slave) {
+  config_.commutator_slave[master] = slave;
+}
+
+void Simulator::set_estop(bool pressed) { inputs_.estop = pressed; }
+void Simulator::set_start_button(bool pressed) { inputs_.start_button = pressed; }
+void Simulator::set_homing_permit(bool on) { inputs_.homing_permit = on; }
+
+bool Simulator::at_hard_stop(std::size_t axis) const {
+  const AxisConfig& c = config_.axes[axis];
+  const double x = axes_[axis].actual_mm;
+  return std::abs(x - c.hard_stop_min_mm) <= kTouch_mm || std::abs(x - c.hard_stop_max_mm) <= kTouch_mm;
+}
+
+bool Simulator::electrical_level(std::size_t axis) const {
+  const Axis& ax = axes_[axis];
+  const AxisConfig& c = config_.axes[axis];
+  bool contact = ax.sensor.active() != ax.bounce_odd;
+  switch (c.fault) {
+    case Fault::sensor_stuck_active: contact = true; break;
+    case Fault::sensor_stuck_inactive: contact = false; break;
+    case Fault::wire_break: return false;  // NO then reads inactive, NC reads active
+    case Fault::none:
+    case Fault::drive_fault: break;
+  }
+  return c.sensor_nc ? !contact : contact;
+}
+
+bool Simulator::reports_edges(std::size_t axis) const {
+  const Fault f = config_.axes[axis].fault;
+  return f == Fault::none || f == Fault::drive_fault;
+}
+
+void Simulator::advance(const Outputs& outputs, double dt_s) {
+  dt_s = std::max(dt_s, 0.0);
+  for (std::size_t i = 0; i < kAxisCount; ++i) advance_axis(i, outputs.axes[i], dt_s);
+  route_sensors(outputs);
+  time_s_ += dt_s;
+}
+
+void Simulator::advance_axis(std::size_t i, const AxisOutputs& out, double dt_s) {
+  Axis& ax = axes_[i];
+  AxisConfig& c = config_.axes[i];
+  AxisInputs& in = own_[i];
+  in.sensor_edges = InputEdges{};
+  in.index_edges = InputEdges{};
+  in.index_level = false;  // pulses are far shorter than a period
+
+  // A fault or wiring change since the last period: the level steps at its start.
+  if (electrical_level(i) != ax.reported_level) in.sensor_edges.add(0.0);
+
+  SensorEvents events;
+  const double slip_start_mm = ax.actual_mm - out.motor.position_mm;
+  // The carriage jumped (place, lose_steps) or the cam moved while it stood still.
+  if (ax.sensor.settle_at(ax.actual_mm)) {
+    events.add(SensorEvent{0.0, ax.sensor.active(), ax.actual_mm, slip_start_mm});
+  }
+
+  const MotionPath motor = plan_path(out.motor, out.motion, dt_s);
+  const bool follows = c.fault != Fault::drive_fault;
+  const CarriagePath carriage = carriage_path(out.motor, motor, ax.actual_mm, stops_of(c), follows);
+  for (std::size_t p = 0; p < carriage.count; ++p) {
+    const CarriagePiece& piece = carriage.pieces[p];
+    ax.sensor.sweep(piece.motion, piece.slip_mm, events);
+    add_index_crossings(piece.motion, c.index_pitch_mm, c.index_offset_mm, in.index_edges);
+  }
+  ax.moving = motor.end.velocity_mm_per_s != 0;
+  ax.actual_mm = carriage.count ? carriage.end_mm : ax.actual_mm;
+  c.actual_position_mm = ax.actual_mm;
+
+  // True edges and bounce toggles in time order; each one flips the contact.
+  const bool report = reports_edges(i);
+  const double bounce_s = c.bounce_ms / 1000.0;
+  double toggle_s = 0;
+  auto flush_bounce = [&](double until_s) {
+    while (ax.bounce.pop_due(until_s, toggle_s)) {
+      ax.bounce_odd = !ax.bounce_odd;
+      if (report) in.sensor_edges.add(toggle_s - time_s_);
+    }
+  };
+  for (std::size_t e = 0; e < events.count; ++e) {
+    const SensorEvent& ev = events.items[e];
+    const double t_s = time_s_ + ev.time_s;
+    flush_bounce(t_s);
+    ax.ring.push(EdgeRecord{i, t_s, ev.to_active, ev.actual_mm, ev.actual_mm - ev.slip_mm});
+    if (report) in.sensor_edges.add(ev.time_s);
+    ax.bounce.schedule(t_s, bounce_s);
+  }
+  flush_bounce(time_s_ + dt_s);
+
+  ax.reported_level = electrical_level(i);
+  in.sensor_level = ax.reported_level;
+  in.absolute_valid = true;
+  in.absolute_position_mm = ax.actual_mm + c.absolute_offset_mm;
+  in.drive_fault = c.fault == Fault::drive_fault;
+}
+
+void Simulator::route_sensors(const Outputs& outputs) {
+  for (std::size_t m = 0; m < kAxisCount; ++m) {
+    inputs_.axes[m] = own_[m];
+    const int s = config_.commutator_slave[m];
+    // The diverter puts the slave's switch on the master's input; switching it
+    // is a plain level change, with no edge time.
+    if (outputs.axes[m].commutator_output && s >= 0 && s < static_cast<int>(kAxisCount) &&
+        static_cast<std::size_t>(s) != m) {
+      inputs_.axes[m].sensor_level = own_[s].sensor_level;
+      inputs_.axes[m].sensor_edges = own_[s].sensor_edges;
+    }
+  }
+}
+
+std::size_t Simulator::edges(std::size_t axis, std::span<EdgeRecord> out) const {
+  return axes_[axis].ring.copy(out);
+}
+
+std::vector<EdgeRecord> Simulator::edges(std::size_t axis) const {
+  std::vector<EdgeRecord> out(axes_[axis].ring.size());
+  axes_[axis].ring.copy(out);
+  return out;
+}
+
+std::optional<EdgeRecord> Simulator::last_edge(std::size_t axis) const {
+  return axes_[axis].ring.last();
+}
+
+std::optional<EdgeRecord> Simulator::last_edge(std::size_t axis, bool to_active) const {
+  return axes_[axis].ring.last(to_active);
+}
+
+}  // namespace homing::sim

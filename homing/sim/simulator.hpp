@@ -1,0 +1,94 @@
+#pragma once
+// The simulated machine, the default backend. Pure and deterministic: no
+// clocks, threads or I/O; every random draw comes from generators seeded from
+// the config, so a run repeats exactly. Runs in lock-step with the engine:
+//   inputs = sim.inputs(); outputs = engine.step(settings, inputs, dt);
+//   sim.advance(outputs, dt);
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "bounce.hpp"
+#include "config.hpp"
+#include "edge_ring.hpp"
+#include "home_sensor.hpp"
+#include "homing/io.hpp"
+
+namespace homing::sim {
+
+class Simulator {
+ public:
+  explicit Simulator(const MachineConfig& config);
+
+  // Inputs describing the period the last advance() simulated: levels at its
+  // end, edges with times in [0, dt] from its start. Before any advance():
+  // the levels at rest, no edges. commands, communication_lost and
+  // settings_lost are never touched (the runtime owns them).
+  const Inputs& inputs() const { return inputs_; }
+
+  // Runs every axis's outputs.axes[i].motion for dt_s starting from
+  // outputs.axes[i].motor (the engine's motor state now).
+  void advance(const Outputs& outputs, double dt_s);
+
+  // Knobs at run time (as Modbus writes them). set_axis_config keeps the
+  // carriage where it is (its actual_position_mm is ignored: use place()).
+  void set_axis_config(std::size_t axis, const AxisConfig& config);
+  // actual_position_mm here is the live carriage position.
+  const AxisConfig& axis_config(std::size_t axis) const { return config_.axes[axis]; }
+  // Refused (false) while the axis moves. Clamped to the mechanical stops.
+  bool place(std::size_t axis, double actual_mm);
+  // Shifts the carriage by mm without the controller knowing (within the stops).
+  void lose_steps(std::size_t axis, double mm);
+  void set_commutator_slave(std::size_t master, int slave);
+  void set_estop(bool pressed);
+  void set_start_button(bool pressed);
+  void set_homing_permit(bool on);
+  // Restarts every generator from this seed and redraws the pending edge noise.
+  void set_seed(std::uint64_t seed);
+
+  double actual_position_mm(std::size_t axis) const { return axes_[axis].actual_mm; }
+  // The physical switch: no fault, polarity or bounce.
+  bool sensor_active(std::size_t axis) const { return axes_[axis].sensor.active(); }
+  bool at_hard_stop(std::size_t axis) const;
+  // The motor is still running at the end of the last period.
+  bool moving(std::size_t axis) const { return axes_[axis].moving; }
+  double time_s() const { return time_s_; }
+  const MachineConfig& config() const { return config_; }
+
+  // True sensor edges (bounce excluded), oldest first; the last
+  // EdgeRing::kCapacity per axis are kept.
+  std::size_t edges(std::size_t axis, std::span<EdgeRecord> out) const;
+  std::vector<EdgeRecord> edges(std::size_t axis) const;
+  std::optional<EdgeRecord> last_edge(std::size_t axis) const;
+  std::optional<EdgeRecord> last_edge(std::size_t axis, bool to_active) const;
+  // Edges since construction, including those no longer kept.
+  std::uint64_t edge_count(std::size_t axis) const { return axes_[axis].ring.total(); }
+
+ private:
+  struct Axis {
+    double actual_mm = 0;
+    bool moving = false;
+    HomeSensor sensor{};
+    BounceQueue bounce{};
+    bool bounce_odd = false;       // an odd number of bounce toggles so far: contact is flipped
+    bool reported_level = false;   // electrical level at the end of the last period
+    EdgeRing ring{};
+  };
+
+  void reseed();
+  void advance_axis(std::size_t axis, const AxisOutputs& outputs, double dt_s);
+  bool electrical_level(std::size_t axis) const;
+  bool reports_edges(std::size_t axis) const;
+  void route_sensors(const Outputs& outputs);
+
+  MachineConfig config_;
+  std::array<Axis, kAxisCount> axes_{};
+  std::array<AxisInputs, kAxisCount> own_{};  // each axis's own sensor channel before routing
+  Inputs inputs_{};
+  double time_s_ = 0;
+};
+
+}  // namespace homing::sim
