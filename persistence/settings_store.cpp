@@ -431,7 +431,11 @@ std::optional<std::int64_t> SettingsStore::value(const std::string& name) const 
 Result<std::vector<Change>> SettingsStore::commit(const std::vector<SettingWrite>& writes, const ChangeSource& source) {
   std::lock_guard lock(impl_->mu);
   auto changes = impl_->commit_locked(writes, source);
-  if (changes && !changes->empty()) {
+  if (!changes) {
+    changes.error().message += "; nothing was written, the old settings stay in force";
+    return changes;
+  }
+  if (!changes->empty()) {
     if (auto s = impl_->backup_if_due_locked(); !s) impl_->log->warn("{}", s.error().message);
   }
   return changes;

@@ -6,6 +6,8 @@
 #include <cstring>
 #include <filesystem>
 
+#include <sys/statvfs.h>
+
 namespace persistence {
 
 std::string_view kind_name(ErrorKind kind) {
@@ -57,10 +59,9 @@ namespace {
 std::string_view hint(ErrorKind kind) {
   switch (kind) {
     case ErrorKind::disk_full:
-      return "free space on the storage device (or raise the size limit); the old settings stay in force";
+      return "free space on the storage device";
     case ErrorKind::read_only:
-      return "the storage is read-only or write-protected; check the mount and file permissions; the old "
-             "settings stay in force";
+      return "the storage is read-only or write-protected; check the mount and file permissions";
     case ErrorKind::corrupt:
       return "the database is damaged; restart the module to restore the last good backup";
     case ErrorKind::busy: return "another program holds the database locked; close it and retry";
@@ -98,9 +99,28 @@ Result<Db> Db::open(const std::string& path, int flags, const char* vfs) {
   return db;
 }
 
+namespace {
+// For an I/O error during COMMIT SQLite often keeps no errno (sqlite3_system_errno
+// is 0, and the failing write may be to the WAL file), so ask the main file's VFS,
+// then the file system itself: read-only mount or no free blocks.
+int diagnose_errno(sqlite3* db, const std::string& path) {
+  int e = 0;
+  if (sqlite3_file_control(db, "main", SQLITE_FCNTL_LAST_ERRNO, &e) == SQLITE_OK && e != 0) return e;
+  std::filesystem::path dir = std::filesystem::absolute(std::filesystem::path(path)).parent_path();
+  struct statvfs st {};
+  if (::statvfs(dir.c_str(), &st) != 0) return 0;
+  if (st.f_flag & ST_RDONLY) return EROFS;
+  if (st.f_bavail == 0) return ENOSPC;
+  return 0;
+}
+}  // namespace
+
 Error Db::error(int rc, std::string_view what) const {
   if (!db_) return Error{ErrorKind::internal, fmt::format("{}: {} on a closed database", path_, what)};
-  return make_error(path_, what, rc, sqlite3_system_errno(db_.get()), sqlite3_errmsg(db_.get()));
+  int sys = sqlite3_system_errno(db_.get());
+  if (sys == 0 && ((rc & 0xff) == SQLITE_IOERR || (rc & 0xff) == SQLITE_CANTOPEN || (rc & 0xff) == SQLITE_FULL))
+    sys = diagnose_errno(db_.get(), path_);
+  return make_error(path_, what, rc, sys, sqlite3_errmsg(db_.get()));
 }
 
 Status Db::exec(std::string_view sql, std::string_view what) {

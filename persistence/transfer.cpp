@@ -189,7 +189,10 @@ Result<ImportReport> SettingsStore::import_file(const std::string& file, const V
   writes.reserve(entries.size());
   for (const auto& [name, e] : entries) writes.push_back({name, e.value});
   auto changes = m.commit_locked(writes, ChangeSource{"import", file});
-  if (!changes) return std::unexpected(changes.error());
+  if (!changes) {
+    changes.error().message += fmt::format("; nothing was imported from {}", file);
+    return std::unexpected(changes.error());
+  }
   if (!changes->empty()) {
     if (auto s = m.backup_if_due_locked(); !s) m.log->warn("{}", s.error().message);
   }

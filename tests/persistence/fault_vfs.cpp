@@ -1,0 +1,152 @@
+#include "fault_vfs.hpp"
+
+#include <sqlite3.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <mutex>
+
+namespace fault_vfs {
+namespace {
+
+std::atomic<Fault> g_fault{Fault::none};
+std::atomic<int> g_countdown{0};
+std::atomic<int> g_hits{0};
+std::atomic<int> g_errno{0};
+sqlite3_vfs* g_real = nullptr;
+sqlite3_vfs g_vfs{};
+
+struct File {
+  sqlite3_file base;
+  sqlite3_file* real;
+};
+sqlite3_file* R(sqlite3_file* f) { return reinterpret_cast<File*>(f)->real; }
+
+// Returns the error code to inject, or SQLITE_OK.
+int should_fail(int readonly_code) {
+  Fault f = g_fault.load();
+  if (f == Fault::none) return SQLITE_OK;
+  if (g_countdown.fetch_sub(1) > 0) return SQLITE_OK;
+  ++g_hits;
+  if (f == Fault::disk_full) {
+    g_errno = ENOSPC;
+    return SQLITE_FULL;
+  }
+  g_errno = EROFS;
+  return readonly_code;
+}
+
+int x_close(sqlite3_file* f) {
+  int rc = R(f)->pMethods ? R(f)->pMethods->xClose(R(f)) : SQLITE_OK;
+  return rc;
+}
+int x_read(sqlite3_file* f, void* b, int n, sqlite3_int64 o) { return R(f)->pMethods->xRead(R(f), b, n, o); }
+int x_write(sqlite3_file* f, const void* b, int n, sqlite3_int64 o) {
+  if (int rc = should_fail(SQLITE_IOERR_WRITE)) return rc;
+  return R(f)->pMethods->xWrite(R(f), b, n, o);
+}
+int x_truncate(sqlite3_file* f, sqlite3_int64 s) {
+  if (int rc = should_fail(SQLITE_IOERR_TRUNCATE)) return rc == SQLITE_FULL ? SQLITE_IOERR_TRUNCATE : rc;
+  return R(f)->pMethods->xTruncate(R(f), s);
+}
+int x_sync(sqlite3_file* f, int flags) {
+  if (g_fault.load() == Fault::read_only) {
+    if (int rc = should_fail(SQLITE_IOERR_FSYNC)) return rc;
+  }
+  return R(f)->pMethods->xSync(R(f), flags);
+}
+int x_size(sqlite3_file* f, sqlite3_int64* s) { return R(f)->pMethods->xFileSize(R(f), s); }
+int x_lock(sqlite3_file* f, int l) { return R(f)->pMethods->xLock(R(f), l); }
+int x_unlock(sqlite3_file* f, int l) { return R(f)->pMethods->xUnlock(R(f), l); }
+int x_check(sqlite3_file* f, int* o) { return R(f)->pMethods->xCheckReservedLock(R(f), o); }
+int x_fcntl(sqlite3_file* f, int op, void* a) {
+  if (op == SQLITE_FCNTL_LAST_ERRNO && g_errno.load() != 0) {
+    *static_cast<int*>(a) = g_errno.load();
+    return SQLITE_OK;
+  }
+  return R(f)->pMethods->xFileControl(R(f), op, a);
+}
+int x_sector(sqlite3_file* f) { return R(f)->pMethods->xSectorSize(R(f)); }
+int x_devchar(sqlite3_file* f) { return R(f)->pMethods->xDeviceCharacteristics(R(f)); }
+int x_shmmap(sqlite3_file* f, int i, int sz, int ext, void volatile** pp) {
+  return R(f)->pMethods->xShmMap(R(f), i, sz, ext, pp);
+}
+int x_shmlock(sqlite3_file* f, int o, int n, int fl) { return R(f)->pMethods->xShmLock(R(f), o, n, fl); }
+void x_shmbarrier(sqlite3_file* f) { R(f)->pMethods->xShmBarrier(R(f)); }
+int x_shmunmap(sqlite3_file* f, int d) { return R(f)->pMethods->xShmUnmap(R(f), d); }
+int x_fetch(sqlite3_file* f, sqlite3_int64 o, int n, void** pp) { return R(f)->pMethods->xFetch(R(f), o, n, pp); }
+int x_unfetch(sqlite3_file* f, sqlite3_int64 o, void* p) { return R(f)->pMethods->xUnfetch(R(f), o, p); }
+
+const sqlite3_io_methods kMethods = {
+    3,        x_close,    x_read,     x_write,    x_truncate,   x_sync,     x_size,
+    x_lock,   x_unlock,   x_check,    x_fcntl,    x_sector,     x_devchar,  x_shmmap,
+    x_shmlock, x_shmbarrier, x_shmunmap, x_fetch, x_unfetch,
+};
+
+int x_open(sqlite3_vfs*, sqlite3_filename name, sqlite3_file* f, int flags, int* out_flags) {
+  auto* file = reinterpret_cast<File*>(f);
+  file->real = reinterpret_cast<sqlite3_file*>(file + 1);
+  std::memset(file->real, 0, static_cast<std::size_t>(g_real->szOsFile));
+  int rc = g_real->xOpen(g_real, name, file->real, flags, out_flags);
+  file->base.pMethods = file->real->pMethods ? &kMethods : nullptr;
+  return rc;
+}
+int x_delete(sqlite3_vfs*, const char* n, int sync) { return g_real->xDelete(g_real, n, sync); }
+int x_access(sqlite3_vfs*, const char* n, int fl, int* out) { return g_real->xAccess(g_real, n, fl, out); }
+int x_fullpath(sqlite3_vfs*, const char* n, int sz, char* out) { return g_real->xFullPathname(g_real, n, sz, out); }
+void* x_dlopen(sqlite3_vfs*, const char* n) { return g_real->xDlOpen(g_real, n); }
+void x_dlerror(sqlite3_vfs*, int n, char* m) { g_real->xDlError(g_real, n, m); }
+void (*x_dlsym(sqlite3_vfs*, void* h, const char* s))(void) { return g_real->xDlSym(g_real, h, s); }
+void x_dlclose(sqlite3_vfs*, void* h) { g_real->xDlClose(g_real, h); }
+int x_random(sqlite3_vfs*, int n, char* out) { return g_real->xRandomness(g_real, n, out); }
+int x_sleep(sqlite3_vfs*, int us) { return g_real->xSleep(g_real, us); }
+int x_time(sqlite3_vfs*, double* t) { return g_real->xCurrentTime(g_real, t); }
+int x_lasterror(sqlite3_vfs*, int n, char* m) {
+  if (int e = g_errno.load()) return e;
+  return g_real->xGetLastError(g_real, n, m);
+}
+int x_time64(sqlite3_vfs*, sqlite3_int64* t) { return g_real->xCurrentTimeInt64(g_real, t); }
+
+}  // namespace
+
+void install() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    g_real = sqlite3_vfs_find(nullptr);
+    g_vfs.iVersion = 2;
+    g_vfs.szOsFile = static_cast<int>(sizeof(File)) + g_real->szOsFile;
+    g_vfs.mxPathname = g_real->mxPathname;
+    g_vfs.zName = kName;
+    g_vfs.xOpen = x_open;
+    g_vfs.xDelete = x_delete;
+    g_vfs.xAccess = x_access;
+    g_vfs.xFullPathname = x_fullpath;
+    g_vfs.xDlOpen = x_dlopen;
+    g_vfs.xDlError = x_dlerror;
+    g_vfs.xDlSym = x_dlsym;
+    g_vfs.xDlClose = x_dlclose;
+    g_vfs.xRandomness = x_random;
+    g_vfs.xSleep = x_sleep;
+    g_vfs.xCurrentTime = x_time;
+    g_vfs.xGetLastError = x_lasterror;
+    g_vfs.xCurrentTimeInt64 = x_time64;
+    sqlite3_vfs_register(&g_vfs, 0);
+  });
+}
+
+void arm(Fault fault, int writes_before) {
+  g_countdown = writes_before;
+  g_hits = 0;
+  g_errno = 0;
+  g_fault = fault;
+}
+
+void disarm() {
+  g_fault = Fault::none;
+  g_errno = 0;
+}
+
+int faults_hit() { return g_hits.load(); }
+
+}  // namespace fault_vfs

@@ -1,0 +1,252 @@
+// Disk faults and damaged databases. A full or read-only disk is simulated by
+// the "faulty" SQLite VFS (fault_vfs.hpp): we run as root, where chmod would
+// not stop writes, and mounting is not available.
+#include <catch2/catch.hpp>
+
+#include "fault_vfs.hpp"
+#include "helpers.hpp"
+
+using namespace persistence;
+
+namespace {
+
+StoreOptions faulty_options() {
+  fault_vfs::install();
+  auto o = test::options();
+  o.vfs = fault_vfs::kName;
+  return o;
+}
+
+void check_fault_keeps_old_value(fault_vfs::Fault fault, ErrorKind expected_kind) {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  OpenReport report;
+  {
+    auto store = test::open_ok(db, report, faulty_options());
+    REQUIRE(store.commit({{"axis.x.seek_feedrate", 4000}}, test::kTcp));
+    {
+      fault_vfs::Scoped f(fault);
+      auto r = store.commit({{"axis.x.seek_feedrate", 5000}, {"axis.y.mode", 4}}, test::kTcp);
+      REQUIRE_FALSE(r);
+      CHECK(fault_vfs::faults_hit() > 0);
+      CHECK(r.error().kind == expected_kind);
+      CHECK_THAT(r.error().message, Catch::Contains(db));
+      CHECK_THAT(r.error().message, Catch::Contains("old settings stay in force"));
+      // In memory: old values.
+      CHECK(store.value("axis.x.seek_feedrate") == 4000);
+      CHECK(store.value("axis.y.mode") == 0);
+      // Still faulty: still refused, still old.
+      CHECK_FALSE(store.commit({{"axis.y.mode", 4}}, test::kTcp));
+      CHECK(store.value("axis.y.mode") == 0);
+    }
+    // The disk recovers: writes work again on the same store.
+    REQUIRE(store.commit({{"global.watchdog_ms", 900}}, test::kTcp));
+    CHECK(store.value("axis.x.seek_feedrate") == 4000);
+    auto audit = store.recent_changes(10);
+    REQUIRE(audit);
+    CHECK(audit->size() == 2);  // 4000 and 900; nothing of the refused writes
+  }
+  // On disk: old values, intact.
+  auto store = test::open_ok(db, report);
+  CHECK(report.outcome == OpenOutcome::opened);
+  CHECK(store.value("axis.x.seek_feedrate") == 4000);
+  CHECK(store.value("axis.y.mode") == 0);
+  CHECK(store.value("global.watchdog_ms") == 900);
+  CHECK(store.check_integrity());
+}
+
+}  // namespace
+
+TEST_CASE("a full disk answers the write with an error and keeps the old value everywhere", "[persistence][fault]") {
+  check_fault_keeps_old_value(fault_vfs::Fault::disk_full, ErrorKind::disk_full);
+}
+
+TEST_CASE("a read-only disk answers the write with an error and keeps the old value everywhere",
+          "[persistence][fault]") {
+  check_fault_keeps_old_value(fault_vfs::Fault::read_only, ErrorKind::read_only);
+}
+
+TEST_CASE("a disk that fails in the middle of a commit keeps the old value everywhere", "[persistence][fault]") {
+  // Let some page writes of the commit through before the disk fills.
+  for (int writes_before : {1, 2, 3}) {
+    test::TempDir dir;
+    const auto db = dir.file("settings.db");
+    OpenReport report;
+    {
+      auto store = test::open_ok(db, report, faulty_options());
+      std::vector<SettingWrite> many;
+      for (const auto& d : test::defaults()) many.push_back({d.name, d.value + 17});
+      fault_vfs::Scoped f(fault_vfs::Fault::disk_full, writes_before);
+      auto r = store.commit(many, test::kTcp);
+      if (r) continue;  // the commit needed fewer writes than allowed: nothing to check
+      CHECK(store.value("axis.x.mode") == 3);
+    }
+    auto store = test::open_ok(db, report);
+    CHECK(report.outcome == OpenOutcome::opened);
+    CHECK(store.value("axis.x.mode") == 3);
+    CHECK(store.value("global.watchdog_ms") == 500);
+  }
+}
+
+TEST_CASE("a homing run that cannot be recorded returns an error", "[persistence][fault]") {
+  test::TempDir dir;
+  OpenReport report;
+  auto store = test::open_ok(dir.file("settings.db"), report, faulty_options());
+  fault_vfs::Scoped f(fault_vfs::Fault::disk_full);
+  auto r = store.record_homing_run(HomingRun{});
+  REQUIRE_FALSE(r);
+  CHECK(r.error().kind == ErrorKind::disk_full);
+}
+
+TEST_CASE("each committed change batch leaves a verified backup, keeping the last two", "[persistence][backup]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  OpenReport report;
+  auto store = test::open_ok(db, report);
+  REQUIRE(store.commit({{"axis.x.mode", 4}}, test::kTcp));
+  REQUIRE(std::filesystem::exists(db + ".bak"));
+  CHECK(test::sql_int(db + ".bak", "SELECT value FROM settings WHERE name='axis.x.mode'") == 4);
+  REQUIRE(store.commit({{"axis.x.mode", 5}}, test::kTcp));
+  CHECK(test::sql_int(db + ".bak", "SELECT value FROM settings WHERE name='axis.x.mode'") == 5);
+  CHECK(test::sql_int(db + ".bak.1", "SELECT value FROM settings WHERE name='axis.x.mode'") == 4);
+  CHECK_FALSE(std::filesystem::exists(db + ".bak.tmp"));
+}
+
+TEST_CASE("backups are deferred while commits come fast, and written by close", "[persistence][backup]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  OpenReport report;
+  auto o = test::options();
+  o.backup_min_interval = std::chrono::hours(1);
+  {
+    auto store = test::open_ok(db, report, o);  // created: writes the first backup
+    REQUIRE(store.commit({{"axis.x.mode", 4}}, test::kTcp));
+    CHECK(store.backup_pending());
+    CHECK(test::sql_int(db + ".bak", "SELECT value FROM settings WHERE name='axis.x.mode'") == 3);
+  }
+  CHECK(test::sql_int(db + ".bak", "SELECT value FROM settings WHERE name='axis.x.mode'") == 4);
+}
+
+TEST_CASE("a damaged database header is detected and the last good backup restored", "[persistence][fault]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  OpenReport report;
+  {
+    auto store = test::open_ok(db, report);
+    REQUIRE(store.commit({{"axis.x.seek_feedrate", 4321}}, test::kTcp));
+  }
+  test::smash(db, 0, 100);
+  test::CapturedLog log;
+  auto o = test::options();
+  o.logger = log.logger;
+  auto store = test::open_ok(db, report, o);
+  CHECK(report.outcome == OpenOutcome::restored_from_backup);
+  CHECK(report.restored_from == db + ".bak");
+  CHECK_FALSE(report.settings_lost);
+  CHECK(store.value("axis.x.seek_feedrate") == 4321);
+  CHECK(std::filesystem::exists(report.damaged_copy));
+  CHECK_THAT(log.text(), Catch::Contains("damaged") && Catch::Contains("restored from backup " + db + ".bak"));
+  CHECK(store.check_integrity());
+}
+
+TEST_CASE("damaged pages inside the database fail the integrity check and the backup is restored",
+          "[persistence][fault]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  OpenReport report;
+  {
+    auto o = test::options();
+    auto store = test::open_ok(db, report, o);
+    std::vector<SettingWrite> w;
+    for (int i = 0; i < 30; ++i) REQUIRE(store.commit({{"global.watchdog_ms", 600 + i}}, test::kTcp));
+  }
+  auto size = std::filesystem::file_size(db);
+  REQUIRE(size >= 3 * 4096);
+  for (std::size_t page = 1; page * 4096 < size; ++page) test::smash(db, page * 4096 + 8, 64);
+  auto store = test::open_ok(db, report);
+  CHECK(report.outcome == OpenOutcome::restored_from_backup);
+  CHECK(store.value("global.watchdog_ms") == 629);
+}
+
+TEST_CASE("when the newest backup is damaged too, the one before is restored", "[persistence][fault]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  OpenReport report;
+  {
+    auto store = test::open_ok(db, report);
+    REQUIRE(store.commit({{"axis.y.mode", 1}}, test::kTcp));
+    REQUIRE(store.commit({{"axis.y.mode", 2}}, test::kTcp));
+  }
+  test::smash(db, 0, 100);
+  test::smash(db + ".bak", 0, 100);
+  test::CapturedLog log;
+  auto o = test::options();
+  o.logger = log.logger;
+  auto store = test::open_ok(db, report, o);
+  CHECK(report.outcome == OpenOutcome::restored_from_backup);
+  CHECK(report.restored_from == db + ".bak.1");
+  CHECK(store.value("axis.y.mode") == 1);
+  CHECK_THAT(log.text(), Catch::Contains("backup " + db + ".bak is not usable"));
+}
+
+TEST_CASE("a damaged database without a good backup starts on defaults with settings lost", "[persistence][fault]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  OpenReport report;
+  {
+    auto store = test::open_ok(db, report);
+    REQUIRE(store.commit({{"axis.x.mode", 7}}, test::kTcp));
+  }
+  std::filesystem::remove(db + ".bak");
+  std::filesystem::remove(db + ".bak.1");
+  test::smash(db, 0, 100);
+  test::CapturedLog log;
+  auto o = test::options();
+  o.logger = log.logger;
+  {
+    auto store = test::open_ok(db, report, o);
+    CHECK(report.outcome == OpenOutcome::defaults_settings_lost);
+    CHECK(report.settings_lost);
+    CHECK(store.settings_lost());
+    CHECK(store.value("axis.x.mode") == 3);
+    CHECK_THAT(log.text(), Catch::Contains("critical") && Catch::Contains("DEFAULT settings"));
+  }
+  // Still latched after a restart, until someone acknowledges it.
+  {
+    auto store = test::open_ok(db, report);
+    CHECK(report.outcome == OpenOutcome::opened);
+    CHECK(report.settings_lost);
+    REQUIRE(store.acknowledge_settings_lost(test::kTcp));
+    CHECK_FALSE(store.settings_lost());
+    CHECK(store.recent_changes(1)->front().name == "settings_lost");
+  }
+  test::open_ok(db, report);
+  CHECK_FALSE(report.settings_lost);
+}
+
+TEST_CASE("a database file that vanished is restored from its backup", "[persistence][fault]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  OpenReport report;
+  {
+    auto store = test::open_ok(db, report);
+    REQUIRE(store.commit({{"axis.x.mode", 2}}, test::kTcp));
+  }
+  std::filesystem::remove(db);
+  auto store = test::open_ok(db, report);
+  CHECK(report.outcome == OpenOutcome::restored_from_backup);
+  CHECK(store.value("axis.x.mode") == 2);
+}
+
+TEST_CASE("an intact start says so in the log", "[persistence]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  OpenReport report;
+  test::CapturedLog log;
+  auto o = test::options();
+  o.logger = log.logger;
+  { test::open_ok(db, report, o); }
+  CHECK_THAT(log.text(), Catch::Contains("created"));
+  test::open_ok(db, report, o);
+  CHECK_THAT(log.text(), Catch::Contains("opened, intact"));
+}

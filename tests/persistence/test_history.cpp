@@ -1,0 +1,95 @@
+#include <catch2/catch.hpp>
+
+#include "helpers.hpp"
+
+using namespace persistence;
+
+namespace {
+HomingRun run_with(std::int64_t start, double x_corr, std::optional<double> y_corr, std::int32_t result = 0) {
+  HomingRun r;
+  r.start_ms = start;
+  r.end_ms = start + 2500;
+  r.axes = 0b11;
+  r.result = result;
+  r.alarm_axis = result ? 1 : -1;
+  r.axis[0] = {true, x_corr, 1200};
+  r.axis[1] = {true, y_corr, 1800};
+  return r;
+}
+}  // namespace
+
+TEST_CASE("a homing run is recorded with its times, axes, result and per-axis corrections", "[persistence]") {
+  test::TempDir dir;
+  OpenReport report;
+  auto store = test::open_ok(dir.file("settings.db"), report);
+  auto id1 = store.record_homing_run(run_with(1000, 0.012, -0.004));
+  auto id2 = store.record_homing_run(run_with(9000, 0.015, std::nullopt, 1));
+  REQUIRE(id1);
+  REQUIRE(id2);
+  auto runs = store.recent_runs(10);
+  REQUIRE(runs);
+  REQUIRE(runs->size() == 2);
+  const auto& last = (*runs)[0];
+  CHECK(last.id == *id2);
+  CHECK(last.start_ms == 9000);
+  CHECK(last.end_ms == 11500);
+  CHECK(last.axes == 0b11);
+  CHECK(last.result == 1);
+  CHECK(last.alarm_axis == 1);
+  CHECK(last.axis[0].present);
+  CHECK(last.axis[0].correction_mm == Approx(0.015));
+  CHECK(last.axis[0].duration_ms == 1200);
+  CHECK(last.axis[1].present);
+  CHECK_FALSE(last.axis[1].correction_mm);
+  CHECK_FALSE(last.axis[2].present);
+  CHECK((*runs)[1].axis[1].correction_mm == Approx(-0.004));
+}
+
+TEST_CASE("the last N home corrections of an axis are summarised", "[persistence]") {
+  test::TempDir dir;
+  OpenReport report;
+  auto store = test::open_ok(dir.file("settings.db"), report);
+  // An old outlier that falls outside the window of the last 4.
+  REQUIRE(store.record_homing_run(run_with(0, 5.0, 0.0)));
+  for (double c : {0.010, 0.020, 0.030, 0.040}) REQUIRE(store.record_homing_run(run_with(1, c, std::nullopt)));
+  auto s = store.correction_summary(0, 4);
+  REQUIRE(s);
+  CHECK(s->count == 4);
+  CHECK(s->mean == Approx(0.025));
+  CHECK(s->spread == Approx(0.030));
+  CHECK(s->min == Approx(0.010));
+  CHECK(s->max == Approx(0.040));
+  CHECK(s->stddev == Approx(0.0129099).epsilon(1e-4));
+  auto y = store.correction_summary(1, 10);  // runs without a Y correction are skipped
+  REQUIRE(y);
+  CHECK(y->count == 1);
+  CHECK(y->stddev == 0);
+  CHECK(store.correction_summary(2, 10)->count == 0);
+  CHECK_FALSE(store.correction_summary(6, 10));
+}
+
+TEST_CASE("the homing history keeps only the newest runs up to its limit", "[persistence]") {
+  test::TempDir dir;
+  OpenReport report;
+  auto o = test::options();
+  o.history_max_rows = 3;
+  auto store = test::open_ok(dir.file("settings.db"), report, o);
+  for (int i = 0; i < 10; ++i) REQUIRE(store.record_homing_run(run_with(i * 100, i, i)));
+  auto runs = store.recent_runs(100);
+  REQUIRE(runs);
+  REQUIRE(runs->size() == 3);
+  CHECK(runs->front().start_ms == 900);
+  CHECK(runs->back().start_ms == 700);
+  CHECK(test::sql_int(dir.file("settings.db"), "SELECT count(*) FROM homing_axes") == 6);
+}
+
+TEST_CASE("the history survives reopening", "[persistence]") {
+  test::TempDir dir;
+  OpenReport report;
+  { REQUIRE(test::open_ok(dir.file("settings.db"), report).record_homing_run(run_with(42, 0.5, 0.25))); }
+  auto store = test::open_ok(dir.file("settings.db"), report);
+  auto runs = store.recent_runs(5);
+  REQUIRE(runs);
+  REQUIRE(runs->size() == 1);
+  CHECK(runs->front().axis[1].correction_mm == Approx(0.25));
+}

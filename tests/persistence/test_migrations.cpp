@@ -1,0 +1,89 @@
+// Databases written by earlier firmware (schema built here with the SQL those
+// versions shipped) upgrade to the current schema and keep their values.
+#include <catch2/catch.hpp>
+
+#include "helpers.hpp"
+
+using namespace persistence;
+
+namespace {
+
+const std::string kV1Sql = R"(
+CREATE TABLE settings(name TEXT PRIMARY KEY NOT NULL, value INTEGER NOT NULL) WITHOUT ROWID;
+PRAGMA user_version = 1;
+)";
+
+const std::string kV2Sql = kV1Sql + R"(
+CREATE TABLE audit(id INTEGER PRIMARY KEY AUTOINCREMENT, time_ms INTEGER NOT NULL, source TEXT NOT NULL,
+                   name TEXT NOT NULL, old_value INTEGER, new_value INTEGER NOT NULL);
+PRAGMA user_version = 2;
+)";
+
+}  // namespace
+
+TEST_CASE("a version 1 database upgrades and keeps its settings", "[persistence][migration]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  test::sql_exec(db, kV1Sql + "INSERT INTO settings VALUES('axis.x.mode', 8), ('axis.y.mode', 2);");
+  OpenReport report;
+  auto store = test::open_ok(db, report);
+  CHECK(report.outcome == OpenOutcome::opened);
+  CHECK(report.schema_version_found == 1);
+  CHECK(store.value("axis.x.mode") == 8);
+  CHECK(store.value("axis.y.mode") == 2);
+  CHECK(store.value("global.watchdog_ms") == 500);  // not in v1 file: default added
+  CHECK(test::sql_int(db, "PRAGMA user_version") == kSchemaVersion);
+  // The upgraded database works: audit and history.
+  REQUIRE(store.commit({{"axis.x.mode", 3}}, test::kTcp));
+  REQUIRE(store.record_homing_run(HomingRun{}));
+  CHECK(std::filesystem::exists(db + ".pre-v" + std::to_string(kSchemaVersion)));
+}
+
+TEST_CASE("a version 2 database upgrades, keeping settings and splitting the audit source", "[persistence][migration]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  test::sql_exec(db, kV2Sql + R"(
+    INSERT INTO settings VALUES('axis.x.seek_feedrate', 2500);
+    INSERT INTO audit(time_ms, source, name, old_value, new_value)
+      VALUES(100, 'tcp 10.0.0.5:502', 'axis.x.seek_feedrate', 3000, 2500),
+            (200, 'cli', 'axis.x.seek_feedrate', NULL, 2500);
+  )");
+  OpenReport report;
+  auto store = test::open_ok(db, report);
+  CHECK(report.schema_version_found == 2);
+  CHECK(store.value("axis.x.seek_feedrate") == 2500);
+  auto audit = store.recent_changes(10);
+  REQUIRE(audit);
+  REQUIRE(audit->size() == 2);
+  CHECK((*audit)[1].transport == "tcp");
+  CHECK((*audit)[1].client == "10.0.0.5:502");
+  CHECK((*audit)[1].old_value == 3000);
+  CHECK((*audit)[0].transport == "cli");
+  CHECK((*audit)[0].client == "");
+  CHECK((*audit)[0].old_value == 2500);
+  // New audit rows continue after the migrated ones.
+  REQUIRE(store.commit({{"axis.x.seek_feedrate", 2600}}, test::kTcp));
+  CHECK(store.recent_changes(1)->front().id == 3);
+}
+
+TEST_CASE("an upgraded database opens as current the next time", "[persistence][migration]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  test::sql_exec(db, kV1Sql);
+  OpenReport report;
+  { test::open_ok(db, report); }
+  test::open_ok(db, report);
+  CHECK(report.schema_version_found == kSchemaVersion);
+}
+
+TEST_CASE("a database from a newer firmware is refused and left untouched", "[persistence][migration]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  test::sql_exec(db, kV2Sql + "PRAGMA user_version = 99;");
+  OpenReport report;
+  auto store = SettingsStore::open(db, test::defaults(), report, test::options());
+  REQUIRE_FALSE(store);
+  CHECK(store.error().kind == ErrorKind::version);
+  CHECK_THAT(store.error().message, Catch::Contains("newer firmware"));
+  CHECK(test::sql_int(db, "PRAGMA user_version") == 99);
+}
