@@ -1,0 +1,332 @@
+// Raw <-> engineering conversion and the binding of every row to the engine's
+// structs. One case per Key; a row whose key has no binding is a table bug and
+// throws (the tests touch every row, so it cannot ship).
+#include "registers/codec.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "registers/lookup.hpp"
+
+namespace registers {
+namespace {
+
+using homing::AxisSettings;
+using homing::Settings;
+
+[[noreturn]] void unbound(const Register& reg, std::string_view what) {
+  throw std::logic_error(fmt::format("register {} has no {} binding", reg.name(), what));
+}
+
+// Exact divisor of the scale: dividing by 1000 (not multiplying by 0.001)
+// gives the double nearest to the decimal value, so 100 µm prints as 0.1.
+double divisor(const Register& reg) { return reg.scale() == 1.0 ? 1.0 : std::round(1.0 / reg.scale()); }
+
+// The double-valued members of AxisSettings, by key (const-correct for get and set).
+template <class A>
+auto double_field(A& a, Key k) -> decltype(&a.pull_off_mm) {
+  switch (k) {
+    case Key::axis_seek_feedrate: return &a.seek_feedrate_mm_per_min;
+    case Key::axis_latch_feedrate: return &a.latch_feedrate_mm_per_min;
+    case Key::axis_acceleration: return &a.acceleration_mm_per_s2;
+    case Key::axis_max_seek_travel: return &a.max_seek_travel_mm;
+    case Key::axis_max_stop_distance: return &a.max_stop_distance_mm;
+    case Key::axis_max_backoff: return &a.max_backoff_mm;
+    case Key::axis_pull_off: return &a.pull_off_mm;
+    case Key::axis_home_position: return &a.home_position_mm;
+    case Key::axis_final_position: return &a.final_position_mm;
+    case Key::axis_debounce_ms: return &a.debounce_ms;
+    case Key::axis_pre_move_distance: return &a.pre_move_distance_mm;
+    case Key::axis_push_distance: return &a.push_distance_mm;
+    case Key::axis_index_pitch: return &a.index_pitch_mm;
+    case Key::axis_max_misalignment: return &a.max_misalignment_mm;
+    case Key::axis_switch_compensation: return &a.switch_compensation_mm;
+    case Key::axis_soft_limit_min: return &a.soft_limit_min_mm;
+    case Key::axis_soft_limit_max: return &a.soft_limit_max_mm;
+    case Key::axis_jog_feedrate: return &a.jog_feedrate_mm_per_min;
+    default: return nullptr;
+  }
+}
+
+template <class A>
+auto bool_field(A& a, Key k) -> decltype(&a.sensor_nc) {
+  switch (k) {
+    case Key::axis_final_move_enable: return &a.final_move_enable;
+    case Key::axis_sensor_nc: return &a.sensor_nc;
+    case Key::axis_soft_limits_enable: return &a.soft_limits_enable;
+    case Key::axis_shared_limit: return &a.shared_limit;
+    default: return nullptr;
+  }
+}
+
+template <class E>
+std::int64_t raw_of(E e) { return static_cast<std::int64_t>(e); }
+
+std::size_t axis_index(const Register& reg) { return static_cast<std::size_t>(reg.axis); }
+
+}  // namespace
+
+// ---- words ----
+void encode_words(const Register& reg, std::int64_t raw, WordOrder order, std::span<std::uint16_t> out) {
+  const auto u = static_cast<std::uint32_t>(static_cast<std::uint64_t>(raw) & 0xFFFF'FFFFu);
+  if (reg.words() == 1) {
+    out[0] = static_cast<std::uint16_t>(u & 0xFFFFu);
+    return;
+  }
+  const auto hi = static_cast<std::uint16_t>(u >> 16);
+  const auto lo = static_cast<std::uint16_t>(u & 0xFFFFu);
+  out[0] = order == WordOrder::high_first ? hi : lo;
+  out[1] = order == WordOrder::high_first ? lo : hi;
+}
+
+std::int64_t decode_words(const Register& reg, std::span<const std::uint16_t> words, WordOrder order) {
+  if (reg.words() == 1) {
+    if (reg.type == Type::i16) return static_cast<std::int16_t>(words[0]);
+    return words[0];
+  }
+  const std::uint32_t hi = order == WordOrder::high_first ? words[0] : words[1];
+  const std::uint32_t lo = order == WordOrder::high_first ? words[1] : words[0];
+  const std::uint32_t u = (hi << 16) | lo;
+  if (reg.type == Type::i32) return static_cast<std::int32_t>(u);
+  return u;
+}
+
+// ---- scale ----
+double to_engineering(const Register& reg, std::int64_t raw) {
+  return static_cast<double>(raw) / divisor(reg);
+}
+
+std::int64_t to_raw(const Register& reg, double value) {
+  if (std::isnan(value)) return 0;
+  const double scaled = std::round(value * divisor(reg));
+  const auto lo = static_cast<double>(type_min(reg.type));
+  const auto hi = static_cast<double>(type_max(reg.type));
+  return static_cast<std::int64_t>(std::clamp(scaled, lo, hi));
+}
+
+// ---- commands ----
+std::optional<CommandRequest> command_of(const Register& coil, bool value) {
+  if (coil.unit != Unit::module || coil.table != Table::coil) return std::nullopt;
+  const int axis = coil.axis;
+  switch (coil.key) {
+    case Key::cmd_home_all: return CommandRequest{Command::home_all, -1, true};
+    case Key::cmd_abort: return CommandRequest{Command::abort, -1, true};
+    case Key::cmd_reset_alarm: return CommandRequest{Command::reset_alarm, -1, true};
+    case Key::cmd_home: return CommandRequest{Command::home_axis, axis, true};
+    case Key::cmd_move: return CommandRequest{Command::move, axis, true};
+    case Key::cmd_jog_plus: return CommandRequest{Command::jog_plus, axis, value};
+    case Key::cmd_jog_minus: return CommandRequest{Command::jog_minus, axis, value};
+    case Key::host_homing_permit: return CommandRequest{Command::homing_permit, -1, value};
+    default: unbound(coil, "command");
+  }
+}
+
+// ---- settings ----
+std::int64_t setting_raw(const Settings& settings, const Register& reg) {
+  if (reg.per_axis()) {
+    const AxisSettings& a = settings.axes[axis_index(reg)];
+    if (const double* d = double_field(a, reg.key)) return to_raw(reg, *d);
+    if (const bool* b = bool_field(a, reg.key)) return *b ? 1 : 0;
+    switch (reg.key) {
+      case Key::axis_mode: return raw_of(a.mode);
+      case Key::axis_direction: return raw_of(a.direction);
+      case Key::axis_pre_move_mode: return raw_of(a.pre_move_mode);
+      case Key::axis_slave_of: return a.slave_of;
+      case Key::axis_slave_mode: return raw_of(a.slave_mode);
+      default: unbound(reg, "settings");
+    }
+  }
+  const homing::GlobalSettings& g = settings.global;
+  switch (reg.key) {
+    case Key::sequence_step: return g.sequence_steps.at(reg.slot);
+    case Key::global_allowed_without_homing: return raw_of(g.allowed_without_homing);
+    case Key::global_alarm_clears_homed: return g.alarm_clears_homed ? 1 : 0;
+    case Key::global_watchdog_ms: return g.watchdog_ms;
+    case Key::global_permit_required: return g.permit_required ? 1 : 0;
+    default: unbound(reg, "settings");
+  }
+}
+
+void set_setting_raw(Settings& settings, const Register& reg, std::int64_t raw) {
+  if (reg.per_axis()) {
+    AxisSettings& a = settings.axes[axis_index(reg)];
+    if (double* d = double_field(a, reg.key)) {
+      *d = to_engineering(reg, raw);
+      return;
+    }
+    if (bool* b = bool_field(a, reg.key)) {
+      *b = raw != 0;
+      return;
+    }
+    switch (reg.key) {
+      case Key::axis_mode: a.mode = static_cast<homing::HomingMode>(raw); return;
+      case Key::axis_direction: a.direction = static_cast<homing::Direction>(raw); return;
+      case Key::axis_pre_move_mode: a.pre_move_mode = static_cast<homing::PreMove>(raw); return;
+      case Key::axis_slave_of: a.slave_of = static_cast<std::uint8_t>(raw); return;
+      case Key::axis_slave_mode: a.slave_mode = static_cast<homing::SlaveMode>(raw); return;
+      default: unbound(reg, "settings");
+    }
+  }
+  homing::GlobalSettings& g = settings.global;
+  switch (reg.key) {
+    case Key::sequence_step: g.sequence_steps.at(reg.slot) = static_cast<homing::AxisMask>(raw); return;
+    case Key::global_allowed_without_homing:
+      g.allowed_without_homing = static_cast<homing::AllowedWithoutHoming>(raw);
+      return;
+    case Key::global_alarm_clears_homed: g.alarm_clears_homed = raw != 0; return;
+    case Key::global_watchdog_ms: g.watchdog_ms = static_cast<std::uint32_t>(raw); return;
+    case Key::global_permit_required: g.permit_required = raw != 0; return;
+    default: unbound(reg, "settings");
+  }
+}
+
+// ---- host values ----
+std::int64_t host_raw(const HostRegisters& host, const Register& reg) {
+  switch (reg.key) {
+    case Key::host_heartbeat: return host.heartbeat;
+    case Key::host_target: return to_raw(reg, host.target_mm.at(axis_index(reg)));
+    case Key::host_homing_permit: return host.homing_permit ? 1 : 0;
+    case Key::cmd_jog_plus: return host.jog_plus.at(axis_index(reg)) ? 1 : 0;
+    case Key::cmd_jog_minus: return host.jog_minus.at(axis_index(reg)) ? 1 : 0;
+    default: unbound(reg, "host");
+  }
+}
+
+void set_host_raw(HostRegisters& host, const Register& reg, std::int64_t raw) {
+  switch (reg.key) {
+    case Key::host_heartbeat: host.heartbeat = static_cast<std::uint16_t>(raw); return;
+    case Key::host_target: host.target_mm.at(axis_index(reg)) = to_engineering(reg, raw); return;
+    case Key::host_homing_permit: host.homing_permit = raw != 0; return;
+    case Key::cmd_jog_plus: host.jog_plus.at(axis_index(reg)) = raw != 0; return;
+    case Key::cmd_jog_minus: host.jog_minus.at(axis_index(reg)) = raw != 0; return;
+    default: unbound(reg, "host");
+  }
+}
+
+// ---- status ----
+std::int64_t read_raw(const Register& reg, const ModuleView& view) {
+  if (reg.unit != Unit::module) unbound(reg, "module read");
+  const homing::Status& st = view.status;
+  if (reg.table == Table::holding_register)
+    return reg.persisted ? setting_raw(view.settings, reg) : host_raw(view.host, reg);
+  if (reg.table == Table::coil) {
+    const bool held = reg.key == Key::host_homing_permit || reg.key == Key::cmd_jog_plus ||
+                      reg.key == Key::cmd_jog_minus;
+    return held ? host_raw(view.host, reg) : 0;  // pulse commands read back 0
+  }
+  if (reg.per_axis()) {
+    const std::size_t i = axis_index(reg);
+    const homing::AxisStatus& a = st.axes[i];
+    switch (reg.key) {
+      case Key::axis_phase: return raw_of(a.phase);
+      case Key::axis_alarm: return raw_of(a.alarm.code);
+      case Key::axis_alarm_phase: return a.alarm ? raw_of(a.alarm.phase) : 0;
+      case Key::axis_position: return to_raw(reg, a.position_mm);
+      case Key::axis_velocity: return to_raw(reg, a.velocity_mm_per_s);
+      case Key::axis_home_correction: return to_raw(reg, a.home_correction_mm);
+      case Key::axis_stop_distance: return to_raw(reg, a.stop_distance_mm);
+      case Key::axis_trigger_position: return to_raw(reg, a.trigger_position_mm);
+      case Key::axis_phase_distance: return to_raw(reg, a.phase_distance_mm);
+      case Key::axis_correction_mean: return to_raw(reg, view.extras.correction_mean_mm[i]);
+      case Key::axis_correction_spread: return to_raw(reg, view.extras.correction_spread_mm[i]);
+      case Key::axis_homed: return a.homed ? 1 : 0;
+      case Key::axis_sensor: return a.sensor ? 1 : 0;
+      case Key::axis_busy: return a.busy ? 1 : 0;
+      default: unbound(reg, "status");
+    }
+  }
+  switch (reg.key) {
+    case Key::status_map_version: return view.extras.map_version;
+    case Key::status_state: return raw_of(st.state);
+    case Key::status_sequence_step: return st.sequence_step;
+    case Key::status_homing_cycles: return st.homing_cycles;
+    case Key::status_heartbeat: return st.heartbeat & 0xFFFFu;  // wraps: a watchdog only needs change
+    case Key::status_last_command_result: return raw_of(st.last_command_result);
+    case Key::status_interlocks: return st.interlocks;
+    case Key::status_global_alarm: return raw_of(st.global_alarm);
+    case Key::status_alarm_axis:
+      for (std::size_t i = 0; i < st.axes.size(); ++i)
+        if (st.axes[i].alarm) return static_cast<std::int64_t>(i) + 1;
+      return 0;
+    case Key::status_alarm: return st.alarm ? 1 : 0;
+    case Key::status_homing: return st.homing ? 1 : 0;
+    case Key::status_estop: return st.estop ? 1 : 0;
+    default: unbound(reg, "status");
+  }
+}
+
+// ---- ranges ----
+namespace {
+std::optional<Refusal> check_read_range(Unit unit, Table table, std::uint16_t start, std::size_t count) {
+  if (count == 0) return Refusal{ExceptionCode::illegal_data_value, "a read of 0 items"};
+  if (std::size_t{start} + count > 65536)
+    return Refusal{ExceptionCode::illegal_data_address,
+                   fmt::format("{} {}..{} runs past address 65535", table_name(table), start,
+                               std::size_t{start} + count - 1)};
+  for (std::size_t i = 0; i < count; ++i)
+    if (find_register(unit, table, static_cast<std::uint16_t>(start + i))) return std::nullopt;
+  return Refusal{ExceptionCode::illegal_data_address,
+                 fmt::format("no {} of the {} unit is mapped at {}..{} (see hmi_maps/)", table_name(table),
+                             unit_name(unit), start, std::size_t{start} + count - 1)};
+}
+}  // namespace
+
+std::optional<Refusal> read_words(Unit unit, Table table, std::uint16_t start, std::span<std::uint16_t> out,
+                                  WordOrder order, const RawReader& raw_of) {
+  if (auto bad = check_read_range(unit, table, start, out.size())) return bad;
+  for (std::size_t i = 0; i < out.size();) {
+    const auto address = static_cast<std::uint16_t>(start + i);
+    const Register* reg = find_register(unit, table, address);
+    if (!reg) {
+      out[i++] = 0;  // a gap in the map
+      continue;
+    }
+    std::array<std::uint16_t, 2> w{};
+    encode_words(*reg, raw_of(*reg), order, std::span(w).first(reg->words()));
+    for (std::size_t k = address - reg->address; k < reg->words() && i < out.size(); ++k) out[i++] = w[k];
+  }
+  return std::nullopt;
+}
+
+std::optional<Refusal> read_bits(Unit unit, Table table, std::uint16_t start, std::span<std::uint8_t> out,
+                                 const RawReader& raw_of) {
+  if (auto bad = check_read_range(unit, table, start, out.size())) return bad;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const Register* reg = find_register(unit, table, static_cast<std::uint16_t>(start + i));
+    out[i] = reg && raw_of(*reg) != 0 ? 1 : 0;
+  }
+  return std::nullopt;
+}
+
+std::optional<Refusal> read_module_words(Table table, std::uint16_t start, std::span<std::uint16_t> out,
+                                         WordOrder order, const ModuleView& view) {
+  return read_words(Unit::module, table, start, out, order,
+                    [&](const Register& r) { return read_raw(r, view); });
+}
+
+std::optional<Refusal> read_module_bits(Table table, std::uint16_t start, std::span<std::uint8_t> out,
+                                        const ModuleView& view) {
+  return read_bits(Unit::module, table, start, out, [&](const Register& r) { return read_raw(r, view); });
+}
+
+// ---- text ----
+std::string modbus_reference(Table table, std::uint16_t address) {
+  const int prefix = table == Table::coil ? 0 : table == Table::discrete_input ? 1
+                   : table == Table::input_register ? 3 : 4;
+  return fmt::format("{}{:05d}", prefix, std::uint32_t{address} + 1);
+}
+
+std::string format_value(const Register& reg, std::int64_t raw) {
+  if (reg.type == Type::enumeration) {
+    const auto n = value_name(reg, raw);
+    return n.empty() ? fmt::format("{}", raw) : fmt::format("{} ({})", raw, n);
+  }
+  const auto unit = reg.unit_text();
+  if (unit.empty()) return fmt::format("{}", to_engineering(reg, raw));
+  return fmt::format("{} {}", to_engineering(reg, raw), unit);
+}
+
+}  // namespace registers

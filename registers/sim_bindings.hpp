@@ -1,0 +1,58 @@
+#pragma once
+// The simulator unit (--sim-unit, default 247): its rows bound to
+// homing::sim::MachineConfig and to what the simulator shows. Kept apart from
+// the module codec so the module side never depends on the simulator.
+#include <array>
+#include <cstdint>
+#include <expected>
+#include <span>
+#include <vector>
+
+#include "homing/sim/config.hpp"
+#include "registers/codec.hpp"
+#include "registers/validate.hpp"
+
+namespace registers {
+
+// sim.estop and sim.start_button (coils).
+struct SimSwitches {
+  bool estop = false;
+  bool start_button = false;
+};
+
+// What the running simulator shows, sampled by the runtime for a read.
+struct SimReadback {
+  std::array<double, homing::kAxisCount> actual_position_mm{};  // Simulator::actual_position_mm
+  std::array<bool, homing::kAxisCount> sensor{};                // Simulator::sensor_active
+  std::array<bool, homing::kAxisCount> at_hard_stop{};          // Simulator::at_hard_stop
+};
+
+// The table's defaults for the simulated machine (a home-all with
+// default_settings() succeeds on it).
+homing::sim::MachineConfig default_sim_config();
+SimSwitches default_sim_switches();
+
+// Raw value of any simulator-unit register. sim.<a>.lose_steps reads 0.
+std::int64_t sim_raw(const Register& reg, const homing::sim::MachineConfig& config, const SimSwitches& switches,
+                     const SimReadback& readback);
+
+struct AcceptedSimWrite {
+  std::vector<Change> changes;
+  homing::sim::MachineConfig config;  // with the request applied (call Simulator::set_axis_config)
+  SimSwitches switches;
+  std::array<bool, homing::kAxisCount> placed{};           // actual_position written: Simulator::place
+  std::array<double, homing::kAxisCount> lose_steps_mm{};  // Simulator::lose_steps, 0 = none
+  bool seed_written = false;                               // Simulator::set_seed(config.seed)
+};
+
+// A write to the simulator unit, all or nothing, like validate_write. Not
+// decided here: exception 06 when actual_position is written while the axis
+// moves (the runtime asks Simulator::moving).
+std::expected<AcceptedSimWrite, Refusal> validate_sim_write(Table table, std::uint16_t start,
+                                                            std::span<const std::uint16_t> values,
+                                                            WordOrder order,
+                                                            const homing::sim::MachineConfig& config,
+                                                            const SimSwitches& switches,
+                                                            const SimReadback& readback);
+
+}  // namespace registers

@@ -1,0 +1,151 @@
+#pragma once
+// The one table of truth: the row type of every Modbus register of the module
+// and of the simulator unit. The rows themselves live in table.cpp; the codec,
+// the write validation, the defaults, the SQLite keys and every file in
+// hmi_maps/ are derived from them. Numbers in a row are typed integers (raw
+// register values), never strings, so the compiler checks them (see the
+// static_asserts in table.cpp).
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "homing/axes.hpp"
+
+namespace registers {
+
+// Bump when a published address or meaning changes (status.map_version).
+inline constexpr std::uint16_t kMapVersion = 1;
+
+// Which Modbus unit (slave id) a register belongs to. The ids themselves are
+// run-time options (--unit, default 1; --sim-unit, default 247).
+enum class Unit : std::uint8_t { module = 0, simulator = 1 };
+inline constexpr std::uint8_t kDefaultModuleUnitId = 1;
+inline constexpr std::uint8_t kDefaultSimUnitId = 247;
+
+// Enum order = the classic 0x/1x/3x/4x order, used to sort the exports.
+enum class Table : std::uint8_t { coil = 0, discrete_input = 1, input_register = 2, holding_register = 3 };
+enum class Type : std::uint8_t { boolean, u16, i16, u32, i32, enumeration, bitmask };
+enum class Access : std::uint8_t { r, rw, w };
+
+// What the raw integer measures. Together with the axis (linear or rotary) it
+// gives the unit text and the scale, so no row can pair µm with scale 1.
+enum class Quantity : std::uint8_t {
+  none,              // counts, codes, flags: scale 1, no unit
+  length_um,         // raw µm (millidegree on rotary axes), scale 0.001, unit mm / deg
+  velocity_um_per_s, // raw µm/s (millideg/s), scale 0.001, unit mm/s / deg/s
+  feedrate_per_min,  // raw mm/min (deg/min), scale 1
+  acceleration_per_s2,  // raw mm/s² (deg/s²), scale 1
+  time_ms,           // raw milliseconds, scale 1
+};
+
+// What a register is bound to. The codec has one case per key; the axis (or
+// sequence step) comes from the row, so one key serves six rows.
+enum class Key : std::uint8_t {
+  // holding, module: per-axis settings (suffix = homing::field_name)
+  axis_mode, axis_direction, axis_seek_feedrate, axis_latch_feedrate, axis_acceleration,
+  axis_max_seek_travel, axis_max_stop_distance, axis_max_backoff, axis_pull_off,
+  axis_home_position, axis_final_position, axis_final_move_enable, axis_sensor_nc,
+  axis_debounce_ms, axis_pre_move_mode, axis_pre_move_distance, axis_push_distance,
+  axis_index_pitch, axis_slave_of, axis_slave_mode, axis_max_misalignment,
+  axis_switch_compensation, axis_soft_limit_min, axis_soft_limit_max, axis_soft_limits_enable,
+  axis_shared_limit, axis_jog_feedrate,
+  // holding, module: global settings and host values
+  sequence_step, global_allowed_without_homing, global_alarm_clears_homed, global_watchdog_ms,
+  global_permit_required, host_heartbeat, host_target,
+  // input registers, module
+  status_map_version, status_state, status_sequence_step, status_homing_cycles, status_heartbeat,
+  status_last_command_result, status_interlocks, status_global_alarm, status_alarm_axis,
+  axis_phase, axis_alarm, axis_alarm_phase, axis_position, axis_velocity, axis_home_correction,
+  axis_stop_distance, axis_trigger_position, axis_phase_distance, axis_correction_mean,
+  axis_correction_spread,
+  // discrete inputs, module
+  status_alarm, status_homing, status_estop, axis_homed, axis_sensor, axis_busy,
+  // coils, module
+  cmd_home_all, cmd_abort, cmd_reset_alarm, host_homing_permit, cmd_home, cmd_jog_plus,
+  cmd_jog_minus, cmd_move,
+  // simulator unit
+  sim_seed, sim_actual_position, sim_sensor_min, sim_sensor_max, sim_hysteresis, sim_noise,
+  sim_bounce_ms, sim_sensor_nc, sim_hard_stop_min, sim_hard_stop_max, sim_index_pitch,
+  sim_index_offset, sim_absolute_offset, sim_fault, sim_lose_steps, sim_estop, sim_start_button,
+  sim_sensor, sim_at_hard_stop,
+};
+
+// One value of an enum register, or one bit of a bitmask register (value = bit number).
+struct EnumValue {
+  std::int64_t value = 0;
+  std::string_view name;
+  std::string_view meaning;
+};
+
+// One register, expanded (per-axis rows already carry their axis and address).
+struct Register {
+  std::string_view pattern;  // "axis.<a>.mode": <a> becomes the axis letter
+  Unit unit = Unit::module;
+  Table table = Table::holding_register;
+  std::uint16_t address = 0;  // 0-based protocol address (first word)
+  Type type = Type::u16;
+  Access access = Access::r;
+  Quantity quantity = Quantity::none;
+  std::int64_t min = 0;  // raw
+  std::int64_t max = 0;  // raw
+  std::int64_t default_raw = 0;
+  bool persisted = false;
+  Key key = Key::axis_mode;
+  std::int8_t axis = -1;    // 0..5 for per-axis rows, -1 otherwise
+  std::uint8_t slot = 0;    // sequence.step<slot+1>
+  std::uint8_t offset = 0;  // offset inside the per-axis block (per-axis rows)
+  std::span<const EnumValue> values{};  // enum values / bitmask bits
+  std::string_view description;
+
+  constexpr std::uint16_t words() const { return type == Type::u32 || type == Type::i32 ? 2 : 1; }
+  constexpr bool per_axis() const { return axis >= 0; }
+  constexpr bool writable() const { return access != Access::r; }
+  constexpr std::uint32_t end() const { return std::uint32_t{address} + words(); }  // one past
+  std::string name() const;
+  std::string_view unit_text() const;  // "mm", "deg/min", "" ...
+  double scale() const;                // engineering = raw * scale
+};
+
+// Per-axis blocks: register of axis i = base + stride * i + offset. Globals sit below base.
+struct AxisBlock {
+  std::uint16_t base = 0;
+  std::uint16_t stride = 0;
+};
+constexpr AxisBlock axis_block(Table table) {
+  return table == Table::holding_register || table == Table::input_register ? AxisBlock{100, 100}
+                                                                           : AxisBlock{100, 10};
+}
+
+// Every register of both units, sorted by (unit, table, address).
+std::span<const Register> all_registers();
+std::span<const Register> registers_of(Unit unit);
+
+// Raw range that each type can carry on the wire.
+constexpr std::int64_t type_min(Type t) {
+  switch (t) {
+    case Type::i16: return -32768;
+    case Type::i32: return -2147483648LL;
+    default: return 0;
+  }
+}
+constexpr std::int64_t type_max(Type t) {
+  switch (t) {
+    case Type::boolean: return 1;
+    case Type::i16: return 32767;
+    case Type::u32: return 4294967295LL;
+    case Type::i32: return 2147483647LL;
+    default: return 65535;
+  }
+}
+
+std::string_view table_name(Table t);  // "coil", "discrete_input", ...
+std::string_view type_name(Type t);    // "bool", "u16", ... "enum", "bitmask"
+std::string_view access_name(Access a);
+std::string_view unit_name(Unit u);    // "module", "simulator"
+
+// Name of an enum value of a register ("" if not listed).
+std::string_view value_name(const Register& reg, std::int64_t raw);
+
+}  // namespace registers

@@ -1,0 +1,129 @@
+#include "registers/validate.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <bitset>
+
+#include "homing/settings_check.hpp"
+#include "registers/lookup.hpp"
+
+namespace registers {
+namespace {
+
+Refusal address_fault(std::string message) {
+  return Refusal{ExceptionCode::illegal_data_address, std::move(message)};
+}
+
+std::string where(Unit unit, Table table, std::uint32_t address) {
+  return fmt::format("{} {} ({}) of the {} unit", table_name(table), address,
+                     modbus_reference(table, static_cast<std::uint16_t>(address)), unit_name(unit));
+}
+
+std::string range_text(const Register& reg) {
+  const auto unit = reg.unit_text();
+  return fmt::format("{}..{}{}{}", to_engineering(reg, reg.min), to_engineering(reg, reg.max),
+                     unit.empty() ? "" : " ", unit);
+}
+
+}  // namespace
+
+std::expected<std::vector<RawWrite>, Refusal> decode_write(Unit unit, Table table, std::uint16_t start,
+                                                            std::span<const std::uint16_t> values,
+                                                            WordOrder order) {
+  if (values.empty()) return std::unexpected(Refusal{ExceptionCode::illegal_data_value, "a write of 0 items"});
+  const std::uint32_t end = std::uint32_t{start} + static_cast<std::uint32_t>(values.size());
+  if (end > 65536)
+    return std::unexpected(address_fault(fmt::format("write {}..{} runs past address 65535", start, end - 1)));
+
+  std::vector<RawWrite> out;
+  std::optional<Refusal> value_fault;  // reported only when every address is fine
+  for (std::uint32_t a = start; a < end;) {
+    const Register* reg = find_register(unit, table, static_cast<std::uint16_t>(a));
+    if (!reg)
+      return std::unexpected(address_fault(fmt::format("{} is not mapped; nothing was written (see hmi_maps/)",
+                                                       where(unit, table, a))));
+    if (!reg->writable() || table == Table::input_register || table == Table::discrete_input)
+      return std::unexpected(address_fault(
+          fmt::format("{} ({}) is read-only; nothing was written", reg->name(), where(unit, table, a))));
+    if (reg->address != a)
+      return std::unexpected(address_fault(fmt::format(
+          "{} is 32-bit ({}..{}); this write starts at its second word {}: write both words in one request",
+          reg->name(), reg->address, reg->address + 1, a)));
+    if (reg->end() > end)
+      return std::unexpected(address_fault(fmt::format(
+          "{} is 32-bit ({}..{}); this write ends after its first word: write both words in one request",
+          reg->name(), reg->address, reg->address + 1)));
+
+    const auto words = values.subspan(a - start, reg->words());
+    std::int64_t raw = 0;
+    if (table == Table::coil) {
+      raw = words[0] != 0 ? 1 : 0;
+    } else {
+      raw = decode_words(*reg, words, order);
+    }
+    if ((raw < reg->min || raw > reg->max) && !value_fault)
+      value_fault = Refusal{ExceptionCode::illegal_data_value,
+                            fmt::format("{} = {} is outside its range {}; nothing was written", reg->name(),
+                                        format_value(*reg, raw), range_text(*reg))};
+    out.push_back({reg, raw});
+    a = reg->end();
+  }
+  if (value_fault) return std::unexpected(*value_fault);
+  return out;
+}
+
+bool AcceptedWrite::changes_persisted() const {
+  return std::any_of(changes.begin(), changes.end(), [](const Change& c) { return c.reg->persisted; });
+}
+
+std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t start,
+                                                     std::span<const std::uint16_t> values, WordOrder order,
+                                                     const homing::Settings& settings,
+                                                     const HostRegisters& host) {
+  auto decoded = decode_write(Unit::module, table, start, values, order);
+  if (!decoded) return std::unexpected(decoded.error());
+
+  AcceptedWrite result{{}, settings, host, {}};
+  std::bitset<homing::kAxisCount> touched;
+  for (const RawWrite& w : *decoded) {
+    const Register& reg = *w.reg;
+    std::int64_t old_raw = 0;
+    if (reg.table == Table::coil) {
+      if (auto cmd = command_of(reg, w.raw != 0); cmd && (w.raw != 0 || cmd->command == Command::jog_plus ||
+                                                          cmd->command == Command::jog_minus ||
+                                                          cmd->command == Command::homing_permit))
+        result.commands.push_back(*cmd);
+      if (reg.access == Access::w) continue;  // pulse commands hold no state
+      old_raw = host_raw(result.host, reg);
+      set_host_raw(result.host, reg, w.raw);
+    } else if (reg.persisted) {
+      old_raw = setting_raw(result.settings, reg);
+      set_setting_raw(result.settings, reg, w.raw);
+      if (reg.per_axis()) touched.set(static_cast<std::size_t>(reg.axis));
+    } else {
+      old_raw = host_raw(result.host, reg);
+      set_host_raw(result.host, reg, w.raw);
+    }
+    if (old_raw != w.raw) result.changes.push_back({&reg, old_raw, w.raw});
+  }
+
+  // The engine's own check, on the settings as they would be after the request.
+  for (std::size_t axis = 0; axis < homing::kAxisCount; ++axis) {
+    const homing::AxisSettings& s = result.settings.axes[axis];
+    if (s.mode == homing::HomingMode::disabled) continue;
+    const int master = homing::master_of(s);
+    const bool master_touched = master >= 0 && master < static_cast<int>(homing::kAxisCount) &&
+                                touched.test(static_cast<std::size_t>(master));
+    if (!touched.test(axis) && !master_touched) continue;
+    // A slave untouched by the request is only refused for if this request breaks it.
+    if (!touched.test(axis) && homing::check_axis(settings, axis)) continue;
+    if (const auto fault = homing::check_axis(result.settings, axis))
+      return std::unexpected(Refusal{
+          ExceptionCode::illegal_data_value,
+          fmt::format("{}; nothing was written", homing::describe_fault(*fault, result.settings))});
+  }
+  return result;
+}
+
+}  // namespace registers
