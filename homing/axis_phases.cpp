@@ -278,6 +278,10 @@ struct PhaseRunner {
       if (!ready) return wait_for(software_pair() ? Wait::partner_assigned : Wait::slave_aligned, Phase::final_move);
     }
     if (is_slave) {
+      // A software-slaved slave rests on its own edge until the master has
+      // its own: locking earlier would drag it along the master's back-off
+      // and pull-off and undo the squaring.
+      if (software_pair() && !partner_run().assigned) return wait_for(Wait::partner_assigned, Phase::done);
       run.follow_master = true;
       return enter(Phase::done);
     }
@@ -320,6 +324,7 @@ struct PhaseRunner {
     }
     if (ready) {
       run.wait = Wait::none;
+      if (is_slave && run.next_phase == Phase::done) run.follow_master = true;  // now lock
       enter(run.next_phase);
     }
   }
