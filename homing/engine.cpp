@@ -364,7 +364,11 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
   }
 
   for (std::size_t a = 0; a < kAxisCount; ++a) {
-    if (!(covered & axis_bit(a))) continue;
+    // In a home-all, a slave's own bit is ignored, so a slave whose slave_of
+    // names no usable master (itself, another slave) would never be covered
+    // and would silently stay unhomed: check every slave's configuration.
+    const bool slave = master_of(settings.axes[a]) >= 0;
+    if (!(covered & axis_bit(a)) && !(all && slave)) continue;
     if (auto fault = check_axis(settings, a)) {
       AxisRun& run = axes_[fault->axis];
       run.alarm = Alarm{fault->code(), Phase::idle, fault->field, fault->value,
