@@ -63,7 +63,7 @@ struct Rig {
   double ran_dt_s = 0.001;  // length of the period the simulator last ran
   Inputs last_inputs{};
   std::uint64_t periods = 0;
-  std::function<void(const Rig&)> on_period;  // invariant checks
+  std::function<void(Rig&)> on_period;  // invariant checks
 
   // Only X by default, so a home-all is one axis unless a test adds more.
   Rig() {

@@ -1,0 +1,403 @@
+// Every alarm code from its own fault: code, phase and text; latched until
+// reset; all motion stopped while latched.
+#include <catch2/catch.hpp>
+
+#include "rig.hpp"
+#include "truth.hpp"
+
+using namespace rig;
+
+namespace {
+
+// The alarm stays latched, nothing moves, homing is refused; reset clears it.
+void check_latched_until_reset(Rig& r, std::size_t axis, AlarmCode code) {
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  REQUIRE_FALSE(r.any_moving());
+  const double x = r.actual(axis);
+  r.clear_trace();
+  r.run_for(0.3);
+  for (std::size_t a = 0; a < kAxisCount; ++a) CHECK(r.trace[a].path_mm == 0);
+  CHECK(r.axis(axis).alarm.code == code);
+  CHECK(r.status().alarm);
+  CHECK(r.status().state == MachineState::alarm);
+  CHECK((r.status().interlocks & interlock::alarm_latched) != 0);
+  CHECK_FALSE(r.engine.outputs().homing_done_lamp);
+  r.pending.home_all = true;
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::refused_alarm);
+  r.jog(axis, +1);
+  r.run_for(0.1);
+  r.release_jogs();
+  CHECK(r.actual(axis) == x);
+  r.reset_alarm();
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  CHECK(r.axis(axis).alarm.code == AlarmCode::none);
+  CHECK_FALSE(r.status().alarm);
+}
+
+std::string text_of(Rig& r, std::size_t axis) { return describe_alarm(axis, r.axis(axis).alarm, r.settings); }
+
+// Runs home-all into the period that raises an alarm.
+void home_into_alarm(Rig& r, double max_s = 60) {
+  r.pending.home_all = true;
+  r.step();
+  r.run_until([&] { return r.status().alarm || !r.status().homing; }, max_s);
+}
+
+}  // namespace
+
+SCENARIO("sensor_not_found: a wire break on a normally open sensor", "[alarms]") {
+  Rig r;
+  r.settings.axes[0].max_seek_travel_mm = 200;
+  r.machine.axes[0].fault = sim::Fault::wire_break;
+  home_into_alarm(r);
+  CHECK(r.axis(0).alarm.code == AlarmCode::sensor_not_found);
+  CHECK(r.axis(0).alarm.phase == Phase::seek);
+  CHECK(text_of(r, 0).find("X: home sensor not found within 200 mm of travel") == 0);
+  check_latched_until_reset(r, 0, AlarmCode::sensor_not_found);
+}
+
+SCENARIO("sensor_not_found: a sensor stuck inactive", "[alarms]") {
+  Rig r;
+  r.settings.axes[0].max_seek_travel_mm = 120;
+  r.machine.axes[0].fault = sim::Fault::sensor_stuck_inactive;
+  r.clear_trace();
+  home_into_alarm(r);
+  CHECK(r.axis(0).alarm.code == AlarmCode::sensor_not_found);
+  CHECK(r.trace[0].path_mm <= 120 + 1e-9);
+  // The carriage passed through the cam at 0 and went on: only the seek bound stopped it.
+  CHECK(r.trace[0].min_actual == Approx(-5));  // held at the mechanical stop
+}
+
+SCENARIO("overrun_during_stop: a trigger cam shorter than the stop distance", "[alarms]") {
+  Rig r;
+  r.machine.axes[0].sensor_min_mm = -0.2;  // 0.2 mm cam + 0.05 hysteresis < 0.4 mm stop
+  home_into_alarm(r);
+  CHECK(r.axis(0).alarm.code == AlarmCode::overrun_during_stop);
+  CHECK(r.axis(0).alarm.phase == Phase::stop);
+  CHECK(text_of(r, 0).find("shorter than the stop distance") != std::string::npos);
+  check_latched_until_reset(r, 0, AlarmCode::overrun_during_stop);
+}
+
+SCENARIO("stop_distance_exceeded: contact bounce delays the trigger beyond max stop distance", "[alarms]") {
+  Rig r;
+  AxisSettings& s = r.settings.axes[0];
+  s.debounce_ms = 20;          // needed: 0.4 + 20 mm/s · 20 ms = 0.8 mm
+  s.max_stop_distance_mm = 0.85;
+  r.machine.axes[0].bounce_ms = 20;  // bounce up to 20 ms more before the debounce starts
+  home_into_alarm(r);
+  CHECK(r.axis(0).alarm.code == AlarmCode::stop_distance_exceeded);
+  CHECK(r.axis(0).alarm.phase == Phase::stop);
+  CHECK(r.axis(0).alarm.value > 0.85);
+  CHECK(text_of(r, 0).find("more than max_stop_distance 0.85 mm") != std::string::npos);
+  check_latched_until_reset(r, 0, AlarmCode::stop_distance_exceeded);
+}
+
+SCENARIO("not_released: a sensor stuck active", "[alarms]") {
+  Rig r;
+  r.machine.axes[0].fault = sim::Fault::sensor_stuck_active;
+  home_into_alarm(r);
+  CHECK(r.axis(0).alarm.code == AlarmCode::not_released);
+  CHECK(r.axis(0).alarm.phase == Phase::back_off);
+  CHECK(text_of(r, 0).find("still active after backing off 10 mm") != std::string::npos);
+  check_latched_until_reset(r, 0, AlarmCode::not_released);
+}
+
+SCENARIO("not_released: a wire break on a normally closed sensor reads active", "[alarms]") {
+  Rig r;
+  r.settings.axes[0].sensor_nc = true;
+  r.machine.axes[0].sensor_nc = true;
+  r.machine.axes[0].fault = sim::Fault::wire_break;
+  r.clear_trace();
+  home_into_alarm(r);
+  CHECK(r.axis(0).alarm.code == AlarmCode::not_released);
+  CHECK_FALSE(r.saw(0, Phase::stop));  // read as already active: straight to back-off
+}
+
+SCENARIO("index_not_found: no index pulse after the switch edge", "[alarms]") {
+  Rig r;
+  r.settings.axes[0].mode = HomingMode::switch_index;
+  r.machine.axes[0].index_pitch_mm = 0;
+  home_into_alarm(r);
+  CHECK(r.axis(0).alarm.code == AlarmCode::index_not_found);
+  CHECK(r.axis(0).alarm.phase == Phase::index);
+  CHECK(text_of(r, 0).find("no encoder index pulse") != std::string::npos);
+  check_latched_until_reset(r, 0, AlarmCode::index_not_found);
+}
+
+SCENARIO("slave_sensor_missing: a software-slaved axis without its own sensor", "[alarms][gantry]") {
+  Rig r;
+  r.settings.axes[1] = typical_axis();
+  r.settings.axes[1].mode = HomingMode::manual;
+  r.settings.axes[1].slave_of = 1;
+  r.step();
+  r.clear_trace();
+  home_into_alarm(r, 1);
+  CHECK(r.axis(1).alarm.code == AlarmCode::slave_sensor_missing);
+  CHECK(r.status().last_command_result == CommandResult::refused_settings_fault);
+  CHECK(r.trace[0].path_mm == 0);
+  CHECK(r.trace[1].path_mm == 0);
+  CHECK(text_of(r, 1).find("Y: software-slaved axis has no home sensor") == 0);
+  check_latched_until_reset(r, 1, AlarmCode::slave_sensor_missing);
+}
+
+SCENARIO("misalignment: a gantry skewed beyond max misalignment", "[alarms][gantry]") {
+  Rig r;
+  r.settings.axes[1] = typical_axis();
+  r.settings.axes[1].slave_of = 1;
+  r.settings.axes[1].max_misalignment_mm = 2;
+  r.machine.axes[1].actual_position_mm = 103;  // 3 mm behind the master
+  home_into_alarm(r);
+  CHECK(r.axis(1).alarm.code == AlarmCode::misalignment);
+  CHECK(r.axis(1).alarm.phase == Phase::seek);
+  CHECK(text_of(r, 1).find("more than max_misalignment 2 mm") != std::string::npos);
+  // Stopped as soon as the skew passed the limit: the slave never reached its sensor.
+  CHECK(r.actual(1) > 0);
+  check_latched_until_reset(r, 1, AlarmCode::misalignment);
+}
+
+SCENARIO("hard_limit: the shared home sensor trips after homing", "[alarms][limits]") {
+  Rig r;
+  r.settings.axes[0].shared_limit = true;
+  REQUIRE(r.home_all());
+  CHECK(r.status().state == MachineState::homed);
+  r.jog(0, -1);
+  r.run_until([&] { return r.status().alarm; }, 10);
+  r.release_jogs();
+  CHECK(r.axis(0).alarm.code == AlarmCode::hard_limit);
+  CHECK(text_of(r, 0).find("shared home/limit sensor tripped") != std::string::npos);
+  CHECK_FALSE(r.axis(0).homed);  // global.alarm_clears_homed
+  // Stopped within the jog's deceleration distance after the trip.
+  const double v = mm_per_min_to_mm_per_s(r.settings.axes[0].jog_feedrate_mm_per_min);
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(r.actual(0) >= -stop_distance_mm(v, r.settings.axes[0].acceleration_mm_per_s2) - v * r.dt_s - 1e-9);
+  r.reset_alarm();
+  CHECK_FALSE(r.status().alarm);
+}
+
+SCENARIO("soft_limit: an axis moving outside its enforced soft limits", "[alarms][limits]") {
+  Rig r;
+  REQUIRE(r.home_all());
+  // The limits are tightened at run time so that the homed axis stands outside them.
+  r.settings.axes[0].soft_limits_enable = true;
+  r.settings.axes[0].soft_limit_min_mm = 10;
+  r.settings.axes[0].soft_limit_max_mm = 100;
+  r.jog(0, -1);
+  r.run_until([&] { return r.status().alarm; }, 2);
+  r.release_jogs();
+  CHECK(r.axis(0).alarm.code == AlarmCode::soft_limit);
+  CHECK(text_of(r, 0).find("beyond the soft limits [10, 100]") != std::string::npos);
+  check_latched_until_reset(r, 0, AlarmCode::soft_limit);
+}
+
+namespace {
+
+// Starts home-all and runs until the seek is at full speed, far from the sensor.
+void run_to_full_seek(Rig& r) {
+  r.pending.home_all = true;
+  r.step();
+  r.run_until([&] { return r.axis(0).phase == Phase::seek && r.actual(0) < 80; }, 10);
+  REQUIRE(r.axis(0).velocity_mm_per_s == Approx(-20));
+}
+
+double seek_stop_mm(const Rig& r) {
+  const AxisSettings& s = r.settings.axes[0];
+  return stop_distance_mm(mm_per_min_to_mm_per_s(s.seek_feedrate_mm_per_min), s.acceleration_mm_per_s2);
+}
+
+}  // namespace
+
+SCENARIO("aborted: abort during a cycle stops within the deceleration distance", "[alarms][stop]") {
+  Rig r;
+  run_to_full_seek(r);
+  const double at_event = r.actual(0);
+  r.pending.abort = true;
+  r.step();
+  CHECK(r.axis(0).alarm.code == AlarmCode::aborted);
+  CHECK(r.axis(0).alarm.phase == Phase::seek);
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(at_event - r.actual(0) <= seek_stop_mm(r) + 1e-9);
+  CHECK(at_event - r.actual(0) == Approx(seek_stop_mm(r)).margin(1e-6));
+  CHECK(text_of(r, 0).find("homing aborted by command during seek") != std::string::npos);
+  check_latched_until_reset(r, 0, AlarmCode::aborted);
+}
+
+SCENARIO("emergency_stop: e-stop during a cycle stops within the deceleration distance", "[alarms][stop]") {
+  Rig r;
+  run_to_full_seek(r);
+  const double at_event = r.actual(0);
+  r.sim().set_estop(true);
+  r.step();
+  CHECK(r.axis(0).alarm.code == AlarmCode::emergency_stop);
+  CHECK(r.status().global_alarm == AlarmCode::emergency_stop);
+  CHECK((r.status().interlocks & interlock::estop) != 0);
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(at_event - r.actual(0) <= seek_stop_mm(r) + 1e-9);
+  CHECK(text_of(r, 0).find("emergency stop during seek") != std::string::npos);
+  THEN("reset is refused while the e-stop is pressed") {
+    r.reset_alarm();
+    CHECK(r.status().last_command_result == CommandResult::refused_cause_present);
+    CHECK(r.status().alarm);
+    r.pending.home_all = true;
+    r.step();
+    CHECK(r.status().last_command_result == CommandResult::refused_estop);
+    r.sim().set_estop(false);
+    r.step();
+    check_latched_until_reset(r, 0, AlarmCode::emergency_stop);
+    CHECK(r.status().global_alarm == AlarmCode::none);
+  }
+}
+
+SCENARIO("drive_fault: a faulted drive raises its alarm and motion stops", "[alarms][stop]") {
+  Rig r;
+  run_to_full_seek(r);
+  const double at_event = r.actual(0);
+  const double motor_at_event = r.engine.outputs().axes[0].motor.position_mm;
+  auto c = r.sim().axis_config(0);
+  c.fault = sim::Fault::drive_fault;
+  r.sim().set_axis_config(0, c);
+  r.step();  // the period in which the drive faulted
+  r.step();  // the engine sees it
+  CHECK(r.axis(0).alarm.code == AlarmCode::drive_fault);
+  CHECK((r.status().interlocks & interlock::drive_fault) != 0);
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(std::abs(at_event - r.actual(0)) <= seek_stop_mm(r) + 1e-9);
+  // The commanded motion too: one period before the fault was seen, then the ramp down.
+  const double v = 20;
+  CHECK(motor_at_event - r.engine.outputs().axes[0].motor.position_mm <= seek_stop_mm(r) + 2 * v * r.dt_s + 1e-9);
+  CHECK(text_of(r, 0).find("drive fault during seek") != std::string::npos);
+  r.reset_alarm();
+  CHECK(r.status().last_command_result == CommandResult::refused_cause_present);
+  c.fault = sim::Fault::none;
+  r.sim().set_axis_config(0, c);
+  r.step();
+  check_latched_until_reset(r, 0, AlarmCode::drive_fault);
+}
+
+SCENARIO("communication_lost: the watchdog expires during a cycle", "[alarms][stop]") {
+  Rig r;
+  run_to_full_seek(r);
+  const double at_event = r.actual(0);
+  bool lost = true;
+  r.tweak_inputs = [&](Inputs& in) { in.communication_lost = lost; };
+  r.step();
+  CHECK(r.axis(0).alarm.code == AlarmCode::communication_lost);
+  CHECK((r.status().interlocks & interlock::communication_lost) != 0);
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(at_event - r.actual(0) <= seek_stop_mm(r) + 1e-9);
+  CHECK(text_of(r, 0).find("communication lost") != std::string::npos);
+  r.reset_alarm();
+  CHECK(r.status().last_command_result == CommandResult::refused_cause_present);
+  lost = false;
+  r.step();
+  check_latched_until_reset(r, 0, AlarmCode::communication_lost);
+}
+
+SCENARIO("settings_fault: a setting that cannot work", "[alarms]") {
+  Rig r;
+  r.settings.axes[0].max_stop_distance_mm = 0.2;
+  home_into_alarm(r, 1);
+  CHECK(r.axis(0).alarm.code == AlarmCode::settings_fault);
+  CHECK(r.axis(0).alarm.phase == Phase::idle);
+  CHECK(text_of(r, 0).find("axis.x.max_stop_distance") != std::string::npos);
+  r.settings.axes[0].max_stop_distance_mm = 10;
+  check_latched_until_reset(r, 0, AlarmCode::settings_fault);
+  REQUIRE(r.home_all());
+}
+
+SCENARIO("settings_lost: the settings had to be reset to defaults", "[alarms]") {
+  Rig r;
+  bool lost = true;
+  r.tweak_inputs = [&](Inputs& in) { in.settings_lost = lost; };
+  r.step();
+  lost = false;
+  r.step();
+  CHECK(r.status().global_alarm == AlarmCode::settings_lost);
+  CHECK((r.status().interlocks & interlock::settings_lost) != 0);
+  CHECK(describe_alarm(0, Alarm{AlarmCode::settings_lost}, r.settings).find("settings lost") == 0);
+  r.pending.home_all = true;
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::refused_alarm);
+  r.clear_trace();
+  r.run_for(0.2);
+  CHECK(r.trace[0].path_mm == 0);
+  r.reset_alarm();
+  CHECK(r.status().global_alarm == AlarmCode::none);
+  REQUIRE(r.home_all());
+}
+
+SCENARIO("reapproach_not_found: the sensor does not trigger again", "[alarms]") {
+  Rig r;
+  r.settings.axes[0].mode = HomingMode::switch_reapproach;
+  r.on_period = [&](Rig& rr) {
+    if (rr.axis(0).phase == Phase::reapproach) {
+      auto c = rr.simulator->axis_config(0);
+      c.fault = sim::Fault::sensor_stuck_inactive;
+      rr.simulator->set_axis_config(0, c);
+    }
+  };
+  home_into_alarm(r);
+  r.on_period = nullptr;
+  CHECK(r.axis(0).alarm.code == AlarmCode::reapproach_not_found);
+  CHECK(r.axis(0).alarm.phase == Phase::reapproach);
+  CHECK(text_of(r, 0).find("not found again within 10 mm while re-approaching") != std::string::npos);
+  check_latched_until_reset(r, 0, AlarmCode::reapproach_not_found);
+}
+
+SCENARIO("permit_withdrawn: the homing permit goes off during a cycle", "[alarms][permit]") {
+  Rig r;
+  r.settings.global.permit_required = true;
+  r.sim().set_homing_permit(true);
+  run_to_full_seek(r);
+  const double at_event = r.actual(0);
+  r.sim().set_homing_permit(false);
+  r.step();
+  CHECK(r.axis(0).alarm.code == AlarmCode::permit_withdrawn);
+  CHECK(r.axis(0).alarm.phase == Phase::seek);
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(at_event - r.actual(0) <= seek_stop_mm(r) + 1e-9);
+  CHECK(text_of(r, 0).find("homing permit went off during seek") != std::string::npos);
+  check_latched_until_reset(r, 0, AlarmCode::permit_withdrawn);
+}
+
+SCENARIO("encoder_fault: absolute mode without a valid encoder position", "[alarms]") {
+  Rig r;
+  r.settings.axes[0].mode = HomingMode::absolute;
+  r.tweak_inputs = [](Inputs& in) { in.axes[0].absolute_valid = false; };
+  r.clear_trace();
+  home_into_alarm(r, 1);
+  CHECK(r.axis(0).alarm.code == AlarmCode::encoder_fault);
+  CHECK(r.trace[0].path_mm == 0);
+  CHECK(text_of(r, 0).find("absolute encoder gives no valid position") != std::string::npos);
+  r.tweak_inputs = [](Inputs&) {};
+  check_latched_until_reset(r, 0, AlarmCode::encoder_fault);
+}
+
+SCENARIO("every alarm code has a name and a text", "[alarms]") {
+  Settings s;
+  s.axes[0] = typical_axis();
+  for (std::uint8_t c = 1; c < kAlarmCodeCount; ++c) {
+    const auto code = static_cast<AlarmCode>(c);
+    CHECK_FALSE(alarm_name(code).empty());
+    CHECK(alarm_name(code) != "?");
+    CHECK(describe_alarm(0, Alarm{code, Phase::seek}, s).size() > 20);
+  }
+}
+
+SCENARIO("global.alarm_clears_homed decides whether an alarm clears the homed state", "[alarms]") {
+  for (bool clears : {true, false}) {
+    DYNAMIC_SECTION("alarm_clears_homed = " << clears) {
+      Rig r;
+      r.settings.global.alarm_clears_homed = clears;
+      REQUIRE(r.home_all());
+      r.sim().set_estop(true);
+      r.step();
+      CHECK(r.status().alarm);
+      CHECK(r.axis(0).homed == !clears);
+      r.sim().set_estop(false);
+      r.reset_alarm();
+      CHECK(r.axis(0).homed == !clears);
+      CHECK(r.status().state == (clears ? MachineState::not_homed : MachineState::homed));
+    }
+  }
+}
