@@ -1,0 +1,236 @@
+#include "control_loop.hpp"
+
+#include <pthread.h>
+#include <time.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace server {
+
+std::int64_t monotonic_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+ControlLoop::ControlLoop(const homing::Settings& settings, std::unique_ptr<MachineIo> io,
+                         homing::sim::Simulator* sim, int period_us, double time_scale)
+    : settings_(settings), io_(std::move(io)), sim_(sim), period_us_(std::max(period_us, 50)),
+      time_scale_(time_scale > 0 ? time_scale : 1.0) {
+  heartbeat_changed_ns_ = monotonic_ns();
+  // A first period with no elapsed time: the engine learns the inputs' levels.
+  run_period(0);
+}
+
+ControlLoop::~ControlLoop() { stop(); }
+
+void ControlLoop::start() {
+  if (running_.exchange(true)) return;
+  stop_requested_ = false;
+  thread_ = std::thread([this] { thread_main(); });
+}
+
+void ControlLoop::stop() {
+  if (!running_) return;
+  stop_requested_ = true;
+  if (thread_.joinable()) thread_.join();
+  running_ = false;
+}
+
+void ControlLoop::submit(const homing::Commands& c, bool from_modbus) {
+  std::lock_guard lock(mailbox_mutex_);
+  pending_.home_all |= c.home_all;
+  pending_.home_axes |= c.home_axes;
+  pending_.abort |= c.abort;
+  pending_.reset_alarm |= c.reset_alarm;
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    if (c.move_axes & homing::axis_bit(a)) pending_.move_target_mm[a] = c.move_target_mm[a];
+  }
+  pending_.move_axes |= c.move_axes;
+  pending_from_modbus_ = pending_from_modbus_ || from_modbus;
+}
+
+void ControlLoop::set_jog(std::size_t axis, std::int8_t direction, std::uint64_t owner) {
+  std::lock_guard lock(mailbox_mutex_);
+  if (direction == 0) {
+    // Only the client that holds a jog (or nobody) can release it.
+    if (jog_owner_[axis] == owner || jog_dir_[axis] == 0) jog_dir_[axis] = 0;
+    return;
+  }
+  jog_dir_[axis] = direction;
+  jog_owner_[axis] = owner;
+  pending_from_modbus_ = true;
+}
+
+void ControlLoop::release_jogs(std::uint64_t owner) {
+  std::lock_guard lock(mailbox_mutex_);
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+    if (jog_dir_[a] != 0 && jog_owner_[a] == owner) jog_dir_[a] = 0;
+}
+
+void ControlLoop::set_settings(const homing::Settings& settings) {
+  std::lock_guard lock(mailbox_mutex_);
+  new_settings_ = settings;
+  settings_pending_ = true;
+}
+
+void ControlLoop::set_permit_coil(bool on) {
+  std::lock_guard lock(mailbox_mutex_);
+  permit_coil_ = on;
+}
+
+void ControlLoop::raise_settings_lost() {
+  std::lock_guard lock(mailbox_mutex_);
+  settings_lost_pending_ = true;
+}
+
+void ControlLoop::heartbeat_written(std::uint16_t value) {
+  if (heartbeat_value_.exchange(value) != value) heartbeat_changed_ns_ = monotonic_ns();
+}
+
+void ControlLoop::sim_op(SimOp op) {
+  std::lock_guard lock(mailbox_mutex_);
+  sim_ops_.push_back(std::move(op));
+}
+
+Snapshot ControlLoop::snapshot() const {
+  std::lock_guard lock(snapshot_mutex_);
+  return snapshot_;
+}
+
+LoopStats ControlLoop::stats() const {
+  std::lock_guard lock(snapshot_mutex_);
+  return stats_;
+}
+
+// Never blocks: when the server holds the mailbox, its news waits one period.
+void ControlLoop::take_mailbox(homing::Inputs& inputs) {
+  std::unique_lock lock(mailbox_mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) {
+    inputs.commands.jog = loop_jog_;
+    inputs.homing_permit = inputs.homing_permit || loop_permit_;
+    return;
+  }
+  inputs.commands = pending_;
+  if (pending_from_modbus_ && (pending_.home_all || pending_.home_axes || pending_.move_axes))
+    modbus_motion_ = true;
+  pending_ = homing::Commands{};
+  pending_from_modbus_ = false;
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    if (jog_dir_[a] != 0 && loop_jog_[a] == 0) modbus_motion_ = true;
+    loop_jog_[a] = jog_dir_[a];
+  }
+  inputs.commands.jog = loop_jog_;
+  if (settings_pending_) {
+    settings_ = new_settings_;
+    settings_pending_ = false;
+  }
+  if (sim_ && !sim_ops_.empty()) {
+    for (auto& op : sim_ops_) op(*sim_);
+    sim_ops_.clear();
+  }
+  sim_ops_.clear();
+  loop_permit_ = permit_coil_;
+  inputs.homing_permit = inputs.homing_permit || loop_permit_;
+  inputs.settings_lost = settings_lost_pending_;
+  settings_lost_pending_ = false;
+}
+
+bool ControlLoop::watchdog_expired() const {
+  const std::uint32_t ms = settings_.global.watchdog_ms;
+  if (ms == 0 || !modbus_motion_) return false;
+  return monotonic_ns() - heartbeat_changed_ns_.load() > std::int64_t{ms} * 1'000'000;
+}
+
+void ControlLoop::run_period(double wall_dt_s) {
+  // --time-scale: several engine periods of the nominal length per wall
+  // period, so precision does not change with the speed-up.
+  const double sim_dt = wall_dt_s * time_scale_;
+  const double nominal = period_us_ * 1e-6;
+  const int steps = sim_dt <= 0 ? 1 : std::max(1, static_cast<int>(std::ceil(sim_dt / nominal - 1e-9)));
+  const double dt = sim_dt / steps;
+  for (int i = 0; i < steps; ++i) {
+    io_->advance(outputs_, dt);
+    homing::Inputs inputs = io_->read();
+    if (i == 0) take_mailbox(inputs);
+    else {
+      inputs.commands.jog = loop_jog_;
+      inputs.homing_permit = inputs.homing_permit || loop_permit_;
+    }
+    inputs.communication_lost = watchdog_expired();
+    const std::int64_t t0 = monotonic_ns();
+    const homing::StepResult r = engine_.step(settings_, inputs, dt);
+    const std::int64_t t1 = monotonic_ns();
+    outputs_ = r.outputs;
+    const bool motion = r.status.homing || r.status.state == homing::MachineState::moving;
+    if (!motion && !inputs.commands.home_all && !inputs.commands.home_axes && !inputs.commands.move_axes &&
+        std::none_of(loop_jog_.begin(), loop_jog_.end(), [](std::int8_t j) { return j != 0; }))
+      modbus_motion_ = false;
+    engine_us_ += (t1 - t0) / 1000.0;
+  }
+  std::unique_lock lock(snapshot_mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) return;  // a reader is copying: publish next period
+  Snapshot& s = snapshot_;
+  s.status = engine_.status();
+  s.outputs = outputs_;
+  s.periods = ++stats_.periods;
+  stats_.engine_us_total = engine_us_;
+  if (sim_) {
+    s.has_sim = true;
+    s.machine_time_s = sim_->time_s();
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+      SimAxisView& v = s.sim[a];
+      v.actual_position_mm = sim_->actual_position_mm(a);
+      v.sensor = sim_->sensor_active(a);
+      v.at_hard_stop = sim_->at_hard_stop(a);
+      v.moving = sim_->moving(a);
+      v.config = sim_->axis_config(a);
+    }
+    s.sim_seed = sim_->config().seed;
+    s.sim_estop = sim_->inputs().estop;
+    s.sim_start_button = sim_->inputs().start_button;
+  }
+}
+
+void ControlLoop::thread_main() {
+  const std::int64_t period_ns = std::int64_t{period_us_} * 1000;
+  std::int64_t last = monotonic_ns();
+  std::int64_t deadline = last + period_ns;
+  std::int64_t stop_started = 0;
+  for (;;) {
+    timespec ts{static_cast<time_t>(deadline / 1'000'000'000), static_cast<long>(deadline % 1'000'000'000)};
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {}
+    const std::int64_t now = monotonic_ns();
+    const double lateness_us = (now - deadline) / 1000.0;
+    {
+      std::lock_guard lock(snapshot_mutex_);
+      stats_.max_lateness_us = std::max(stats_.max_lateness_us, lateness_us);
+      if (now - deadline > period_ns) ++stats_.late_periods;
+    }
+    if (stop_requested_ && stop_started == 0) {
+      // Stop safely: abort whatever moves, let it decelerate, then leave.
+      homing::Commands abort{};
+      abort.abort = true;
+      submit(abort, false);
+      {
+        std::lock_guard lock(mailbox_mutex_);
+        jog_dir_.fill(0);
+      }
+      stop_started = now;
+    }
+    run_period((now - last) * 1e-9);
+    last = now;
+    if (stop_started != 0) {
+      const Snapshot s = snapshot();
+      bool moving = false;
+      for (const auto& a : s.status.axes) moving = moving || a.velocity_mm_per_s != 0;
+      if (!moving || now - stop_started > 10'000'000'000LL) break;
+    }
+    deadline += period_ns;
+    if (now - deadline > period_ns) deadline = now + period_ns;  // far behind: do not burst
+  }
+  io_->shutdown();
+}
+
+}  // namespace server

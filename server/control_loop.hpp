@@ -1,0 +1,129 @@
+#pragma once
+// The runtime: owns time and the control thread. Every period (absolute
+// deadlines on CLOCK_MONOTONIC) it advances the machine, steps the engine and
+// publishes a snapshot. The Modbus side talks to it only through mailboxes
+// that the loop takes with try_lock, so a busy server never delays a period.
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "homing/engine.hpp"
+#include "homing/sim/simulator.hpp"
+#include "machine_io.hpp"
+
+namespace server {
+
+struct SimAxisView {
+  double actual_position_mm = 0;
+  bool sensor = false;
+  bool at_hard_stop = false;
+  bool moving = false;
+  homing::sim::AxisConfig config{};
+};
+
+// Everything a Modbus read may need, copied whole under one lock: a 32-bit
+// position is never half old, half new.
+struct Snapshot {
+  homing::Status status{};
+  homing::Outputs outputs{};
+  bool has_sim = false;
+  std::array<SimAxisView, homing::kAxisCount> sim{};
+  std::uint64_t sim_seed = 0;
+  bool sim_estop = false;
+  bool sim_start_button = false;
+  double machine_time_s = 0;
+  std::uint64_t periods = 0;
+};
+
+// Loop timing figures (benchmarks read them).
+struct LoopStats {
+  std::uint64_t periods = 0;
+  std::uint64_t late_periods = 0;  // started more than one period after their deadline
+  double max_lateness_us = 0;
+  double engine_us_total = 0;
+};
+
+class ControlLoop {
+ public:
+  using SimOp = std::function<void(homing::sim::Simulator&)>;
+
+  ControlLoop(const homing::Settings& settings, std::unique_ptr<MachineIo> io,
+              homing::sim::Simulator* sim, int period_us, double time_scale);
+  ~ControlLoop();
+  ControlLoop(const ControlLoop&) = delete;
+  ControlLoop& operator=(const ControlLoop&) = delete;
+
+  void start();
+  // Stops motion (abort, decelerate) and joins the thread.
+  void stop();
+
+  // One-shot commands; merged until the loop takes them.
+  void submit(const homing::Commands& commands, bool from_modbus);
+  // A jog held by an owner (a client connection); 0 releases.
+  void set_jog(std::size_t axis, std::int8_t direction, std::uint64_t owner);
+  // Releases every jog held by an owner (its client disconnected).
+  void release_jogs(std::uint64_t owner);
+  void set_settings(const homing::Settings& settings);
+  void set_permit_coil(bool on);
+  void raise_settings_lost();
+  // The host wrote host.heartbeat (the watchdog only cares that it changes).
+  void heartbeat_written(std::uint16_t value);
+  void sim_op(SimOp op);
+
+  Snapshot snapshot() const;
+  LoopStats stats() const;
+  bool has_sim() const { return sim_ != nullptr; }
+
+  // Runs one period by hand (tests step the loop without a thread).
+  void run_period(double wall_dt_s);
+
+ private:
+  void thread_main();
+  void take_mailbox(homing::Inputs& inputs);
+  bool watchdog_expired() const;
+
+  homing::Settings settings_;
+  std::unique_ptr<MachineIo> io_;
+  homing::sim::Simulator* sim_;  // owned by io_ when the backend is the simulator
+  int period_us_;
+  double time_scale_;
+  homing::Engine engine_;
+  homing::Outputs outputs_{};
+
+  mutable std::mutex mailbox_mutex_;
+  homing::Commands pending_{};
+  bool pending_from_modbus_ = false;
+  std::array<std::int8_t, homing::kAxisCount> jog_dir_{};
+  std::array<std::uint64_t, homing::kAxisCount> jog_owner_{};
+  bool settings_pending_ = false;
+  homing::Settings new_settings_{};
+  std::vector<SimOp> sim_ops_;
+  bool permit_coil_ = false;
+  bool settings_lost_pending_ = false;
+
+  // Loop-private copies of the mailbox state.
+  std::array<std::int8_t, homing::kAxisCount> loop_jog_{};
+  bool loop_permit_ = false;
+  bool modbus_motion_ = false;
+
+  std::atomic<std::uint16_t> heartbeat_value_{0};
+  std::atomic<std::int64_t> heartbeat_changed_ns_{0};
+
+  mutable std::mutex snapshot_mutex_;
+  Snapshot snapshot_{};
+  LoopStats stats_{};
+  double engine_us_ = 0;
+
+  std::atomic<bool> running_{false};
+  std::atomic<bool> stop_requested_{false};
+  std::thread thread_;
+};
+
+std::int64_t monotonic_ns();
+
+}  // namespace server

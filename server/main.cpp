@@ -1,0 +1,123 @@
+// homingd: the homing module's daemon. Modbus TCP and RTU in front, the
+// control loop and the machine (simulator or GPIO) behind, settings in SQLite.
+#include <pthread.h>
+#include <signal.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <memory>
+#include <thread>
+
+#include "control_loop.hpp"
+#include "modbus_service.hpp"
+#include "monitor.hpp"
+#include "options.hpp"
+#include "persistence/settings_store.hpp"
+#include "registers/defaults.hpp"
+#include "registers/sim_bindings.hpp"
+#include "rtu_server.hpp"
+#include "simulator_io.hpp"
+#include "tcp_server.hpp"
+
+namespace {
+
+int fail_start(const std::string& message) {
+  std::fprintf(stderr, "homingd: %s\n", message.c_str());
+  return 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  auto parsed = server::parse_options(argc, argv);
+  if (!parsed) {
+    std::fprintf(stderr, "homingd: %s\nRun 'homingd --help' for the options and their accepted values.\n",
+                 parsed.error().c_str());
+    return 2;
+  }
+  if (parsed->exit_now) return parsed->exit_code;
+  const server::Options& opt = parsed->options;
+
+  auto logger = spdlog::stderr_color_mt("homingd");
+  spdlog::set_default_logger(logger);
+  spdlog::set_level(spdlog::level::from_str(opt.log_level));
+  spdlog::set_pattern("%Y-%m-%d %H:%M:%S.%e %^%l%$ %v");
+
+  // Signals are taken by the main thread only, with sigwait: every thread
+  // started below inherits this mask.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  signal(SIGPIPE, SIG_IGN);
+
+  if (opt.backend != "sim")
+    return fail_start("--backend gpiod: the GPIO backend is not built into this version; use --backend sim");
+
+  // Settings: durable, from the register table's defaults on first start.
+  std::vector<persistence::SettingDefault> defaults;
+  for (const auto& [name, value] : registers::persisted_defaults()) defaults.push_back({name, value});
+  persistence::OpenReport report;
+  auto store = persistence::SettingsStore::open(opt.db_path, defaults, report);
+  if (!store) return fail_start("--db " + opt.db_path + ": " + store.error().message);
+  for (const auto& m : report.messages) spdlog::info("settings: {}", m);
+  auto from_raw = registers::settings_from_raw(store->load());
+  for (const auto& r : from_raw.rejected) spdlog::warn("settings: {}", r);
+
+  auto sim_io = std::make_unique<server::SimulatorIo>(registers::default_sim_config());
+  homing::sim::Simulator* sim = &sim_io->sim();
+  server::ControlLoop loop(from_raw.settings, std::move(sim_io), sim, opt.period_us, opt.time_scale);
+  if (report.settings_lost) loop.raise_settings_lost();
+
+  server::ServiceConfig service_config;
+  service_config.unit_id = static_cast<std::uint8_t>(opt.unit_id);
+  service_config.sim_unit_id = static_cast<std::uint8_t>(opt.sim_unit_id);
+  service_config.word_order = opt.word_order;
+  server::ModbusService service(service_config, loop, &*store, from_raw.settings);
+
+  std::unique_ptr<server::TcpServer> tcp;
+  if (opt.tcp_enabled) {
+    tcp = std::make_unique<server::TcpServer>(opt.tcp_host, opt.tcp_port, opt.max_clients, opt.idle_timeout_s, service);
+    if (auto r = tcp->listen(); !r) return fail_start(r.error());
+  }
+  std::unique_ptr<server::RtuServer> rtu;
+  if (!opt.rtu_device.empty()) {
+    rtu = std::make_unique<server::RtuServer>(
+        server::RtuConfig{opt.rtu_device, opt.baud, opt.parity, opt.stop_bits, opt.unit_id}, service);
+    if (auto r = rtu->open(); !r) return fail_start(r.error());
+  }
+
+  loop.start();
+  server::Monitor monitor(loop, service, &*store, service.store_mutex());
+  monitor.start();
+  std::thread tcp_thread, rtu_thread;
+  if (tcp) tcp_thread = std::thread([&] { tcp->run(); });
+  if (rtu) rtu_thread = std::thread([&] { rtu->run(); });
+
+  std::string where;
+  if (tcp) where += "tcp " + opt.tcp_host + ":" + std::to_string(opt.tcp_port);
+  if (rtu) where += std::string(where.empty() ? "" : ", ") + "rtu " + opt.rtu_device + " " + std::to_string(opt.baud) +
+                    " 8" + opt.parity + std::to_string(opt.stop_bits);
+  std::printf("homingd: listening on %s (unit %d, simulator unit %d, backend %s, db %s)\n", where.c_str(),
+              opt.unit_id, opt.sim_unit_id, opt.backend.c_str(), opt.db_path.c_str());
+  std::fflush(stdout);
+
+  int sig = 0;
+  sigwait(&signals, &sig);
+  spdlog::info("{} received: stopping motion and shutting down", sig == SIGINT ? "SIGINT" : "SIGTERM");
+  if (tcp) tcp->stop();
+  if (rtu) rtu->stop();
+  if (tcp_thread.joinable()) tcp_thread.join();
+  if (rtu_thread.joinable()) rtu_thread.join();
+  tcp.reset();
+  loop.stop();
+  monitor.stop();
+  {
+    std::lock_guard lock(service.store_mutex());
+    store->close();
+  }
+  spdlog::info("stopped cleanly");
+  return 0;
+}

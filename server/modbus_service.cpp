@@ -1,0 +1,378 @@
+#include "modbus_service.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "registers/lookup.hpp"
+#include "registers/sim_bindings.hpp"
+
+namespace server {
+namespace {
+
+using registers::ExceptionCode;
+using registers::Table;
+
+constexpr std::uint8_t kReadCoils = 1, kReadDiscrete = 2, kReadHolding = 3, kReadInput = 4, kWriteCoil = 5,
+                       kWriteRegister = 6, kWriteCoils = 15, kWriteRegisters = 16, kReadWrite = 23,
+                       kEncapsulated = 43;
+
+Reply fail(std::uint8_t fc, ExceptionCode code) { return exception_reply(fc, static_cast<std::uint8_t>(code)); }
+
+Reply refusal_reply(std::uint8_t fc, const registers::Refusal& r, const ClientInfo& client) {
+  spdlog::debug("{} {}: FC{} refused with exception {:02X} ({}): {}", client.transport, client.address, fc,
+                static_cast<int>(r.code), registers::exception_name(r.code), r.message);
+  return fail(fc, r.code);
+}
+
+std::string describe_changes(const std::vector<registers::Change>& changes) {
+  std::string out;
+  for (const auto& c : changes) {
+    if (!out.empty()) out += "; ";
+    out += c.reg->name() + ": " + registers::format_value(*c.reg, c.old_raw) + " -> " +
+           registers::format_value(*c.reg, c.new_raw);
+  }
+  return out;
+}
+
+}  // namespace
+
+ModbusService::ModbusService(ServiceConfig config, ControlLoop& loop, persistence::SettingsStore* store,
+                             const homing::Settings& settings)
+    : config_(config), loop_(loop), store_(store), settings_(settings) {}
+
+homing::Settings ModbusService::settings() const {
+  std::lock_guard lock(mutex_);
+  return settings_;
+}
+
+void ModbusService::set_extras(const registers::StatusExtras& extras) {
+  std::lock_guard lock(mutex_);
+  extras_ = extras;
+}
+
+void ModbusService::disconnected(const ClientInfo& client) {
+  // A jog moves only while its client is there to stop it.
+  loop_.release_jogs(client.id);
+}
+
+Reply ModbusService::handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) {
+  if (pdu.empty()) return Reply{};
+  if (unit == config_.unit_id) return dispatch(Target::module, pdu, client, false);
+  if (config_.sim_unit_id && unit == *config_.sim_unit_id) return dispatch(Target::simulator, pdu, client, false);
+  if (unit == 0 && client.transport == "rtu") {
+    dispatch(Target::module, pdu, client, true);  // applied, never answered
+    return Reply{};
+  }
+  // A unit id that does not exist here: over TCP the gateway answer "target
+  // device failed to respond" (0x0B); over RTU silence, as on a shared bus.
+  if (client.transport == "tcp") return exception_reply(pdu[0], 0x0B);
+  return Reply{};
+}
+
+Reply ModbusService::dispatch(Target target, std::span<const std::uint8_t> pdu, const ClientInfo& client,
+                              bool broadcast) {
+  const std::uint8_t fc = pdu[0];
+  auto bad_value = [&] { return fail(fc, ExceptionCode::illegal_data_value); };
+  switch (fc) {
+    case kReadCoils:
+    case kReadDiscrete:
+    case kReadHolding:
+    case kReadInput: {
+      if (broadcast) return Reply{};
+      if (pdu.size() != 5) return bad_value();
+      const std::uint16_t start = be16(pdu, 1), count = be16(pdu, 3);
+      if (fc == kReadCoils || fc == kReadDiscrete) {
+        if (count < 1 || count > 2000) return bad_value();
+        return read_bits(target, fc, fc == kReadCoils ? Table::coil : Table::discrete_input, start, count);
+      }
+      if (count < 1 || count > 125) return bad_value();
+      return read_registers(target, fc, fc == kReadHolding ? Table::holding_register : Table::input_register,
+                            start, count);
+    }
+    case kWriteCoil: {
+      if (pdu.size() != 5) return bad_value();
+      const std::uint16_t start = be16(pdu, 1), value = be16(pdu, 3);
+      if (value != 0xFF00 && value != 0x0000) return bad_value();
+      const std::uint16_t bit = value == 0xFF00 ? 1 : 0;
+      if (auto r = write(target, fc, Table::coil, start, std::span(&bit, 1), client)) return *r;
+      return Reply{true, std::vector<std::uint8_t>(pdu.begin(), pdu.end())};
+    }
+    case kWriteRegister: {
+      if (pdu.size() != 5) return bad_value();
+      const std::uint16_t start = be16(pdu, 1), value = be16(pdu, 3);
+      if (auto r = write(target, fc, Table::holding_register, start, std::span(&value, 1), client)) return *r;
+      return Reply{true, std::vector<std::uint8_t>(pdu.begin(), pdu.end())};
+    }
+    case kWriteCoils: {
+      if (pdu.size() < 6) return bad_value();
+      const std::uint16_t start = be16(pdu, 1), count = be16(pdu, 3);
+      const std::uint8_t bytes = pdu[5];
+      if (count < 1 || count > 1968 || bytes != (count + 7) / 8 || pdu.size() != 6u + bytes) return bad_value();
+      std::vector<std::uint16_t> bits(count);
+      for (std::uint16_t i = 0; i < count; ++i) bits[i] = (pdu[6 + i / 8] >> (i % 8)) & 1;
+      if (auto r = write(target, fc, Table::coil, start, bits, client)) return *r;
+      Reply ok{true, {fc}};
+      put16(ok.pdu, start);
+      put16(ok.pdu, count);
+      return ok;
+    }
+    case kWriteRegisters: {
+      if (pdu.size() < 6) return bad_value();
+      const std::uint16_t start = be16(pdu, 1), count = be16(pdu, 3);
+      const std::uint8_t bytes = pdu[5];
+      if (count < 1 || count > 123 || bytes != count * 2 || pdu.size() != 6u + bytes) return bad_value();
+      std::vector<std::uint16_t> words(count);
+      for (std::uint16_t i = 0; i < count; ++i) words[i] = be16(pdu, 6 + 2 * i);
+      if (auto r = write(target, fc, Table::holding_register, start, words, client)) return *r;
+      Reply ok{true, {fc}};
+      put16(ok.pdu, start);
+      put16(ok.pdu, count);
+      return ok;
+    }
+    case kReadWrite: {
+      if (pdu.size() < 10) return bad_value();
+      const std::uint16_t read_start = be16(pdu, 1), read_count = be16(pdu, 3);
+      const std::uint16_t write_start = be16(pdu, 5), write_count = be16(pdu, 7);
+      const std::uint8_t bytes = pdu[9];
+      if (read_count < 1 || read_count > 125 || write_count < 1 || write_count > 121 || bytes != write_count * 2 ||
+          pdu.size() != 10u + bytes)
+        return bad_value();
+      // The read range must be valid too before anything is written.
+      if (Reply probe = read_registers(target, fc, Table::holding_register, read_start, read_count);
+          probe.pdu.size() == 2 && (probe.pdu[0] & 0x80))
+        return probe;
+      std::vector<std::uint16_t> words(write_count);
+      for (std::uint16_t i = 0; i < write_count; ++i) words[i] = be16(pdu, 10 + 2 * i);
+      if (auto r = write(target, fc, Table::holding_register, write_start, words, client)) return *r;
+      if (broadcast) return Reply{};
+      return read_registers(target, fc, Table::holding_register, read_start, read_count);
+    }
+    case kEncapsulated:
+      if (broadcast) return Reply{};
+      return device_identification(pdu);
+    default:
+      spdlog::debug("{} {}: function code {} not supported: exception 01", client.transport, client.address, fc);
+      if (broadcast) return Reply{};
+      return fail(fc, ExceptionCode::illegal_function);
+  }
+}
+
+namespace {
+
+registers::SimReadback readback_of(const Snapshot& snap) {
+  registers::SimReadback r;
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    r.actual_position_mm[a] = snap.sim[a].actual_position_mm;
+    r.sensor[a] = snap.sim[a].sensor;
+    r.at_hard_stop[a] = snap.sim[a].at_hard_stop;
+  }
+  return r;
+}
+
+homing::sim::MachineConfig config_of(const Snapshot& snap) {
+  homing::sim::MachineConfig c;
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) c.axes[a] = snap.sim[a].config;
+  c.seed = snap.sim_seed;
+  return c;
+}
+
+}  // namespace
+
+std::int64_t ModbusService::sim_raw(const registers::Register& reg, const Snapshot& snap) const {
+  return registers::sim_raw(reg, config_of(snap), registers::SimSwitches{snap.sim_estop, snap.sim_start_button},
+                            readback_of(snap));
+}
+
+Reply ModbusService::read_registers(Target target, std::uint8_t fc, Table table, std::uint16_t start,
+                                    std::uint16_t count) {
+  std::vector<std::uint16_t> words(count);
+  const Snapshot snap = loop_.snapshot();
+  std::optional<registers::Refusal> refused;
+  if (target == Target::module) {
+    std::lock_guard lock(mutex_);
+    const registers::ModuleView view{settings_, host_, snap.status, extras_};
+    refused = registers::read_module_words(table, start, words, config_.word_order, view);
+  } else {
+    refused = registers::read_words(registers::Unit::simulator, table, start, words, config_.word_order,
+                                    [&](const registers::Register& r) { return sim_raw(r, snap); });
+  }
+  if (refused) return fail(fc, refused->code);
+  Reply reply{true, {fc, static_cast<std::uint8_t>(count * 2)}};
+  reply.pdu.reserve(2 + count * 2u);
+  for (std::uint16_t w : words) put16(reply.pdu, w);
+  return reply;
+}
+
+Reply ModbusService::read_bits(Target target, std::uint8_t fc, Table table, std::uint16_t start,
+                               std::uint16_t count) {
+  std::vector<std::uint8_t> bits(count);
+  const Snapshot snap = loop_.snapshot();
+  std::optional<registers::Refusal> refused;
+  if (target == Target::module) {
+    std::lock_guard lock(mutex_);
+    const registers::ModuleView view{settings_, host_, snap.status, extras_};
+    refused = registers::read_module_bits(table, start, bits, view);
+  } else {
+    refused = registers::read_bits(registers::Unit::simulator, table, start, bits,
+                                   [&](const registers::Register& r) { return sim_raw(r, snap); });
+  }
+  if (refused) return fail(fc, refused->code);
+  const std::size_t nbytes = (count + 7u) / 8u;
+  Reply reply{true, {fc, static_cast<std::uint8_t>(nbytes)}};
+  reply.pdu.resize(2 + nbytes, 0);
+  for (std::size_t i = 0; i < count; ++i)
+    if (bits[i]) reply.pdu[2 + i / 8] |= static_cast<std::uint8_t>(1u << (i % 8));
+  return reply;
+}
+
+std::optional<Reply> ModbusService::write(Target target, std::uint8_t fc, Table table, std::uint16_t start,
+                                          std::span<const std::uint16_t> values, const ClientInfo& client) {
+  if (target == Target::module) return write_module(fc, table, start, values, client);
+  return write_sim(fc, table, start, values, client);
+}
+
+std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, std::uint16_t start,
+                                                 std::span<const std::uint16_t> values, const ClientInfo& client) {
+  std::vector<registers::CommandRequest> commands;
+  {
+    std::lock_guard lock(mutex_);
+    auto accepted = registers::validate_write(table, start, values, config_.word_order, settings_, host_);
+    if (!accepted) return refusal_reply(fc, accepted.error(), client);
+    if (accepted->changes_persisted()) {
+      if (loop_.snapshot().status.homing) {
+        spdlog::warn("{} {}: settings write refused while a homing cycle runs (exception 06): {}",
+                     client.transport, client.address, describe_changes(accepted->changes));
+        return fail(fc, ExceptionCode::server_device_busy);
+      }
+      std::vector<persistence::SettingWrite> writes;
+      for (const auto& c : accepted->changes)
+        if (c.reg->persisted) writes.push_back({c.reg->name(), c.new_raw});
+      if (store_) {
+        auto committed = store_->commit(writes, persistence::ChangeSource{client.transport, client.address});
+        if (!committed) {
+          spdlog::error("{} {}: settings not stored, answered exception 04: {}", client.transport, client.address,
+                        committed.error().message);
+          return fail(fc, ExceptionCode::server_device_failure);
+        }
+      }
+      settings_ = accepted->settings;
+      loop_.set_settings(settings_);
+      spdlog::info("settings changed by {} {}: {}", client.transport, client.address,
+                   describe_changes(accepted->changes));
+    }
+    const std::uint16_t old_heartbeat = host_.heartbeat;
+    host_ = accepted->host;
+    if (host_.heartbeat != old_heartbeat) loop_.heartbeat_written(host_.heartbeat);
+    commands = std::move(accepted->commands);
+  }
+  run_commands(commands, client);
+  return std::nullopt;
+}
+
+void ModbusService::run_commands(const std::vector<registers::CommandRequest>& commands, const ClientInfo& client) {
+  using registers::Command;
+  homing::Commands c{};
+  bool any = false;
+  for (const auto& r : commands) {
+    const std::size_t a = r.axis >= 0 ? static_cast<std::size_t>(r.axis) : 0;
+    switch (r.command) {
+      case Command::home_all: c.home_all = true; any = true; break;
+      case Command::home_axis: c.home_axes |= homing::axis_bit(a); any = true; break;
+      case Command::abort: c.abort = true; any = true; break;
+      case Command::reset_alarm:
+        c.reset_alarm = true;
+        any = true;
+        if (store_ && store_->settings_lost()) {
+          std::lock_guard lock(mutex_);
+          (void)store_->acknowledge_settings_lost(persistence::ChangeSource{client.transport, client.address});
+        }
+        break;
+      case Command::jog_plus: loop_.set_jog(a, r.on ? 1 : 0, client.id); break;
+      case Command::jog_minus: loop_.set_jog(a, r.on ? -1 : 0, client.id); break;
+      case Command::move: {
+        std::lock_guard lock(mutex_);
+        c.move_axes |= homing::axis_bit(a);
+        c.move_target_mm[a] = host_.target_mm[a];
+        any = true;
+        break;
+      }
+      case Command::homing_permit: loop_.set_permit_coil(r.on); break;
+    }
+    spdlog::info("command from {} {}: {}{}{}", client.transport, client.address,
+                 static_cast<int>(r.command) <= 7 ? std::array<const char*, 8>{"home_all", "home", "abort", "reset_alarm",
+                                                                               "jog_plus", "jog_minus", "move",
+                                                                               "homing_permit"}[static_cast<int>(r.command)]
+                                                  : "?",
+                 r.axis >= 0 ? std::string(".") + std::string(homing::kAxisLetters[a]) : std::string(),
+                 (r.command == Command::jog_plus || r.command == Command::jog_minus ||
+                  r.command == Command::homing_permit)
+                     ? (r.on ? " on" : " off")
+                     : "");
+  }
+  if (any) loop_.submit(c, true);
+}
+
+std::optional<Reply> ModbusService::write_sim(std::uint8_t fc, Table table, std::uint16_t start,
+                                              std::span<const std::uint16_t> values, const ClientInfo& client) {
+  const Snapshot snap = loop_.snapshot();
+  auto accepted = registers::validate_sim_write(table, start, values, config_.word_order, config_of(snap),
+                                                registers::SimSwitches{snap.sim_estop, snap.sim_start_button},
+                                                readback_of(snap));
+  if (!accepted) return refusal_reply(fc, accepted.error(), client);
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    if (accepted->placed[a] && snap.sim[a].moving) {
+      spdlog::info("{} {}: sim.{}.actual_position refused while the axis moves (exception 06)", client.transport,
+                   client.address, homing::kAxisLetters[a]);
+      return fail(fc, ExceptionCode::server_device_busy);
+    }
+  }
+  const registers::AcceptedSimWrite w = std::move(*accepted);
+  loop_.sim_op([w](homing::sim::Simulator& sim) {
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+      homing::sim::AxisConfig c = w.config.axes[a];
+      sim.set_axis_config(a, c);
+      if (w.placed[a]) sim.place(a, w.config.axes[a].actual_position_mm);
+      if (w.lose_steps_mm[a] != 0) sim.lose_steps(a, w.lose_steps_mm[a]);
+    }
+    if (w.seed_written) sim.set_seed(w.config.seed);
+    sim.set_estop(w.switches.estop);
+    sim.set_start_button(w.switches.start_button);
+  });
+  if (!w.changes.empty())
+    spdlog::info("simulator changed by {} {}: {}", client.transport, client.address, describe_changes(w.changes));
+  return std::nullopt;
+}
+
+// FC 43 / MEI 14: libmodbus 3.1.6 has none, so it is answered here.
+Reply ModbusService::device_identification(std::span<const std::uint8_t> pdu) {
+  constexpr std::uint8_t fc = kEncapsulated;
+  if (pdu.size() != 4 || pdu[1] != 0x0E) return fail(fc, ExceptionCode::illegal_function);
+  const std::uint8_t code = pdu[2];
+  std::uint8_t object = pdu[3];
+  static constexpr std::array<std::string_view, 7> kObjects{
+      "Homing Module Works", "HM-6", "0.1.0", "https://example.invalid/homing-module", "Homing module",
+      "HM-6 Modbus homing controller", "homingd"};
+  if (code < 1 || code > 4) return fail(fc, ExceptionCode::illegal_data_value);
+  const std::uint8_t last = code == 1 ? 2 : 6;  // basic: 0..2; regular: 0..6 (no extended objects)
+  if (code == 4) {
+    if (object > 6) return fail(fc, ExceptionCode::illegal_data_address);
+  } else if (object > last) {
+    object = 0;  // stream access from an unknown object restarts at 0
+  }
+  Reply reply{true, {fc, 0x0E, code, 0x82 /* regular, stream and individual */, 0x00, 0x00, 0x00}};
+  std::uint8_t count = 0;
+  const std::uint8_t first = object, stop = code == 4 ? object : last;
+  for (std::uint8_t id = first; id <= stop; ++id) {
+    const auto text = kObjects[id];
+    reply.pdu.push_back(id);
+    reply.pdu.push_back(static_cast<std::uint8_t>(text.size()));
+    reply.pdu.insert(reply.pdu.end(), text.begin(), text.end());
+    ++count;
+  }
+  reply.pdu[6] = count;
+  return reply;
+}
+
+}  // namespace server

@@ -1,0 +1,64 @@
+#pragma once
+// The meaning of Modbus requests: function codes, quantities, units, the
+// register table, durable settings writes, commands and the simulator unit.
+// Transports (TCP, RTU) call handle() with a PDU; fuzzers can too.
+#include <cstdint>
+#include <mutex>
+#include <optional>
+#include <span>
+
+#include "control_loop.hpp"
+#include "persistence/settings_store.hpp"
+#include "registers/codec.hpp"
+#include "registers/validate.hpp"
+#include "request_handler.hpp"
+
+namespace server {
+
+struct ServiceConfig {
+  std::uint8_t unit_id = 1;
+  std::optional<std::uint8_t> sim_unit_id = 247;  // absent with real hardware
+  registers::WordOrder word_order = registers::WordOrder::high_first;
+};
+
+class ModbusService final : public RequestHandler {
+ public:
+  ModbusService(ServiceConfig config, ControlLoop& loop, persistence::SettingsStore* store,
+                const homing::Settings& settings);
+
+  Reply handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) override;
+  void disconnected(const ClientInfo& client) override;
+
+  // Called by the monitor with the history summary.
+  void set_extras(const registers::StatusExtras& extras);
+  homing::Settings settings() const;
+  // Guards the settings store too: whoever else uses the store takes it.
+  std::mutex& store_mutex() { return mutex_; }
+
+ private:
+  enum class Target { module, simulator };
+  Reply dispatch(Target target, std::span<const std::uint8_t> pdu, const ClientInfo& client, bool broadcast);
+  Reply read_registers(Target target, std::uint8_t fc, registers::Table table, std::uint16_t start,
+                       std::uint16_t count);
+  Reply read_bits(Target target, std::uint8_t fc, registers::Table table, std::uint16_t start, std::uint16_t count);
+  // Validates and applies a write; nullopt when accepted.
+  std::optional<Reply> write(Target target, std::uint8_t fc, registers::Table table, std::uint16_t start,
+                             std::span<const std::uint16_t> values, const ClientInfo& client);
+  std::optional<Reply> write_module(std::uint8_t fc, registers::Table table, std::uint16_t start,
+                                    std::span<const std::uint16_t> values, const ClientInfo& client);
+  std::optional<Reply> write_sim(std::uint8_t fc, registers::Table table, std::uint16_t start,
+                                 std::span<const std::uint16_t> values, const ClientInfo& client);
+  void run_commands(const std::vector<registers::CommandRequest>& commands, const ClientInfo& client);
+  Reply device_identification(std::span<const std::uint8_t> pdu);
+  std::int64_t sim_raw(const registers::Register& reg, const Snapshot& snap) const;
+
+  ServiceConfig config_;
+  ControlLoop& loop_;
+  persistence::SettingsStore* store_;
+  mutable std::mutex mutex_;  // settings_, host_, extras_ and the store
+  homing::Settings settings_;
+  registers::HostRegisters host_{};
+  registers::StatusExtras extras_{};
+};
+
+}  // namespace server

@@ -1,0 +1,112 @@
+#include "monitor.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+
+namespace server {
+
+std::int64_t unix_ms() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+Monitor::Monitor(ControlLoop& loop, ModbusService& service, persistence::SettingsStore* store,
+                 std::mutex& store_mutex)
+    : loop_(loop), service_(service), store_(store), store_mutex_(store_mutex) {}
+
+Monitor::~Monitor() { stop(); }
+
+void Monitor::start() {
+  refresh_summary();
+  thread_ = std::thread([this] {
+    while (!stop_) {
+      poll(unix_ms());
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  });
+}
+
+void Monitor::stop() {
+  stop_ = true;
+  if (thread_.joinable()) thread_.join();
+}
+
+void Monitor::refresh_summary() {
+  if (!store_) return;
+  registers::StatusExtras extras;
+  {
+    std::lock_guard lock(store_mutex_);
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+      if (auto s = store_->correction_summary(a, 10); s && s->count > 0) {
+        extras.correction_mean_mm[a] = s->mean;
+        extras.correction_spread_mm[a] = s->spread;
+      }
+    }
+  }
+  service_.set_extras(extras);
+}
+
+void Monitor::poll(std::int64_t now_ms) {
+  const Snapshot snap = loop_.snapshot();
+  const homing::Status& st = snap.status;
+  if (first_) {
+    last_ = st;
+    first_ = false;
+    return;
+  }
+  const homing::Settings settings = service_.settings();
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    const auto& now = st.axes[a].alarm;
+    if (now.code != last_.axes[a].alarm.code && now) {
+      spdlog::error("alarm {} ({}): {}", static_cast<int>(now.code), homing::alarm_name(now.code),
+                    homing::describe_alarm(a, now, settings));
+    }
+  }
+  if (st.global_alarm != last_.global_alarm && st.global_alarm != homing::AlarmCode::none)
+    spdlog::error("alarm {}: {}", homing::alarm_name(st.global_alarm),
+                  homing::describe_alarm(0, homing::Alarm{st.global_alarm}, settings));
+  if (st.alarm != last_.alarm && !st.alarm) spdlog::info("alarms reset");
+  if (st.last_command_result != last_.last_command_result || st.heartbeat == 0)
+    spdlog::info("command result: {}", homing::command_result_name(st.last_command_result));
+  if (st.homing && !last_.homing) {
+    run_start_ms_ = now_ms;
+    run_axes_ = 0;
+    spdlog::info("homing started");
+  }
+  if (st.homing) {
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+      if (st.axes[a].busy) run_axes_ |= homing::axis_bit(a);
+  }
+  if (!st.homing && last_.homing) {
+    persistence::HomingRun run;
+    run.start_ms = run_start_ms_;
+    run.end_ms = now_ms;
+    run.axes = run_axes_;
+    run.result = 0;
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+      if (st.axes[a].alarm) {
+        run.result = static_cast<int>(st.axes[a].alarm.code);
+        run.alarm_axis = static_cast<int>(a);
+        break;
+      }
+    }
+    if (run.result == 0 && st.global_alarm != homing::AlarmCode::none) run.result = static_cast<int>(st.global_alarm);
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+      if (!(run_axes_ & homing::axis_bit(a))) continue;
+      run.axis[a].present = true;
+      run.axis[a].duration_ms = now_ms - run_start_ms_;
+      if (run.result == 0) run.axis[a].correction_mm = st.axes[a].home_correction_mm;
+    }
+    if (run.result == 0) spdlog::info("homing done in {} ms", now_ms - run_start_ms_);
+    else spdlog::warn("homing ended with alarm {}", homing::alarm_name(static_cast<homing::AlarmCode>(run.result)));
+    if (store_) {
+      std::lock_guard lock(store_mutex_);
+      if (auto r = store_->record_homing_run(run); !r) spdlog::error("history not recorded: {}", r.error().message);
+    }
+    refresh_summary();
+  }
+  last_ = st;
+}
+
+}  // namespace server

@@ -1,0 +1,41 @@
+#pragma once
+// Watches the published status from outside the control loop: logs alarms
+// and command results, records each homing run in the history and refreshes
+// the home-correction summary that the input registers show.
+#include <atomic>
+#include <cstdint>
+#include <thread>
+
+#include "control_loop.hpp"
+#include "modbus_service.hpp"
+#include "persistence/settings_store.hpp"
+
+namespace server {
+
+class Monitor {
+ public:
+  Monitor(ControlLoop& loop, ModbusService& service, persistence::SettingsStore* store, std::mutex& store_mutex);
+  ~Monitor();
+  void start();
+  void stop();
+  // One look at the status (tests call it directly).
+  void poll(std::int64_t now_ms);
+
+ private:
+  void refresh_summary();
+
+  ControlLoop& loop_;
+  ModbusService& service_;
+  persistence::SettingsStore* store_;
+  std::mutex& store_mutex_;
+  homing::Status last_{};
+  bool first_ = true;
+  std::int64_t run_start_ms_ = 0;
+  homing::AxisMask run_axes_ = 0;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+std::int64_t unix_ms();
+
+}  // namespace server

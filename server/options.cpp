@@ -1,0 +1,105 @@
+#include "options.hpp"
+
+#include <CLI/CLI.hpp>
+#include <sstream>
+
+namespace server {
+namespace {
+
+std::expected<void, std::string> split_host_port(const std::string& text, Options& o) {
+  const auto colon = text.rfind(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 >= text.size())
+    return std::unexpected("--tcp: expected HOST:PORT (for example 127.0.0.1:1502), got '" + text + "'");
+  const std::string port = text.substr(colon + 1);
+  int value = 0;
+  try {
+    std::size_t used = 0;
+    value = std::stoi(port, &used);
+    if (used != port.size()) throw std::invalid_argument(port);
+  } catch (const std::exception&) {
+    return std::unexpected("--tcp: port '" + port + "' is not a number (1..65535)");
+  }
+  if (value < 1 || value > 65535)
+    return std::unexpected("--tcp: port " + port + " is outside 1..65535");
+  o.tcp_host = text.substr(0, colon);
+  o.tcp_port = value;
+  return {};
+}
+
+}  // namespace
+
+std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv) {
+  ParseOutcome out;
+  Options& o = out.options;
+  CLI::App app{"homingd: Modbus TCP/RTU homing module (simulator or GPIO backend)", "homingd"};
+  app.set_version_flag("--version", "homingd 0.1.0");
+  std::string tcp = "127.0.0.1:1502";
+  std::string parity = "E";
+  std::string word_order = "high-first";
+  app.set_config("--config", "", "TOML config file; every option below can be a key in it")
+      ->check(CLI::ExistingFile);
+  app.add_option("--tcp", tcp, "Modbus TCP listen address HOST:PORT")->capture_default_str();
+  app.add_flag("--no-tcp", [&o](std::int64_t) { o.tcp_enabled = false; }, "Serve RTU only");
+  app.add_option("--rtu", o.rtu_device, "Serial device for Modbus RTU (e.g. /dev/ttyUSB0)");
+  app.add_option("--baud", o.baud, "RTU baud rate")
+      ->check(CLI::IsMember({1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200}))
+      ->capture_default_str();
+  app.add_option("--parity", parity, "RTU parity")->check(CLI::IsMember({"N", "E", "O"}))->capture_default_str();
+  app.add_option("--stop-bits", o.stop_bits, "RTU stop bits")->check(CLI::IsMember({1, 2}))->capture_default_str();
+  app.add_option("--unit", o.unit_id, "Modbus unit id of the module")->check(CLI::Range(1, 247))->capture_default_str();
+  app.add_option("--db", o.db_path, "SQLite settings database")->capture_default_str();
+  app.add_option("--backend", o.backend, "Machine I/O backend")
+      ->check(CLI::IsMember({"sim", "gpiod"}))
+      ->capture_default_str();
+  app.add_option("--period-us", o.period_us, "Control period in microseconds")
+      ->check(CLI::Range(100, 100000))
+      ->capture_default_str();
+  app.add_option("--word-order", word_order, "Order of the two words of 32-bit values")
+      ->check(CLI::IsMember({"high-first", "low-first"}))
+      ->capture_default_str();
+  app.add_option("--max-clients", o.max_clients, "Maximum simultaneous TCP clients")
+      ->check(CLI::Range(1, 1024))
+      ->capture_default_str();
+  app.add_option("--idle-timeout-s", o.idle_timeout_s, "Drop a TCP client silent for this long")
+      ->check(CLI::Range(1, 86400))
+      ->capture_default_str();
+  app.add_option("--sim-unit", o.sim_unit_id, "Unit id of the simulator (sim backend only)")
+      ->check(CLI::Range(1, 247))
+      ->capture_default_str();
+  app.add_option("--time-scale", o.time_scale, "Simulated time runs this many times faster than the wall clock")
+      ->check(CLI::Range(0.01, 1000.0))
+      ->capture_default_str();
+  app.add_option("--log-level", o.log_level, "Log level")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
+      ->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    out.exit_now = true;
+    out.exit_code = app.exit(e);
+    return out;
+  } catch (const CLI::CallForVersion& e) {
+    out.exit_now = true;
+    out.exit_code = app.exit(e);
+    return out;
+  } catch (const CLI::ParseError& e) {
+    std::string what = e.what();
+    if (auto cfg = app.get_option("--config"); cfg && cfg->count() > 0)
+      what += " (config file " + cfg->as<std::string>() + ")";
+    return std::unexpected(what);
+  }
+  if (auto cfg = app.get_option("--config"); cfg->count() > 0) o.config_path = cfg->as<std::string>();
+  if (o.tcp_enabled) {
+    if (auto r = split_host_port(tcp, o); !r) return std::unexpected(r.error());
+  }
+  o.parity = parity.empty() ? 'E' : parity[0];
+  o.word_order = word_order == "low-first" ? registers::WordOrder::low_first : registers::WordOrder::high_first;
+  if (!o.tcp_enabled && o.rtu_device.empty())
+    return std::unexpected("--no-tcp needs --rtu DEVICE: with neither, nothing would be served");
+  if (o.sim_unit_id == o.unit_id && o.backend == "sim")
+    return std::unexpected("--sim-unit " + std::to_string(o.sim_unit_id) + " must differ from --unit " +
+                           std::to_string(o.unit_id));
+  return out;
+}
+
+}  // namespace server

@@ -1,0 +1,42 @@
+#pragma once
+// homingd's start-up options: command line and TOML config file (--config),
+// the command line winning. Fixed by the spec so any tool can start it.
+#include <cstdint>
+#include <expected>
+#include <string>
+
+#include "registers/codec.hpp"
+
+namespace server {
+
+struct Options {
+  bool tcp_enabled = true;
+  std::string tcp_host = "127.0.0.1";
+  int tcp_port = 1502;
+  std::string rtu_device;  // empty: no RTU
+  int baud = 19200;
+  char parity = 'E';
+  int stop_bits = 1;
+  int unit_id = 1;
+  std::string db_path = "homingd.db";
+  std::string backend = "sim";
+  int period_us = 1000;
+  registers::WordOrder word_order = registers::WordOrder::high_first;
+  int max_clients = 32;
+  int idle_timeout_s = 60;
+  int sim_unit_id = 247;
+  double time_scale = 1.0;
+  std::string log_level = "info";
+  std::string config_path;
+};
+
+struct ParseOutcome {
+  Options options;
+  bool exit_now = false;  // --help or --version was printed
+  int exit_code = 0;
+};
+
+// Errors name the option and the accepted values.
+std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv);
+
+}  // namespace server

@@ -1,0 +1,168 @@
+#include "tcp_server.hpp"
+
+#include <arpa/inet.h>
+#include <modbus/modbus.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <spdlog/spdlog.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <cstring>
+
+namespace server {
+namespace {
+
+// Waits until fd is readable; false on timeout, error, or a stop request.
+bool wait_readable(int fd, int timeout_ms, const std::atomic<bool>& stop) {
+  int waited = 0;
+  while (!stop) {
+    const int slice = std::min(200, timeout_ms - waited);
+    if (slice <= 0) return false;
+    pollfd p{fd, POLLIN, 0};
+    const int rc = ::poll(&p, 1, slice);
+    if (rc > 0) return true;
+    if (rc < 0 && errno != EINTR) return false;
+    waited += slice;
+  }
+  return false;
+}
+
+// Reads exactly n bytes, each chunk within timeout_ms.
+bool read_exact(int fd, std::uint8_t* out, std::size_t n, int timeout_ms, const std::atomic<bool>& stop) {
+  std::size_t got = 0;
+  while (got < n) {
+    if (!wait_readable(fd, timeout_ms, stop)) return false;
+    const ssize_t r = ::recv(fd, out + got, n - got, 0);
+    if (r <= 0) {
+      if (r < 0 && errno == EINTR) continue;
+      return false;
+    }
+    got += static_cast<std::size_t>(r);
+  }
+  return true;
+}
+
+bool send_all(int fd, const std::vector<std::uint8_t>& bytes) {
+  std::size_t sent = 0;
+  while (sent < bytes.size()) {
+    const ssize_t r = ::send(fd, bytes.data() + sent, bytes.size() - sent, MSG_NOSIGNAL);
+    if (r <= 0) {
+      if (r < 0 && errno == EINTR) continue;
+      return false;
+    }
+    sent += static_cast<std::size_t>(r);
+  }
+  return true;
+}
+
+constexpr int kFrameTimeoutMs = 1000;  // the rest of a frame must follow its first byte within this
+
+}  // namespace
+
+TcpServer::TcpServer(std::string host, int port, int max_clients, int idle_timeout_s, RequestHandler& handler)
+    : host_(std::move(host)), port_(port), max_clients_(max_clients), idle_timeout_s_(idle_timeout_s),
+      handler_(handler) {}
+
+TcpServer::~TcpServer() {
+  stop();
+  reap(true);
+  if (listen_fd_ >= 0) ::close(listen_fd_);
+}
+
+std::expected<void, std::string> TcpServer::listen() {
+  // libmodbus opens the listening socket (SO_REUSEADDR, the address parsing).
+  modbus_t* ctx = modbus_new_tcp(host_.c_str(), port_);
+  if (!ctx) return std::unexpected("--tcp " + host_ + ":" + std::to_string(port_) + ": " + modbus_strerror(errno));
+  const int fd = modbus_tcp_listen(ctx, 64);
+  const int err = errno;
+  modbus_free(ctx);
+  if (fd < 0)
+    return std::unexpected("--tcp " + host_ + ":" + std::to_string(port_) + ": cannot listen: " + std::strerror(err));
+  listen_fd_ = fd;
+  return {};
+}
+
+void TcpServer::run() {
+  while (!stop_) {
+    pollfd p{listen_fd_, POLLIN, 0};
+    const int rc = ::poll(&p, 1, 200);
+    reap(false);
+    if (rc <= 0) continue;
+    sockaddr_in peer{};
+    socklen_t len = sizeof(peer);
+    const int fd = ::accept4(listen_fd_, reinterpret_cast<sockaddr*>(&peer), &len, SOCK_CLOEXEC);
+    if (fd < 0) continue;
+    char ip[INET_ADDRSTRLEN] = "?";
+    ::inet_ntop(AF_INET, &peer.sin_addr, ip, sizeof(ip));
+    const std::string address = std::string(ip) + ":" + std::to_string(ntohs(peer.sin_port));
+    if (active_.load() >= max_clients_) {
+      ++refused_;
+      spdlog::warn("tcp: refused {}: {} clients connected, the maximum (--max-clients)", address, max_clients_);
+      ::close(fd);
+      continue;
+    }
+    const int one = 1;
+    ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
+    ++active_;
+    ClientInfo info{next_id_++, "tcp", address};
+    spdlog::info("tcp: client {} connected ({} active)", address, active_.load());
+    std::lock_guard lock(connections_mutex_);
+    Connection& c = connections_.emplace_back();
+    c.fd = fd;
+    c.thread = std::thread([this, &c, info] { serve(c, info); });
+  }
+}
+
+void TcpServer::serve(Connection& c, ClientInfo info) {
+  std::array<std::uint8_t, 7 + 256> frame{};
+  const char* why = "closed by the client";
+  for (;;) {
+    if (!wait_readable(c.fd, idle_timeout_s_ * 1000, stop_)) {
+      why = stop_ ? "server stopping" : "idle timeout (--idle-timeout-s)";
+      break;
+    }
+    if (!read_exact(c.fd, frame.data(), 7, kFrameTimeoutMs, stop_)) break;
+    const std::uint16_t tid = static_cast<std::uint16_t>((frame[0] << 8) | frame[1]);
+    const std::uint16_t protocol = static_cast<std::uint16_t>((frame[2] << 8) | frame[3]);
+    const std::uint16_t length = static_cast<std::uint16_t>((frame[4] << 8) | frame[5]);
+    const std::uint8_t unit = frame[6];
+    // MBAP length counts the unit id and the PDU: 2..254 bytes.
+    if (protocol != 0 || length < 2 || length > 254) {
+      why = "malformed MBAP header";
+      spdlog::warn("tcp: {}: MBAP protocol {} length {}; closing the connection", info.address, protocol, length);
+      break;
+    }
+    if (!read_exact(c.fd, frame.data() + 7, length - 1u, kFrameTimeoutMs, stop_)) {
+      why = "incomplete frame";
+      break;
+    }
+    const Reply reply = handler_.handle(unit, std::span<const std::uint8_t>(frame.data() + 7, length - 1u), info);
+    if (reply.send && !send_all(c.fd, tcp_frame(tid, unit, reply.pdu))) break;
+  }
+  handler_.disconnected(info);
+  ::shutdown(c.fd, SHUT_RDWR);
+  ::close(c.fd);
+  --active_;
+  spdlog::info("tcp: client {} disconnected: {}", info.address, why);
+  c.finished = true;
+}
+
+void TcpServer::reap(bool all) {
+  std::lock_guard lock(connections_mutex_);
+  for (auto it = connections_.begin(); it != connections_.end();) {
+    if (all || it->finished) {
+      if (it->thread.joinable()) it->thread.join();
+      it = connections_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+void TcpServer::stop() { stop_ = true; }
+
+}  // namespace server
