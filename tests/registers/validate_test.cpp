@@ -1,0 +1,184 @@
+// Writes are all or nothing: addressing faults are 02, values and setting
+// combinations that cannot work are 03, and nothing is applied on a refusal.
+#include <catch2/catch.hpp>
+
+#include <array>
+#include <vector>
+
+#include "registers/defaults.hpp"
+#include "registers/lookup.hpp"
+#include "registers/validate.hpp"
+
+using namespace registers;
+
+namespace {
+const Register& reg(const char* name) {
+  const Register* r = find_register(name);
+  REQUIRE(r != nullptr);
+  return *r;
+}
+
+std::vector<std::uint16_t> words_of(const Register& r, std::int64_t raw, WordOrder order = WordOrder::high_first) {
+  std::vector<std::uint16_t> w(r.words());
+  encode_words(r, raw, order, w);
+  return w;
+}
+
+auto write_one(const char* name, std::int64_t raw, const homing::Settings& s,
+               WordOrder order = WordOrder::high_first) {
+  const Register& r = reg(name);
+  return validate_write(r.table, r.address, words_of(r, raw, order), order, s, default_host_registers());
+}
+}  // namespace
+
+TEST_CASE("GIVEN defaults WHEN a setting is written in range THEN the copy changes and the change is listed") {
+  const auto s = default_settings();
+  const auto ok = write_one("axis.x.pull_off", 2500, s);
+  REQUIRE(ok);
+  CHECK(ok->settings.axes[0].pull_off_mm == 2.5);
+  REQUIRE(ok->changes.size() == 1);
+  CHECK(ok->changes[0].reg->name() == "axis.x.pull_off");
+  CHECK(ok->changes[0].old_raw == 1000);
+  CHECK(ok->changes[0].new_raw == 2500);
+  CHECK(ok->changes_persisted());
+}
+
+TEST_CASE("a 32-bit write decodes with the low-first word order too") {
+  const auto ok = write_one("axis.x.home_position", -7250, default_settings(), WordOrder::low_first);
+  REQUIRE(ok);
+  CHECK(ok->settings.axes[0].home_position_mm == -7.25);
+}
+
+TEST_CASE("a write out of range is exception 03 and changes nothing") {
+  const auto s = default_settings();
+  const auto refused = write_one("axis.x.seek_feedrate", 60001, s);
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().code == ExceptionCode::illegal_data_value);
+  CHECK_THAT(refused.error().message, Catch::Contains("axis.x.seek_feedrate") && Catch::Contains("60000"));
+  const auto mode = write_one("axis.y.mode", 9, s);
+  REQUIRE_FALSE(mode);
+  CHECK(mode.error().code == ExceptionCode::illegal_data_value);
+}
+
+TEST_CASE("a write to a read-only register is exception 02") {
+  const Register& pos = reg("axis.x.position");
+  const std::array<std::uint16_t, 2> w{0, 5};
+  const auto refused = validate_write(Table::input_register, pos.address, w, WordOrder::high_first,
+                                      default_settings(), default_host_registers());
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().code == ExceptionCode::illegal_data_address);
+  CHECK_THAT(refused.error().message, Catch::Contains("read-only"));
+}
+
+TEST_CASE("a write covering only one half of a 32-bit value is exception 02") {
+  const Register& travel = reg("axis.x.max_seek_travel");
+  const std::array<std::uint16_t, 1> one{7};
+  const auto s = default_settings();
+  const auto h = default_host_registers();
+  const auto first_half = validate_write(Table::holding_register, travel.address, one, WordOrder::high_first, s, h);
+  REQUIRE_FALSE(first_half);
+  CHECK(first_half.error().code == ExceptionCode::illegal_data_address);
+  const auto second_half =
+      validate_write(Table::holding_register, travel.address + 1, one, WordOrder::high_first, s, h);
+  REQUIRE_FALSE(second_half);
+  CHECK(second_half.error().code == ExceptionCode::illegal_data_address);
+  CHECK_THAT(second_half.error().message, Catch::Contains("axis.x.max_seek_travel"));
+}
+
+TEST_CASE("an unmapped address inside a write range is exception 02") {
+  // sequence.step6 at 5, then a gap until global.allowed_without_homing at 10
+  const std::array<std::uint16_t, 3> w{0, 0, 0};
+  const auto refused = validate_write(Table::holding_register, 4, w, WordOrder::high_first, default_settings(),
+                                      default_host_registers());
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().code == ExceptionCode::illegal_data_address);
+  CHECK_THAT(refused.error().message, Catch::Contains("6"));
+}
+
+TEST_CASE("a seek feedrate too fast to stop within max_stop_distance is 03 naming the setting, nothing applied") {
+  // 1000 mm/s² and 10 mm: v²/2a > 10 mm from v = 141 mm/s = 8485 mm/min
+  const auto s = default_settings();
+  const auto refused = write_one("axis.x.seek_feedrate", 20000, s);
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().code == ExceptionCode::illegal_data_value);
+  CHECK_THAT(refused.error().message, Catch::Contains("axis.x.max_stop_distance") && Catch::Contains("seek_feedrate"));
+}
+
+TEST_CASE("the cross-field check is skipped on a disabled axis") {
+  const auto s = default_settings();
+  REQUIRE(s.axes[3].mode == homing::HomingMode::disabled);
+  CHECK(write_one("axis.a.seek_feedrate", 20000, s));
+}
+
+TEST_CASE("a multi-register write is all or nothing") {
+  const auto s = default_settings();
+  const auto h = default_host_registers();
+  // seek_feedrate (+2), latch_feedrate (+3), acceleration (+4) of X in one FC 16
+  const Register& seek = reg("axis.x.seek_feedrate");
+  SECTION("one bad value refuses the whole request") {
+    const std::array<std::uint16_t, 3> w{2000, 0, 800};  // latch 0 is out of range
+    const auto refused = validate_write(Table::holding_register, seek.address, w, WordOrder::high_first, s, h);
+    REQUIRE_FALSE(refused);
+    CHECK(refused.error().code == ExceptionCode::illegal_data_value);
+    CHECK_THAT(refused.error().message, Catch::Contains("axis.x.latch_feedrate"));
+  }
+  SECTION("values that only work together are accepted together") {
+    // Faster seek needs more acceleration: 6000 mm/min at 5000 mm/s² stops in 1 mm.
+    const std::array<std::uint16_t, 3> w{6000, 200, 5000};
+    const auto ok = validate_write(Table::holding_register, seek.address, w, WordOrder::high_first, s, h);
+    REQUIRE(ok);
+    CHECK(ok->changes.size() == 3);
+    CHECK(ok->settings.axes[0].acceleration_mm_per_s2 == 5000);
+    // ...and the same seek alone is refused, leaving the caller's settings as they were.
+    CHECK_FALSE(write_one("axis.x.seek_feedrate", 20000, s));
+    CHECK(s.axes[0].seek_feedrate_mm_per_min == 1000);
+  }
+}
+
+TEST_CASE("host registers bypass the settings and coils give commands") {
+  const auto s = default_settings();
+  const auto hb = write_one("host.heartbeat", 42, s);
+  REQUIRE(hb);
+  CHECK(hb->host.heartbeat == 42);
+  CHECK_FALSE(hb->changes_persisted());
+  const auto target = write_one("axis.z.target", -2500, s);
+  REQUIRE(target);
+  CHECK(target->host.target_mm[2] == -2.5);
+
+  const Register& home_x = reg("cmd.home.x");
+  const std::array<std::uint16_t, 3> bits{1, 1, 0};  // home.x, jog_plus.x on, jog_minus.x off
+  const auto ok = validate_write(Table::coil, home_x.address, bits, WordOrder::high_first, s, default_host_registers());
+  REQUIRE(ok);
+  REQUIRE(ok->commands.size() == 3);
+  CHECK(ok->commands[0] == CommandRequest{Command::home_axis, 0, true});
+  CHECK(ok->commands[1] == CommandRequest{Command::jog_plus, 0, true});
+  CHECK(ok->commands[2] == CommandRequest{Command::jog_minus, 0, false});
+  CHECK(ok->host.jog_plus[0]);
+}
+
+TEST_CASE("a write of 0 to a pulse command coil commands nothing") {
+  const Register& abort = reg("cmd.abort");
+  const std::array<std::uint16_t, 1> zero{0};
+  const auto ok = validate_write(Table::coil, abort.address, zero, WordOrder::high_first, default_settings(),
+                                 default_host_registers());
+  REQUIRE(ok);
+  CHECK(ok->commands.empty());
+}
+
+TEST_CASE("a write to an unmapped coil is exception 02") {
+  const std::array<std::uint16_t, 1> one{1};
+  const auto refused = validate_write(Table::coil, 50, one, WordOrder::high_first, default_settings(),
+                                      default_host_registers());
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().code == ExceptionCode::illegal_data_address);
+}
+
+TEST_CASE("making an axis a slave checks it against its master") {
+  auto s = default_settings();
+  // Y slave of A: A is disabled, so it cannot be a master.
+  const auto refused = write_one("axis.y.slave_of", 4, s);
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().code == ExceptionCode::illegal_data_value);
+  CHECK_THAT(refused.error().message, Catch::Contains("axis.y.slave_of"));
+  CHECK(write_one("axis.y.slave_of", 1, s));  // slave of X, which homes on a switch
+}
