@@ -119,6 +119,7 @@ struct PhaseRunner {
     if (edge_to(true)) {
       run.triggered = true;
       run.trigger_mm = edge_mm();
+      run.trigger_period_s = dt();
       if (partner >= 0 && software_pair()) {
         Run& p = partner_run();
         if (!p.triggered) {
@@ -147,9 +148,10 @@ struct PhaseRunner {
     if (edge_to(false)) return fail(AlarmCode::overrun_during_stop);
     if (!at_rest()) return;
     // One control period of travel is allowed on top: the trigger cannot be
-    // seen before the period in which it happened has ended.
+    // seen before the period in which it happened has ended. That is the
+    // period the trigger was seen in (possibly a late one), not the current.
     const double past = std::abs(run.motor.position_mm - run.trigger_mm);
-    if (past > s.max_stop_distance_mm + seek_v * dt() + 1e-9)
+    if (past > s.max_stop_distance_mm + seek_v * run.trigger_period_s + 1e-9)
       return fail(AlarmCode::stop_distance_exceeded, past);
     run.stopped_after_trigger = true;
     after_stop();

@@ -41,6 +41,7 @@ class Engine {
     double phase_start_mm = 0;    // motor position at phase entry
     double cycle_start_mm = 0;
     double trigger_mm = 0;        // motor position at the seek trigger
+    double trigger_period_s = 0;  // length of the period in which the seek trigger was seen
     bool triggered = false;
     double reference_mm = 0;      // motor position at the reference edge
     double release_mm = 0;
