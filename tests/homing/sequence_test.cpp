@@ -1,0 +1,147 @@
+// The homing sequence: steps as bit masks run in order, axes of one step move
+// together, axes in no step are assigned at the end; single-axis homing; the
+// start button and the homing-done lamp.
+#include <catch2/catch.hpp>
+
+#include <set>
+
+#include "rig.hpp"
+#include "truth.hpp"
+
+using namespace rig;
+
+namespace {
+constexpr std::size_t X = 0, Y = 1, Z = 2, A = 3;
+}
+
+SCENARIO("sequence steps run in order, the axes of one step moving together", "[sequence]") {
+  GIVEN("a mill: Z in step 1, X and Y in step 2") {
+    Rig r;
+    r.add_axis(Y, 2);
+    r.add_axis(Z, 1);
+    r.settings.global.sequence_steps = {axis_bit(Z), static_cast<AxisMask>(axis_bit(X) | axis_bit(Y)), 0, 0, 0, 0};
+    r.machine.axes[Y].actual_position_mm = 60;
+    r.machine.axes[Z].actual_position_mm = 30;
+    std::vector<int> steps_seen;
+    r.on_period = [&](Rig& rr) {
+      const int st = rr.status().sequence_step;
+      if (st && (steps_seen.empty() || steps_seen.back() != st)) steps_seen.push_back(st);
+      if (st == 1) {
+        CHECK(rr.axis(X).phase == Phase::waiting);
+        CHECK(rr.axis(Y).phase == Phase::waiting);
+      }
+    };
+    r.step();
+    r.clear_trace();
+    REQUIRE(r.home_all());
+    THEN("Z moved and finished before X and Y started") {
+      CHECK(steps_seen == std::vector<int>{1, 2});
+      REQUIRE(r.trace[Z].first_move_period > 0);
+      CHECK(r.trace[Z].last_move_period < r.trace[X].first_move_period);
+      CHECK(r.trace[X].first_move_period == r.trace[Y].first_move_period);
+      for (std::size_t a : {X, Y, Z}) {
+        CHECK(r.axis(a).homed);
+        CHECK(r.actual(a) == Approx(1.05).margin(1e-4));
+      }
+    }
+  }
+}
+
+SCENARIO("empty sequence steps are skipped", "[sequence]") {
+  Rig r;
+  r.add_axis(Z, 2);
+  r.settings.global.sequence_steps = {0, axis_bit(Z), 0, axis_bit(X), 0, 0};
+  std::set<int> steps_seen;
+  r.on_period = [&](Rig& rr) { steps_seen.insert(rr.status().sequence_step); };
+  r.clear_trace();
+  REQUIRE(r.home_all());
+  CHECK(steps_seen == std::set<int>{0, 2, 4});
+  CHECK(r.trace[Z].last_move_period < r.trace[X].first_move_period);
+}
+
+SCENARIO("an axis in no step is assigned its home position when the sequence ends", "[sequence]") {
+  Rig r;
+  r.settings.axes[A] = typical_axis();  // configured, but in no step
+  r.settings.axes[A].home_position_mm = 7;
+  r.machine.axes[A].actual_position_mm = 42;
+  bool a_homed_during_cycle = false;
+  r.on_period = [&](Rig& rr) {
+    if (rr.status().homing && rr.axis(A).homed) a_homed_during_cycle = true;
+  };
+  r.step();
+  r.clear_trace();
+  REQUIRE(r.home_all());
+  CHECK_FALSE(a_homed_during_cycle);
+  CHECK(r.axis(A).homed);
+  CHECK(r.axis(A).position_mm == Approx(7).margin(1e-9));
+  CHECK(r.trace[A].path_mm == 0);
+}
+
+SCENARIO("homing a single axis moves only that axis", "[sequence]") {
+  Rig r;
+  r.add_axis(Y, 1);
+  r.machine.axes[Y].actual_position_mm = 80;
+  r.step();
+  r.clear_trace();
+  REQUIRE(r.home_axes(axis_bit(Y)));
+  CHECK(r.axis(Y).homed);
+  CHECK(r.actual(Y) == Approx(1.05).margin(1e-4));
+  CHECK(r.trace[X].path_mm == 0);
+  CHECK_FALSE(r.axis(X).homed);
+  CHECK(r.status().state == MachineState::not_homed);
+  CHECK_FALSE(r.engine.outputs().homing_done_lamp);
+}
+
+SCENARIO("the start button starts home-all and the lamp shows homing done", "[sequence]") {
+  Rig r;
+  r.step();
+  CHECK_FALSE(r.engine.outputs().homing_done_lamp);
+  r.sim().set_start_button(true);
+  r.step();
+  CHECK(r.status().homing);
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  r.sim().set_start_button(false);
+  r.run_until([&] { return !r.status().homing; }, 60);
+  CHECK(r.status().state == MachineState::homed);
+  CHECK(r.engine.outputs().homing_done_lamp);
+  CHECK(r.status().homing_cycles == 1);
+  WHEN("an alarm is latched the lamp goes off") {
+    r.sim().set_estop(true);
+    r.step();
+    CHECK_FALSE(r.engine.outputs().homing_done_lamp);
+  }
+}
+
+SCENARIO("a held start button starts one cycle, not one per period", "[sequence]") {
+  Rig r;
+  r.sim().set_start_button(true);
+  r.run_until([&] { return r.status().homing; }, 1);
+  r.run_until([&] { return !r.status().homing; }, 60);
+  r.run_for(0.5);
+  CHECK(r.status().homing_cycles == 1);
+  CHECK_FALSE(r.status().homing);
+}
+
+SCENARIO("commands while a cycle runs: the same one is already running, another is refused busy",
+         "[sequence][commands]") {
+  Rig r;
+  r.add_axis(Y, 1);
+  r.pending.home_all = true;
+  r.step();
+  REQUIRE(r.status().homing);
+  r.run_for(0.1);
+  r.pending.home_all = true;
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::already_running);
+  r.pending.home_axes = axis_bit(Y);
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::refused_busy);
+  r.move(Z, 5);
+  CHECK(r.status().last_command_result == CommandResult::refused_busy);
+  r.jog(Z, 1);
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::refused_busy);
+  r.release_jogs();
+  r.run_until([&] { return !r.status().homing; }, 60);
+  CHECK(r.status().state == MachineState::homed);
+}
