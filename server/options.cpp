@@ -1,7 +1,9 @@
 #include "options.hpp"
 
 #include <CLI/CLI.hpp>
+#include <set>
 #include <sstream>
+#include <toml++/toml.h>
 
 namespace server {
 namespace {
@@ -23,6 +25,33 @@ std::expected<void, std::string> split_host_port(const std::string& text, Option
     return std::unexpected("--tcp: port " + port + " is outside 1..65535");
   o.tcp_host = text.substr(0, colon);
   o.tcp_port = value;
+  return {};
+}
+
+// CLI11 ignores keys it does not know in a config file; a typo there must
+// not silently fall back to a default, so the file is checked first.
+std::expected<void, std::string> check_config_file(const std::string& path, const CLI::App& app) {
+  toml::table file;
+  try {
+    file = toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    return std::unexpected("--config " + path + ": line " + std::to_string(e.source().begin.line) + ": " +
+                           std::string(e.description()));
+  }
+  std::set<std::string> known;
+  for (const CLI::Option* opt : app.get_options()) {
+    for (const auto& name : opt->get_lnames()) known.insert(name);
+  }
+  for (const auto& [key, value] : file) {
+    const std::string k(key.str());
+    if (value.is_table()) {
+      if (k == "gpiod") continue;  // read by the GPIO backend
+      return std::unexpected("--config " + path + ": unknown section [" + k + "] (known: [gpiod])");
+    }
+    if (!known.contains(k) || k == "config" || k == "help" || k == "version")
+      return std::unexpected("--config " + path + ": unknown key '" + k + "'; keys are the long option names "
+                             "without dashes, e.g. tcp = \"0.0.0.0:502\", baud = 19200");
+  }
   return {};
 }
 
@@ -88,7 +117,10 @@ std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv) {
       what += " (config file " + cfg->as<std::string>() + ")";
     return std::unexpected(what);
   }
-  if (auto cfg = app.get_option("--config"); cfg->count() > 0) o.config_path = cfg->as<std::string>();
+  if (auto cfg = app.get_option("--config"); cfg->count() > 0) {
+    o.config_path = cfg->as<std::string>();
+    if (auto r = check_config_file(o.config_path, app); !r) return std::unexpected(r.error());
+  }
   if (o.tcp_enabled) {
     if (auto r = split_host_port(tcp, o); !r) return std::unexpected(r.error());
   }
