@@ -1,0 +1,89 @@
+// homingd's command line, as a tool or a technician meets it: --help lists
+// every option of the spec; a wrong option exits non-zero with one line that
+// names it; a start-up resource at fault (port taken, serial device missing)
+// is named too.
+#include <catch2/catch.hpp>
+
+#include "daemon.hpp"
+
+using namespace e2e;
+
+namespace {
+
+std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
+
+}  // namespace
+
+TEST_CASE("homingd --help lists every option of the spec and exits 0") {
+  const RunResult r = run_program({homingd_path(), "--help"}, 10s);
+  REQUIRE(r.exited());
+  CHECK(r.code() == 0);
+  for (const char* option : {"--tcp", "--no-tcp", "--rtu", "--baud", "--parity", "--stop-bits", "--unit", "--db",
+                             "--backend", "--period-us", "--word-order", "--max-clients", "--idle-timeout-s",
+                             "--sim-unit", "--time-scale", "--log-level", "--config"}) {
+    INFO(option);
+    CHECK(r.out.find(option) != std::string::npos);
+  }
+}
+
+TEST_CASE("homingd exits non-zero with one line naming a wrong option") {
+  TempDir dir;
+  const std::string db = dir.file("never.db");
+  struct Case {
+    std::vector<std::string> args;
+    std::string names;
+  };
+  const std::vector<Case> cases{
+      {{"--parity", "X"}, "--parity"},
+      {{"--baud", "7"}, "--baud"},
+      {{"--tcp", "nonsense"}, "--tcp"},
+      {{"--tcp", "127.0.0.1:70000"}, "--tcp"},
+      {{"--tcp", "127.0.0.1:port"}, "--tcp"},
+      {{"--stop-bits", "3"}, "--stop-bits"},
+      {{"--time-scale", "-1"}, "--time-scale"},
+      {{"--unit", "0"}, "--unit"},
+      {{"--word-order", "middle"}, "--word-order"},
+      {{"--no-such-option"}, "--no-such-option"},
+  };
+  for (const Case& c : cases) {
+    std::vector<std::string> argv{homingd_path(), "--db", db};
+    argv.insert(argv.end(), c.args.begin(), c.args.end());
+    const RunResult r = run_program(argv, 10s);
+    INFO("args: " << c.args[0] << (c.args.size() > 1 ? " " + c.args[1] : "") << "\nstderr: " << r.err);
+    REQUIRE(r.exited());
+    CHECK(r.code() != 0);
+    CHECK(first_line(r.err).find(c.names) != std::string::npos);
+    CHECK(r.out.find("listening") == std::string::npos);
+  }
+  CHECK_FALSE(std::filesystem::exists(db));  // nothing was created by a refused start
+}
+
+TEST_CASE("homingd names the resource at fault when it cannot start") {
+  Daemon first;
+  TempDir dir;
+  SECTION("the TCP port is taken") {
+    const RunResult r = run_program({homingd_path(), "--tcp", "127.0.0.1:" + std::to_string(first.port()), "--db",
+                                     dir.file("second.db")},
+                                    10s);
+    INFO("stderr: " << r.err);
+    REQUIRE(r.exited());
+    CHECK(r.code() != 0);
+    CHECK(first_line(r.err).find("--tcp") != std::string::npos);
+  }
+  SECTION("the serial device does not exist") {
+    const RunResult r = run_program({homingd_path(), "--tcp", "127.0.0.1:" + std::to_string(free_port()), "--db",
+                                     dir.file("third.db"), "--rtu", dir.file("no-such-tty")},
+                                    10s);
+    INFO("stderr: " << r.err);
+    REQUIRE(r.exited());
+    CHECK(r.code() != 0);
+    CHECK(first_line(r.err).find("--rtu") != std::string::npos);
+  }
+  // The first daemon is unharmed and still answers.
+  Client c = Client::tcp(first.port());
+  CHECK(c.read("status.map_version") == registers::kMapVersion);
+  const auto st = first.stop(SIGTERM);
+  REQUIRE(st);
+  CHECK(WIFEXITED(*st));
+  CHECK(WEXITSTATUS(*st) == 0);
+}
