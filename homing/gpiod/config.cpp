@@ -1,0 +1,224 @@
+#include "config.hpp"
+
+#include <fmt/format.h>
+
+#include <set>
+#include <toml++/toml.h>
+
+namespace homing::gpiod {
+namespace {
+
+using Error = std::unexpected<std::string>;
+
+struct Ctx {
+  std::string origin;
+  std::string default_chip;
+};
+
+std::expected<Bias, std::string> parse_bias(const std::string& text, const std::string& where) {
+  if (text == "as-is") return Bias::as_is;
+  if (text == "disable") return Bias::disable;
+  if (text == "pull-up") return Bias::pull_up;
+  if (text == "pull-down") return Bias::pull_down;
+  return Error(fmt::format("{}: bias \"{}\" is not one of \"as-is\", \"pull-up\", \"pull-down\", \"disable\"",
+                           where, text));
+}
+
+// A line is `23` (offset on the default chip), `"NAME"` (a line name) or
+// `{ chip = "gpiochip1", line = 23, active_low = true, bias = "pull-up" }`.
+std::expected<LineSpec, std::string> parse_line(const Ctx& ctx, const std::string& section, const std::string& key,
+                                                const toml::node& node) {
+  const std::string where = fmt::format("{}: [{}] {}", ctx.origin, section, key);
+  LineSpec spec;
+  spec.role = key;
+  spec.chip = ctx.default_chip;
+  const toml::node* line = &node;
+  if (const auto* t = node.as_table()) {
+    for (const auto& [k, v] : *t) {
+      const std::string name(k.str());
+      if (name != "chip" && name != "line" && name != "active_low" && name != "bias")
+        return Error(fmt::format("{}: unknown key '{}' (known: chip, line, active_low, bias)", where, name));
+    }
+    if (const auto chip = (*t)["chip"]) {
+      if (!chip.is_string()) return Error(where + ": chip must be a string such as \"gpiochip0\"");
+      spec.chip = chip.as_string()->get();
+    }
+    if (const auto al = (*t)["active_low"]) {
+      if (!al.is_boolean()) return Error(where + ": active_low must be true or false");
+      spec.active_low = al.as_boolean()->get();
+    }
+    if (const auto b = (*t)["bias"]) {
+      if (!b.is_string()) return Error(where + ": bias must be a string");
+      auto bias = parse_bias(b.as_string()->get(), where);
+      if (!bias) return Error(bias.error());
+      spec.bias = *bias;
+    }
+    line = t->get("line");
+    if (!line) return Error(where + ": missing 'line' (an offset such as 23 or a line name such as \"GPIO23\")");
+  }
+  if (const auto* i = line->as_integer()) {
+    if (i->get() < 0 || i->get() > 1023) return Error(fmt::format("{}: line offset {} is not 0..1023", where, i->get()));
+    spec.line = static_cast<unsigned>(i->get());
+    if (spec.chip.empty())
+      return Error(where + ": a line offset needs a chip: set chip = \"gpiochip0\" in [gpiod] or in the line");
+  } else if (const auto* s = line->as_string()) {
+    if (s->get().empty()) return Error(where + ": the line name is empty");
+    spec.line = s->get();
+  } else {
+    return Error(where + ": expected a line offset (23), a line name (\"GPIO23\") or a table { chip, line, ... }");
+  }
+  return spec;
+}
+
+std::expected<std::int64_t, std::string> parse_int(const Ctx& ctx, const toml::node& node, const std::string& key,
+                                                   std::int64_t lo, std::int64_t hi) {
+  const auto* i = node.as_integer();
+  if (!i || i->get() < lo || i->get() > hi)
+    return Error(fmt::format("{}: [gpiod] {} must be an integer in {}..{}", ctx.origin, key, lo, hi));
+  return i->get();
+}
+
+std::expected<void, std::string> parse_axis(const Ctx& ctx, std::size_t a, const toml::table& t, AxisLines& out) {
+  const std::string section = fmt::format("gpiod.axes.{}", kAxisUpper[a]);
+  const std::string prefix(1, kAxisUpper[a]);
+  out.configured = true;
+  const std::pair<const char*, std::optional<LineSpec> AxisLines::*> lines[] = {
+      {"step", &AxisLines::step},       {"dir", &AxisLines::dir},
+      {"enable", &AxisLines::enable},   {"push", &AxisLines::push},
+      {"commutator", &AxisLines::commutator}, {"home", &AxisLines::home},
+      {"index", &AxisLines::index},     {"drive_fault", &AxisLines::drive_fault}};
+  for (const auto& [k, v] : t) {
+    const std::string key(k.str());
+    if (key == "steps_per_unit") {
+      const auto d = v.value<double>();
+      if (!d || !(*d > 0) || *d > 1e6)
+        return Error(fmt::format("{}: [{}] steps_per_unit must be a number > 0 (motor steps per {})", ctx.origin,
+                                 section, axis_unit(a)));
+      out.steps_per_unit = *d;
+      continue;
+    }
+    bool known = false;
+    for (const auto& [name, member] : lines) {
+      if (key != name) continue;
+      auto spec = parse_line(ctx, section, key, v);
+      if (!spec) return Error(spec.error());
+      spec->role = prefix + "." + key;
+      out.*member = *spec;
+      known = true;
+    }
+    if (!known)
+      return Error(fmt::format("{}: [{}] unknown key '{}' (known: steps_per_unit, step, dir, enable, push, "
+                               "commutator, home, index, drive_fault)",
+                               ctx.origin, section, key));
+  }
+  if (!out.step || !out.dir)
+    return Error(fmt::format("{}: [{}] needs both 'step' and 'dir' lines (the axis drives a step/dir motor)",
+                             ctx.origin, section));
+  if (out.steps_per_unit <= 0)
+    return Error(fmt::format("{}: [{}] needs steps_per_unit (motor steps per {}, e.g. 400)", ctx.origin, section,
+                             axis_unit(a)));
+  return {};
+}
+
+// Two signals on one line would fight each other (or one would never see
+// its edges): refuse before touching the hardware.
+std::expected<void, std::string> check_unique(const BackendConfig& c, const std::string& origin) {
+  std::vector<const LineSpec*> all;
+  for (const auto* o : {&c.estop, &c.drive_fault, &c.start_button, &c.homing_permit, &c.homing_done_lamp})
+    if (*o) all.push_back(&**o);
+  for (const AxisLines& a : c.axes)
+    for (const auto* o : {&a.step, &a.dir, &a.enable, &a.push, &a.commutator, &a.home, &a.index, &a.drive_fault})
+      if (*o) all.push_back(&**o);
+  for (std::size_t i = 0; i < all.size(); ++i)
+    for (std::size_t j = i + 1; j < all.size(); ++j)
+      if (all[i]->chip == all[j]->chip && all[i]->line == all[j]->line)
+        return Error(fmt::format("{}: {} and {} are on the same line; each signal needs its own", origin,
+                                 describe(*all[i]), describe(*all[j])));
+  return {};
+}
+
+}  // namespace
+
+std::expected<BackendConfig, std::string> parse_config(const toml::table& root, const std::string& origin) {
+  const toml::table* g = root["gpiod"].as_table();
+  if (!g)
+    return Error(origin + ": no [gpiod] table; --backend gpiod needs one naming the lines (see homing/gpiod/README.md)");
+  BackendConfig c;
+  Ctx ctx{origin, ""};
+  if (const auto chip = (*g)["chip"]) {
+    if (!chip.is_string()) return Error(origin + ": [gpiod] chip must be a string such as \"gpiochip0\"");
+    ctx.default_chip = chip.as_string()->get();
+  }
+  const std::pair<const char*, std::optional<LineSpec> BackendConfig::*> lines[] = {
+      {"estop", &BackendConfig::estop},
+      {"drive_fault", &BackendConfig::drive_fault},
+      {"start_button", &BackendConfig::start_button},
+      {"homing_permit", &BackendConfig::homing_permit},
+      {"homing_done_lamp", &BackendConfig::homing_done_lamp}};
+  const std::pair<const char*, std::int64_t BackendConfig::*> ints[] = {
+      {"tick_us", &BackendConfig::tick_us},
+      {"dir_setup_us", &BackendConfig::dir_setup_us},
+      {"input_debounce_ms", &BackendConfig::input_debounce_ms},
+      {"playback_delay_us", &BackendConfig::playback_delay_us}};
+  bool any_axis = false;
+  for (const auto& [k, v] : *g) {
+    const std::string key(k.str());
+    if (key == "chip") continue;
+    if (key == "axes") {
+      const auto* axes = v.as_table();
+      if (!axes) return Error(origin + ": [gpiod] axes must be a table: [gpiod.axes.X]");
+      for (const auto& [ak, av] : *axes) {
+        const std::string name(ak.str());
+        std::size_t a = kAxisCount;
+        for (std::size_t i = 0; i < kAxisCount; ++i)
+          if (name.size() == 1 && (name[0] == kAxisUpper[i] || name[0] == kAxisLetters[i][0])) a = i;
+        if (a == kAxisCount || !av.is_table())
+          return Error(fmt::format("{}: [gpiod.axes.{}] is not an axis (X Y Z A B C)", origin, name));
+        if (auto r = parse_axis(ctx, a, *av.as_table(), c.axes[a]); !r) return Error(r.error());
+        any_axis = true;
+      }
+      continue;
+    }
+    if (key == "rt_priority") {
+      auto p = parse_int(ctx, v, key, 0, 99);
+      if (!p) return Error(p.error());
+      c.rt_priority = static_cast<int>(*p);
+      continue;
+    }
+    bool known = false;
+    for (const auto& [name, member] : ints) {
+      if (key != name) continue;
+      auto value = parse_int(ctx, v, key, key == std::string("tick_us") ? 2 : 0, 1'000'000);
+      if (!value) return Error(value.error());
+      c.*member = *value;
+      known = true;
+    }
+    for (const auto& [name, member] : lines) {
+      if (key != name) continue;
+      auto spec = parse_line(ctx, "gpiod", key, v);
+      if (!spec) return Error(spec.error());
+      c.*member = *spec;
+      known = true;
+    }
+    if (!known)
+      return Error(fmt::format("{}: [gpiod] unknown key '{}' (known: chip, tick_us, dir_setup_us, input_debounce_ms, "
+                               "playback_delay_us, rt_priority, estop, drive_fault, start_button, homing_permit, "
+                               "homing_done_lamp, [gpiod.axes.X])",
+                               origin, key));
+  }
+  if (!any_axis) return Error(origin + ": [gpiod] configures no axis; add at least [gpiod.axes.X] with step, dir, steps_per_unit");
+  if (auto r = check_unique(c, origin); !r) return Error(r.error());
+  return c;
+}
+
+std::expected<BackendConfig, std::string> load_config(const std::string& path) {
+  if (path.empty())
+    return Error("--backend gpiod needs --config FILE with a [gpiod] table naming the lines (see homing/gpiod/README.md)");
+  try {
+    return parse_config(toml::parse_file(path), path);
+  } catch (const toml::parse_error& e) {
+    return Error(fmt::format("{}: line {}: {}", path, e.source().begin.line, e.description()));
+  }
+}
+
+}  // namespace homing::gpiod

@@ -1,0 +1,44 @@
+#pragma once
+// The [gpiod] table of homingd's config file: which GPIO line carries which
+// signal, and the pulse generator's timing. See README.md for an example.
+#include <array>
+#include <cstdint>
+#include <expected>
+#include <optional>
+#include <string>
+
+#include "homing/axes.hpp"
+#include "line_api.hpp"
+
+namespace toml {
+inline namespace v3 {
+class table;
+}
+}  // namespace toml
+
+namespace homing::gpiod {
+
+struct AxisLines {
+  bool configured = false;
+  double steps_per_unit = 0;  // motor steps per mm (per degree on A B C)
+  std::optional<LineSpec> step, dir, enable;            // outputs
+  std::optional<LineSpec> push, commutator;             // outputs (pushing modes, gantry commutator)
+  std::optional<LineSpec> home, index, drive_fault;     // inputs
+};
+
+struct BackendConfig {
+  std::array<AxisLines, kAxisCount> axes{};
+  std::optional<LineSpec> estop, drive_fault, start_button, homing_permit;  // inputs
+  std::optional<LineSpec> homing_done_lamp;                                 // output
+  std::int64_t tick_us = 10;          // pulse thread period; max step rate is 1/(2 tick)
+  std::int64_t dir_setup_us = 5;      // direction stable before the next step edge
+  std::int64_t input_debounce_ms = 10;  // start button and permit (sensors use the engine's debounce)
+  std::int64_t playback_delay_us = 0;   // 0: 1.5 control periods (see step_generator.hpp)
+  int rt_priority = 0;                  // SCHED_FIFO priority of the pulse thread, 0 = normal
+};
+
+// origin names the file in errors ("config.toml: [gpiod.axes.X] step: ...").
+std::expected<BackendConfig, std::string> parse_config(const toml::table& root, const std::string& origin);
+std::expected<BackendConfig, std::string> load_config(const std::string& path);
+
+}  // namespace homing::gpiod

@@ -1,0 +1,199 @@
+#include "gpiod_io.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <fmt/format.h>
+
+namespace homing::gpiod {
+namespace {
+
+// Beyond this the sum of the loop's periods and the clock disagree for a
+// reason other than jitter (a stalled loop): start the timeline again.
+constexpr std::int64_t kResyncNs = 50'000'000;
+
+}  // namespace
+
+GpiodIo::GpiodIo(const BackendConfig& config, std::unique_ptr<LineApi> lines, RunOptions options)
+    : lines_(std::move(lines)), options_(std::move(options)) {
+  dir_setup_ns_ = config.dir_setup_us * 1000;
+  tick_ns_ = config.tick_us * 1000;
+  input_debounce_ns_ = config.input_debounce_ms * 1'000'000;
+  rt_priority_ = config.rt_priority;
+  // The engine's command for a period is known only when that period ends;
+  // play it back a period and a half later so the next one is always there.
+  playback_delay_ns_ = config.playback_delay_us > 0 ? config.playback_delay_us * 1000
+                                                    : std::int64_t{options_.control_period_us} * 1500;
+}
+
+std::expected<std::unique_ptr<GpiodIo>, std::string> GpiodIo::open(const BackendConfig& config,
+                                                                   std::unique_ptr<LineApi> lines,
+                                                                   RunOptions options) {
+  std::unique_ptr<GpiodIo> io(new GpiodIo(config, std::move(lines), std::move(options)));
+  if (auto r = io->request_all(config); !r) {
+    io->shut_down_ = true;  // nothing was driven yet; the LineApi releases what it took
+    return std::unexpected(r.error());
+  }
+  if (io->options_.start_pulse_thread) {
+    std::vector<StepGenerator*> gens;
+    for (Axis& a : io->axes_)
+      if (a.generator) gens.push_back(a.generator.get());
+    io->pulse_thread_ = std::make_unique<PulseThread>(std::move(gens), io->tick_ns_, io->rt_priority_);
+    if (auto warning = io->pulse_thread_->start(); !warning.empty()) io->options_.warn(warning);
+  }
+  return io;
+}
+
+std::expected<void, std::string> GpiodIo::request_all(const BackendConfig& c) {
+  LineApi& api = *lines_;
+  auto output = [&](const std::optional<LineSpec>& spec, OutputLine& out) -> std::expected<void, std::string> {
+    if (!spec) return {};
+    auto id = api.request_output(*spec, false);  // every output starts inactive: motors disabled
+    if (!id) return std::unexpected(id.error());
+    out.id = *id;
+    return {};
+  };
+  auto level = [&](const std::optional<LineSpec>& spec, std::int64_t debounce_ns,
+                   std::unique_ptr<LevelInput>& out) -> std::expected<void, std::string> {
+    if (!spec) return {};
+    auto id = api.request_input(*spec);
+    if (!id) return std::unexpected(id.error());
+    auto v = api.get_value(*id);
+    if (!v) return std::unexpected(v.error());
+    out = std::make_unique<LevelInput>(api, *id, debounce_ns, *v);
+    return {};
+  };
+  auto edges = [&](const std::optional<LineSpec>& spec,
+                   std::unique_ptr<EdgeInput>& out) -> std::expected<void, std::string> {
+    if (!spec) return {};
+    auto id = api.request_input_events(*spec);
+    if (!id) return std::unexpected(id.error());
+    auto v = api.get_value(*id);
+    if (!v) return std::unexpected(v.error());
+    out = std::make_unique<EdgeInput>(api, *id, *v);
+    return {};
+  };
+  for (std::size_t i = 0; i < kAxisCount; ++i) {
+    const AxisLines& cfg = c.axes[i];
+    Axis& a = axes_[i];
+    if (!cfg.configured) continue;
+    a.configured = true;
+    OutputLine step, dir;
+    for (auto r : {output(cfg.step, step), output(cfg.dir, dir), output(cfg.enable, a.enable),
+                   output(cfg.push, a.push), output(cfg.commutator, a.commutator), edges(cfg.home, a.home),
+                   edges(cfg.index, a.index), level(cfg.drive_fault, 0, a.drive_fault)})
+      if (!r) return r;
+    a.generator = std::make_unique<StepGenerator>(api, *step.id, *dir.id, cfg.steps_per_unit, dir_setup_ns_);
+  }
+  // Safety inputs act at once; the operator's inputs are debounced.
+  for (auto r : {level(c.estop, 0, estop_), level(c.drive_fault, 0, drive_fault_),
+                 level(c.start_button, input_debounce_ns_, start_button_),
+                 level(c.homing_permit, input_debounce_ns_, homing_permit_), output(c.homing_done_lamp, lamp_)})
+    if (!r) return r;
+  return {};
+}
+
+GpiodIo::~GpiodIo() { shutdown(); }
+
+void GpiodIo::write(OutputLine& out, bool value) {
+  if (!out.id || out.value == value) return;
+  if (auto r = lines_->set_value(*out.id, value); !r) {
+    input_failed(r.error());
+    return;
+  }
+  out.value = value;
+}
+
+void GpiodIo::input_failed(const std::string& message) {
+  input_fault_ = true;
+  if (message != last_input_error_) options_.warn("gpiod: " + message + "; e-stop raised until it recovers");
+  last_input_error_ = message;
+}
+
+void GpiodIo::advance(const Outputs& outputs, double dt_s) {
+  if (shut_down_) return;
+  const std::int64_t now = options_.clocks.monotonic_ns();
+  const std::int64_t dt_ns = std::llround(std::max(dt_s, 0.0) * 1e9);
+  // The loop's periods add up to its own clock; follow their sum (several
+  // short periods may be run at once when the loop is late).
+  if (!anchored_ || std::llabs(period_end_ns_ + dt_ns - now) > kResyncNs) {
+    period_end_ns_ = now - dt_ns;
+    anchored_ = dt_ns > 0;
+  }
+  period_start_ns_ = period_end_ns_;
+  period_end_ns_ += dt_ns;
+  for (std::size_t i = 0; i < kAxisCount; ++i) {
+    Axis& a = axes_[i];
+    if (!a.configured) continue;
+    const AxisOutputs& o = outputs.axes[i];
+    if (dt_ns > 0) a.generator->push(Segment{period_start_ns_ + playback_delay_ns_, o.motor, o.motion});
+    write(a.enable, o.enable);
+    write(a.push, o.push_output);
+    write(a.commutator, o.commutator_output);
+  }
+  write(lamp_, outputs.homing_done_lamp);
+}
+
+Inputs GpiodIo::read() {
+  Inputs in{};
+  if (shut_down_) {
+    in.estop = true;
+    return in;
+  }
+  input_fault_ = false;
+  const std::int64_t mono = options_.clocks.monotonic_ns();
+  const std::int64_t real = options_.clocks.realtime_ns();
+  const std::int64_t end = period_end_ns_;
+  auto sample = [&](const std::unique_ptr<LevelInput>& line) {
+    if (!line) return false;
+    auto v = line->sample(end);
+    if (v) return *v;
+    input_failed(v.error());
+    return false;
+  };
+  for (std::size_t i = 0; i < kAxisCount; ++i) {
+    Axis& a = axes_[i];
+    if (!a.configured) continue;
+    AxisInputs& ai = in.axes[i];
+    for (auto [input, edges, level, rising_only] :
+         {std::tuple{a.home.get(), &ai.sensor_edges, &ai.sensor_level, false},
+          std::tuple{a.index.get(), &ai.index_edges, &ai.index_level, true}}) {
+      if (!input) continue;
+      if (auto r = input->poll(mono, real); !r) input_failed(r.error());
+      input->take(period_start_ns_, end, rising_only, *edges, *level);
+    }
+    ai.drive_fault = sample(a.drive_fault);
+    if (a.generator->failed()) {
+      // A step or dir write failed: the motor no longer follows the count.
+      ai.drive_fault = true;
+      if (a.reported_failure.empty()) {
+        a.reported_failure = a.generator->failure();
+        options_.warn("gpiod: " + a.reported_failure + "; the axis reports a drive fault");
+      }
+    }
+  }
+  const bool global_fault = sample(drive_fault_);
+  for (std::size_t i = 0; i < kAxisCount; ++i)
+    if (axes_[i].configured) in.axes[i].drive_fault = in.axes[i].drive_fault || global_fault;
+  in.estop = sample(estop_);
+  in.start_button = sample(start_button_);
+  in.homing_permit = sample(homing_permit_);
+  // An input that cannot be read might be the e-stop: stop everything.
+  if (input_fault_) in.estop = true;
+  return in;
+}
+
+void GpiodIo::shutdown() {
+  if (shut_down_) return;
+  shut_down_ = true;
+  if (pulse_thread_) pulse_thread_->stop();
+  for (Axis& a : axes_) {
+    if (!a.configured) continue;
+    a.generator->idle();
+    write(a.enable, false);
+    write(a.push, false);
+    write(a.commutator, false);
+  }
+  write(lamp_, false);
+}
+
+}  // namespace homing::gpiod
