@@ -474,6 +474,13 @@ void Engine::run_motion(const Settings& settings) {
       }
       case Phase::stopping:
         run.command = stop_command(accel);
+        // A jog released while braking onto a soft limit: a late period can leave the
+        // motor faster than the jog's braking planned, so keep the limit on the stop.
+        if (homed && s.soft_limits_enable && run.motor.velocity_mm_per_s != 0) {
+          run.command.has_limit = true;
+          run.command.limit_mm =
+              (run.motor.velocity_mm_per_s > 0 ? s.soft_limit_max_mm : s.soft_limit_min_mm) - run.offset_mm;
+        }
         if (run.motor.velocity_mm_per_s == 0) run.phase = Phase::idle;
         break;
       case Phase::idle:
