@@ -181,11 +181,24 @@ struct PhaseRunner {
       run.command = velocity_command(-dir * latch_v, accel);
       run.command.has_limit = true;
       run.command.limit_mm = run.phase_start_mm - dir * s.max_backoff_mm;
+      run.index_seen = false;
+    }
+    if (event().index) {
+      run.index_seen = true;
+      run.index_seen_mm = event().index_mm;
     }
     if (edge_to(false)) {
       run.release_mm = edge_mm();
       if (mode_reapproaches(s.mode)) return enter(Phase::reapproach);
-      if (s.mode == HomingMode::switch_index) return enter(Phase::index);
+      if (s.mode == HomingMode::switch_index) {
+        // The release is accepted only after the debounce time: an index pulse
+        // may already have passed beyond the release edge. It is the next one.
+        if (run.index_seen && beyond_release(run.index_seen_mm)) {
+          run.reference_mm = run.index_seen_mm;
+          return enter(Phase::pull_off);
+        }
+        return enter(Phase::index);
+      }
       run.reference_mm = run.release_mm;
       return enter(Phase::pull_off);
     }
@@ -206,6 +219,9 @@ struct PhaseRunner {
       fail(AlarmCode::reapproach_not_found, s.max_backoff_mm);
   }
 
+  // The index search runs away from the sensor (-dir) from the release edge.
+  bool beyond_release(double x_mm) const { return (x_mm - run.release_mm) * -dir > 0; }
+
   double index_bound() const { return s.index_pitch_mm * 1.1 + stop_distance_mm(latch_v, accel); }
 
   void index() {
@@ -214,7 +230,8 @@ struct PhaseRunner {
       run.command.has_limit = true;
       run.command.limit_mm = run.phase_start_mm - dir * index_bound();
     }
-    if (event().index) {
+    // A pulse in the same period but before the release edge is not the next one.
+    if (event().index && beyond_release(event().index_mm)) {
       run.reference_mm = event().index_mm;
       return enter(Phase::pull_off);
     }

@@ -45,6 +45,8 @@ class Engine {
     bool triggered = false;
     double reference_mm = 0;      // motor position at the reference edge
     double release_mm = 0;
+    bool index_seen = false;      // an index pulse passed during back-off (switch + index)
+    double index_seen_mm = 0;     // motor position of the last one
     double target_mm = 0;         // of the current move_to
     bool push_output = false;
     bool commutator_output = false;
