@@ -147,6 +147,11 @@ struct PhaseRunner {
     if (entry()) run.command = stop_command(accel);
     if (edge_to(false)) return fail(AlarmCode::overrun_during_stop);
     if (!at_rest()) return;
+    // A release during the stop may still be in its debounce time when the
+    // axis comes to rest: wait for the verdict, or back-off would take that
+    // release (inside the stop) for its reference edge.
+    const Debouncer& filter = e.sensor_filter_[static_cast<std::size_t>(channel)];
+    if (filter.raw() != filter.stable()) return;
     // One control period of travel is allowed on top: the trigger cannot be
     // seen before the period in which it happened has ended. That is the
     // period the trigger was seen in (possibly a late one), not the current.
