@@ -158,3 +158,44 @@ SCENARIO("a normally closed sensor homes exactly like a normally open one", "[ed
     CHECK(q.trace[0].path_mm <= q.settings.axes[0].max_backoff_mm + 1e-9);
   }
 }
+
+SCENARIO("switch + index: a pulse passing while the release edge is debounced is still the next one",
+         "[edge][index]") {
+  Rig r;
+  AxisSettings& s = r.settings.axes[0];
+  s.mode = HomingMode::switch_index;
+  s.debounce_ms = 5;  // 1 mm/s latch: the release is accepted 0.005 mm later
+  r.machine.axes[0].index_pitch_mm = 5;
+  r.machine.axes[0].index_offset_mm = 0.052;  // 0.002 mm beyond the release edge at 0.05
+  REQUIRE(r.home_all());
+  CHECK(r.actual(0) == Approx(rest_point_mm(s, 0.052)).margin(edge_tolerance_mm(s, r.dt_s)));
+}
+
+SCENARIO("a release during the stop that is still being debounced when the axis comes to rest is an overrun",
+         "[edge][stop]") {
+  Rig r;
+  AxisSettings& s = r.settings.axes[0];
+  s.debounce_ms = 20;  // stop: 0.4 + 20 mm/s · 20 ms = 0.8 mm
+  r.machine.axes[0].sensor_min_mm = -0.77;
+  r.machine.axes[0].hysteresis_mm = 0;  // releases about 0.03 mm before the halt, accepted after it
+  r.home_all(30);
+  CHECK(r.axis(0).alarm.code == AlarmCode::overrun_during_stop);
+}
+
+SCENARIO("a jog released while braking onto a soft limit after a late period stays inside it",
+         "[interlocks][limits][late]") {
+  Rig r;
+  AxisSettings& s = r.settings.axes[0];
+  s.soft_limits_enable = true;
+  s.soft_limit_max_mm = 20;
+  REQUIRE(r.home_all());
+  r.jog(0, +1);
+  // Periods alternate 1 and 3 ms; the jog is released as it brakes onto the limit.
+  int n = 0;
+  r.next_dt = [&n] { return (++n % 2) ? 0.003 : 0.001; };
+  r.run_until([&] { return r.axis(0).position_mm > 19.99; }, 10);
+  r.release_jogs();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK_FALSE(r.status().alarm);
+  CHECK(r.axis(0).position_mm <= 20 + 1e-9);
+}
