@@ -214,6 +214,7 @@ Result<SettingsStore> SettingsStore::open(const std::string& path, const std::ve
   } else {
     // Leftovers of a backup or restore interrupted by a power cut.
     remove_quiet(bak_path(path, 0) + ".tmp");
+    remove_quiet(bak_path(path, 0) + ".tmp-journal");
     remove_quiet(path + ".restore.tmp");
 
     auto restore_from_backup = [&]() -> std::optional<std::string> {
@@ -664,18 +665,46 @@ Result<CorrectionSummary> SettingsStore::correction_summary(std::size_t axis, st
   return s;
 }
 
+namespace {
+struct BackupFinisher {
+  void operator()(sqlite3_backup* b) const noexcept { sqlite3_backup_finish(b); }
+};
+
+// Copies the live database (including what is still in the WAL) page by page
+// into `tmp`, unsynced; the caller verifies and fsyncs it once. Then marks the
+// copy as a rollback-journal database (header bytes 18-19 = 1, what
+// "PRAGMA journal_mode=DELETE" writes) so it opens without -wal/-shm files.
+Status copy_pages(sql::Db& src, const std::string& tmp, const char* vfs) {
+  auto dst = sql::Db::open(tmp, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, vfs);
+  if (!dst) return std::unexpected(dst.error());
+  if (auto s = dst->exec("PRAGMA journal_mode=OFF; PRAGMA synchronous=OFF", "preparing the backup file"); !s) return s;
+  std::unique_ptr<sqlite3_backup, BackupFinisher> b(sqlite3_backup_init(dst->get(), "main", src.get(), "main"));
+  if (!b) return std::unexpected(dst->error(sqlite3_errcode(dst->get()), "starting the backup"));
+  int rc = sqlite3_backup_step(b.get(), -1);
+  int finish = sqlite3_backup_finish(b.release());
+  if (rc != SQLITE_DONE) return std::unexpected(dst->error(rc, "copying the database into the backup"));
+  if (finish != SQLITE_OK) return std::unexpected(dst->error(finish, "finishing the backup"));
+  dst->close();
+  int fd = ::open(tmp.c_str(), O_WRONLY | O_CLOEXEC);
+  if (fd < 0) return std::unexpected(os_error(tmp, "opening the backup", errno));
+  const unsigned char rollback_mode[2] = {1, 1};
+  ssize_t n = ::pwrite(fd, rollback_mode, 2, 18);
+  int err = errno;
+  ::close(fd);
+  if (n != 2) return std::unexpected(os_error(tmp, "writing the backup header", n < 0 ? err : EIO));
+  return {};
+}
+}  // namespace
+
 Status SettingsStore::Impl::backup_locked() {
   const std::string bak = bak_path(path, 0);
   const std::string tmp = bak + ".tmp";
   remove_quiet(tmp);
-  {
-    auto st = db.prepare("VACUUM INTO ?");
-    if (!st) return std::unexpected(st.error());
-    st->bind(1, std::string_view(tmp));
-    if (auto s = st->run(fmt::format("writing backup {}", tmp)); !s) {
-      remove_quiet(tmp);
-      return s;
-    }
+  remove_quiet(tmp + "-journal");
+  if (auto s = copy_pages(db, tmp, vfs()); !s) {
+    remove_quiet(tmp);
+    s.error().message = fmt::format("backup {} not written: {}", bak, s.error().message);
+    return s;
   }
   if (auto problem = backup_problem(tmp, vfs())) {
     remove_quiet(tmp);

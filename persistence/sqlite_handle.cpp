@@ -79,7 +79,10 @@ Error make_error(const std::string& path, std::string_view what, int rc, int sys
                             (rc & 0xff) == SQLITE_FULL)) {
     msg += fmt::format(" (OS: {})", std::strerror(system_errno));
   }
-  if (auto h = hint(kind); !h.empty()) msg += fmt::format("; {}", h);
+  if (system_errno == ENOENT)
+    msg += "; check that the file and its directory exist";
+  else if (auto h = hint(kind); !h.empty())
+    msg += fmt::format("; {}", h);
   return Error{kind, std::move(msg)};
 }
 
