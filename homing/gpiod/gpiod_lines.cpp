@@ -1,5 +1,7 @@
 #include "gpiod_lines.hpp"
 
+#include "line_errors.hpp"
+
 #include <gpiod.h>
 
 #include <array>
@@ -9,26 +11,6 @@
 
 namespace homing::gpiod {
 namespace {
-
-// What to do about errno after a failed open or request, in the words of
-// the person at the cabinet.
-std::string errno_hint(int err) {
-  switch (err) {
-    case EACCES:
-    case EPERM:
-      return "permission denied: run homingd as a user in the 'gpio' group (or give it access to "
-             "/dev/gpiochip*)";
-    case EBUSY:
-      return "the line is in use by another program or driver (see 'gpioinfo'); free it or pick another line";
-    case ENOENT:
-    case ENODEV:
-      return "no such GPIO chip (see 'gpiodetect' for the chips this board has)";
-    case EINVAL:
-      return "the chip refused the request (a line that cannot do this, e.g. no edge events or no bias)";
-    default:
-      return std::strerror(err);
-  }
-}
 
 int request_flags(const LineSpec& s) {
   int flags = s.active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0;
@@ -61,8 +43,7 @@ std::expected<gpiod_chip*, std::string> GpiodLines::open_chip(const LineSpec& sp
   errno = 0;
   ChipPtr chip(gpiod_chip_open_lookup(key.c_str()));
   if (!chip)
-    return std::unexpected(fmt::format("{}: cannot open GPIO chip '{}': {}", describe(spec), key,
-                                       errno_hint(errno ? errno : ENODEV)));
+    return std::unexpected(errors::chip_open(spec, key, errno ? errno : ENODEV));
   gpiod_chip* raw = chip.get();
   chips_.push_back(Chip{key, std::move(chip)});
   return raw;
@@ -72,12 +53,10 @@ std::expected<gpiod_line*, std::string> GpiodLines::find_line(const LineSpec& sp
   if (spec.chip.empty()) {
     // A bare line name: search every chip, then keep that chip open here.
     const auto* name = std::get_if<std::string>(&spec.line);
-    if (!name) return std::unexpected(describe(spec) + ": a line offset needs a chip (chip = \"gpiochip0\")");
+    if (!name) return std::unexpected(errors::offset_needs_chip(spec));
     errno = 0;
     gpiod_line* found = gpiod_line_find(name->c_str());
-    if (!found)
-      return std::unexpected(fmt::format("{}: no GPIO line is named \"{}\" on any chip (see 'gpioinfo')",
-                                         describe(spec), *name));
+    if (!found) return std::unexpected(errors::no_name(spec));
     const std::string chip_name = gpiod_chip_name(gpiod_line_get_chip(found));
     const unsigned offset = gpiod_line_offset(found);
     gpiod_line_close_chip(found);
@@ -91,18 +70,13 @@ std::expected<gpiod_line*, std::string> GpiodLines::find_line(const LineSpec& sp
   gpiod_line* line = nullptr;
   if (const auto* offset = std::get_if<unsigned>(&spec.line)) {
     const unsigned count = gpiod_chip_num_lines(*chip);
-    if (*offset >= count)
-      return std::unexpected(fmt::format("{}: chip '{}' has lines 0..{}, there is no line {}", describe(spec),
-                                         spec.chip, count - 1, *offset));
+    if (*offset >= count) return std::unexpected(errors::no_offset(spec, count));
     line = gpiod_chip_get_line(*chip, *offset);
   } else {
     line = gpiod_chip_find_line(*chip, std::get<std::string>(spec.line).c_str());
-    if (!line)
-      return std::unexpected(fmt::format("{}: chip '{}' has no line named \"{}\" (see 'gpioinfo {}')",
-                                         describe(spec), spec.chip, std::get<std::string>(spec.line),
-                                         spec.chip));
+    if (!line) return std::unexpected(errors::no_name(spec));
   }
-  if (!line) return std::unexpected(fmt::format("{}: {}", describe(spec), errno_hint(errno)));
+  if (!line) return std::unexpected(errors::request_failed(spec, errno));
   return line;
 }
 
@@ -111,8 +85,7 @@ std::expected<LineId, std::string> GpiodLines::request(const LineSpec& spec, Kin
   if (!line) return std::unexpected(line.error());
   if (gpiod_line_is_requested(*line) || gpiod_line_is_used(*line)) {
     const char* user = gpiod_line_consumer(*line);
-    return std::unexpected(fmt::format("{}: the line is in use by '{}'; free it or pick another line",
-                                       describe(spec), user ? user : "the kernel"));
+    return std::unexpected(errors::busy(spec, user ? user : ""));
   }
   gpiod_line_request_config cfg{consumer_.c_str(), 0, request_flags(spec)};
   cfg.request_type = kind == Kind::output   ? GPIOD_LINE_REQUEST_DIRECTION_OUTPUT
@@ -120,7 +93,7 @@ std::expected<LineId, std::string> GpiodLines::request(const LineSpec& spec, Kin
                                            : GPIOD_LINE_REQUEST_EVENT_BOTH_EDGES;
   errno = 0;
   if (gpiod_line_request(*line, &cfg, initial ? 1 : 0) != 0)
-    return std::unexpected(fmt::format("{}: request failed: {}", describe(spec), errno_hint(errno)));
+    return std::unexpected(errno == EBUSY ? errors::busy(spec, "") : errors::request_failed(spec, errno));
   lines_.push_back(Line{spec, *line});
   return static_cast<LineId>(lines_.size() - 1);
 }
