@@ -98,7 +98,8 @@ TEST_CASE("direction changes: dir switches while step is low, and the next step 
   EngineSide e;
   for (int i = 0; i < 200; ++i) e.period(axis, velocity_command(5, 1000), 1'000'000);
   for (int i = 0; i < 400; ++i) e.period(axis, velocity_command(-5, 1000), 1'000'000);
-X
+  for (int i = 0; i < 400; ++i) e.period(axis, move_to_command(e.motor, 0, 5, 1000, 0.001), 1'000'000);
+  REQUIRE(e.motor.velocity_mm_per_s == 0);
   axis.run_until(e.t_ns + 5'000'000);
   CHECK(axis.gen->position_steps() == std::llround(e.motor.position_mm * 200));
   const auto dirs = axis.chip.writes_of("X.dir");
