@@ -257,6 +257,10 @@ Result<SettingsStore> SettingsStore::open(const std::string& path, const std::ve
     int version = 0;
     if (!fresh) {
       auto db = open_verified(path, vfs, version);
+      if (db && version == 0 && (exists(bak_path(path, 0)) || exists(bak_path(path, 1)))) {
+        // An empty file next to backups is a lost database, not a first start.
+        db = std::unexpected(Error{ErrorKind::corrupt, fmt::format("{}: the file is empty but backups exist", path)});
+      }
       if (!db && db.error().kind == ErrorKind::corrupt && report.outcome != OpenOutcome::restored_from_backup) {
         note(spdlog::level::critical, fmt::format("settings database is damaged: {}", db.error().message));
         // Keep the damaged file (and its WAL) for diagnosis, out of the way.
@@ -300,6 +304,7 @@ Result<SettingsStore> SettingsStore::open(const std::string& path, const std::ve
       version = 0;
     }
     report.schema_version_found = version;
+    if (version == 0 && report.outcome == OpenOutcome::opened) report.outcome = OpenOutcome::created;
 
     if (version < kSchemaVersion) {
       if (version > 0) {

@@ -238,6 +238,32 @@ TEST_CASE("a database file that vanished is restored from its backup", "[persist
   CHECK(store.value("axis.x.mode") == 2);
 }
 
+TEST_CASE("a database file truncated to nothing is restored from its backup, not taken as a first start",
+          "[persistence][fault]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  OpenReport report;
+  {
+    auto store = test::open_ok(db, report);
+    REQUIRE(store.commit({{"axis.x.mode", 2}}, test::kTcp));
+  }
+  std::filesystem::resize_file(db, 0);
+  auto store = test::open_ok(db, report);
+  CHECK(report.outcome == OpenOutcome::restored_from_backup);
+  CHECK(store.value("axis.x.mode") == 2);
+}
+
+TEST_CASE("a first start interrupted before anything was written starts fresh", "[persistence]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  test::write_text(db, "");
+  OpenReport report;
+  auto store = test::open_ok(db, report);
+  CHECK(report.outcome == OpenOutcome::created);
+  CHECK_FALSE(report.settings_lost);
+  CHECK(store.value("axis.x.mode") == 3);
+}
+
 TEST_CASE("an intact start says so in the log", "[persistence]") {
   test::TempDir dir;
   const auto db = dir.file("settings.db");
