@@ -10,6 +10,8 @@
 #include <thread>
 
 #include "control_loop.hpp"
+#include "homing/gpiod/gpiod_io.hpp"
+#include "homing/gpiod/gpiod_lines.hpp"
 #include "modbus_service.hpp"
 #include "monitor.hpp"
 #include "options.hpp"
@@ -53,8 +55,21 @@ int main(int argc, char** argv) {
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   signal(SIGPIPE, SIG_IGN);
 
-  if (opt.backend != "sim")
-    return fail_start("--backend gpiod: the GPIO backend is not built into this version; use --backend sim");
+  // The machine: GPIO lines named in the config file's [gpiod] table, opened
+  // first so that a wiring mistake is reported before anything else starts.
+  std::unique_ptr<server::MachineIo> machine;
+  homing::sim::Simulator* sim = nullptr;
+  if (opt.backend == "gpiod") {
+    if (opt.time_scale != 1.0) return fail_start("--time-scale: simulator only; the GPIO backend runs in real time");
+    auto config = homing::gpiod::load_config(opt.config_path);
+    if (!config) return fail_start("--backend gpiod: " + config.error());
+    homing::gpiod::RunOptions run;
+    run.control_period_us = opt.period_us;
+    run.warn = [](const std::string& m) { spdlog::warn("{}", m); };
+    auto io = homing::gpiod::GpiodIo::open(*config, std::make_unique<homing::gpiod::GpiodLines>(), run);
+    if (!io) return fail_start("--backend gpiod: " + io.error());
+    machine = std::move(*io);
+  }
 
   // Settings: durable, from the register table's defaults on first start.
   std::vector<persistence::SettingDefault> defaults;
@@ -66,14 +81,18 @@ int main(int argc, char** argv) {
   auto from_raw = registers::settings_from_raw(store->load());
   for (const auto& r : from_raw.rejected) spdlog::warn("settings: {}", r);
 
-  auto sim_io = std::make_unique<server::SimulatorIo>(registers::default_sim_config());
-  homing::sim::Simulator* sim = &sim_io->sim();
-  server::ControlLoop loop(from_raw.settings, std::move(sim_io), sim, opt.period_us, opt.time_scale);
+  if (!machine) {
+    auto sim_io = std::make_unique<server::SimulatorIo>(registers::default_sim_config());
+    sim = &sim_io->sim();
+    machine = std::move(sim_io);
+  }
+  server::ControlLoop loop(from_raw.settings, std::move(machine), sim, opt.period_us, opt.time_scale);
   if (report.settings_lost) loop.raise_settings_lost();
 
   server::ServiceConfig service_config;
   service_config.unit_id = static_cast<std::uint8_t>(opt.unit_id);
   service_config.sim_unit_id = static_cast<std::uint8_t>(opt.sim_unit_id);
+  if (!sim) service_config.sim_unit_id = std::nullopt;  // no simulator behind real GPIO
   service_config.word_order = opt.word_order;
   server::ModbusService service(service_config, loop, &*store, from_raw.settings);
 
