@@ -1,0 +1,151 @@
+// Modbus RTU over a pseudo-terminal pair (socat): homingd serves one end, a
+// libmodbus RTU client the other. RTU serves the module unit only, so the
+// simulator's truth is read over TCP at the same time.
+#include <catch2/catch.hpp>
+
+#include "daemon.hpp"
+#include "homing/phases.hpp"
+#include "homing/status.hpp"
+
+using namespace e2e;
+
+namespace {
+
+struct RtuRig {
+  PtyPair pty;
+  Daemon daemon;
+  Client rtu;
+  Client tcp;
+  RtuRig()
+      : daemon(DaemonOptions{.time_scale = 10,
+                             .extra = {"--rtu", pty.server_end(), "--baud", "19200", "--parity", "E"}}),
+        rtu(Client::rtu(pty.client_end(), 19200, 'E')),
+        tcp(Client::tcp(daemon.port())) {}
+};
+
+}  // namespace
+
+TEST_CASE("RTU: configure and home all over a serial line, checked against the simulator over TCP") {
+  RtuRig rig;
+  INFO(rig.daemon.listening_line());
+  CHECK(rig.daemon.listening_line().find("rtu") != std::string::npos);
+  Client& rtu = rig.rtu;
+  Client& tcp = rig.tcp;
+  REQUIRE(rtu.read("status.map_version") == registers::kMapVersion);
+
+  // Configure over RTU; TCP sees it (one module behind both transports).
+  rtu.set("axis.x.pull_off", um(2.0));
+  rtu.set("axis.y.home_position", um(3.25));
+  rtu.set("axis.z.seek_feedrate", 1200);
+  CHECK(rtu.read("axis.x.pull_off") == 2000);
+  CHECK(tcp.read("axis.x.pull_off") == 2000);
+  CHECK(tcp.read("axis.y.home_position") == 3250);
+  CHECK(tcp.read("axis.z.seek_feedrate") == 1200);
+
+  REQUIRE(rtu.write("cmd.home_all", 1) == 0);
+  bool saw_z_seek = false, saw_xy_seek = false, saw_sim_move = false;
+  const auto z_start = tcp.read("sim.z.actual_position");
+  const auto deadline = Clock::now() + 20s;
+  int state = 0;
+  while (Clock::now() < deadline) {
+    state = static_cast<int>(rtu.read("status.state"));
+    // Z read before and after X and Y: the reads are not one snapshot.
+    const auto z1 = rtu.read("axis.z.phase");
+    const auto x = rtu.read("axis.x.phase"), y = rtu.read("axis.y.phase");
+    const auto z2 = rtu.read("axis.z.phase");
+    const int seek = static_cast<int>(homing::Phase::seek);
+    if (z1 == seek && z2 == seek) {
+      saw_z_seek = true;
+      CHECK(x == static_cast<int>(homing::Phase::waiting));
+      CHECK(y == static_cast<int>(homing::Phase::waiting));
+    }
+    if (x == seek || y == seek) {
+      saw_xy_seek = true;
+      CHECK(z2 == static_cast<int>(homing::Phase::done));
+    }
+    if (tcp.read("sim.z.actual_position") != z_start) saw_sim_move = true;
+    if (state == static_cast<int>(homing::MachineState::homed) || state == static_cast<int>(homing::MachineState::alarm))
+      break;
+  }
+  REQUIRE(state == static_cast<int>(homing::MachineState::homed));
+  CHECK(saw_z_seek);
+  CHECK(saw_xy_seek);
+  CHECK(saw_sim_move);
+  for (const char* a : {"x", "y", "z"}) {
+    const std::string p = std::string("axis.") + a + ".";
+    const std::string s = std::string("sim.") + a + ".";
+    INFO("axis " << a);
+    CHECK(rtu.read(p + "homed") == 1);
+    CHECK(rtu.read(p + "position") == rtu.read(p + "home_position"));
+    const double expected = tcp.read_mm(s + "sensor_max") + tcp.read_mm(s + "hysteresis") + rtu.read_mm(p + "pull_off");
+    CHECK(tcp.read_mm(s + "actual_position") == Approx(expected).margin(0.02));
+  }
+  CHECK(rtu.read("axis.y.position") == 3250);
+}
+
+TEST_CASE("RTU: a broadcast write is applied and never answered, other units are silent, bad frames are survived") {
+  RtuRig rig;
+  Client& rtu = rig.rtu;
+  Client& tcp = rig.tcp;
+  REQUIRE(rtu.read("status.map_version") == registers::kMapVersion);
+  rtu.set_timeout(300ms);
+
+  // FC 6 to unit 0.
+  const auto& jog = reg("axis.x.jog_feedrate");
+  std::vector<std::uint8_t> req{0, 0x06, static_cast<std::uint8_t>(jog.address >> 8),
+                                static_cast<std::uint8_t>(jog.address & 0xFF), 0x04, 0xD2};  // 1234
+  REQUIRE(modbus_send_raw_request(rtu.ctx(), req.data(), static_cast<int>(req.size())) > 0);
+  std::uint8_t rsp[MODBUS_RTU_MAX_ADU_LENGTH];
+  CHECK(modbus_receive_confirmation(rtu.ctx(), rsp) == -1);  // nothing came back
+  CHECK(errno == ETIMEDOUT);
+  REQUIRE(wait_until([&] { return tcp.read("axis.x.jog_feedrate") == 1234; }, 2s));
+  CHECK(rtu.read("axis.x.jog_feedrate") == 1234);
+
+  // FC 16 of a 32-bit value to unit 0.
+  const auto& pull = reg("axis.y.pull_off");
+  std::vector<std::uint8_t> req16{0, 0x10, static_cast<std::uint8_t>(pull.address >> 8),
+                                  static_cast<std::uint8_t>(pull.address & 0xFF), 0, 2, 4, 0, 0, 0x0B, 0xB8};  // 3000
+  REQUIRE(modbus_send_raw_request(rtu.ctx(), req16.data(), static_cast<int>(req16.size())) > 0);
+  CHECK(modbus_receive_confirmation(rtu.ctx(), rsp) == -1);
+  REQUIRE(wait_until([&] { return tcp.read("axis.y.pull_off") == 3000; }, 2s));
+
+  // A broadcast refused by validation is not applied and not answered either.
+  std::vector<std::uint8_t> bad{0, 0x06, static_cast<std::uint8_t>(jog.address >> 8),
+                                static_cast<std::uint8_t>(jog.address & 0xFF), 0, 0};  // 0 is out of range
+  REQUIRE(modbus_send_raw_request(rtu.ctx(), bad.data(), static_cast<int>(bad.size())) > 0);
+  CHECK(modbus_receive_confirmation(rtu.ctx(), rsp) == -1);
+  CHECK(tcp.read("axis.x.jog_feedrate") == 1234);
+
+  // The simulator unit and unknown units are not served over RTU: silence.
+  for (int unit : {247, 5}) {
+    INFO("unit " << unit);
+    rtu.use_unit(unit);
+    std::uint16_t w[2];
+    CHECK(modbus_read_registers(rtu.ctx(), 0, 1, w) == -1);
+    CHECK(errno == ETIMEDOUT);
+  }
+  rtu.use_unit(1);
+
+  // Garbage on the line (a frame with a bad CRC, then noise): the server counts it and goes on.
+  const int fd = modbus_get_socket(rtu.ctx());
+  const std::uint8_t garbage[] = {0x01, 0x03, 0x00, 0x00, 0x00, 0x01, 0xDE, 0xAD, 0x55, 0xAA, 0x00, 0xFF};
+  REQUIRE(::write(fd, garbage, sizeof(garbage)) == static_cast<ssize_t>(sizeof(garbage)));
+  std::this_thread::sleep_for(400ms);
+  modbus_flush(rtu.ctx());
+  rtu.set_timeout(1000ms);
+  bool answered = wait_until([&] { return rtu.try_read("status.map_version") == registers::kMapVersion; }, 3s, 50ms);
+  CHECK(answered);
+  // An exception over RTU, with nothing changed.
+  std::uint16_t w = 0;
+  CHECK(modbus_write_register(rtu.ctx(), reg("axis.x.pull_off").address, 1) == -1);
+  CHECK(exception_of(errno) == MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
+  CHECK(modbus_read_registers(rtu.ctx(), 9000, 1, &w) == -1);
+  CHECK(exception_of(errno) == MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
+  CHECK(tcp.read("axis.x.pull_off") == reg("axis.x.pull_off").default_raw);
+  // homingd is still whole on both transports.
+  CHECK(rtu.read("axis.y.pull_off") == 3000);
+  CHECK(tcp.read("status.map_version") == registers::kMapVersion);
+  const auto st = rig.daemon.stop(SIGTERM);
+  REQUIRE(st);
+  CHECK(WIFEXITED(*st));
+}
