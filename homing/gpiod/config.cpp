@@ -213,7 +213,7 @@ std::expected<BackendConfig, std::string> parse_config(const toml::table& root, 
 
 std::expected<BackendConfig, std::string> load_config(const std::string& path) {
   if (path.empty())
-    return Error("--backend gpiod needs --config FILE with a [gpiod] table naming the lines (see homing/gpiod/README.md)");
+    return Error("it needs --config FILE with a [gpiod] table naming the lines (see homing/gpiod/README.md)");
   try {
     return parse_config(toml::parse_file(path), path);
   } catch (const toml::parse_error& e) {
