@@ -332,7 +332,7 @@ TEST_CASE("a multi-register FC16 write is all or nothing") {
   CHECK(c.read("axis.x.debounce_ms") == 5);
 }
 
-TEST_CASE("FC23 read/write registers: the write is applied before the read; a bad write changes nothing") {
+TEST_CASE("FC23 read/write registers: the write is applied before the read, a bad write changes nothing") {
   Daemon d;
   Client c = Client::tcp(d.port());
   const auto& pull_off = reg("axis.z.pull_off");
