@@ -163,11 +163,20 @@ void ControlLoop::run_period(double wall_dt_s) {
     const homing::StepResult r = engine_.step(settings_, inputs, dt);
     const std::int64_t t1 = monotonic_ns();
     outputs_ = r.outputs;
+    machine_time_s_ += dt;
+    record_trace(r.status);
     const bool motion = r.status.homing || r.status.state == homing::MachineState::moving;
     if (!motion && !inputs.commands.home_all && !inputs.commands.home_axes && !inputs.commands.move_axes &&
         std::none_of(loop_jog_.begin(), loop_jog_.end(), [](std::int8_t j) { return j != 0; }))
       modbus_motion_ = false;
     engine_us_ += (t1 - t0) / 1000.0;
+  }
+  if (trace_pending_) {
+    std::unique_lock trace_lock(trace_mutex_, std::try_to_lock);
+    if (trace_lock.owns_lock()) {
+      *published_trace_ = recorder_.traces();
+      trace_pending_ = false;
+    }
   }
   std::unique_lock lock(snapshot_mutex_, std::try_to_lock);
   if (!lock.owns_lock()) return;  // a reader is copying: publish next period
@@ -191,6 +200,23 @@ void ControlLoop::run_period(double wall_dt_s) {
     s.sim_estop = sim_->inputs().estop;
     s.sim_start_button = sim_->inputs().start_button;
   }
+}
+
+void ControlLoop::record_trace(const homing::Status& status) {
+  std::array<double, homing::kAxisCount> motor{};
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) motor[a] = outputs_.axes[a].motor.position_mm;
+  if (status.homing) {
+    if (!recorder_.active()) recorder_.begin(period_us_ * 1e-6);
+    recorder_.record(machine_time_s_, status, motor);
+  } else if (recorder_.active()) {
+    recorder_.finish(machine_time_s_, status, motor);
+    trace_pending_ = true;
+  }
+}
+
+AxisTrace ControlLoop::trace(std::size_t axis) const {
+  std::lock_guard lock(trace_mutex_);
+  return (*published_trace_)[axis];
 }
 
 void ControlLoop::thread_main() {

@@ -15,6 +15,7 @@
 #include "homing/engine.hpp"
 #include "homing/sim/simulator.hpp"
 #include "machine_io.hpp"
+#include "trace.hpp"
 
 namespace server {
 
@@ -76,6 +77,8 @@ class ControlLoop {
   void sim_op(SimOp op);
 
   Snapshot snapshot() const;
+  // The trace of the last finished homing cycle of one axis.
+  AxisTrace trace(std::size_t axis) const;
   LoopStats stats() const;
   bool has_sim() const { return sim_ != nullptr; }
 
@@ -86,6 +89,7 @@ class ControlLoop {
   void thread_main();
   void take_mailbox(homing::Inputs& inputs);
   bool watchdog_expired() const;
+  void record_trace(const homing::Status& status);
 
   homing::Settings settings_;
   std::unique_ptr<MachineIo> io_;
@@ -113,6 +117,13 @@ class ControlLoop {
 
   std::atomic<std::uint16_t> heartbeat_value_{0};
   std::atomic<std::int64_t> heartbeat_changed_ns_{0};
+
+  TraceRecorder recorder_;
+  double machine_time_s_ = 0;
+  bool trace_pending_ = false;
+  mutable std::mutex trace_mutex_;
+  std::unique_ptr<std::array<AxisTrace, homing::kAxisCount>> published_trace_ =
+      std::make_unique<std::array<AxisTrace, homing::kAxisCount>>();
 
   mutable std::mutex snapshot_mutex_;
   Snapshot snapshot_{};

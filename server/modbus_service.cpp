@@ -16,7 +16,7 @@ using registers::Table;
 
 constexpr std::uint8_t kReadCoils = 1, kReadDiscrete = 2, kReadHolding = 3, kReadInput = 4, kWriteCoil = 5,
                        kWriteRegister = 6, kWriteCoils = 15, kWriteRegisters = 16, kReadWrite = 23,
-                       kEncapsulated = 43;
+                       kReadFileRecord = 20, kEncapsulated = 43;
 
 Reply fail(std::uint8_t fc, ExceptionCode code) { return exception_reply(fc, static_cast<std::uint8_t>(code)); }
 
@@ -24,6 +24,21 @@ Reply refusal_reply(std::uint8_t fc, const registers::Refusal& r, const ClientIn
   spdlog::debug("{} {}: FC{} refused with exception {:02X} ({}): {}", client.transport, client.address, fc,
                 static_cast<int>(r.code), registers::exception_name(r.code), r.message);
   return fail(fc, r.code);
+}
+
+std::string_view command_name(registers::Command c) {
+  using registers::Command;
+  switch (c) {
+    case Command::home_all: return "home_all";
+    case Command::home_axis: return "home";
+    case Command::abort: return "abort";
+    case Command::reset_alarm: return "reset_alarm";
+    case Command::jog_plus: return "jog_plus";
+    case Command::jog_minus: return "jog_minus";
+    case Command::move: return "move";
+    case Command::homing_permit: return "homing_permit";
+  }
+  return "?";
 }
 
 std::string describe_changes(const std::vector<registers::Change>& changes) {
@@ -152,6 +167,9 @@ Reply ModbusService::dispatch(Target target, std::span<const std::uint8_t> pdu, 
     case kEncapsulated:
       if (broadcast) return Reply{};
       return device_identification(pdu);
+    case kReadFileRecord:
+      if (broadcast || target != Target::module) return broadcast ? Reply{} : fail(fc, ExceptionCode::illegal_function);
+      return read_file_record(pdu);
     default:
       spdlog::debug("{} {}: function code {} not supported: exception 01", client.transport, client.address, fc);
       if (broadcast) return Reply{};
@@ -300,16 +318,11 @@ void ModbusService::run_commands(const std::vector<registers::CommandRequest>& c
       }
       case Command::homing_permit: loop_.set_permit_coil(r.on); break;
     }
-    spdlog::info("command from {} {}: {}{}{}", client.transport, client.address,
-                 static_cast<int>(r.command) <= 7 ? std::array<const char*, 8>{"home_all", "home", "abort", "reset_alarm",
-                                                                               "jog_plus", "jog_minus", "move",
-                                                                               "homing_permit"}[static_cast<int>(r.command)]
-                                                  : "?",
-                 r.axis >= 0 ? std::string(".") + std::string(homing::kAxisLetters[a]) : std::string(),
-                 (r.command == Command::jog_plus || r.command == Command::jog_minus ||
-                  r.command == Command::homing_permit)
-                     ? (r.on ? " on" : " off")
-                     : "");
+    const bool held = r.command == Command::jog_plus || r.command == Command::jog_minus ||
+                      r.command == Command::homing_permit;
+    spdlog::info("command from {} {}: {}{}{}", client.transport, client.address, command_name(r.command),
+                 r.axis >= 0 ? "." + std::string(homing::kAxisLetters[a]) : std::string(),
+                 held ? (r.on ? " on" : " off") : "");
   }
   if (any) loop_.submit(c, true);
 }
@@ -343,6 +356,32 @@ std::optional<Reply> ModbusService::write_sim(std::uint8_t fc, Table table, std:
   if (!w.changes.empty())
     spdlog::info("simulator changed by {} {}: {}", client.transport, client.address, describe_changes(w.changes));
   return std::nullopt;
+}
+
+// FC 20: the homing traces, one file per axis (see server/trace.hpp).
+Reply ModbusService::read_file_record(std::span<const std::uint8_t> pdu) {
+  constexpr std::uint8_t fc = kReadFileRecord;
+  if (pdu.size() < 2) return fail(fc, ExceptionCode::illegal_data_value);
+  const std::uint8_t bytes = pdu[1];
+  if (bytes < 7 || bytes > 0xF5 || bytes % 7 != 0 || pdu.size() != 2u + bytes)
+    return fail(fc, ExceptionCode::illegal_data_value);
+  Reply reply{true, {fc, 0}};
+  std::array<std::optional<std::vector<std::uint16_t>>, homing::kAxisCount> files;
+  for (std::size_t at = 2; at < pdu.size(); at += 7) {
+    const std::uint8_t type = pdu[at];
+    const std::uint16_t file = be16(pdu, at + 1), record = be16(pdu, at + 3), length = be16(pdu, at + 5);
+    if (type != 6 || file < 1 || file > homing::kAxisCount || record > 9999 || length < 1)
+      return fail(fc, ExceptionCode::illegal_data_address);
+    auto& words = files[file - 1u];
+    if (!words) words = trace_file(loop_.trace(file - 1u));
+    if (std::size_t{record} + length > words->size()) return fail(fc, ExceptionCode::illegal_data_address);
+    if (reply.pdu.size() + 2u + 2u * length > kMaxPdu) return fail(fc, ExceptionCode::illegal_data_value);
+    reply.pdu.push_back(static_cast<std::uint8_t>(1 + 2 * length));
+    reply.pdu.push_back(6);
+    for (std::uint16_t i = 0; i < length; ++i) put16(reply.pdu, (*words)[record + i]);
+  }
+  reply.pdu[1] = static_cast<std::uint8_t>(reply.pdu.size() - 2);
+  return reply;
 }
 
 // FC 43 / MEI 14: libmodbus 3.1.6 has none, so it is answered here.

@@ -50,6 +50,7 @@ class ModbusService final : public RequestHandler {
                                  std::span<const std::uint16_t> values, const ClientInfo& client);
   void run_commands(const std::vector<registers::CommandRequest>& commands, const ClientInfo& client);
   Reply device_identification(std::span<const std::uint8_t> pdu);
+  Reply read_file_record(std::span<const std::uint8_t> pdu);
   std::int64_t sim_raw(const registers::Register& reg, const Snapshot& snap) const;
 
   ServiceConfig config_;
