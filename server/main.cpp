@@ -119,8 +119,9 @@ int main(int argc, char** argv) {
   if (tcp) where += "tcp " + opt.tcp_host + ":" + std::to_string(opt.tcp_port);
   if (rtu) where += std::string(where.empty() ? "" : ", ") + "rtu " + opt.rtu_device + " " + std::to_string(opt.baud) +
                     " 8" + opt.parity + std::to_string(opt.stop_bits);
-  std::printf("homingd: listening on %s (unit %d, simulator unit %d, backend %s, db %s)\n", where.c_str(),
-              opt.unit_id, opt.sim_unit_id, opt.backend.c_str(), opt.db_path.c_str());
+  const std::string sim_unit = sim ? ", simulator unit " + std::to_string(opt.sim_unit_id) : std::string();
+  std::printf("homingd: listening on %s (unit %d%s, backend %s, db %s)\n", where.c_str(), opt.unit_id,
+              sim_unit.c_str(), opt.backend.c_str(), opt.db_path.c_str());
   std::fflush(stdout);
 
   int sig = 0;
