@@ -176,12 +176,23 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
 
   comm_lost_ = inputs.communication_lost;
   if (comm_lost_ && any_motion()) {
+    // Note every moving axis and its phase first: raising the first alarm
+    // already turns the others to "stopping".
+    bool any = false;
     for (std::size_t a = 0; a < kAxisCount; ++a) {
-      const AxisRun& run = axes_[a];
-      if (run.in_cycle || run.phase == Phase::jog || run.phase == Phase::move ||
-          run.motor.velocity_mm_per_s != 0) {
-        raise(settings, a, Alarm{AlarmCode::communication_lost});
+      AxisRun& run = axes_[a];
+      const bool homing_phase = run.in_cycle && run.phase != Phase::waiting && run.phase != Phase::done;
+      const bool moving = homing_phase || run.phase == Phase::jog || run.phase == Phase::move ||
+                          run.motor.velocity_mm_per_s != 0;
+      if (moving && !run.alarm) {
+        run.alarm = Alarm{AlarmCode::communication_lost, run.phase};
+        any = true;
       }
+    }
+    if (any) {
+      if (settings.global.alarm_clears_homed)
+        for (AxisRun& run : axes_) run.homed = false;
+      stop_all(settings);
     }
   }
 

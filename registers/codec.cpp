@@ -120,6 +120,7 @@ std::optional<CommandRequest> command_of(const Register& coil, bool value) {
     case Key::cmd_jog_plus: return CommandRequest{Command::jog_plus, axis, value};
     case Key::cmd_jog_minus: return CommandRequest{Command::jog_minus, axis, value};
     case Key::host_homing_permit: return CommandRequest{Command::homing_permit, -1, value};
+    case Key::cmd_lock_settings: return CommandRequest{Command::lock_settings, -1, true};
     default: unbound(coil, "command");
   }
 }
@@ -189,6 +190,7 @@ std::int64_t host_raw(const HostRegisters& host, const Register& reg) {
     case Key::host_heartbeat: return host.heartbeat;
     case Key::host_target: return to_raw(reg, host.target_mm.at(axis_index(reg)));
     case Key::host_homing_permit: return host.homing_permit ? 1 : 0;
+    case Key::security_unlock: return 0;  // a code is never read back
     case Key::cmd_jog_plus: return host.jog_plus.at(axis_index(reg)) ? 1 : 0;
     case Key::cmd_jog_minus: return host.jog_minus.at(axis_index(reg)) ? 1 : 0;
     default: unbound(reg, "host");
@@ -200,6 +202,7 @@ void set_host_raw(HostRegisters& host, const Register& reg, std::int64_t raw) {
     case Key::host_heartbeat: host.heartbeat = static_cast<std::uint16_t>(raw); return;
     case Key::host_target: host.target_mm.at(axis_index(reg)) = to_engineering(reg, raw); return;
     case Key::host_homing_permit: host.homing_permit = raw != 0; return;
+    case Key::security_unlock: host.unlock_code = static_cast<std::uint16_t>(raw); return;
     case Key::cmd_jog_plus: host.jog_plus.at(axis_index(reg)) = raw != 0; return;
     case Key::cmd_jog_minus: host.jog_minus.at(axis_index(reg)) = raw != 0; return;
     default: unbound(reg, "host");
@@ -251,6 +254,15 @@ std::int64_t read_raw(const Register& reg, const ModuleView& view) {
       for (std::size_t i = 0; i < st.axes.size(); ++i)
         if (st.axes[i].alarm) return static_cast<std::int64_t>(i) + 1;
       return 0;
+    case Key::status_settings_locked: return view.extras.settings_locked ? 1 : 0;
+    case Key::diag_loop_periods: return static_cast<std::int64_t>(view.extras.loop_periods & 0xFFFFFFFFu);
+    case Key::diag_late_p50_us: return to_raw(reg, view.extras.late_p50_us);
+    case Key::diag_late_p99_us: return to_raw(reg, view.extras.late_p99_us);
+    case Key::diag_late_p999_us: return to_raw(reg, view.extras.late_p999_us);
+    case Key::diag_late_max_us: return to_raw(reg, view.extras.late_max_us);
+    case Key::diag_engine_step_ns: return to_raw(reg, view.extras.engine_step_ns);
+    case Key::diag_rss_kb: return static_cast<std::int64_t>(std::min<std::uint64_t>(view.extras.rss_kb, 0xFFFFFFFFu));
+    case Key::diag_tcp_clients: return view.extras.tcp_clients;
     case Key::status_alarm: return st.alarm ? 1 : 0;
     case Key::status_homing: return st.homing ? 1 : 0;
     case Key::status_estop: return st.estop ? 1 : 0;

@@ -34,6 +34,7 @@ struct HostRegisters {
   std::uint16_t heartbeat = 0;                     // host.heartbeat
   std::array<double, homing::kAxisCount> target_mm{};  // axis.<a>.target (axis unit)
   bool homing_permit = false;                      // host.homing_permit
+  std::uint16_t unlock_code = 0;                   // security.unlock, as last written (reads 0)
   std::array<bool, homing::kAxisCount> jog_plus{};     // cmd.jog_plus.<a> held
   std::array<bool, homing::kAxisCount> jog_minus{};    // cmd.jog_minus.<a> held
 };
@@ -43,10 +44,17 @@ struct StatusExtras {
   std::uint16_t map_version = kMapVersion;
   std::array<double, homing::kAxisCount> correction_mean_mm{};
   std::array<double, homing::kAxisCount> correction_spread_mm{};
+  bool settings_locked = false;
+  // Diagnostics of the running daemon (diag.*).
+  std::uint64_t loop_periods = 0;
+  double late_p50_us = 0, late_p99_us = 0, late_p999_us = 0, late_max_us = 0;
+  double engine_step_ns = 0;
+  std::uint64_t rss_kb = 0;
+  std::uint32_t tcp_clients = 0;
 };
 
 // ---- coils -> commands ----
-enum class Command : std::uint8_t { home_all, home_axis, abort, reset_alarm, jog_plus, jog_minus, move, homing_permit };
+enum class Command : std::uint8_t { home_all, home_axis, abort, reset_alarm, jog_plus, jog_minus, move, homing_permit, lock_settings };
 struct CommandRequest {
   Command command = Command::home_all;
   int axis = -1;     // 0..5 for per-axis commands, -1 otherwise

@@ -164,6 +164,7 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "global.alarm_clears_homed", .offset = 11, .max = 1, .def = 1, .key = Key::global_alarm_clears_homed, .description = "flag (0/1): an alarm clears the homed state of every axis"},
     {.pattern = "global.watchdog_ms", .offset = 12, .quantity = Quantity::time_ms, .max = 60'000, .key = Key::global_watchdog_ms, .description = "host watchdog: stop motion started over Modbus when host.heartbeat does not change for this long; 0 = off"},
     {.pattern = "global.permit_required", .offset = 13, .max = 1, .key = Key::global_permit_required, .description = "flag (0/1): homing needs host.homing_permit (or the permit input) on"},
+    {.pattern = "security.unlock", .offset = 30, .max = 65535, .persisted = false, .key = Key::security_unlock, .description = "write the unlock code (homingd --unlock-code) to allow settings writes; reads 0"},
     {.pattern = "host.heartbeat", .offset = 20, .max = 65535, .persisted = false, .key = Key::host_heartbeat, .description = "the master changes this at least once per watchdog period (not persisted)"},
     // input registers: status
     {.pattern = "status.map_version", .table = IR, .access = Access::r, .max = 65535, .def = kMapVersion, .persisted = false, .key = Key::status_map_version, .description = "version of this register map"},
@@ -175,6 +176,16 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "status.interlocks", .table = IR, .offset = 7, .type = Type::bitmask, .access = Access::r, .max = 511, .persisted = false, .key = Key::status_interlocks, .values = kInterlocks, .description = "what now blocks homing or motion; 0 = free to move"},
     {.pattern = "status.global_alarm", .table = IR, .offset = 8, .type = Type::enumeration, .access = Access::r, .max = 18, .persisted = false, .key = Key::status_global_alarm, .values = kAlarms, .description = "alarm not tied to one axis (e-stop at rest, settings lost)"},
     {.pattern = "status.alarm_axis", .table = IR, .offset = 9, .type = Type::enumeration, .access = Access::r, .max = 6, .persisted = false, .key = Key::status_alarm_axis, .values = kAlarmAxis, .description = "first axis with a latched alarm (1 = X ... 6 = C), 0 none"},
+    {.pattern = "status.settings_locked", .table = IR, .offset = 10, .access = Access::r, .max = 1, .persisted = false, .key = Key::status_settings_locked, .description = "1 while settings writes are locked (write the unlock code to security.unlock)"},
+    // input registers: diagnostics of the running daemon
+    {.pattern = "diag.loop_periods", .table = IR, .offset = 20, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::diag_loop_periods, .description = "control periods run since start"},
+    {.pattern = "diag.loop_late_p50_us", .table = IR, .offset = 22, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::diag_late_p50_us, .description = "median lateness of a control period's start behind its deadline, µs"},
+    {.pattern = "diag.loop_late_p99_us", .table = IR, .offset = 24, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::diag_late_p99_us, .description = "99th percentile of control-period lateness, µs"},
+    {.pattern = "diag.loop_late_p999_us", .table = IR, .offset = 26, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::diag_late_p999_us, .description = "99.9th percentile of control-period lateness, µs"},
+    {.pattern = "diag.loop_late_max_us", .table = IR, .offset = 28, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::diag_late_max_us, .description = "largest control-period lateness, µs"},
+    {.pattern = "diag.engine_step_ns", .table = IR, .offset = 30, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::diag_engine_step_ns, .description = "mean time of one engine step, ns"},
+    {.pattern = "diag.rss_kb", .table = IR, .offset = 32, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::diag_rss_kb, .description = "resident memory of the daemon, KiB"},
+    {.pattern = "diag.tcp_clients", .table = IR, .offset = 34, .access = Access::r, .max = 65535, .persisted = false, .key = Key::diag_tcp_clients, .description = "TCP clients connected now"},
     // discrete inputs
     {.pattern = "status.alarm", .table = DI, .type = Type::boolean, .access = Access::r, .max = 1, .persisted = false, .key = Key::status_alarm, .description = "an alarm is latched"},
     {.pattern = "status.homing", .table = DI, .offset = 1, .type = Type::boolean, .access = Access::r, .max = 1, .persisted = false, .key = Key::status_homing, .description = "a homing cycle runs"},
@@ -183,6 +194,7 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "cmd.home_all", .table = CO, .type = Type::boolean, .access = Access::w, .max = 1, .persisted = false, .key = Key::cmd_home_all, .description = "write 1: home all axes in sequence (reads back 0)"},
     {.pattern = "cmd.abort", .table = CO, .offset = 1, .type = Type::boolean, .access = Access::w, .max = 1, .persisted = false, .key = Key::cmd_abort, .description = "write 1: stop every motion within its deceleration distance"},
     {.pattern = "cmd.reset_alarm", .table = CO, .offset = 2, .type = Type::boolean, .access = Access::w, .max = 1, .persisted = false, .key = Key::cmd_reset_alarm, .description = "write 1: clear latched alarms once their cause is gone"},
+    {.pattern = "cmd.lock_settings", .table = CO, .offset = 4, .type = Type::boolean, .access = Access::w, .max = 1, .persisted = false, .key = Key::cmd_lock_settings, .description = "write 1: lock settings writes again (when homingd has an unlock code)"},
     {.pattern = "host.homing_permit", .table = CO, .offset = 3, .type = Type::boolean, .access = Access::rw, .max = 1, .persisted = false, .key = Key::host_homing_permit, .description = "held by the PLC: homing permitted (used when global.permit_required = 1)"},
 });
 

@@ -94,6 +94,19 @@ void ControlLoop::sim_op(SimOp op) {
   sim_ops_.push_back(std::move(op));
 }
 
+double LoopStats::lateness_percentile_us(double q) const {
+  std::uint64_t total = 0;
+  for (auto n : lateness_us_histogram) total += n;
+  if (total == 0) return 0;
+  const auto wanted = static_cast<std::uint64_t>(std::ceil(q * static_cast<double>(total)));
+  std::uint64_t seen = 0;
+  for (std::size_t i = 0; i < kBuckets; ++i) {
+    seen += lateness_us_histogram[i];
+    if (seen >= wanted) return i == kBuckets - 1 ? max_lateness_us : static_cast<double>(i);
+  }
+  return max_lateness_us;
+}
+
 Snapshot ControlLoop::snapshot() const {
   std::lock_guard lock(snapshot_mutex_);
   return snapshot_;
@@ -170,6 +183,7 @@ void ControlLoop::run_period(double wall_dt_s) {
         std::none_of(loop_jog_.begin(), loop_jog_.end(), [](std::int8_t j) { return j != 0; }))
       modbus_motion_ = false;
     engine_us_ += (t1 - t0) / 1000.0;
+    ++engine_steps_;
   }
   if (trace_pending_) {
     std::unique_lock trace_lock(trace_mutex_, std::try_to_lock);
@@ -178,13 +192,16 @@ void ControlLoop::run_period(double wall_dt_s) {
       trace_pending_ = false;
     }
   }
+  loop_stats_.engine_us_total = engine_us_;
+  loop_stats_.engine_steps = engine_steps_;
+  ++loop_stats_.periods;
   std::unique_lock lock(snapshot_mutex_, std::try_to_lock);
   if (!lock.owns_lock()) return;  // a reader is copying: publish next period
   Snapshot& s = snapshot_;
   s.status = engine_.status();
   s.outputs = outputs_;
-  s.periods = ++stats_.periods;
-  stats_.engine_us_total = engine_us_;
+  s.periods = loop_stats_.periods;
+  if (++stats_publish_tick_ % 64 == 0) stats_ = loop_stats_;  // the histogram is 32 KiB: copy it now and then
   if (sim_) {
     s.has_sim = true;
     s.machine_time_s = sim_->time_s();
@@ -229,11 +246,11 @@ void ControlLoop::thread_main() {
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {}
     const std::int64_t now = monotonic_ns();
     const double lateness_us = (now - deadline) / 1000.0;
-    {
-      std::lock_guard lock(snapshot_mutex_);
-      stats_.max_lateness_us = std::max(stats_.max_lateness_us, lateness_us);
-      if (now - deadline > period_ns) ++stats_.late_periods;
-    }
+    // Loop-private figures: published with the snapshot, never behind a lock here.
+    loop_stats_.max_lateness_us = std::max(loop_stats_.max_lateness_us, lateness_us);
+    const auto bucket = static_cast<std::size_t>(std::clamp(lateness_us, 0.0, double(LoopStats::kBuckets - 1)));
+    ++loop_stats_.lateness_us_histogram[bucket];
+    if (now - deadline > period_ns) ++loop_stats_.late_periods;
     if (stop_requested_ && stop_started == 0) {
       // Stop safely: abort whatever moves, let it decelerate, then leave.
       homing::Commands abort{};

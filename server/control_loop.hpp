@@ -43,10 +43,15 @@ struct Snapshot {
 
 // Loop timing figures (benchmarks read them).
 struct LoopStats {
+  static constexpr std::size_t kBuckets = 4096;  // lateness histogram, 1 µs per bucket, last = beyond
+  std::array<std::uint64_t, kBuckets> lateness_us_histogram{};
   std::uint64_t periods = 0;
   std::uint64_t late_periods = 0;  // started more than one period after their deadline
   double max_lateness_us = 0;
   double engine_us_total = 0;
+  std::uint64_t engine_steps = 0;
+  // Lateness (µs) below which a fraction q of the periods started.
+  double lateness_percentile_us(double q) const;
 };
 
 class ControlLoop {
@@ -127,8 +132,11 @@ class ControlLoop {
 
   mutable std::mutex snapshot_mutex_;
   Snapshot snapshot_{};
-  LoopStats stats_{};
+  LoopStats stats_{};       // published copy (under snapshot_mutex_)
+  LoopStats loop_stats_{};  // the loop's own
+  std::uint64_t stats_publish_tick_ = 0;
   double engine_us_ = 0;
+  std::uint64_t engine_steps_ = 0;
 
   std::atomic<bool> running_{false};
   std::atomic<bool> stop_requested_{false};

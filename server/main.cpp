@@ -87,13 +87,15 @@ int main(int argc, char** argv) {
     machine = std::move(sim_io);
   }
   server::ControlLoop loop(from_raw.settings, std::move(machine), sim, opt.period_us, opt.time_scale);
-  if (report.settings_lost) loop.raise_settings_lost();
+  if (store->settings_lost()) loop.raise_settings_lost();
 
   server::ServiceConfig service_config;
   service_config.unit_id = static_cast<std::uint8_t>(opt.unit_id);
   service_config.sim_unit_id = static_cast<std::uint8_t>(opt.sim_unit_id);
   if (!sim) service_config.sim_unit_id = std::nullopt;  // no simulator behind real GPIO
   service_config.word_order = opt.word_order;
+  for (const auto& entry : opt.write_allow) service_config.write_allow.push_back(*server::parse_cidr(entry));
+  service_config.unlock_code = static_cast<std::uint16_t>(opt.unlock_code);
   server::ModbusService service(service_config, loop, &*store, from_raw.settings);
 
   std::unique_ptr<server::TcpServer> tcp;
@@ -109,7 +111,9 @@ int main(int argc, char** argv) {
   }
 
   loop.start();
-  server::Monitor monitor(loop, service, &*store, service.store_mutex());
+  server::Monitor monitor(loop, service, &*store, service.store_mutex(), [&tcp]() -> std::uint32_t {
+    return tcp ? static_cast<std::uint32_t>(tcp->active_clients()) : 0;
+  });
   monitor.start();
   std::thread tcp_thread, rtu_thread;
   if (tcp) tcp_thread = std::thread([&] { tcp->run(); });
@@ -131,9 +135,9 @@ int main(int argc, char** argv) {
   if (rtu) rtu->stop();
   if (tcp_thread.joinable()) tcp_thread.join();
   if (rtu_thread.joinable()) rtu_thread.join();
-  tcp.reset();
   loop.stop();
   monitor.stop();
+  tcp.reset();
   {
     std::lock_guard lock(service.store_mutex());
     store->close();

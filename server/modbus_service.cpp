@@ -37,6 +37,7 @@ std::string_view command_name(registers::Command c) {
     case Command::jog_minus: return "jog_minus";
     case Command::move: return "move";
     case Command::homing_permit: return "homing_permit";
+    case Command::lock_settings: return "lock_settings";
   }
   return "?";
 }
@@ -55,7 +56,16 @@ std::string describe_changes(const std::vector<registers::Change>& changes) {
 
 ModbusService::ModbusService(ServiceConfig config, ControlLoop& loop, persistence::SettingsStore* store,
                              const homing::Settings& settings)
-    : config_(config), loop_(loop), store_(store), settings_(settings) {}
+    : config_(config), loop_(loop), store_(store), settings_(settings), locked_(config.unlock_code != 0) {
+  extras_.settings_locked = locked_;
+}
+
+// RTU clients stand at the cabinet's serial line: the allow-list is for the network.
+bool ModbusService::may_write(const ClientInfo& client) const {
+  if (client.transport != "tcp" || config_.write_allow.empty()) return true;
+  return std::any_of(config_.write_allow.begin(), config_.write_allow.end(),
+                     [&](const Cidr& c) { return c.contains(client.address); });
+}
 
 homing::Settings ModbusService::settings() const {
   std::lock_guard lock(mutex_);
@@ -64,7 +74,9 @@ homing::Settings ModbusService::settings() const {
 
 void ModbusService::set_extras(const registers::StatusExtras& extras) {
   std::lock_guard lock(mutex_);
+  const bool locked = extras_.settings_locked;
   extras_ = extras;
+  extras_.settings_locked = locked;  // owned here, not by the monitor
 }
 
 void ModbusService::disconnected(const ClientInfo& client) {
@@ -247,6 +259,11 @@ Reply ModbusService::read_bits(Target target, std::uint8_t fc, Table table, std:
 
 std::optional<Reply> ModbusService::write(Target target, std::uint8_t fc, Table table, std::uint16_t start,
                                           std::span<const std::uint16_t> values, const ClientInfo& client) {
+  if (!may_write(client)) {
+    spdlog::warn("{} {}: write refused, the address is not in --write-allow (exception 01)", client.transport,
+                 client.address);
+    return fail(fc, ExceptionCode::illegal_function);
+  }
   if (target == Target::module) return write_module(fc, table, start, values, client);
   return write_sim(fc, table, start, values, client);
 }
@@ -258,7 +275,24 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
     std::lock_guard lock(mutex_);
     auto accepted = registers::validate_write(table, start, values, config_.word_order, settings_, host_);
     if (!accepted) return refusal_reply(fc, accepted.error(), client);
+    if (accepted->host.unlock_code != 0) {
+      const bool right = config_.unlock_code != 0 && accepted->host.unlock_code == config_.unlock_code;
+      accepted->host.unlock_code = 0;
+      if (!right) {
+        spdlog::warn("{} {}: wrong unlock code written to security.unlock (exception 03); settings stay locked",
+                     client.transport, client.address);
+        return fail(fc, ExceptionCode::illegal_data_value);
+      }
+      if (locked_) spdlog::info("settings unlocked by {} {}", client.transport, client.address);
+      locked_ = false;
+      extras_.settings_locked = false;
+    }
     if (accepted->changes_persisted()) {
+      if (locked_) {
+        spdlog::warn("{} {}: settings write refused, settings are locked (exception 04): {}", client.transport,
+                     client.address, describe_changes(accepted->changes));
+        return fail(fc, ExceptionCode::server_device_failure);
+      }
       if (loop_.snapshot().status.homing) {
         spdlog::warn("{} {}: settings write refused while a homing cycle runs (exception 06): {}",
                      client.transport, client.address, describe_changes(accepted->changes));
@@ -317,6 +351,12 @@ void ModbusService::run_commands(const std::vector<registers::CommandRequest>& c
         break;
       }
       case Command::homing_permit: loop_.set_permit_coil(r.on); break;
+      case Command::lock_settings: {
+        std::lock_guard lock(mutex_);
+        locked_ = config_.unlock_code != 0;
+        extras_.settings_locked = locked_;
+        break;
+      }
     }
     const bool held = r.command == Command::jog_plus || r.command == Command::jog_minus ||
                       r.command == Command::homing_permit;

@@ -8,6 +8,7 @@
 #include <span>
 
 #include "control_loop.hpp"
+#include "options.hpp"
 #include "persistence/settings_store.hpp"
 #include "registers/codec.hpp"
 #include "registers/validate.hpp"
@@ -19,6 +20,8 @@ struct ServiceConfig {
   std::uint8_t unit_id = 1;
   std::optional<std::uint8_t> sim_unit_id = 247;  // absent with real hardware
   registers::WordOrder word_order = registers::WordOrder::high_first;
+  std::vector<Cidr> write_allow;  // empty: every TCP client may write
+  std::uint16_t unlock_code = 0;  // 0: settings are never locked
 };
 
 class ModbusService final : public RequestHandler {
@@ -57,7 +60,9 @@ class ModbusService final : public RequestHandler {
   ControlLoop& loop_;
   persistence::SettingsStore* store_;
   mutable std::mutex mutex_;  // settings_, host_, extras_ and the store
+  bool may_write(const ClientInfo& client) const;
   homing::Settings settings_;
+  bool locked_ = false;
   registers::HostRegisters host_{};
   registers::StatusExtras extras_{};
 };

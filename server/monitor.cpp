@@ -3,6 +3,9 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cstdlib>
+#include <fstream>
+#include <string>
 
 namespace server {
 
@@ -12,8 +15,45 @@ std::int64_t unix_ms() {
 }
 
 Monitor::Monitor(ControlLoop& loop, ModbusService& service, persistence::SettingsStore* store,
-                 std::mutex& store_mutex)
-    : loop_(loop), service_(service), store_(store), store_mutex_(store_mutex) {}
+                 std::mutex& store_mutex, std::function<std::uint32_t()> tcp_clients)
+    : loop_(loop), service_(service), store_(store), store_mutex_(store_mutex), tcp_clients_(std::move(tcp_clients)) {}
+
+namespace {
+
+std::uint64_t resident_kb() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmRSS:", 0) == 0) return std::strtoull(line.c_str() + 6, nullptr, 10);
+  return 0;
+}
+
+}  // namespace
+
+void Monitor::refresh_diagnostics() {
+  const LoopStats s = loop_.stats();
+  extras_.loop_periods = s.periods;
+  extras_.late_p50_us = s.lateness_percentile_us(0.50);
+  extras_.late_p99_us = s.lateness_percentile_us(0.99);
+  extras_.late_p999_us = s.lateness_percentile_us(0.999);
+  extras_.late_max_us = s.max_lateness_us;
+  extras_.engine_step_ns = s.engine_steps ? s.engine_us_total * 1000.0 / static_cast<double>(s.engine_steps) : 0;
+  extras_.rss_kb = resident_kb();
+  extras_.tcp_clients = tcp_clients_ ? tcp_clients_() : 0;
+}
+
+// Twice a second: diagnostics for the input registers, and the settings
+// backup that the store keeps after a batch of changes.
+void Monitor::housekeeping(std::int64_t now_ms) {
+  if (now_ms - last_housekeeping_ms_ < 500) return;
+  last_housekeeping_ms_ = now_ms;
+  refresh_diagnostics();
+  service_.set_extras(extras_);
+  if (store_) {
+    std::lock_guard lock(store_mutex_);
+    if (auto r = store_->backup_if_due(); !r) spdlog::warn("settings backup not written: {}", r.error().message);
+  }
+}
 
 Monitor::~Monitor() { stop(); }
 
@@ -34,7 +74,7 @@ void Monitor::stop() {
 
 void Monitor::refresh_summary() {
   if (!store_) return;
-  registers::StatusExtras extras;
+  registers::StatusExtras& extras = extras_;
   {
     std::lock_guard lock(store_mutex_);
     for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
@@ -44,10 +84,11 @@ void Monitor::refresh_summary() {
       }
     }
   }
-  service_.set_extras(extras);
+  service_.set_extras(extras_);
 }
 
 void Monitor::poll(std::int64_t now_ms) {
+  housekeeping(now_ms);
   const Snapshot snap = loop_.snapshot();
   const homing::Status& st = snap.status;
   if (first_) {

@@ -4,6 +4,7 @@
 // the home-correction summary that the input registers show.
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <thread>
 
 #include "control_loop.hpp"
@@ -14,7 +15,8 @@ namespace server {
 
 class Monitor {
  public:
-  Monitor(ControlLoop& loop, ModbusService& service, persistence::SettingsStore* store, std::mutex& store_mutex);
+  Monitor(ControlLoop& loop, ModbusService& service, persistence::SettingsStore* store, std::mutex& store_mutex,
+          std::function<std::uint32_t()> tcp_clients = {});
   ~Monitor();
   void start();
   void stop();
@@ -23,11 +25,16 @@ class Monitor {
 
  private:
   void refresh_summary();
+  void refresh_diagnostics();
+  void housekeeping(std::int64_t now_ms);
 
   ControlLoop& loop_;
   ModbusService& service_;
   persistence::SettingsStore* store_;
   std::mutex& store_mutex_;
+  std::function<std::uint32_t()> tcp_clients_;
+  registers::StatusExtras extras_{};
+  std::int64_t last_housekeeping_ms_ = 0;
   homing::Status last_{};
   bool first_ = true;
   std::int64_t run_start_ms_ = 0;

@@ -1,5 +1,7 @@
 #include "options.hpp"
 
+#include <arpa/inet.h>
+
 #include <CLI/CLI.hpp>
 #include <set>
 #include <sstream>
@@ -57,6 +59,33 @@ std::expected<void, std::string> check_config_file(const std::string& path, cons
 
 }  // namespace
 
+std::optional<Cidr> parse_cidr(const std::string& text) {
+  const auto slash = text.find('/');
+  const std::string ip = text.substr(0, slash);
+  in_addr addr{};
+  if (inet_pton(AF_INET, ip.c_str(), &addr) != 1) return std::nullopt;
+  int bits = 32;
+  if (slash != std::string::npos) {
+    try {
+      std::size_t used = 0;
+      bits = std::stoi(text.substr(slash + 1), &used);
+      if (used != text.size() - slash - 1) return std::nullopt;
+    } catch (const std::exception&) {
+      return std::nullopt;
+    }
+    if (bits < 0 || bits > 32) return std::nullopt;
+  }
+  const std::uint32_t mask = bits == 0 ? 0 : ~std::uint32_t{0} << (32 - bits);
+  return Cidr{ntohl(addr.s_addr) & mask, mask};
+}
+
+bool Cidr::contains(const std::string& address) const {
+  const std::string ip = address.substr(0, address.rfind(':'));
+  in_addr addr{};
+  if (inet_pton(AF_INET, ip.c_str(), &addr) != 1) return false;
+  return (ntohl(addr.s_addr) & mask) == network;
+}
+
 std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv) {
   ParseOutcome out;
   Options& o = out.options;
@@ -101,6 +130,13 @@ std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv) {
   app.add_option("--log-level", o.log_level, "Log level")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
       ->capture_default_str();
+  app.add_option("--write-allow", o.write_allow,
+                 "TCP client addresses allowed to write (IPv4 address or CIDR, comma separated); others may "
+                 "only read. Default: every client")
+      ->delimiter(',');
+  app.add_option("--unlock-code", o.unlock_code,
+                 "Lock settings writes until this code (1..65535) is written to security.unlock")
+      ->check(CLI::Range(1, 65535));
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -126,6 +162,8 @@ std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv) {
   }
   o.parity = parity.empty() ? 'E' : parity[0];
   o.word_order = word_order == "low-first" ? registers::WordOrder::low_first : registers::WordOrder::high_first;
+  for (const auto& entry : o.write_allow)
+    if (!parse_cidr(entry)) return std::unexpected("--write-allow: '" + entry + "' is not an IPv4 address or CIDR (e.g. 10.0.0.0/24)");
   if (!o.tcp_enabled && o.rtu_device.empty())
     return std::unexpected("--no-tcp needs --rtu DEVICE: with neither, nothing would be served");
   if (o.sim_unit_id == o.unit_id && o.backend == "sim")

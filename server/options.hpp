@@ -3,7 +3,9 @@
 // the command line winning. Fixed by the spec so any tool can start it.
 #include <cstdint>
 #include <expected>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "registers/codec.hpp"
 
@@ -28,7 +30,19 @@ struct Options {
   double time_scale = 1.0;
   std::string log_level = "info";
   std::string config_path;
+  // Access: TCP clients allowed to write (empty = all); others may only read.
+  std::vector<std::string> write_allow;  // "192.168.1.10", "10.0.0.0/24"
+  int unlock_code = 0;                   // 0 = no settings lock
 };
+
+// An IPv4 network for --write-allow.
+struct Cidr {
+  std::uint32_t network = 0;  // host byte order
+  std::uint32_t mask = 0;
+  // address: "a.b.c.d" or "a.b.c.d:port"
+  bool contains(const std::string& address) const;
+};
+std::optional<Cidr> parse_cidr(const std::string& text);
 
 struct ParseOutcome {
   Options options;
