@@ -65,6 +65,9 @@ struct GlobalSettings {
   bool alarm_clears_homed = true;
   std::uint32_t watchdog_ms = 0;
   bool permit_required = false;
+  // Not used by the engine: the runtime bounds the audit log and the homing
+  // history with it (oldest rows pruned).
+  std::uint32_t history_max_rows = 10000;
 };
 
 struct Settings {

@@ -147,6 +147,7 @@ std::int64_t setting_raw(const Settings& settings, const Register& reg) {
     case Key::global_alarm_clears_homed: return g.alarm_clears_homed ? 1 : 0;
     case Key::global_watchdog_ms: return g.watchdog_ms;
     case Key::global_permit_required: return g.permit_required ? 1 : 0;
+    case Key::global_history_max_rows: return g.history_max_rows;
     default: unbound(reg, "settings");
   }
 }
@@ -180,6 +181,7 @@ void set_setting_raw(Settings& settings, const Register& reg, std::int64_t raw) 
     case Key::global_alarm_clears_homed: g.alarm_clears_homed = raw != 0; return;
     case Key::global_watchdog_ms: g.watchdog_ms = static_cast<std::uint32_t>(raw); return;
     case Key::global_permit_required: g.permit_required = raw != 0; return;
+    case Key::global_history_max_rows: g.history_max_rows = static_cast<std::uint32_t>(raw); return;
     default: unbound(reg, "settings");
   }
 }

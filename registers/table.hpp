@@ -53,7 +53,7 @@ enum class Key : std::uint8_t {
   axis_shared_limit, axis_jog_feedrate,
   // holding, module: global settings and host values
   sequence_step, global_allowed_without_homing, global_alarm_clears_homed, global_watchdog_ms,
-  global_permit_required, host_heartbeat, host_target,
+  global_permit_required, global_history_max_rows, host_heartbeat, host_target,
   // input registers, module
   status_map_version, status_state, status_sequence_step, status_homing_cycles, status_heartbeat,
   status_last_command_result, status_interlocks, status_global_alarm, status_alarm_axis,

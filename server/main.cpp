@@ -80,6 +80,8 @@ int main(int argc, char** argv) {
   for (const auto& m : report.messages) spdlog::info("settings: {}", m);
   auto from_raw = registers::settings_from_raw(store->load());
   for (const auto& r : from_raw.rejected) spdlog::warn("settings: {}", r);
+  const auto rows = from_raw.settings.global.history_max_rows;
+  if (auto r = store->set_limits(rows, rows); !r) spdlog::warn("settings: history limit not applied: {}", r.error().message);
 
   if (!machine) {
     auto sim_io = std::make_unique<server::SimulatorIo>(registers::default_sim_config());

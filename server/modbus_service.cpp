@@ -309,8 +309,14 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
           return fail(fc, ExceptionCode::server_device_failure);
         }
       }
+      const bool new_limit = accepted->settings.global.history_max_rows != settings_.global.history_max_rows;
       settings_ = accepted->settings;
       loop_.set_settings(settings_);
+      if (new_limit && store_) {
+        const auto rows = settings_.global.history_max_rows;
+        if (auto r = store_->set_limits(rows, rows); !r)
+          spdlog::warn("history limit not applied: {}", r.error().message);
+      }
       spdlog::info("settings changed by {} {}: {}", client.transport, client.address,
                    describe_changes(accepted->changes));
     }

@@ -34,7 +34,8 @@ TEST_CASE("product defaults: X Y Z home on a switch, A B C disabled, Z first the
 
 TEST_CASE("persisted defaults hold every persisted register and no runtime value") {
   const auto rows = persisted_defaults();
-  CHECK(rows.size() == 11 - 1 + 27 * homing::kAxisCount);  // globals less host.heartbeat, 27 settings per axis
+  // 6 sequence steps + 5 global settings, 27 settings per axis
+  CHECK(rows.size() == 6 + 5 + 27 * homing::kAxisCount);
   for (const auto& [name, raw] : rows) {
     const Register* r = find_register(name);
     REQUIRE(r);
