@@ -6,6 +6,7 @@
 #include <bitset>
 
 #include "homing/settings_check.hpp"
+#include "registers/defaults.hpp"
 #include "registers/lookup.hpp"
 
 namespace registers {
@@ -124,6 +125,24 @@ std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t 
           fmt::format("{}; nothing was written", homing::describe_fault(*fault, result.settings))});
   }
   return result;
+}
+
+std::optional<Refusal> validate_settings_map(const std::map<std::string, std::int64_t>& values) {
+  for (const auto& [name, raw] : values) {
+    const Register* reg = find_register(name);
+    if (!reg || !reg->persisted)
+      return Refusal{ExceptionCode::illegal_data_address, fmt::format("{} is not a setting of this module", name)};
+    if (raw < reg->min || raw > reg->max)
+      return Refusal{ExceptionCode::illegal_data_value,
+                     fmt::format("{} = {} is outside its range {}", name, format_value(*reg, raw), range_text(*reg))};
+  }
+  const SettingsFromRaw decoded = settings_from_raw(values);
+  for (std::size_t axis = 0; axis < homing::kAxisCount; ++axis) {
+    if (decoded.settings.axes[axis].mode == homing::HomingMode::disabled) continue;
+    if (const auto fault = homing::check_axis(decoded.settings, axis))
+      return Refusal{ExceptionCode::illegal_data_value, homing::describe_fault(*fault, decoded.settings)};
+  }
+  return std::nullopt;
 }
 
 }  // namespace registers

@@ -4,6 +4,9 @@
 // configuration check), and the caller applies the copy only when accepted.
 #include <cstdint>
 #include <expected>
+#include <map>
+#include <optional>
+#include <string>
 #include <span>
 #include <vector>
 
@@ -54,5 +57,11 @@ std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t 
                                                      std::span<const std::uint16_t> values, WordOrder order,
                                                      const homing::Settings& settings,
                                                      const HostRegisters& host);
+
+// A whole set of settings by register name (an imported file, merged with the
+// current settings): every name must be a persisted register, every value in
+// its range, and every axis that homes must pass the engine's check, exactly
+// as a Modbus write would. Returns the refusal naming the register, or nothing.
+std::optional<Refusal> validate_settings_map(const std::map<std::string, std::int64_t>& settings);
 
 }  // namespace registers

@@ -18,6 +18,7 @@
 #include "persistence/settings_store.hpp"
 #include "registers/defaults.hpp"
 #include "registers/sim_bindings.hpp"
+#include "registers/validate.hpp"
 #include "rtu_server.hpp"
 #include "simulator_io.hpp"
 #include "tcp_server.hpp"
@@ -77,7 +78,24 @@ int main(int argc, char** argv) {
   persistence::OpenReport report;
   auto store = persistence::SettingsStore::open(opt.db_path, defaults, report);
   if (!store) return fail_start("--db " + opt.db_path + ": " + store.error().message);
-  for (const auto& m : report.messages) spdlog::info("settings: {}", m);
+  if (!opt.export_settings.empty()) {
+    if (auto r = store->export_file(opt.export_settings); !r) return fail_start("--export-settings: " + r.error().message);
+    std::printf("homingd: settings of %s written to %s\n", opt.db_path.c_str(), opt.export_settings.c_str());
+    return 0;
+  }
+  if (!opt.import_settings.empty()) {
+    auto validate = [](const std::map<std::string, std::int64_t>& all) -> std::optional<persistence::Rejection> {
+      if (auto refusal = registers::validate_settings_map(all)) return persistence::Rejection{"", refusal->message};
+      return std::nullopt;
+    };
+    auto r = store->import_file(opt.import_settings, validate);
+    if (!r) return fail_start("--import-settings " + opt.import_settings + ": " + r.error().message + "; nothing changed");
+    std::printf("homingd: %zu settings changed from %s\n", r->changes.size(), opt.import_settings.c_str());
+    for (const auto& c : r->changes)
+      std::printf("  %s: %lld -> %lld\n", c.name.c_str(), static_cast<long long>(c.old_value),
+                  static_cast<long long>(c.new_value));
+    return 0;
+  }
   auto from_raw = registers::settings_from_raw(store->load());
   for (const auto& r : from_raw.rejected) spdlog::warn("settings: {}", r);
   const auto rows = from_raw.settings.global.history_max_rows;

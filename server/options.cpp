@@ -137,6 +137,11 @@ std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv) {
   app.add_option("--unlock-code", o.unlock_code,
                  "Lock settings writes until this code (1..65535) is written to security.unlock")
       ->check(CLI::Range(1, 65535));
+  app.add_option("--export-settings", o.export_settings,
+                 "Write every setting of --db to this TOML file and exit (no server)");
+  app.add_option("--import-settings", o.import_settings,
+                 "Validate this TOML file like Modbus writes, apply it to --db in one transaction and exit")
+      ->check(CLI::ExistingFile);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

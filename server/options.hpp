@@ -33,6 +33,9 @@ struct Options {
   // Access: TCP clients allowed to write (empty = all); others may only read.
   std::vector<std::string> write_allow;  // "192.168.1.10", "10.0.0.0/24"
   int unlock_code = 0;                   // 0 = no settings lock
+  // Offline settings transfer: act on --db and exit without serving.
+  std::string export_settings;
+  std::string import_settings;
 };
 
 // An IPv4 network for --write-allow.

@@ -1,0 +1,121 @@
+// Settings files (offline export/import on the daemon's database), the
+// write allow-list and the settings lock, against the real homingd.
+#include <catch2/catch.hpp>
+
+#include <fstream>
+#include <regex>
+
+#include "daemon.hpp"
+
+using namespace e2e;
+
+namespace {
+
+std::string replace_line(const std::string& text, const std::string& key, const std::string& value) {
+  return std::regex_replace(text, std::regex("\"" + key + "\" = -?[0-9]+"), "\"" + key + "\" = " + value);
+}
+
+}  // namespace
+
+TEST_CASE("settings exported from one module's database import onto another and survive its start") {
+  TempDir dir;
+  const std::string a = dir.file("a.db"), b = dir.file("b.db"), file = dir.file("machine.toml");
+  {
+    Daemon d({.db = a});
+    Client c = Client::tcp(d.port());
+    c.set("axis.x.pull_off", um(2.5));
+    c.set("axis.y.seek_feedrate", 1500);
+    REQUIRE(d.stop() == 0);
+  }
+  const RunResult exported = run_program({homingd_path(), "--db", a, "--export-settings", file}, 20s);
+  REQUIRE(exported.code() == 0);
+  const std::string text = read_file(file);
+  CHECK(text.find("\"axis.x.pull_off\" = 2500") != std::string::npos);
+
+  const RunResult imported = run_program({homingd_path(), "--db", b, "--import-settings", file}, 20s);
+  REQUIRE(imported.code() == 0);
+  CHECK(imported.out.find("axis.x.pull_off") != std::string::npos);
+  Daemon d({.db = b});
+  Client c = Client::tcp(d.port());
+  CHECK(c.read("axis.x.pull_off") == um(2.5));
+  CHECK(c.read("axis.y.seek_feedrate") == 1500);
+}
+
+TEST_CASE("an imported file that a Modbus write would refuse changes nothing and names the setting") {
+  TempDir dir;
+  const std::string db = dir.file("m.db"), file = dir.file("bad.toml");
+  REQUIRE(run_program({homingd_path(), "--db", db, "--export-settings", file}, 20s).code() == 0);
+  const std::string good = read_file(file);
+  {
+    std::ofstream(file) << replace_line(replace_line(good, "axis.x.pull_off", "3000"), "axis.x.seek_feedrate",
+                                        "60000");
+  }
+  const RunResult r = run_program({homingd_path(), "--db", db, "--import-settings", file}, 20s);
+  CHECK(r.code() == 1);
+  CHECK(r.err.find("max_stop_distance") != std::string::npos);
+  CHECK(r.err.find("nothing changed") != std::string::npos);
+  Daemon d({.db = db});
+  Client c = Client::tcp(d.port());
+  CHECK(c.read("axis.x.pull_off") == um(1.0));  // the valid line of the bad file was not applied either
+  CHECK(c.read("axis.x.seek_feedrate") == 1000);
+}
+
+TEST_CASE("a client outside --write-allow may read but every write is refused with exception 01") {
+  Daemon d({.extra = {"--write-allow", "10.1.2.0/24"}});
+  Client c = Client::tcp(d.port());
+  CHECK(c.read("axis.x.seek_feedrate") == 1000);
+  CHECK(c.write("axis.x.seek_feedrate", 1200) == 1);
+  CHECK(c.write("cmd.home_all", 1) == 1);
+  CHECK(c.read("axis.x.seek_feedrate") == 1000);
+  CHECK(c.read("status.homing") == 0);
+}
+
+TEST_CASE("a client inside --write-allow writes as usual") {
+  Daemon d({.extra = {"--write-allow", "10.1.2.0/24,127.0.0.0/8"}});
+  Client c = Client::tcp(d.port());
+  CHECK(c.write("axis.x.seek_feedrate", 1200) == 0);
+  CHECK(c.read("axis.x.seek_feedrate") == 1200);
+}
+
+TEST_CASE("locked settings refuse writes with exception 04 until the unlock code is written") {
+  Daemon d({.extra = {"--unlock-code", "4321"}});
+  Client c = Client::tcp(d.port());
+  CHECK(c.read("status.settings_locked") == 1);
+  CHECK(c.write("axis.x.seek_feedrate", 1200) == 4);
+  CHECK(c.read("axis.x.seek_feedrate") == 1000);
+  // Commands and host values are not settings: they still work while locked.
+  CHECK(c.write("host.heartbeat", 7) == 0);
+
+  CHECK(c.write("security.unlock", 1111) == 3);  // wrong code
+  CHECK(c.read("status.settings_locked") == 1);
+  CHECK(c.write("security.unlock", 4321) == 0);
+  CHECK(c.read("status.settings_locked") == 0);
+  CHECK(c.read("security.unlock") == 0);  // the code is never read back
+  CHECK(c.write("axis.x.seek_feedrate", 1200) == 0);
+  CHECK(c.read("axis.x.seek_feedrate") == 1200);
+
+  CHECK(c.write("cmd.lock_settings", 1) == 0);
+  CHECK(c.read("status.settings_locked") == 1);
+  CHECK(c.write("axis.x.seek_feedrate", 1300) == 4);
+  CHECK(c.read("axis.x.seek_feedrate") == 1200);
+}
+
+TEST_CASE("without an unlock code the settings are never locked") {
+  Daemon d;
+  Client c = Client::tcp(d.port());
+  CHECK(c.read("status.settings_locked") == 0);
+  CHECK(c.write("cmd.lock_settings", 1) == 0);
+  CHECK(c.read("status.settings_locked") == 0);
+  CHECK(c.write("axis.x.seek_feedrate", 1200) == 0);
+}
+
+TEST_CASE("diagnostics show the control loop running and the daemon's memory") {
+  Daemon d;
+  Client c = Client::tcp(d.port());
+  std::this_thread::sleep_for(1200ms);
+  CHECK(c.read("diag.loop_periods") > 100);
+  CHECK(c.read("diag.rss_kb") > 1000);
+  CHECK(c.read("diag.engine_step_ns") > 0);
+  CHECK(c.read("diag.tcp_clients") == 1);
+  CHECK(c.read("diag.loop_late_max_us") >= c.read("diag.loop_late_p50_us"));
+}
