@@ -1,0 +1,289 @@
+#include "actions.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <thread>
+
+#include "settings_io.hpp"
+#include "status_view.hpp"
+#include "values.hpp"
+
+namespace homingctl {
+
+using Clock = std::chrono::steady_clock;
+using homing::CommandResult;
+
+int axis_index(std::string_view letter) {
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+    if (letter.size() == 1 && std::tolower(static_cast<unsigned char>(letter[0])) == homing::kAxisLetters[a][0])
+      return static_cast<int>(a);
+  return -1;
+}
+
+std::string command_result_text(int r) {
+  switch (static_cast<CommandResult>(r)) {
+    case CommandResult::none: return "no command result yet";
+    case CommandResult::accepted: return "accepted";
+    case CommandResult::already_running: return "the same command is still running (not restarted)";
+    case CommandResult::refused_alarm: return "an alarm is latched: run `homingctl reset` first";
+    case CommandResult::refused_estop: return "the emergency stop is pressed: release it, then reset";
+    case CommandResult::refused_drive_fault: return "a drive reports a fault: check the drive, then reset";
+    case CommandResult::refused_busy: return "another homing cycle or motion is running (`homingctl abort` stops it)";
+    case CommandResult::refused_not_homed:
+      return "not allowed before the machine is homed (global.allowed_without_homing): home first";
+    case CommandResult::refused_no_permit: return "global.permit_required is on and the homing permit is off";
+    case CommandResult::refused_soft_limit: return "the target is outside the axis's soft limits";
+    case CommandResult::refused_slave_axis: return "this axis is a gantry slave: command its master";
+    case CommandResult::refused_cause_present:
+      return "the cause of the alarm is still present (e-stop, drive fault or watchdog): remove it first";
+    case CommandResult::refused_invalid: return "the command makes no sense here (axis disabled or bad target)";
+    case CommandResult::refused_communication_lost:
+      return "the watchdog expired: host.heartbeat stopped changing; reset first";
+    case CommandResult::refused_settings_fault: return "the configuration check refused the cycle";
+  }
+  return fmt::format("result {}", r);
+}
+
+namespace {
+
+struct Session {
+  Connection& c;
+  const ActionOptions& o;
+  homing::Settings settings;
+  std::uint16_t hb = 0;
+
+  Session(Connection& conn, const ActionOptions& opts) : c(conn), o(opts), settings(read_settings(conn)) {
+    hb = static_cast<std::uint16_t>(c.read("status.heartbeat"));
+  }
+
+  void beat() {
+    if (settings.global.watchdog_ms == 0) return;
+    (void)c.write("host.heartbeat", ++hb);
+  }
+
+  // Waits until the control loop has run at least two periods (so it took the command).
+  void let_loop_take(std::uint16_t h0) {
+    const auto deadline = Clock::now() + std::chrono::seconds(1);
+    while (Clock::now() < deadline) {
+      const auto h = static_cast<std::uint16_t>(c.read("status.heartbeat"));
+      if (static_cast<std::uint16_t>(h - h0) >= 2) return;
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+  }
+
+  // Writes 1 to a command coil; the command result after the loop took it.
+  std::expected<CommandResult, std::string> pulse(const std::string& coil, bool value = true) {
+    beat();
+    const auto h0 = static_cast<std::uint16_t>(c.read("status.heartbeat"));
+    if (const int ex = c.write(coil, value ? 1 : 0))
+      return std::unexpected(fmt::format("writing {} refused: {}", coil, exception_sentence(ex)));
+    let_loop_take(h0);
+    return static_cast<CommandResult>(c.read("status.last_command_result"));
+  }
+
+  // Polls until `done(status)` or the timeout; keeps the heartbeat alive.
+  std::expected<StatusView, std::string> wait_for(const std::function<bool(const StatusView&)>& done) {
+    const auto deadline = Clock::now() + std::chrono::duration<double>(o.timeout_s);
+    for (;;) {
+      beat();
+      StatusView s = read_status(c, settings);
+      if (done(s)) return s;
+      if (Clock::now() >= deadline)
+        return std::unexpected(fmt::format("still {} after {:g} s: gave up waiting (the machine keeps going; "
+                                           "`homingctl abort` stops it)",
+                                           homing::state_name(s.state), o.timeout_s));
+      std::this_thread::sleep_for(std::chrono::duration<double>(o.poll_s));
+    }
+  }
+
+  std::vector<std::string> alarms(const StatusView& s) const {
+    std::vector<std::string> out;
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+      if (s.axes[a].alarm != homing::AlarmCode::none) out.push_back(alarm_text(a, s.axes[a], settings));
+    if (s.global_alarm != homing::AlarmCode::none) out.push_back(global_alarm_text(s.global_alarm, settings));
+    return out;
+  }
+
+  ActionResult refused(const std::string& what, CommandResult r, const StatusView* s = nullptr) {
+    ActionResult res;
+    res.exit_code = 1;
+    res.message = fmt::format("{} refused: {}", what, command_result_text(static_cast<int>(r)));
+    StatusView st = s ? *s : read_status(c, settings);
+    if (st.interlocks) res.message += fmt::format(" (blocking motion: {})", interlocks_text(st.interlocks));
+    for (const auto& a : alarms(st)) res.message += "\n  " + a;
+    res.json = {{"command", what}, {"ok", false}, {"result", std::string(homing::command_result_name(r))},
+                {"message", res.message}};
+    return res;
+  }
+
+  ActionResult finished(const std::string& what, const StatusView& s, bool alarm_is_failure = true) {
+    ActionResult res;
+    const auto al = alarms(s);
+    res.json = {{"command", what}, {"state", std::string(homing::state_name(s.state))}};
+    std::string pos;
+    nlohmann::json positions = nlohmann::json::object();
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+      if (settings.axes[a].mode == homing::HomingMode::disabled) continue;
+      pos += fmt::format("{}{} {:.3f}{}", pos.empty() ? "" : ", ", homing::kAxisUpper[a], s.axes[a].position,
+                         s.axes[a].homed ? "" : " (not homed)");
+      positions[std::string(homing::kAxisLetters[a])] = s.axes[a].position;
+    }
+    res.json["positions"] = positions;
+    res.json["alarms"] = al;
+    if (!al.empty() && alarm_is_failure) {
+      res.exit_code = 1;
+      res.message = fmt::format("{} failed: {}", what, fmt::join(al, "\n  "));
+      res.json["ok"] = false;
+    } else {
+      res.message = fmt::format("{}: {} ({})", what, homing::state_name(s.state), pos);
+      for (const auto& a : al) res.message += "\n  " + a;
+      res.json["ok"] = true;
+    }
+    return res;
+  }
+};
+
+bool at_rest(const StatusView& s) {
+  if (s.homing) return false;
+  for (const auto& a : s.axes)
+    if (a.busy) return false;
+  return s.state != homing::MachineState::homing && s.state != homing::MachineState::moving;
+}
+
+ActionResult failure(std::string message) {
+  ActionResult r;
+  r.exit_code = 1;
+  r.json = {{"ok", false}, {"message", message}};
+  r.message = std::move(message);
+  return r;
+}
+
+ActionResult not_waited(const std::string& what, CommandResult r) {
+  ActionResult res;
+  res.message = fmt::format("{}: {} (not waiting)", what, command_result_text(static_cast<int>(r)));
+  res.json = {{"command", what}, {"ok", true}, {"result", std::string(homing::command_result_name(r))}};
+  return res;
+}
+
+bool taken(CommandResult r) { return r == CommandResult::accepted || r == CommandResult::already_running; }
+
+}  // namespace
+
+ActionResult home(Connection& c, const std::vector<std::string>& targets, const ActionOptions& o) {
+  Session s(c, o);
+  std::vector<std::pair<std::string, std::string>> jobs;  // (what, coil)
+  bool all = targets.empty();
+  for (const auto& t : targets)
+    if (t == "all") all = true;
+  if (all) {
+    jobs.emplace_back("home all", "cmd.home_all");
+  } else {
+    for (const auto& t : targets) {
+      const int a = axis_index(t);
+      if (a < 0) throw std::invalid_argument(fmt::format("home: '{}' is not an axis (all, x, y, z, a, b, c)", t));
+      jobs.emplace_back(fmt::format("home {}", homing::kAxisUpper[static_cast<std::size_t>(a)]),
+                        fmt::format("cmd.home.{}", homing::kAxisLetters[static_cast<std::size_t>(a)]));
+    }
+  }
+  ActionResult last;
+  for (const auto& [what, coil] : jobs) {
+    auto r = s.pulse(coil);
+    if (!r) return failure(r.error());
+    if (!taken(*r)) {
+      if (*r == CommandResult::refused_settings_fault) {
+        auto st = read_status(c, s.settings);
+        return s.refused(what, *r, &st);
+      }
+      return s.refused(what, *r);
+    }
+    if (!o.wait) {
+      last = not_waited(what, *r);
+      continue;
+    }
+    auto st = s.wait_for(at_rest);
+    if (!st) return failure(st.error());
+    last = s.finished(what, *st);
+    if (last.exit_code != 0) return last;
+    if (st->state != homing::MachineState::homed && all) {
+      last.exit_code = 1;
+      last.message = fmt::format("{} ended {}", what, homing::state_name(st->state));
+      return last;
+    }
+  }
+  return last;
+}
+
+ActionResult abort_motion(Connection& c, const ActionOptions& o) {
+  Session s(c, o);
+  auto r = s.pulse("cmd.abort");
+  if (!r) return failure(r.error());
+  if (!taken(*r)) return s.refused("abort", *r);
+  if (!o.wait) return not_waited("abort", *r);
+  auto st = s.wait_for(at_rest);
+  if (!st) return failure(st.error());
+  auto res = s.finished("abort", *st, false);
+  if (st->alarm) res.message += "\n(reset with `homingctl reset` before homing again)";
+  return res;
+}
+
+ActionResult reset_alarm(Connection& c, const ActionOptions& o) {
+  Session s(c, o);
+  auto r = s.pulse("cmd.reset_alarm");
+  if (!r) return failure(r.error());
+  if (!taken(*r)) return s.refused("reset", *r);
+  StatusView st = read_status(c, s.settings);
+  if (st.state == homing::MachineState::alarm || st.alarm) {
+    auto res = s.finished("reset", st);
+    res.exit_code = 1;
+    res.message = "reset did not clear the alarm: " + res.message;
+    return res;
+  }
+  return s.finished("reset", st);
+}
+
+ActionResult jog(Connection& c, const std::string& axis, int direction, int ms, const ActionOptions& o) {
+  const int a = axis_index(axis);
+  if (a < 0) throw std::invalid_argument(fmt::format("jog: '{}' is not an axis (x, y, z, a, b, c)", axis));
+  Session s(c, o);
+  const std::string coil = fmt::format("cmd.jog_{}.{}", direction > 0 ? "plus" : "minus",
+                                       homing::kAxisLetters[static_cast<std::size_t>(a)]);
+  const std::string what = fmt::format("jog {}{}", homing::kAxisUpper[static_cast<std::size_t>(a)], direction > 0 ? "+" : "-");
+  auto r = s.pulse(coil);
+  if (!r) return failure(r.error());
+  if (!taken(*r)) {
+    (void)c.write(coil, 0);
+    return s.refused(what, *r);
+  }
+  const auto until = Clock::now() + std::chrono::milliseconds(ms);
+  while (Clock::now() < until) {
+    s.beat();
+    std::this_thread::sleep_for(std::min<Clock::duration>(until - Clock::now(), std::chrono::milliseconds(50)));
+  }
+  if (const int ex = c.write(coil, 0)) return failure(fmt::format("releasing {} refused: {}", coil, exception_sentence(ex)));
+  if (!o.wait) return not_waited(what, *r);
+  auto st = s.wait_for(at_rest);
+  if (!st) return failure(st.error());
+  return s.finished(what, *st);
+}
+
+ActionResult move(Connection& c, const std::string& axis, const std::string& target, const ActionOptions& o) {
+  const int a = axis_index(axis);
+  if (a < 0) throw std::invalid_argument(fmt::format("move: '{}' is not an axis (x, y, z, a, b, c)", axis));
+  const auto letter = homing::kAxisLetters[static_cast<std::size_t>(a)];
+  const auto& treg = register_named(fmt::format("axis.{}.target", letter));
+  auto raw = parse_value(treg, target);
+  if (!raw) throw std::invalid_argument(raw.error());
+  Session s(c, o);
+  if (const int ex = c.write(treg, *raw)) return failure(fmt::format("writing {} refused: {}", treg.name(), exception_sentence(ex)));
+  const std::string what = fmt::format("move {} to {}", homing::kAxisUpper[static_cast<std::size_t>(a)], value_text(treg, *raw));
+  auto r = s.pulse(fmt::format("cmd.move.{}", letter));
+  if (!r) return failure(r.error());
+  if (!taken(*r)) return s.refused(what, *r);
+  if (!o.wait) return not_waited(what, *r);
+  auto st = s.wait_for(at_rest);
+  if (!st) return failure(st.error());
+  return s.finished(what, *st);
+}
+
+}  // namespace homingctl

@@ -1,0 +1,38 @@
+#pragma once
+// Commands that move the machine: write the coil, see whether the module took
+// it (status.last_command_result), wait for the outcome while keeping the
+// watchdog's heartbeat alive, and say what went wrong in words.
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "connection.hpp"
+
+namespace homingctl {
+
+struct ActionOptions {
+  bool wait = true;
+  double timeout_s = 300;
+  double poll_s = 0.1;
+};
+
+struct ActionResult {
+  int exit_code = 0;     // 0 ok, 1 failed (refused, alarm)
+  std::string message;   // for people
+  nlohmann::json json;   // for --json
+};
+
+// `targets`: empty or "all" -> cmd.home_all; else axis letters, homed one after the other.
+ActionResult home(Connection& c, const std::vector<std::string>& targets, const ActionOptions& o);
+ActionResult abort_motion(Connection& c, const ActionOptions& o);
+ActionResult reset_alarm(Connection& c, const ActionOptions& o);
+// Holds the jog coil for `ms` (refreshing the heartbeat), then releases it.
+ActionResult jog(Connection& c, const std::string& axis, int direction, int ms, const ActionOptions& o);
+ActionResult move(Connection& c, const std::string& axis, const std::string& target, const ActionOptions& o);
+
+// Axis index of "x".."c" (case-insensitive) or -1.
+int axis_index(std::string_view letter);
+std::string command_result_text(int result);
+
+}  // namespace homingctl

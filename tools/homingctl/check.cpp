@@ -1,0 +1,188 @@
+#include "check.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "homing/phases.hpp"
+#include "homing/settings_check.hpp"
+
+namespace homingctl {
+
+using homing::HomingMode;
+
+namespace {
+
+// Time of a point-to-point move of `d` at most `v` with acceleration `a` (trapezoid or triangle).
+double move_time(double d, double v, double a) {
+  d = std::abs(d);
+  if (d <= 0 || v <= 0 || a <= 0) return 0;
+  if (d <= v * v / a) return 2 * std::sqrt(d / a);
+  return d / v + v / a;
+}
+
+}  // namespace
+
+bool CheckReport::ok() const {
+  return std::none_of(axes.begin(), axes.end(), [](const AxisCheck& a) { return a.fault.has_value(); });
+}
+
+CheckReport check_settings(const homing::Settings& settings,
+                           const std::array<std::optional<TriggerCam>, homing::kAxisCount>& cams) {
+  CheckReport r;
+  for (std::size_t i = 0; i < homing::kAxisCount; ++i) {
+    const homing::AxisSettings& s = settings.axes[i];
+    AxisCheck c;
+    c.axis = i;
+    c.enabled = s.mode != HomingMode::disabled;
+    c.stop_distance_mm = homing::seek_stop_distance_mm(s);
+    c.max_stop_distance_mm = s.max_stop_distance_mm;
+    const auto u = homing::axis_unit(i);
+    if (!c.enabled) {
+      r.axes.push_back(c);
+      continue;
+    }
+    if (auto f = homing::check_axis(settings, i)) c.fault = homing::describe_fault(*f, settings);
+    const double a = s.acceleration_mm_per_s2;
+    const double seek_v = s.seek_feedrate_mm_per_min / 60.0, latch_v = s.latch_feedrate_mm_per_min / 60.0;
+    const double latch_stop = a > 0 ? latch_v * latch_v / (2 * a) : 0;
+    auto phase = [&](homing::Phase p, double t) {
+      if (t > 0) c.phases.emplace_back(std::string(homing::phase_name(p)), t);
+    };
+    const bool final_move = s.mode == HomingMode::absolute_final ||
+                            (s.final_move_enable && s.mode != HomingMode::absolute);
+    if (homing::mode_uses_switch(s.mode)) {
+      if (s.pre_move_mode == homing::PreMove::always) phase(homing::Phase::pre_move, move_time(s.pre_move_distance_mm, seek_v, a));
+      c.seek_worst_s = move_time(s.max_seek_travel_mm, seek_v, a);
+      phase(homing::Phase::seek, c.seek_worst_s);
+      phase(homing::Phase::stop, a > 0 ? seek_v / a + s.debounce_ms / 1000.0 : 0);
+      if (homing::mode_is_pushing(s.mode)) phase(homing::Phase::push, move_time(s.push_distance_mm, latch_v, a));
+      phase(homing::Phase::back_off, move_time(c.stop_distance_mm + latch_stop, latch_v, a) + s.debounce_ms / 1000.0);
+      if (homing::mode_reapproaches(s.mode)) phase(homing::Phase::reapproach, move_time(2 * latch_stop + 0.1, latch_v, a));
+      if (s.mode == HomingMode::switch_index) phase(homing::Phase::index, move_time(1.1 * s.index_pitch_mm, latch_v, a));
+      phase(homing::Phase::pull_off, move_time(s.pull_off_mm + latch_stop, seek_v, a));
+    }
+    if (final_move) phase(homing::Phase::final_move, move_time(s.final_position_mm - s.home_position_mm, seek_v, a));
+    for (const auto& [name, t] : c.phases)
+      if (name != "seek") c.after_trigger_s += t;
+
+    // Warnings the engine's check does not refuse.
+    if (homing::mode_uses_switch(s.mode)) {
+      if (s.max_stop_distance_mm > 0 && c.stop_distance_mm > 0.8 * s.max_stop_distance_mm && !c.fault)
+        c.warnings.push_back(fmt::format("stop distance {:.3f} {} uses {:.0f}% of max_stop_distance {:g} {}: little margin",
+                                         c.stop_distance_mm, u, 100 * c.stop_distance_mm / s.max_stop_distance_mm,
+                                         s.max_stop_distance_mm, u));
+      if (s.latch_feedrate_mm_per_min >= s.seek_feedrate_mm_per_min)
+        c.warnings.push_back(fmt::format("latch_feedrate {:g} is not slower than seek_feedrate {:g}: the edge is "
+                                         "located no more precisely than during the seek",
+                                         s.latch_feedrate_mm_per_min, s.seek_feedrate_mm_per_min));
+      if (cams[i]) {
+        const double len = cams[i]->max_mm - cams[i]->min_mm;
+        if (len < c.stop_distance_mm)
+          c.warnings.push_back(fmt::format("the trigger (cam {:.3f} {} long) is shorter than the stop distance "
+                                           "{:.3f} {}: the sensor releases while stopping (overrun_during_stop)",
+                                           len, u, c.stop_distance_mm, u));
+      } else {
+        c.warnings.push_back(fmt::format("the trigger cam must be longer than the stop distance {:.3f} {} "
+                                         "(not known to the module: measure it)", c.stop_distance_mm, u));
+      }
+      if (s.max_backoff_mm < c.stop_distance_mm + latch_stop)
+        c.warnings.push_back(fmt::format("max_backoff {:g} {} is shorter than the stop distance plus the latch stop "
+                                         "({:.3f} {}): back-off may end before the sensor releases (not_released)",
+                                         s.max_backoff_mm, u, c.stop_distance_mm + latch_stop, u));
+      if (s.pull_off_mm == 0)
+        c.warnings.push_back("pull_off is 0: the axis rests on the sensor edge and the sensor may flicker");
+    }
+    const bool outside_home = s.home_position_mm < s.soft_limit_min_mm || s.home_position_mm > s.soft_limit_max_mm;
+    if (outside_home)
+      c.warnings.push_back(fmt::format("home_position {:g} {} is outside the soft limits [{:g}, {:g}]{}",
+                                       s.home_position_mm, u, s.soft_limit_min_mm, s.soft_limit_max_mm,
+                                       s.soft_limits_enable ? "" : " (soft limits are off now; enabling them will be refused)"));
+    if (final_move && (s.final_position_mm < s.soft_limit_min_mm || s.final_position_mm > s.soft_limit_max_mm))
+      c.warnings.push_back(fmt::format("final_position {:g} {} is outside the soft limits [{:g}, {:g}]",
+                                       s.final_position_mm, u, s.soft_limit_min_mm, s.soft_limit_max_mm));
+    if (homing::mode_uses_switch(s.mode) && s.soft_limits_enable &&
+        s.max_seek_travel_mm < s.soft_limit_max_mm - s.soft_limit_min_mm)
+      c.warnings.push_back(fmt::format("max_seek_travel {:g} {} is shorter than the soft-limit range {:g} {}: from the "
+                                       "far end the sensor may be out of reach",
+                                       s.max_seek_travel_mm, u, s.soft_limit_max_mm - s.soft_limit_min_mm, u));
+    r.axes.push_back(c);
+  }
+
+  // The sequence: steps one after the other, axes of a step together; slaves with their master.
+  homing::AxisMask in_steps = 0;
+  for (std::size_t step = 0; step < settings.global.sequence_steps.size(); ++step) {
+    const auto mask = settings.global.sequence_steps[step];
+    in_steps |= mask;
+    double worst = 0;
+    for (std::size_t i = 0; i < homing::kAxisCount; ++i) {
+      const bool member = (mask & homing::axis_bit(i)) ||
+                          (homing::master_of(settings.axes[i]) >= 0 &&
+                           (mask & homing::axis_bit(static_cast<std::size_t>(homing::master_of(settings.axes[i])))));
+      if (member && r.axes[i].enabled) worst = std::max(worst, r.axes[i].seek_worst_s + r.axes[i].after_trigger_s);
+    }
+    r.cycle_worst_s += worst;
+  }
+  for (std::size_t i = 0; i < homing::kAxisCount; ++i)
+    if (r.axes[i].enabled && !(in_steps & homing::axis_bit(i)) && homing::master_of(settings.axes[i]) < 0 &&
+        homing::mode_uses_switch(settings.axes[i].mode))
+      r.warnings.push_back(fmt::format("{} is in no sequence step: home-all assigns its home position without moving it",
+                                       homing::kAxisUpper[i]));
+  if (settings.global.watchdog_ms == 0)
+    r.warnings.push_back("global.watchdog_ms is 0: motion started over Modbus does not stop when the host goes silent");
+  return r;
+}
+
+std::string render_check(const CheckReport& r) {
+  std::string out;
+  out += fmt::format("{:<4} {:<26} {:>12} {:>13} {}\n", "axis", "stop distance / max", "seek worst", "after trigger",
+                     "verdict");
+  for (const AxisCheck& c : r.axes) {
+    const auto u = homing::axis_unit(c.axis);
+    if (!c.enabled) {
+      out += fmt::format("{:<4} disabled\n", homing::kAxisUpper[c.axis]);
+      continue;
+    }
+    out += fmt::format("{:<4} {:<26} {:>10.1f} s {:>11.1f} s {}\n", homing::kAxisUpper[c.axis],
+                       fmt::format("{:.3f} / {:g} {}", c.stop_distance_mm, c.max_stop_distance_mm, u), c.seek_worst_s,
+                       c.after_trigger_s, c.fault ? "REFUSED" : (c.warnings.empty() ? "ok" : "ok, with warnings"));
+    if (c.fault) out += fmt::format("     error: {}\n", *c.fault);
+    if (!c.phases.empty()) {
+      std::string p;
+      for (const auto& [name, t] : c.phases) p += fmt::format("{}{} {:.2f} s", p.empty() ? "" : ", ", name, t);
+      out += fmt::format("     phases (estimate): {}\n", p);
+    }
+    for (const auto& w : c.warnings) out += fmt::format("     warning: {}\n", w);
+  }
+  out += fmt::format("expected home-all cycle: at most {:.1f} s (seeks over their whole max_seek_travel; "
+                     "usually much less)\n", r.cycle_worst_s);
+  for (const auto& w : r.warnings) out += fmt::format("warning: {}\n", w);
+  out += r.ok() ? "settings: ok\n" : "settings: homing will be REFUSED (see the errors above)\n";
+  return out;
+}
+
+nlohmann::json check_json(const CheckReport& r) {
+  nlohmann::json j;
+  j["ok"] = r.ok();
+  j["cycle_worst_s"] = r.cycle_worst_s;
+  j["warnings"] = r.warnings;
+  j["axes"] = nlohmann::json::array();
+  for (const AxisCheck& c : r.axes) {
+    nlohmann::json a{{"axis", std::string(homing::kAxisLetters[c.axis])}, {"enabled", c.enabled}};
+    if (c.enabled) {
+      a["stop_distance"] = c.stop_distance_mm;
+      a["max_stop_distance"] = c.max_stop_distance_mm;
+      a["fault"] = c.fault ? nlohmann::json(*c.fault) : nlohmann::json(nullptr);
+      a["seek_worst_s"] = c.seek_worst_s;
+      a["after_trigger_s"] = c.after_trigger_s;
+      a["phases"] = nlohmann::json::object();
+      for (const auto& [name, t] : c.phases) a["phases"][name] = t;
+      a["warnings"] = c.warnings;
+    }
+    j["axes"].push_back(a);
+  }
+  return j;
+}
+
+}  // namespace homingctl

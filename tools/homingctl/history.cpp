@@ -1,0 +1,88 @@
+#include "history.hpp"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <sys/stat.h>
+
+#include <ctime>
+
+#include "homing/alarms.hpp"
+#include "homing/axes.hpp"
+#include "persistence/settings_store.hpp"
+#include "registers/lookup.hpp"
+#include "values.hpp"
+
+namespace homingctl {
+
+namespace {
+
+std::string local_time(std::int64_t ms) {
+  std::time_t t = static_cast<std::time_t>(ms / 1000);
+  std::tm tm{};
+  localtime_r(&t, &tm);
+  char buf[40];
+  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%S", &tm);
+  return buf;
+}
+
+std::string shown(const std::string& name, std::int64_t raw) {
+  const registers::Register* r = registers::find_register(name);
+  return r ? value_text(*r, raw) : std::to_string(raw);
+}
+
+}  // namespace
+
+std::expected<HistoryReport, std::string> read_history(const std::string& db, std::size_t n_runs, std::size_t n_changes) {
+  struct stat st{};
+  if (::stat(db.c_str(), &st) != 0)
+    return std::unexpected(fmt::format("{}: no such database (give the daemon's --db file with --db)", db));
+  auto logger = spdlog::default_logger();
+  logger->set_level(spdlog::level::warn);
+  persistence::OpenReport report;
+  persistence::StoreOptions options;
+  options.read_only = true;
+  auto store = persistence::SettingsStore::open(db, {}, report, options);
+  if (!store) return std::unexpected(fmt::format("{}: {}", db, store.error().message));
+  auto runs = store->recent_runs(n_runs);
+  if (!runs) return std::unexpected(runs.error().message);
+  auto changes = store->recent_changes(n_changes);
+  if (!changes) return std::unexpected(changes.error().message);
+
+  HistoryReport out;
+  out.json["runs"] = nlohmann::json::array();
+  out.json["changes"] = nlohmann::json::array();
+  out.text += fmt::format("homing runs (newest first, {} shown):\n", runs->size());
+  for (const auto& r : *runs) {
+    std::string axes;
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+      if (r.axes & (1u << a)) axes += homing::kAxisUpper[a];
+    const auto code = static_cast<homing::AlarmCode>(r.result);
+    std::string result = r.result == 0 ? "ok" : std::string(homing::alarm_name(code));
+    if (r.result != 0 && r.alarm_axis >= 0 && r.alarm_axis < 6)
+      result += fmt::format(" on {}", homing::kAxisUpper[static_cast<std::size_t>(r.alarm_axis)]);
+    std::string corr;
+    nlohmann::json jaxes = nlohmann::json::object();
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+      const auto& x = r.axis[a];
+      if (!x.present) continue;
+      corr += x.correction_mm ? fmt::format("  {} {:+.4f}", homing::kAxisUpper[a], *x.correction_mm) : "";
+      jaxes[std::string(homing::kAxisLetters[a])] = {
+          {"correction", x.correction_mm ? nlohmann::json(*x.correction_mm) : nlohmann::json(nullptr)},
+          {"duration_ms", x.duration_ms}};
+    }
+    out.text += fmt::format("  #{:<5} {}  {:7.2f} s  axes {:<6} {}{}\n", r.id, local_time(r.start_ms),
+                            (r.end_ms - r.start_ms) / 1000.0, axes, result, corr);
+    out.json["runs"].push_back({{"id", r.id}, {"start_ms", r.start_ms}, {"end_ms", r.end_ms}, {"result", result},
+                                {"alarm_code", r.result}, {"axes", jaxes}});
+  }
+  out.text += fmt::format("settings changes (newest first, {} shown):\n", changes->size());
+  for (const auto& c : *changes) {
+    out.text += fmt::format("  {}  {:<6} {:<22} {:<32} {} -> {}\n", local_time(c.time_ms), c.transport, c.client, c.name,
+                            shown(c.name, c.old_value), shown(c.name, c.new_value));
+    out.json["changes"].push_back({{"time_ms", c.time_ms}, {"transport", c.transport}, {"client", c.client},
+                                   {"name", c.name}, {"old", c.old_value}, {"new", c.new_value}});
+  }
+  return out;
+}
+
+}  // namespace homingctl

@@ -1,0 +1,341 @@
+#include "settings_io.hpp"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <ctime>
+#include <toml++/toml.h>
+
+#include "homing/settings_check.hpp"
+#include "registers/defaults.hpp"
+#include "registers/lookup.hpp"
+#include "registers/validate.hpp"
+#include "values.hpp"
+
+namespace homingctl {
+
+using registers::Register;
+using registers::Table;
+using registers::Unit;
+
+const std::vector<const Register*>& persisted_registers() {
+  static const std::vector<const Register*> regs = [] {
+    std::vector<const Register*> v;
+    for (const Register& r : registers::registers_of(Unit::module))
+      if (r.table == Table::holding_register && r.persisted) v.push_back(&r);
+    return v;
+  }();
+  return regs;
+}
+
+RawMap read_settings_raw(Connection& c) { return c.read_many(persisted_registers()); }
+
+homing::Settings settings_of(const RawMap& raw) { return registers::settings_from_raw(raw).settings; }
+
+homing::Settings read_settings(Connection& c) { return settings_of(read_settings_raw(c)); }
+
+namespace {
+
+// Runs of holding registers without gaps: one write request can cover a run.
+struct Run {
+  std::uint16_t start = 0;
+  std::uint32_t end = 0;
+};
+std::vector<Run> holding_runs() {
+  std::vector<Run> runs;
+  for (const Register& r : registers::registers_of(Unit::module)) {
+    if (r.table != Table::holding_register) continue;
+    if (!runs.empty() && runs.back().end == r.address)
+      runs.back().end = r.end();
+    else
+      runs.push_back({r.address, r.end()});
+  }
+  return runs;
+}
+
+void apply_raw(homing::Settings& s, registers::HostRegisters& h, const Register& r, std::int64_t raw) {
+  if (r.persisted)
+    registers::set_setting_raw(s, r, raw);
+  else
+    registers::set_host_raw(h, r, raw);
+}
+
+}  // namespace
+
+std::expected<WritePlan, std::string> plan_write(const RawMap& current, const RawMap& wanted,
+                                                 registers::WordOrder order, bool check) {
+  WritePlan plan;
+  homing::Settings settings = settings_of(current);
+  registers::HostRegisters host = registers::default_host_registers();
+  for (const auto& [name, raw] : current) {
+    const Register* r = registers::find_register(name);
+    if (r && r->unit == Unit::module && r->table == Table::holding_register && !r->persisted)
+      registers::set_host_raw(host, *r, raw);
+  }
+  const homing::Settings before = settings;
+  homing::Settings after = settings;
+  registers::HostRegisters host_after = host;
+  std::vector<bool> touched(homing::kAxisCount, false);
+  for (const auto& [name, raw] : wanted) {
+    const Register* r = registers::find_register(name);
+    if (!r || r->unit != Unit::module || r->table != Table::holding_register)
+      return std::unexpected(fmt::format("'{}' is not a setting (module holding register)", name));
+    if (check && (raw < r->min || raw > r->max))
+      return std::unexpected(fmt::format("{} = {} is outside its range {}; nothing was written", name,
+                                         value_text(*r, raw), accepted_text(*r)));
+    const auto it = current.find(name);
+    if (it == current.end()) return std::unexpected(fmt::format("internal: current value of {} not read", name));
+    if (it->second == raw) continue;
+    plan.changes.push_back({r, it->second, raw});
+    apply_raw(after, host_after, *r, raw);
+    if (r->per_axis()) touched[static_cast<std::size_t>(r->axis)] = true;
+  }
+  if (plan.changes.empty()) return plan;
+
+  // The final settings must pass the engine's check, as the daemon runs it.
+  for (std::size_t a = 0; check && a < homing::kAxisCount; ++a) {
+    if (after.axes[a].mode == homing::HomingMode::disabled) continue;
+    const int m = homing::master_of(after.axes[a]);
+    const bool master_touched = m >= 0 && m < static_cast<int>(homing::kAxisCount) && touched[static_cast<std::size_t>(m)];
+    if (!touched[a] && !master_touched) continue;
+    if (!touched[a] && homing::check_axis(before, a)) continue;
+    if (auto f = homing::check_axis(after, a))
+      return std::unexpected(fmt::format("{}; nothing was written", homing::describe_fault(*f, after)));
+  }
+
+  // One block per run touched, from the first to the last changed word,
+  // the words in between at their current values.
+  auto word_of = [&](std::uint16_t address, bool new_value) -> std::uint16_t {
+    const Register* r = registers::find_register(Unit::module, Table::holding_register, address);
+    if (!r) return 0;
+    std::int64_t raw = current.at(r->name());
+    if (new_value)
+      if (auto w = wanted.find(r->name()); w != wanted.end()) raw = w->second;
+    std::uint16_t words[2];
+    registers::encode_words(*r, raw, order, std::span<std::uint16_t>(words, r->words()));
+    return words[address - r->address];
+  };
+  std::vector<Block> blocks;
+  for (const Run& run : holding_runs()) {
+    std::uint32_t lo = UINT32_MAX, hi = 0;
+    for (const auto& c : plan.changes)
+      if (c.reg->address >= run.start && c.reg->end() <= run.end) {
+        lo = std::min<std::uint32_t>(lo, c.reg->address);
+        hi = std::max(hi, c.reg->end());
+      }
+    if (lo == UINT32_MAX) continue;
+    for (std::uint32_t a = lo; a < hi; ++a) {
+      const Register* r = registers::find_register(Unit::module, Table::holding_register, static_cast<std::uint16_t>(a));
+      if (r && !current.contains(r->name()))
+        return std::unexpected(fmt::format("internal: current value of {} not read", r->name()));
+    }
+    Block b;
+    b.start = static_cast<std::uint16_t>(lo);
+    for (std::uint32_t a = lo; a < hi; ++a) {
+      b.words.push_back(word_of(static_cast<std::uint16_t>(a), true));
+      b.old_words.push_back(word_of(static_cast<std::uint16_t>(a), false));
+    }
+    // Requests carry at most 123 registers.
+    while (b.words.size() > 123) {
+      Block head{b.start, {b.words.begin(), b.words.begin() + 120}, {b.old_words.begin(), b.old_words.begin() + 120}};
+      blocks.push_back(head);
+      b.start = static_cast<std::uint16_t>(b.start + 120);
+      b.words.erase(b.words.begin(), b.words.begin() + 120);
+      b.old_words.erase(b.old_words.begin(), b.old_words.begin() + 120);
+    }
+    blocks.push_back(b);
+  }
+
+  // The daemon checks each request on its own: find an order in which every
+  // intermediate state passes too.
+  if (!check) {
+    for (auto& b : blocks) plan.blocks.push_back(std::move(b));
+    return plan;
+  }
+  std::string first_refusal;
+  while (!blocks.empty()) {
+    bool placed = false;
+    for (std::size_t i = 0; i < blocks.size(); ++i) {
+      auto ok = registers::validate_write(Table::holding_register, blocks[i].start, blocks[i].words, order, settings, host);
+      if (!ok) {
+        if (first_refusal.empty()) first_refusal = ok.error().message;
+        continue;
+      }
+      settings = ok->settings;
+      host = ok->host;
+      plan.blocks.push_back(std::move(blocks[i]));
+      blocks.erase(blocks.begin() + static_cast<long>(i));
+      placed = true;
+      break;
+    }
+    if (!placed)
+      return std::unexpected(fmt::format(
+          "the values are valid together, but the module checks each write request on its own and no order of "
+          "the {} requests passes: {}. Change fewer settings at a time (or use import, which does the same)",
+          plan.blocks.size() + blocks.size(), first_refusal));
+  }
+  return plan;
+}
+
+std::expected<void, std::string> execute_plan(Connection& c, const WritePlan& plan) {
+  for (std::size_t i = 0; i < plan.blocks.size(); ++i) {
+    const Block& b = plan.blocks[i];
+    const int ex = c.write_words(Unit::module, b.start, b.words);
+    if (ex == 0) continue;
+    std::string undo;
+    for (std::size_t k = i; k-- > 0;) {
+      const Block& w = plan.blocks[k];
+      if (c.write_words(Unit::module, w.start, w.old_words) != 0) undo = " (and writing back an earlier part failed too: check the settings)";
+    }
+    return std::unexpected(fmt::format("the module refused: {}{}{}", exception_sentence(ex),
+                                       i > 0 ? "; the part already written was restored" : "", undo));
+  }
+  return {};
+}
+
+// ------------------------------------------------------------------ file
+namespace {
+
+constexpr std::string_view kFormat = "homing-module-settings";
+constexpr std::int64_t kFormatVersion = 1;
+
+std::string quote_key(std::string_view k) {
+  std::string out = "\"";
+  for (char ch : k) {
+    if (ch == '"' || ch == '\\') out += '\\';
+    out += ch;
+  }
+  out += '"';
+  return out;
+}
+
+std::string utc_text(std::int64_t ms) {
+  std::time_t t = static_cast<std::time_t>(ms / 1000);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+std::string_view node_kind(toml::node_type t) {
+  switch (t) {
+    case toml::node_type::string: return "string";
+    case toml::node_type::floating_point: return "decimal number";
+    case toml::node_type::boolean: return "boolean";
+    case toml::node_type::array: return "array";
+    default: return "value of another kind";
+  }
+}
+
+struct Entry {
+  std::int64_t value;
+  std::uint32_t line;
+};
+
+std::optional<std::string> flatten(const std::string& file, const toml::table& table, const std::string& prefix,
+                                   std::map<std::string, Entry>& out) {
+  for (const auto& [key, node] : table) {
+    std::string name = prefix.empty() ? std::string(key.str()) : prefix + "." + std::string(key.str());
+    const auto line = node.source().begin.line;
+    if (const auto* sub = node.as_table()) {
+      if (auto e = flatten(file, *sub, name, out)) return e;
+      continue;
+    }
+    const auto* i = node.as_integer();
+    if (!i)
+      return fmt::format("{}:{}: '{}' must be an integer (the raw register value), not a {}; nothing was imported",
+                         file, line, name, node_kind(node.type()));
+    if (out.contains(name)) return fmt::format("{}:{}: '{}' is given twice; nothing was imported", file, line, name);
+    out[name] = Entry{i->get(), line};
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+// Same layout as persistence::SettingsStore::export_file (persistence/transfer.cpp).
+std::string settings_file_text(const RawMap& values, const std::string& source, std::int64_t now_ms) {
+  std::string text;
+  text += "# Homing module settings: raw register values by register name.\n";
+  text += fmt::format("# Exported {} from {}.\n", utc_text(now_ms), source);
+  text += "# Import checks every value exactly like a Modbus write; a bad file changes nothing.\n";
+  text += fmt::format("format = \"{}\"\nformat_version = {}\n\n[settings]\n", kFormat, kFormatVersion);
+  for (const auto& [name, value] : values) text += fmt::format("{} = {}\n", quote_key(name), value);
+  return text;
+}
+
+std::expected<void, std::string> write_file_atomically(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) return std::unexpected(fmt::format("{}: cannot create: {}", tmp, std::strerror(errno)));
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const int e = errno;
+      ::close(fd);
+      ::unlink(tmp.c_str());
+      return std::unexpected(fmt::format("{}: write failed: {}", tmp, std::strerror(e)));
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  if (::fsync(fd) != 0 || ::close(fd) != 0) {
+    const int e = errno;
+    ::unlink(tmp.c_str());
+    return std::unexpected(fmt::format("{}: fsync failed: {}", tmp, std::strerror(e)));
+  }
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int e = errno;
+    ::unlink(tmp.c_str());
+    return std::unexpected(fmt::format("{}: rename failed: {}", path, std::strerror(e)));
+  }
+  return {};
+}
+
+std::expected<RawMap, std::string> read_settings_file(const std::string& file) {
+  toml::table doc;
+  try {
+    doc = toml::parse_file(file);
+  } catch (const toml::parse_error& e) {
+    const auto& src = e.source();
+    if (src.begin.line == 0)
+      return std::unexpected(fmt::format("{}: cannot read the file: {}; nothing was imported", file, e.description()));
+    return std::unexpected(fmt::format("{}:{}:{}: not valid TOML: {}; nothing was imported", file, src.begin.line,
+                                       src.begin.column, e.description()));
+  }
+  if (auto f = doc["format"]; f) {
+    auto v = f.value<std::string>();
+    if (!v || *v != kFormat)
+      return std::unexpected(fmt::format("{}:{}: 'format' must be \"{}\"; nothing was imported", file,
+                                         f.node()->source().begin.line, kFormat));
+  }
+  if (auto ver = doc["format_version"]; ver) {
+    auto v = ver.value<std::int64_t>();
+    if (!v || *v > kFormatVersion)
+      return std::unexpected(fmt::format("{}:{}: format_version must be at most {}; nothing was imported", file,
+                                         ver.node()->source().begin.line, kFormatVersion));
+  }
+  const toml::table* settings = doc["settings"].as_table();
+  if (!settings) return std::unexpected(fmt::format("{}: no [settings] table; nothing was imported", file));
+  std::map<std::string, Entry> entries;
+  if (auto e = flatten(file, *settings, "", entries)) return std::unexpected(*e);
+  RawMap out;
+  for (const auto& [name, e] : entries) {
+    const Register* r = registers::find_register(name);
+    if (!r || r->unit != Unit::module || r->table != Table::holding_register || !r->persisted)
+      return std::unexpected(fmt::format("{}:{}: unknown register '{}'; nothing was imported", file, e.line, name));
+    if (e.value < r->min || e.value > r->max)
+      return std::unexpected(fmt::format("{}:{}: '{}' = {} is outside its range {}; nothing was imported", file,
+                                         e.line, name, e.value, accepted_text(*r)));
+    out[name] = e.value;
+  }
+  return out;
+}
+
+}  // namespace homingctl

@@ -1,0 +1,60 @@
+#pragma once
+// Settings over Modbus: read them all, plan an all-or-nothing write of several
+// values (validated locally with the daemon's own code first, so a refusal
+// names the setting and the rule), execute it, and the export/import file
+// (the same TOML as persistence's export_file / import_file).
+#include <cstdint>
+#include <expected>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "connection.hpp"
+#include "homing/settings.hpp"
+#include "registers/codec.hpp"
+
+namespace homingctl {
+
+using RawMap = std::map<std::string, std::int64_t>;
+
+// Every persisted holding register of the module unit, in address order.
+const std::vector<const registers::Register*>& persisted_registers();
+
+RawMap read_settings_raw(Connection& c);
+homing::Settings settings_of(const RawMap& raw);  // registers::settings_from_raw
+homing::Settings read_settings(Connection& c);
+
+struct Block {
+  std::uint16_t start = 0;
+  std::vector<std::uint16_t> words;      // new words
+  std::vector<std::uint16_t> old_words;  // words before (to undo)
+};
+struct PlannedChange {
+  const registers::Register* reg = nullptr;
+  std::int64_t old_raw = 0;
+  std::int64_t new_raw = 0;
+};
+struct WritePlan {
+  std::vector<Block> blocks;  // in the order to write (each passes the daemon's check)
+  std::vector<PlannedChange> changes;
+};
+
+// Plans writing `wanted` (module holding registers, name -> raw) over `current`
+// (raw values of at least every persisted register and every named one).
+// Refused with a sentence naming the setting and the rule, exactly like the
+// daemon would, when the final settings cannot work.
+// With check = false the local checks are skipped (the daemon decides alone).
+std::expected<WritePlan, std::string> plan_write(const RawMap& current, const RawMap& wanted,
+                                                 registers::WordOrder order, bool check = true);
+
+// Writes the plan's blocks in order. If the daemon refuses a block, the blocks
+// already written are written back to their old values; the error says why.
+std::expected<void, std::string> execute_plan(Connection& c, const WritePlan& plan);
+
+// ---- the settings file (persistence/transfer.cpp's format) ----
+std::string settings_file_text(const RawMap& values, const std::string& source, std::int64_t now_ms);
+std::expected<void, std::string> write_file_atomically(const std::string& path, const std::string& text);
+// name -> raw from a settings file; errors carry file:line, like import_file.
+std::expected<RawMap, std::string> read_settings_file(const std::string& path);
+
+}  // namespace homingctl

@@ -1,0 +1,47 @@
+#pragma once
+// The homing trace of one axis (FC 20 file = axis + 1, see server/trace.hpp):
+// read in chunks, as CSV samples, and drawn as an SVG (position, velocity and
+// sensor against time, phases shaded, the reference edge marked).
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "connection.hpp"
+#include "homing/phases.hpp"
+#include "homing/alarms.hpp"
+
+namespace homingctl {
+
+struct TracePoint {
+  std::uint32_t time_ms = 0;
+  homing::Phase phase = homing::Phase::idle;
+  double position_mm = 0;
+  double velocity_mm_per_s = 0;
+  bool sensor = false;
+};
+
+struct Trace {
+  std::size_t axis = 0;
+  double interval_ms = 0;
+  std::optional<std::uint32_t> edge_time_ms;
+  double edge_position_mm = 0;
+  homing::AlarmCode alarm = homing::AlarmCode::none;
+  homing::Phase alarm_phase = homing::Phase::idle;
+  std::uint32_t duration_ms = 0;
+  std::vector<TracePoint> samples;
+};
+
+// Parses the words of a trace file (header + samples); throws std::runtime_error when malformed.
+Trace parse_trace(std::size_t axis, const std::vector<std::uint16_t>& words);
+// Reads the whole file over FC 20 (chunks of at most 120 records).
+Trace read_trace(Connection& c, std::size_t axis);
+
+std::string trace_csv(const Trace& t);
+nlohmann::json trace_json(const Trace& t);
+// `alarm_text` is shown under the title when not empty.
+std::string trace_svg(const Trace& t, const std::string& alarm_text);
+
+}  // namespace homingctl
