@@ -1,0 +1,118 @@
+// What a Modbus client sees when the disk fails or the settings were lost,
+// checked on the real request path (ModbusService) with the loop stepped by hand.
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+
+#include "fault_vfs.hpp"
+#include "persistence/settings_store.hpp"
+#include "registers/defaults.hpp"
+#include "registers/lookup.hpp"
+#include "registers/sim_bindings.hpp"
+#include "server/control_loop.hpp"
+#include "server/modbus_service.hpp"
+#include "server/simulator_io.hpp"
+
+namespace {
+
+struct Module {
+  std::filesystem::path dir;
+  std::unique_ptr<persistence::SettingsStore> store;
+  std::unique_ptr<server::ControlLoop> loop;
+  std::unique_ptr<server::ModbusService> service;
+  server::ClientInfo client{7, "tcp", "127.0.0.1:50000"};
+
+  explicit Module(bool faulty_disk) {
+    char tmpl[] = "/tmp/runtime_test_XXXXXX";
+    dir = ::mkdtemp(tmpl);
+    std::vector<persistence::SettingDefault> defaults;
+    for (const auto& [name, value] : registers::persisted_defaults()) defaults.push_back({name, value});
+    persistence::StoreOptions options;
+    if (faulty_disk) {
+      fault_vfs::install();
+      options.vfs = fault_vfs::kName;
+    }
+    persistence::OpenReport report;
+    auto opened = persistence::SettingsStore::open((dir / "settings.db").string(), defaults, report, options);
+    REQUIRE(opened);
+    store = std::make_unique<persistence::SettingsStore>(std::move(*opened));
+    const auto settings = registers::settings_from_raw(store->load()).settings;
+    auto io = std::make_unique<server::SimulatorIo>(registers::default_sim_config());
+    auto* sim = &io->sim();
+    loop = std::make_unique<server::ControlLoop>(settings, std::move(io), sim, 1000, 1.0);
+    service = std::make_unique<server::ModbusService>(server::ServiceConfig{}, *loop, store.get(), settings);
+  }
+  ~Module() {
+    service.reset();
+    loop.reset();
+    store.reset();
+    std::filesystem::remove_all(dir);
+  }
+
+  std::vector<std::uint8_t> request(std::vector<std::uint8_t> pdu) { return service->handle(1, pdu, client).pdu; }
+  void periods(int n) {
+    for (int i = 0; i < n; ++i) loop->run_period(0.001);
+  }
+  static std::uint16_t address(std::string_view name) { return registers::find_register(name)->address; }
+  std::int64_t read_i32(std::string_view name) {
+    const auto a = address(name);
+    const auto r = request({3, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), 0, 2});
+    REQUIRE(r.size() == 6);
+    return static_cast<std::int32_t>((r[2] << 24) | (r[3] << 16) | (r[4] << 8) | r[5]);
+  }
+  std::vector<std::uint8_t> write_i32(std::string_view name, std::int32_t v) {
+    const auto a = address(name);
+    const auto u = static_cast<std::uint32_t>(v);
+    return request({16, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), 0, 2, 4,
+                    static_cast<std::uint8_t>(u >> 24), static_cast<std::uint8_t>(u >> 16),
+                    static_cast<std::uint8_t>(u >> 8), static_cast<std::uint8_t>(u)});
+  }
+  std::vector<std::uint8_t> coil(std::string_view name) {
+    const auto a = address(name);
+    return request({5, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), 0xFF, 0x00});
+  }
+};
+
+}  // namespace
+
+TEST_CASE("a settings write the disk cannot store is answered with exception 04 and changes nothing") {
+  for (auto fault : {fault_vfs::Fault::disk_full, fault_vfs::Fault::read_only}) {
+    Module m(true);
+    REQUIRE(m.read_i32("axis.x.pull_off") == 1000);
+    {
+      fault_vfs::Scoped broken(fault);
+      const auto reply = m.write_i32("axis.x.pull_off", 2500);
+      REQUIRE(reply.size() == 2);
+      CHECK(reply[0] == (16 | 0x80));
+      CHECK(reply[1] == 4);
+      CHECK(m.read_i32("axis.x.pull_off") == 1000);
+      CHECK(m.service->settings().axes[0].pull_off_mm == 1.0);
+      CHECK(m.store->value("axis.x.pull_off") == 1000);
+    }
+    // The disk is back: the same write is stored and answered.
+    const auto reply = m.write_i32("axis.x.pull_off", 2500);
+    CHECK(reply.size() == 5);
+    CHECK(m.read_i32("axis.x.pull_off") == 2500);
+    CHECK(m.store->value("axis.x.pull_off") == 2500);
+  }
+}
+
+TEST_CASE("settings lost at start block homing until the alarm is reset over Modbus") {
+  Module m(false);
+  m.loop->raise_settings_lost();
+  m.periods(3);
+  CHECK(m.loop->snapshot().status.global_alarm == homing::AlarmCode::settings_lost);
+  CHECK(m.loop->snapshot().status.interlocks & homing::interlock::settings_lost);
+  m.coil("cmd.home_all");
+  m.periods(3);
+  CHECK(m.loop->snapshot().status.last_command_result == homing::CommandResult::refused_alarm);
+  CHECK_FALSE(m.loop->snapshot().status.homing);
+  m.coil("cmd.reset_alarm");
+  m.periods(3);
+  CHECK(m.loop->snapshot().status.global_alarm == homing::AlarmCode::none);
+  m.coil("cmd.home_all");
+  m.periods(3);
+  CHECK(m.loop->snapshot().status.homing);
+}
