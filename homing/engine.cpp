@@ -216,8 +216,10 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
       continue;
     }
     const double tol = 1e-6;
-    if (s.soft_limits_enable && run.motor.velocity_mm_per_s != 0 &&
-        (pos < s.soft_limit_min_mm - tol || pos > s.soft_limit_max_mm + tol)) {
+    // Only moving further out is a fault: an axis left outside tightened
+    // limits may still be jogged back in.
+    const double v = run.motor.velocity_mm_per_s;
+    if (s.soft_limits_enable && ((pos < s.soft_limit_min_mm - tol && v < 0) || (pos > s.soft_limit_max_mm + tol && v > 0))) {
       raise(settings, a, Alarm{AlarmCode::soft_limit});
       axes_[a].alarm.value = pos;
     }
@@ -369,6 +371,12 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
       if (!(covered & axis_bit(a)) && master_of(settings.axes[a]) < 0 &&
           settings.axes[a].mode != HomingMode::disabled)
         unsequenced_ |= axis_bit(a);
+    // A slave is assigned with its master, whatever its own mode.
+    for (std::size_t a = 0; a < kAxisCount; ++a) {
+      const int m = master_of(settings.axes[a]);
+      if (m >= 0 && m < static_cast<int>(kAxisCount) && (unsequenced_ & axis_bit(static_cast<std::size_t>(m))))
+        unsequenced_ |= axis_bit(a);
+    }
   } else {
     steps_[0] = with_partners(requested);
     covered = steps_[0];
@@ -468,7 +476,10 @@ void Engine::run_motion(const Settings& settings) {
           v = std::min(v, mm_per_min_to_mm_per_s(100.0));
         if (homed && s.soft_limits_enable) {
           const double limit = (run.jog_dir > 0 ? s.soft_limit_max_mm : s.soft_limit_min_mm) - run.offset_mm;
-          run.command = move_to_command(run.motor, limit, v, accel, last_dt_s_);
+          const bool beyond = run.jog_dir > 0 ? run.motor.position_mm >= limit : run.motor.position_mm <= limit;
+          // At or past the limit in the jog's direction: hold still rather
+          // than head back to the limit against the operator's direction.
+          run.command = beyond ? stop_command(accel) : move_to_command(run.motor, limit, v, accel, last_dt_s_);
         } else {
           run.command = velocity_command(run.jog_dir * v, accel);
         }

@@ -214,3 +214,37 @@ SCENARIO("reset while the cause is still present is refused", "[interlocks][comm
   CHECK(r.status().last_command_result == CommandResult::accepted);
   CHECK_FALSE(r.status().alarm);
 }
+
+SCENARIO("an axis left outside tightened soft limits only jogs back in", "[interlocks][limits]") {
+  Rig r;
+  AxisSettings& s = r.settings.axes[0];
+  s.soft_limits_enable = true;
+  s.soft_limit_min_mm = -1;
+  s.soft_limit_max_mm = 20;
+  REQUIRE(r.home_all());
+  r.move(0, 15);
+  settle(r);
+  REQUIRE(r.axis(0).position_mm == Approx(15).margin(1e-9));
+  s.soft_limit_max_mm = 10;  // tightened: the axis now stands 5 mm outside
+  WHEN("jogging further out") {
+    r.clear_trace();
+    r.jog(0, +1);
+    r.run_for(0.5);
+    r.release_jogs();
+    r.run_for(0.2);
+    THEN("nothing moves and no alarm is raised") {
+      CHECK(r.trace[0].path_mm == 0);
+      CHECK_FALSE(r.status().alarm);
+    }
+  }
+  WHEN("jogging back in") {
+    r.jog(0, -1);
+    r.run_for(0.5);
+    r.release_jogs();
+    settle(r);
+    THEN("it moves toward the limits without an alarm") {
+      CHECK(r.axis(0).position_mm < 15);
+      CHECK_FALSE(r.status().alarm);
+    }
+  }
+}

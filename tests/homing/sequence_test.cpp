@@ -145,3 +145,19 @@ SCENARIO("commands while a cycle runs: the same one is already running, another 
   r.run_until([&] { return !r.status().homing; }, 60);
   CHECK(r.status().state == MachineState::homed);
 }
+
+SCENARIO("a slave whose master is in no step is assigned its home position with its master", "[sequence][gantry]") {
+  Rig r;
+  r.settings.axes[A] = typical_axis();  // a master in no step
+  r.settings.axes[A].home_position_mm = 7;
+  r.settings.axes[4] = typical_axis();
+  r.settings.axes[4].slave_of = static_cast<std::uint8_t>(A + 1);
+  r.settings.axes[4].home_position_mm = 7;
+  r.step();
+  r.clear_trace();
+  REQUIRE(r.home_all());
+  CHECK(r.axis(A).homed);
+  CHECK(r.axis(4).homed);
+  CHECK(r.axis(4).position_mm == Approx(7).margin(1e-9));
+  CHECK(r.trace[4].path_mm == 0);
+}
