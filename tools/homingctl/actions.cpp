@@ -62,13 +62,21 @@ struct Session {
     (void)c.write("host.heartbeat", ++hb);
   }
 
-  // Waits until the control loop has run at least two periods (so it took the command).
+  // Waits until the control loop has published three new snapshots: the
+  // command was taken in one of those periods (the loop takes its mailbox
+  // with try_lock, and with --time-scale the heartbeat counts several engine
+  // steps per period, so a heartbeat difference alone does not say enough).
   void let_loop_take(std::uint16_t h0) {
-    const auto deadline = Clock::now() + std::chrono::seconds(1);
-    while (Clock::now() < deadline) {
+    const auto deadline = Clock::now() + std::chrono::seconds(2);
+    std::uint16_t last = h0;
+    int changes = 0;
+    while (Clock::now() < deadline && changes < 3) {
       const auto h = static_cast<std::uint16_t>(c.read("status.heartbeat"));
-      if (static_cast<std::uint16_t>(h - h0) >= 2) return;
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      if (h != last) {
+        ++changes;
+        last = h;
+      }
+      if (changes < 3) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
   }
 
