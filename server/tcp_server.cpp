@@ -13,6 +13,8 @@
 #include <cerrno>
 #include <cstring>
 
+#include "mbap.hpp"
+
 namespace server {
 namespace {
 
@@ -125,23 +127,20 @@ void TcpServer::serve(Connection& c, ClientInfo info) {
       why = stop_ ? "server stopping" : "idle timeout (--idle-timeout-s)";
       break;
     }
-    if (!read_exact(c.fd, frame.data(), 7, kFrameTimeoutMs, stop_)) break;
-    const std::uint16_t tid = static_cast<std::uint16_t>((frame[0] << 8) | frame[1]);
-    const std::uint16_t protocol = static_cast<std::uint16_t>((frame[2] << 8) | frame[3]);
-    const std::uint16_t length = static_cast<std::uint16_t>((frame[4] << 8) | frame[5]);
-    const std::uint8_t unit = frame[6];
-    // MBAP length counts the unit id and the PDU: 2..254 bytes.
-    if (protocol != 0 || length < 2 || length > 254) {
+    if (!read_exact(c.fd, frame.data(), kMbapHeaderSize, kFrameTimeoutMs, stop_)) break;
+    const MbapHeader h = parse_mbap(std::span<const std::uint8_t, kMbapHeaderSize>(frame.data(), kMbapHeaderSize));
+    if (!h.valid()) {
       why = "malformed MBAP header";
-      spdlog::warn("tcp: {}: MBAP protocol {} length {}; closing the connection", info.address, protocol, length);
+      spdlog::warn("tcp: {}: MBAP protocol {} length {}; closing the connection", info.address, h.protocol, h.length);
       break;
     }
-    if (!read_exact(c.fd, frame.data() + 7, length - 1u, kFrameTimeoutMs, stop_)) {
+    if (!read_exact(c.fd, frame.data() + kMbapHeaderSize, h.pdu_size(), kFrameTimeoutMs, stop_)) {
       why = "incomplete frame";
       break;
     }
-    const Reply reply = handler_.handle(unit, std::span<const std::uint8_t>(frame.data() + 7, length - 1u), info);
-    if (reply.send && !send_all(c.fd, tcp_frame(tid, unit, reply.pdu))) break;
+    const Reply reply =
+        handler_.handle(h.unit, std::span<const std::uint8_t>(frame.data() + kMbapHeaderSize, h.pdu_size()), info);
+    if (reply.send && !send_all(c.fd, tcp_frame(h.transaction_id, h.unit, reply.pdu))) break;
   }
   handler_.disconnected(info);
   ::shutdown(c.fd, SHUT_RDWR);

@@ -1,0 +1,30 @@
+#pragma once
+// The MBAP header of a Modbus/TCP frame and the check the TCP server applies
+// to it before reading the rest of the frame. Shared with fuzz/fuzz_tcp_request
+// so the fuzzer frames a byte stream exactly as the server does.
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+namespace server {
+
+inline constexpr std::size_t kMbapHeaderSize = 7;  // transaction, protocol, length, unit
+
+struct MbapHeader {
+  std::uint16_t transaction_id = 0;
+  std::uint16_t protocol = 0;
+  std::uint16_t length = 0;  // unit id + PDU
+  std::uint8_t unit = 0;
+
+  // MBAP length counts the unit id and the PDU: 2..254 bytes; protocol 0 is Modbus.
+  bool valid() const { return protocol == 0 && length >= 2 && length <= 254; }
+  // Bytes that follow the header (the PDU); meaningful only when valid().
+  std::size_t pdu_size() const { return length - 1u; }
+};
+
+inline MbapHeader parse_mbap(std::span<const std::uint8_t, kMbapHeaderSize> h) {
+  return MbapHeader{static_cast<std::uint16_t>((h[0] << 8) | h[1]), static_cast<std::uint16_t>((h[2] << 8) | h[3]),
+                    static_cast<std::uint16_t>((h[4] << 8) | h[5]), h[6]};
+}
+
+}  // namespace server
