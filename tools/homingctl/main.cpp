@@ -397,7 +397,15 @@ int main(int argc, char** argv) {
       const int a = axis_index(trace_axis);
       if (a < 0) throw Usage(fmt::format("trace: '{}' is not an axis (x, y, z, a, b, c)", trace_axis));
       Connection& c = connection();
-      const Trace t = read_trace(c, static_cast<std::size_t>(a));
+      Trace t;
+      try {
+        t = read_trace(c, static_cast<std::size_t>(a));
+      } catch (const LinkError& e) {
+        if (!c.is_rtu()) throw;
+        throw LinkError(fmt::format("{}\n(homingd serves the traces (function 20) over Modbus TCP only: its RTU "
+                                    "transport frames requests with libmodbus, which cannot receive function 20; "
+                                    "use --tcp)", e.what()));
+      }
       if (t.samples.empty()) {
         fmt::print(stderr, "no trace for {}: the axis has not taken part in a homing cycle since homingd started\n",
                    homing::kAxisUpper[static_cast<std::size_t>(a)]);

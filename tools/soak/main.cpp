@@ -62,6 +62,7 @@ struct Shared {
     if (violations.size() < 40) violations.push_back(std::move(what));
   }
   std::mutex machine;  // the cycle and fault clients take turns
+  std::string last_event;  // what the machine did last (under `machine`), for messages
   std::atomic<bool> stop{false};
 };
 
@@ -295,10 +296,14 @@ void check_truth(Client& c, Shared& shared, const std::map<std::string, std::int
       shared.violation(fmt::format("after homing {} position {:.3f} mm != home_position {:.3f} mm", s, *pos / 1000.0,
                                    home.at(s) / 1000.0));
     const std::int64_t expected = *smax + *hyst + pull_off.at(s);
-    if (std::llabs(*actual - expected) > 20)
+    if (std::llabs(*actual - expected) > 20) {
+      const auto trig = c.read(ax(a, "trigger_position")), corr = c.read(ax(a, "home_correction"));
       shared.violation(fmt::format("after homing {}: simulator carriage at {:.3f} mm, expected {:.3f} mm "
-                                   "(sensor_max + hysteresis + pull_off)",
-                                   s, *actual / 1000.0, expected / 1000.0));
+                                   "(sensor_max + hysteresis + pull_off); trigger_position {:.3f}, home_correction "
+                                   "{:.3f}; before this cycle: {}",
+                                   s, *actual / 1000.0, expected / 1000.0, trig.value_or(0) / 1000.0,
+                                   corr.value_or(0) / 1000.0, shared.last_event));
+    }
   }
 }
 
@@ -320,6 +325,10 @@ void cycle_role(Client& c, Shared& shared, std::uint64_t seed) {
         if (auto v = c.read(ax(a, "pull_off")); v && *v != pull_off[s])
           shared.violation(fmt::format("{} read back {} after writing {}", ax(a, "pull_off"), *v, pull_off[s]));
       }
+      // Let the loop apply the placements before the command: in the period
+      // that takes both, the engine would still see the sensor as it was
+      // before the carriage was placed (see README, Operator tools).
+      if (auto h = c.read("status.heartbeat")) let_loop_take(c, *h);
       if (ok) {
         const bool do_abort = uni(0, 9) < 3;
         auto r = command(c, "cmd.home_all");
@@ -339,6 +348,7 @@ void cycle_role(Client& c, Shared& shared, std::uint64_t seed) {
             if (state && *state == static_cast<int>(homing::MachineState::homed) && alarms.empty()) {
               check_truth(c, shared, pull_off, home);
               ++c.stats.cycles_completed;
+              shared.last_event = do_abort ? "abort came after the end of a completed cycle" : "completed cycle";
             } else if (do_abort) {
               bool only_aborted = !alarms.empty();
               for (const auto& [a, code] : alarms)
@@ -346,6 +356,7 @@ void cycle_role(Client& c, Shared& shared, std::uint64_t seed) {
               if (!only_aborted) shared.violation(fmt::format("abort ended with alarms {}", alarms_text(alarms)));
               ++c.stats.cycles_aborted;
               reset_and_check(c, shared, "after abort");
+              shared.last_event = "aborted cycle, reset";
             } else {
               shared.violation(fmt::format("home all ended {} with alarms {}",
                                            state ? homing::state_name(static_cast<homing::MachineState>(*state)) : "?",
@@ -386,6 +397,7 @@ void fault_role(Client& c, Shared& shared, std::uint64_t seed) {
       }
       c.must_write(sim(a, "fault"), 0);
       reset_and_check(c, shared, "after the stuck sensor");
+      shared.last_event = "sensor stuck inactive on " + a + ", cleared, reset";
     } else {
       // Drive fault at rest: homing refused, reset refused while present, accepted after.
       if (!c.must_write(sim(a, "fault"), 4)) continue;
@@ -403,6 +415,7 @@ void fault_role(Client& c, Shared& shared, std::uint64_t seed) {
       c.must_write(sim(a, "fault"), 0);
       std::this_thread::sleep_for(20ms);
       reset_and_check(c, shared, "after the drive fault");
+      shared.last_event = "drive fault on " + a + ", cleared, reset";
     }
   }
 }

@@ -1,0 +1,339 @@
+// homingctl against a real homingd (simulator backend, --time-scale 10): every
+// command, text and --json, a refused write, a failing homing, exit codes.
+#include <catch2/catch.hpp>
+
+#include "tools_helpers.hpp"
+
+using namespace tools_test;
+
+TEST_CASE("homingctl status and get: one table, words, engineering units, --json") {
+  Daemon d;
+  auto r = ctl(d, {"status"});
+  SHOW(r);
+  REQUIRE(r.code() == 0);
+  CHECK(r.out.find("switch_release") != std::string::npos);
+  CHECK(r.out.find("state: not_homed") != std::string::npos);
+  CHECK(r.out.find("blocking motion: nothing (free to move)") != std::string::npos);
+  for (const char* axis : {"X ", "Y ", "Z ", "A ", "B ", "C "}) CHECK(r.out.find(std::string("\n") + axis) != std::string::npos);
+
+  r = ctl(d, {"status", "--json"});
+  auto j = json_of(r);
+  CHECK(j["state"] == "not_homed");
+  REQUIRE(j["axes"].size() == 6);
+  CHECK(j["axes"][0]["axis"] == "x");
+  CHECK(j["axes"][0]["mode"] == "switch_release");
+  CHECK(j["axes"][0]["unit"] == "mm");
+  CHECK(j["axes"][3]["unit"] == "deg");
+  CHECK(j["interlocks"].empty());
+
+  r = ctl(d, {"get", "axis.x.seek_feedrate", "axis.x.pull_off", "axis.x.mode", "sequence.step2", "sim.x.sensor_max"});
+  SHOW(r);
+  REQUIRE(r.code() == 0);
+  CHECK(r.out.find("axis.x.seek_feedrate = 1000 mm/min\n") != std::string::npos);
+  CHECK(r.out.find("axis.x.pull_off = 1 mm\n") != std::string::npos);
+  CHECK(r.out.find("axis.x.mode = switch_release\n") != std::string::npos);
+  CHECK(r.out.find("sequence.step2 = x+y\n") != std::string::npos);
+  CHECK(r.out.find("sim.x.sensor_max = 0 mm\n") != std::string::npos);
+
+  r = ctl(d, {"--json", "get", "axis.a.*"});
+  j = json_of(r);
+  CHECK(j["axis.a.mode"]["text"] == "disabled");
+  CHECK(j["axis.a.pull_off"]["unit"] == "deg");
+  CHECK(j["axis.a.pull_off"]["value"] == Approx(1.0));
+  CHECK(j["axis.a.pull_off"]["raw"] == 1000);
+}
+
+TEST_CASE("homingctl set: engineering units and enum names, several values in one all-or-nothing write") {
+  Daemon d;
+  Client c = Client::tcp(d.port());
+  auto r = ctl(d, {"set", "axis.x.mode=switch_reapproach", "axis.x.pull_off=2.5mm", "axis.x.home_position=-5",
+                   "axis.x.latch_feedrate=80", "sequence.step1=z", "global.watchdog_ms=0"});
+  SHOW(r);
+  REQUIRE(r.code() == 0);
+  CHECK(r.out.find("axis.x.pull_off: 1 mm -> 2.5 mm") != std::string::npos);
+  CHECK(c.read("axis.x.mode") == 3);
+  CHECK(c.read("axis.x.pull_off") == 2500);
+  CHECK(c.read("axis.x.home_position") == -5000);
+  CHECK(c.read("axis.x.latch_feedrate") == 80);
+
+  // Two settings that only work together, in two requests: max_stop_distance first.
+  r = ctl(d, {"set", "axis.y.seek_feedrate=12000", "axis.y.max_stop_distance=50"});
+  SHOW(r);
+  REQUIRE(r.code() == 0);
+  CHECK(c.read("axis.y.seek_feedrate") == 12000);
+  CHECK(c.read("axis.y.max_stop_distance") == 50000);
+
+  // --dry-run writes nothing.
+  r = ctl(d, {"set", "--dry-run", "axis.z.pull_off=3"});
+  REQUIRE(r.code() == 0);
+  CHECK(r.out.find("axis.z.pull_off: 1 mm -> 3 mm") != std::string::npos);
+  CHECK(c.read("axis.z.pull_off") == 1000);
+}
+
+TEST_CASE("homingctl set: a refused write says why, names the setting, and changes nothing") {
+  Daemon d;
+  Client c = Client::tcp(d.port());
+  const auto before = holding_snapshot(c);
+
+  // Cross-field: the stop distance at that feedrate exceeds max_stop_distance.
+  auto r = ctl(d, {"set", "axis.x.seek_feedrate=20000", "axis.x.pull_off=2"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 1);
+    CHECK(r.err.find("max_stop_distance") != std::string::npos);
+    CHECK(r.err.find("seek_feedrate") != std::string::npos);
+    CHECK(r.err.find("nothing was written") != std::string::npos);
+  }
+  // Out of range, with what is accepted.
+  r = ctl(d, {"set", "axis.x.seek_feedrate=70000"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 1);
+    CHECK(r.err.find("out of range") != std::string::npos);
+    CHECK(r.err.find("60000 mm/min") != std::string::npos);
+  }
+  r = ctl(d, {"set", "axis.x.mode=sideways"});
+  CHECK(r.code() == 1);
+  CHECK(r.err.find("switch_reapproach") != std::string::npos);
+  // Read-only.
+  r = ctl(d, {"set", "axis.x.position=3"});
+  CHECK(r.code() == 1);
+  CHECK(r.err.find("read-only") != std::string::npos);
+  // Without the local check the module's exception is put in words.
+  r = ctl(d, {"set", "--no-check", "axis.x.seek_feedrate=20000"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 1);
+    CHECK(r.err.find("exception 03") != std::string::npos);
+    CHECK(r.err.find("cannot work together") != std::string::npos);
+  }
+  CHECK(holding_snapshot(c) == before);
+
+  // During a homing cycle the module answers 06: said in words.
+  c.set("sim.x.actual_position", um(400));
+  c.set("sim.y.actual_position", um(400));
+  c.set("sim.z.actual_position", um(400));
+  r = ctl(d, {"home", "--no-wait"});
+  REQUIRE(r.code() == 0);
+  r = ctl(d, {"set", "axis.x.pull_off=2"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 1);
+    CHECK(r.err.find("a homing cycle is running: settings cannot change now") != std::string::npos);
+  }
+  CHECK(ctl(d, {"abort"}).code() == 0);
+}
+
+TEST_CASE("homingctl usage errors exit 2, an unreachable module exits 3, --help exits 0") {
+  CHECK(ctl_plain({}).code() == 2);
+  CHECK(ctl_plain({"frobnicate"}).code() == 2);
+  CHECK(ctl_plain({"set", "axis.x.pull_off"}).code() == 2);
+  CHECK(ctl_plain({"get", "no.such.register"}).code() == 2);
+  CHECK(ctl_plain({"jog", "x", "sideways"}).code() == 2);
+  auto r = ctl_plain({"--help"});
+  CHECK(r.code() == 0);
+  for (const char* sub : {"status", "watch", "home", "abort", "reset", "jog", "move", "get", "set", "check", "export",
+                          "import", "history", "trace"})
+    CHECK(r.out.find(sub) != std::string::npos);
+  r = ctl_plain({"home", "--help"});
+  CHECK(r.code() == 0);
+  CHECK(r.out.find("--no-wait") != std::string::npos);
+  r = ctl_plain({"--tcp", "127.0.0.1:" + std::to_string(free_port()), "status"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 3);
+    CHECK(r.err.find("cannot connect") != std::string::npos);
+  }
+}
+
+TEST_CASE("homingctl home waits for the result; a failing homing exits 1 with the alarm text") {
+  Daemon d;
+  Client c = Client::tcp(d.port());
+  auto r = ctl(d, {"set", "axis.x.pull_off=2", "axis.x.home_position=-5"});
+  REQUIRE(r.code() == 0);
+  r = ctl(d, {"home"});
+  {
+    SHOW(r);
+    REQUIRE(r.code() == 0);
+    CHECK(r.out.find("home all: homed") != std::string::npos);
+  }
+  CHECK(c.read("axis.x.position") == -5000);
+  CHECK(c.read_mm("sim.x.actual_position") == Approx(0.05 + 2.0).margin(0.02));
+
+  r = ctl(d, {"--json", "home", "x"});
+  auto j = json_of(r);
+  CHECK(r.code() == 0);
+  CHECK(j["ok"] == true);
+  CHECK(j["positions"]["x"] == Approx(-5.0));
+
+  // The sensor never switches: the seek runs out of travel.
+  REQUIRE(ctl(d, {"set", "axis.x.max_seek_travel=60", "sim.x.fault=sensor_stuck_inactive"}).code() == 0);
+  r = ctl(d, {"home", "x"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 1);
+    CHECK(r.err.find("X: home sensor not found within 60 mm of travel") != std::string::npos);
+  }
+  r = ctl(d, {"status"});
+  CHECK(r.out.find("sensor_not_found") != std::string::npos);
+  CHECK(r.out.find("alarm latched") != std::string::npos);
+
+  // Refused while the alarm is latched, in words.
+  r = ctl(d, {"home"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 1);
+    CHECK(r.err.find("an alarm is latched") != std::string::npos);
+  }
+  REQUIRE(ctl(d, {"set", "sim.x.fault=none"}).code() == 0);
+  r = ctl(d, {"reset"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 0);
+  }
+  CHECK(ctl(d, {"home"}).code() == 0);
+
+  // A drive fault: home refused, reset refused while the cause is present.
+  REQUIRE(ctl(d, {"set", "sim.y.fault=drive_fault"}).code() == 0);
+  r = ctl(d, {"home"});
+  CHECK(r.code() == 1);
+  CHECK(r.err.find("drive") != std::string::npos);
+  r = ctl(d, {"reset"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 1);
+    CHECK(r.err.find("still present") != std::string::npos);
+  }
+  REQUIRE(ctl(d, {"set", "sim.y.fault=none"}).code() == 0);
+  CHECK(ctl(d, {"reset"}).code() == 0);
+}
+
+TEST_CASE("homingctl abort, reset, jog and move") {
+  Daemon d;
+  Client c = Client::tcp(d.port());
+  for (const char* a : {"x", "y", "z"}) c.set(std::string("sim.") + a + ".actual_position", um(400));
+  auto r = ctl(d, {"home", "--no-wait"});
+  REQUIRE(r.code() == 0);
+  CHECK(r.out.find("not waiting") != std::string::npos);
+  r = ctl(d, {"abort"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 0);
+    CHECK(r.out.find("homingctl reset") != std::string::npos);
+  }
+  auto j = json_of(ctl(d, {"status", "--json"}));
+  CHECK(j["state"] == "alarm");
+  bool aborted = false;
+  for (const auto& a : j["axes"])
+    if (!a["alarm"].is_null() && a["alarm"]["name"] == "aborted") aborted = true;
+  CHECK(aborted);
+  CHECK(ctl(d, {"reset"}).code() == 0);
+  REQUIRE(ctl(d, {"home"}).code() == 0);
+
+  const double x0 = c.read_mm("axis.x.position");
+  r = ctl(d, {"jog", "x", "+", "--ms", "300"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 0);
+  }
+  CHECK(c.read_mm("axis.x.position") > x0 + 1.0);
+  CHECK(c.read("cmd.jog_plus.x") == 0);
+  r = ctl(d, {"move", "x", "12.5"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 0);
+    CHECK(r.out.find("move X to 12.5 mm") != std::string::npos);
+  }
+  CHECK(c.read("axis.x.position") == 12500);
+  // Outside the soft limits: refused in words.
+  REQUIRE(ctl(d, {"set", "axis.x.soft_limits_enable=on", "axis.x.soft_limit_max=100"}).code() == 0);
+  r = ctl(d, {"move", "x", "150"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 1);
+    CHECK(r.err.find("soft limits") != std::string::npos);
+  }
+}
+
+TEST_CASE("homingctl watch shows the cycle with progress and exits with its result") {
+  Daemon d;
+  Client c = Client::tcp(d.port());
+  for (const char* a : {"x", "y", "z"}) c.set(std::string("sim.") + a + ".actual_position", um(300));
+  REQUIRE(ctl(d, {"home", "--no-wait"}).code() == 0);
+  auto r = ctl(d, {"watch", "--interval-ms", "50", "--timeout-s", "60"});
+  SHOW(r);
+  CHECK(r.code() == 0);
+  CHECK(r.out.find("homing cycle ended: homed") != std::string::npos);
+  CHECK(r.out.find("[#") != std::string::npos);  // a progress bar
+  CHECK(r.out.find(" seek ") != std::string::npos);
+
+  // --json: one object per refresh; a failing cycle exits 1.
+  c.set("sim.x.actual_position", um(300));
+  REQUIRE(ctl(d, {"set", "sim.x.fault=sensor_stuck_inactive", "axis.x.max_seek_travel=100"}).code() == 0);
+  REQUIRE(ctl(d, {"home", "--no-wait"}).code() == 0);
+  r = ctl(d, {"watch", "--json", "--interval-ms", "50", "--timeout-s", "60"});
+  CHECK(r.code() == 1);
+  std::istringstream lines(r.out);
+  std::string line, last;
+  int n = 0;
+  while (std::getline(lines, line))
+    if (!line.empty()) {
+      auto j = nlohmann::json::parse(line);
+      CHECK(j.contains("axes"));
+      last = line;
+      ++n;
+    }
+  CHECK(n >= 2);
+  auto j = nlohmann::json::parse(last);
+  CHECK(j["cycle_ended"] == true);
+  CHECK(j["axes"][0]["alarm"]["name"] == "sensor_not_found");
+}
+
+TEST_CASE("homingctl check: stop distance against its limit, cycle time, warnings") {
+  Daemon d;
+  auto r = ctl(d, {"check"});
+  {
+    SHOW(r);
+    REQUIRE(r.code() == 0);
+    CHECK(r.out.find("0.278 / 10 mm") != std::string::npos);
+    CHECK(r.out.find("expected home-all cycle") != std::string::npos);
+    CHECK(r.out.find("settings: ok") != std::string::npos);
+  }
+  REQUIRE(ctl(d, {"set", "axis.x.home_position=-1500", "axis.y.seek_feedrate=4000", "axis.y.acceleration=250",
+                  "axis.y.max_stop_distance=10", "sim.z.sensor_min=-0.2"}).code() == 0);
+  r = ctl(d, {"check"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 0);
+    CHECK(r.out.find("home_position -1500 mm is outside the soft limits") != std::string::npos);
+    CHECK(r.out.find("little margin") != std::string::npos);  // Y: 8.9 of 10 mm
+    CHECK(r.out.find("shorter than the stop distance") != std::string::npos);  // Z: 0.2 mm cam
+  }
+  auto j = json_of(ctl(d, {"check", "--json"}));
+  CHECK(j["ok"] == true);
+  CHECK(j["axes"][0]["stop_distance"] == Approx(1000.0 * 1000.0 / 3600.0 / 1000.0).margin(1e-3));
+  CHECK(j["axes"][1]["stop_distance"] == Approx(4000.0 * 4000.0 / 3600.0 / 500.0).margin(1e-3));
+  CHECK(j["axes"][3]["enabled"] == false);
+  CHECK(j["cycle_worst_s"].get<double>() > 30);
+}
+
+TEST_CASE("homingctl history reads the daemon's database read-only while it runs") {
+  Daemon d;
+  REQUIRE(ctl(d, {"set", "axis.x.pull_off=1.5"}).code() == 0);
+  REQUIRE(ctl(d, {"home"}).code() == 0);
+  auto r = run_program({HOMINGCTL_PATH, "history", "--db", d.db()}, 30s);
+  {
+    SHOW(r);
+    REQUIRE(r.code() == 0);
+    CHECK(r.out.find("axes XYZ") != std::string::npos);
+    CHECK(r.out.find("axis.x.pull_off") != std::string::npos);
+    CHECK(r.out.find("1 mm -> 1.5 mm") != std::string::npos);
+  }
+  auto j = json_of(run_program({HOMINGCTL_PATH, "history", "--json", "--db", d.db()}, 30s));
+  REQUIRE(j["runs"].size() >= 1);
+  CHECK(j["runs"][0]["result"] == "ok");
+  CHECK(j["changes"][0]["name"] == "axis.x.pull_off");
+  r = run_program({HOMINGCTL_PATH, "history", "--db", d.db() + ".missing"}, 30s);
+  CHECK(r.code() == 1);
+  CHECK(r.err.find("no such database") != std::string::npos);
+}
