@@ -52,7 +52,7 @@ std::expected<void, std::string> check_config_file(const std::string& path, cons
     }
     if (!known.contains(k) || k == "config" || k == "help" || k == "version")
       return std::unexpected("--config " + path + ": unknown key '" + k + "'; keys are the long option names "
-                             "without dashes, e.g. tcp = \"0.0.0.0:502\", baud = 19200");
+                             "without the leading dashes, e.g. tcp = \"0.0.0.0:502\", log_level = \"warn\"");
   }
   return {};
 }
@@ -97,49 +97,49 @@ std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv) {
   app.set_config("--config", "", "TOML config file; every option below can be a key in it")
       ->check(CLI::ExistingFile);
   app.add_option("--tcp", tcp, "Modbus TCP listen address HOST:PORT")->capture_default_str();
-  app.add_flag("--no-tcp", [&o](std::int64_t) { o.tcp_enabled = false; }, "Serve RTU only");
+  app.add_flag("--no-tcp,--no_tcp", [&o](std::int64_t) { o.tcp_enabled = false; }, "Serve RTU only");
   app.add_option("--rtu", o.rtu_device, "Serial device for Modbus RTU (e.g. /dev/ttyUSB0)");
   app.add_option("--baud", o.baud, "RTU baud rate")
       ->check(CLI::IsMember({1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200}))
       ->capture_default_str();
   app.add_option("--parity", parity, "RTU parity")->check(CLI::IsMember({"N", "E", "O"}))->capture_default_str();
-  app.add_option("--stop-bits", o.stop_bits, "RTU stop bits")->check(CLI::IsMember({1, 2}))->capture_default_str();
+  app.add_option("--stop-bits,--stop_bits", o.stop_bits, "RTU stop bits")->check(CLI::IsMember({1, 2}))->capture_default_str();
   app.add_option("--unit", o.unit_id, "Modbus unit id of the module")->check(CLI::Range(1, 247))->capture_default_str();
   app.add_option("--db", o.db_path, "SQLite settings database")->capture_default_str();
   app.add_option("--backend", o.backend, "Machine I/O backend")
       ->check(CLI::IsMember({"sim", "gpiod"}))
       ->capture_default_str();
-  app.add_option("--period-us", o.period_us, "Control period in microseconds")
+  app.add_option("--period-us,--period_us", o.period_us, "Control period in microseconds")
       ->check(CLI::Range(100, 100000))
       ->capture_default_str();
-  app.add_option("--word-order", word_order, "Order of the two words of 32-bit values")
+  app.add_option("--word-order,--word_order", word_order, "Order of the two words of 32-bit values")
       ->check(CLI::IsMember({"high-first", "low-first"}))
       ->capture_default_str();
-  app.add_option("--max-clients", o.max_clients, "Maximum simultaneous TCP clients")
+  app.add_option("--max-clients,--max_clients", o.max_clients, "Maximum simultaneous TCP clients")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
-  app.add_option("--idle-timeout-s", o.idle_timeout_s, "Drop a TCP client silent for this long")
+  app.add_option("--idle-timeout-s,--idle_timeout_s", o.idle_timeout_s, "Drop a TCP client silent for this long")
       ->check(CLI::Range(1, 86400))
       ->capture_default_str();
-  app.add_option("--sim-unit", o.sim_unit_id, "Unit id of the simulator (sim backend only)")
+  app.add_option("--sim-unit,--sim_unit", o.sim_unit_id, "Unit id of the simulator (sim backend only)")
       ->check(CLI::Range(1, 247))
       ->capture_default_str();
-  app.add_option("--time-scale", o.time_scale, "Simulated time runs this many times faster than the wall clock")
+  app.add_option("--time-scale,--time_scale", o.time_scale, "Simulated time runs this many times faster than the wall clock")
       ->check(CLI::Range(0.01, 1000.0))
       ->capture_default_str();
-  app.add_option("--log-level", o.log_level, "Log level")
+  app.add_option("--log-level,--log_level", o.log_level, "Log level")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
       ->capture_default_str();
-  app.add_option("--write-allow", o.write_allow,
+  app.add_option("--write-allow,--write_allow", o.write_allow,
                  "TCP client addresses allowed to write (IPv4 address or CIDR, comma separated); others may "
                  "only read. Default: every client")
       ->delimiter(',');
-  app.add_option("--unlock-code", o.unlock_code,
+  app.add_option("--unlock-code,--unlock_code", o.unlock_code,
                  "Lock settings writes until this code (1..65535) is written to security.unlock")
       ->check(CLI::Range(1, 65535));
-  app.add_option("--export-settings", o.export_settings,
+  app.add_option("--export-settings,--export_settings", o.export_settings,
                  "Write every setting of --db to this TOML file and exit (no server)");
-  app.add_option("--import-settings", o.import_settings,
+  app.add_option("--import-settings,--import_settings", o.import_settings,
                  "Validate this TOML file like Modbus writes, apply it to --db in one transaction and exit")
       ->check(CLI::ExistingFile);
   try {

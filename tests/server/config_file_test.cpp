@@ -1,0 +1,46 @@
+// Start-up options from a TOML config file (--config), the command line winning.
+#include <catch2/catch.hpp>
+
+#include <fstream>
+
+#include "daemon.hpp"
+
+using namespace e2e;
+
+TEST_CASE("options in the config file are used, and the command line wins over them") {
+  TempDir dir;
+  const std::string config = dir.file("homingd.toml");
+  std::ofstream(config) << "# cabinet 7\n"
+                           "tcp = \"127.0.0.1:1\"          # overridden by the test's --tcp\n"
+                           "unit = 3\n"
+                           "sim_unit = 200\n"
+                           "word_order = \"low-first\"\n"
+                           "max_clients = 8\n"
+                           "log_level = \"warn\"\n";
+  Daemon d({.extra = {"--config", config}});
+  Client c = Client::tcp(d.port(), /*module_unit=*/3, /*sim_unit=*/200);
+  // Unit 3 answers; the simulator sits on unit 200.
+  CHECK(c.read("axis.x.seek_feedrate") == 1000);
+  // low-first: the low word of a 32-bit value comes first on the wire.
+  const auto words = c.holding(registers::find_register("axis.x.max_seek_travel")->address, 2);
+  REQUIRE(words);
+  CHECK(((*words)[1] << 16 | (*words)[0]) == 500000);
+  CHECK(c.try_read("sim.x.hysteresis"));  // a one-word register of the simulator unit
+  // Unit 1 is not served any more.
+  Client other = Client::tcp(d.port(), 1, 247);
+  CHECK_FALSE(other.try_read("axis.x.seek_feedrate"));
+}
+
+TEST_CASE("an unknown key or a wrong value in the config file stops the start naming it") {
+  TempDir dir;
+  const std::string typo = dir.file("typo.toml"), wrong = dir.file("wrong.toml");
+  std::ofstream(typo) << "baudrate = 9600\n";
+  std::ofstream(wrong) << "parity = \"X\"\n";
+  const RunResult a = run_program({homingd_path(), "--config", typo}, 20s);
+  CHECK(a.code() == 2);
+  CHECK(a.err.find("baudrate") != std::string::npos);
+  const RunResult b = run_program({homingd_path(), "--config", wrong}, 20s);
+  CHECK(b.code() == 2);
+  CHECK(b.err.find("--parity") != std::string::npos);
+  CHECK(b.err.find("N,E,O") != std::string::npos);
+}
