@@ -171,13 +171,15 @@ void run_client(const Config& c, ClientResult& r, const std::atomic<bool>& go, c
   // The values written back by write10 (read once at connect), and the two
   // alternating value sets of the durable mix.
   std::uint16_t write_words[10]{}, durable_words[10]{};
-  if (r.connected && !c.raw) {
+  auto uses = [&](Op op) { return std::find(c.ops.begin(), c.ops.end(), op) != c.ops.end(); };
+  if (r.connected && !c.raw && uses(Op::write10)) {
     modbus_set_slave(ctx, c.write_unit);
     if (modbus_read_registers(ctx, c.write_addr, 10, write_words) != 10) std::memset(write_words, 0, sizeof(write_words));
     modbus_set_slave(ctx, c.unit);
-    if (modbus_read_registers(ctx, c.durable_addr, 10, durable_words) != 10)
-      std::memset(durable_words, 0, sizeof(durable_words));
   }
+  if (r.connected && !c.raw && uses(Op::durable) &&
+      modbus_read_registers(ctx, c.durable_addr, 10, durable_words) != 10)
+    std::memset(durable_words, 0, sizeof(durable_words));
   r.latency_us.reserve(1 << 16);
   while (!go) std::this_thread::yield();
   std::uint16_t tid = 0;
