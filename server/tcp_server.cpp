@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 
 #include "mbap.hpp"
@@ -40,8 +41,9 @@ class Reader {
  public:
   explicit Reader(int fd) : fd_(fd) {}
   bool empty() const { return begin_ == end_; }
-  // Reads exactly n bytes (n <= the buffer), each chunk within timeout_ms.
-  bool read_exact(std::uint8_t* out, std::size_t n, int timeout_ms, const std::atomic<bool>& stop) {
+  // Reads exactly n bytes (n <= the buffer) before the deadline.
+  bool read_exact(std::uint8_t* out, std::size_t n, std::chrono::steady_clock::time_point deadline,
+                  const std::atomic<bool>& stop) {
     while (end_ - begin_ < n) {
       if (begin_ > 0) {  // keep the unread bytes at the front
         std::memmove(buf_.data(), buf_.data() + begin_, end_ - begin_);
@@ -56,7 +58,9 @@ class Reader {
       if (r == 0) return false;
       if (errno == EINTR) continue;
       if (errno != EAGAIN && errno != EWOULDBLOCK) return false;
-      if (!wait_readable(fd_, timeout_ms, stop)) return false;
+      const auto left =
+          std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now()).count();
+      if (left <= 0 || !wait_readable(fd_, static_cast<int>(left), stop)) return false;
     }
     std::memcpy(out, buf_.data() + begin_, n);
     begin_ += n;
@@ -149,14 +153,16 @@ void TcpServer::serve(Connection& c, ClientInfo info) {
       why = stop_ ? "server stopping" : "idle timeout (--idle-timeout-s)";
       break;
     }
-    if (!reader.read_exact(frame.data(), kMbapHeaderSize, kFrameTimeoutMs, stop_)) break;
+    // The whole frame, not each of its pieces, must arrive within the frame timeout.
+    const auto frame_deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(kFrameTimeoutMs);
+    if (!reader.read_exact(frame.data(), kMbapHeaderSize, frame_deadline, stop_)) break;
     const MbapHeader h = parse_mbap(std::span<const std::uint8_t, kMbapHeaderSize>(frame.data(), kMbapHeaderSize));
     if (!h.valid()) {
       why = "malformed MBAP header";
       spdlog::warn("tcp: {}: MBAP protocol {} length {}; closing the connection", info.address, h.protocol, h.length);
       break;
     }
-    if (!reader.read_exact(frame.data() + kMbapHeaderSize, h.pdu_size(), kFrameTimeoutMs, stop_)) {
+    if (!reader.read_exact(frame.data() + kMbapHeaderSize, h.pdu_size(), frame_deadline, stop_)) {
       why = "incomplete frame";
       break;
     }
