@@ -250,6 +250,7 @@ CommandResult Engine::motion_refusal(const Settings& settings, std::size_t axis)
 void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
   const Commands& c = inputs.commands;
   if (c.reset_alarm) {
+    ++command_count_;
     const bool fault = std::any_of(drive_fault_.begin(), drive_fault_.end(), [](bool f) { return f; });
     if (estop_ || fault || comm_lost_) {
       last_result_ = CommandResult::refused_cause_present;
@@ -260,6 +261,7 @@ void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
     }
   }
   if (c.abort) {
+    ++command_count_;
     if (cycle_active_) {
       for (std::size_t a = 0; a < kAxisCount; ++a) {
         AxisRun& run = axes_[a];
@@ -278,6 +280,7 @@ void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
   const bool home_all = c.home_all || start_edge;
   const AxisMask home_axes = c.home_axes & kAllAxes;
   if (home_all || home_axes) {
+    ++command_count_;
     if (cycle_active_) {
       const bool same = home_all ? cycle_all_ : (!cycle_all_ && home_axes == cycle_requested_);
       last_result_ = same ? CommandResult::already_running : CommandResult::refused_busy;
@@ -300,6 +303,7 @@ void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
       if (run.phase == Phase::jog && run.jog_dir == req) {
         // still held
       } else if (req != prev_jog_request_[a]) {
+        ++command_count_;
         CommandResult r = motion_refusal(settings, a);
         const bool homed = run.homed || settings.axes[a].mode == HomingMode::disabled;
         if (r == CommandResult::accepted && !homed &&
@@ -319,6 +323,7 @@ void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
 
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     if (!(c.move_axes & axis_bit(a))) continue;
+    ++command_count_;
     AxisRun& run = axes_[a];
     const AxisSettings& s = settings.axes[a];
     const double target = c.move_target_mm[a];
@@ -572,6 +577,7 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
   st.homing_cycles = homing_cycles_;
   st.heartbeat = heartbeat_;
   st.last_command_result = last_result_;
+  st.command_count = command_count_;
   if (alarm) st.state = MachineState::alarm;
   else if (cycle_active_) st.state = MachineState::homing;
   else if (moving) st.state = MachineState::moving;

@@ -124,6 +124,7 @@ class Engine {
   std::uint32_t homing_cycles_ = 0;
   std::uint32_t heartbeat_ = 0;
   CommandResult last_result_ = CommandResult::none;
+  std::uint32_t command_count_ = 0;
 
   Outputs outputs_{};
   Status status_{};

@@ -69,6 +69,7 @@ struct Status {
   std::uint32_t homing_cycles = 0;  // cycles completed successfully
   std::uint32_t heartbeat = 0;      // control periods since start
   CommandResult last_command_result = CommandResult::none;
+  std::uint32_t command_count = 0;  // commands judged so far: last_command_result belongs to the latest
   std::uint16_t interlocks = 0;
   AlarmCode global_alarm = AlarmCode::none;  // alarm not tied to one axis (e-stop at rest, settings lost)
   bool alarm = false;

@@ -229,6 +229,7 @@ std::int64_t read_raw(const Register& reg, const ModuleView& view) {
       case Key::axis_phase: return raw_of(a.phase);
       case Key::axis_alarm: return raw_of(a.alarm.code);
       case Key::axis_alarm_phase: return a.alarm ? raw_of(a.alarm.phase) : 0;
+      case Key::axis_alarm_value: return a.alarm ? to_raw(reg, a.alarm.value) : 0;
       case Key::axis_position: return to_raw(reg, a.position_mm);
       case Key::axis_velocity: return to_raw(reg, a.velocity_mm_per_s);
       case Key::axis_home_correction: return to_raw(reg, a.home_correction_mm);
@@ -257,6 +258,7 @@ std::int64_t read_raw(const Register& reg, const ModuleView& view) {
         if (st.axes[i].alarm) return static_cast<std::int64_t>(i) + 1;
       return 0;
     case Key::status_settings_locked: return view.extras.settings_locked ? 1 : 0;
+    case Key::status_command_count: return st.command_count & 0xFFFFu;
     case Key::diag_loop_periods: return static_cast<std::int64_t>(view.extras.loop_periods & 0xFFFFFFFFu);
     case Key::diag_late_p50_us: return to_raw(reg, view.extras.late_p50_us);
     case Key::diag_late_p99_us: return to_raw(reg, view.extras.late_p99_us);

@@ -118,14 +118,13 @@ LoopStats ControlLoop::stats() const {
 }
 
 // Never blocks: when the server holds the mailbox, its news waits one period.
-void ControlLoop::take_mailbox(homing::Inputs& inputs) {
+// Never blocks: when the server holds the mailbox, its news waits one period.
+// Taken before the machine advances, so that a simulator edit (a carriage
+// placed, a fault) is already in the inputs the commands are judged on.
+void ControlLoop::take_mailbox(Mailbox& out) {
   std::unique_lock lock(mailbox_mutex_, std::try_to_lock);
-  if (!lock.owns_lock()) {
-    inputs.commands.jog = loop_jog_;
-    inputs.homing_permit = inputs.homing_permit || loop_permit_;
-    return;
-  }
-  inputs.commands = pending_;
+  if (!lock.owns_lock()) return;
+  out.commands = pending_;
   if (pending_from_modbus_ && (pending_.home_all || pending_.home_axes || pending_.move_axes))
     modbus_motion_ = true;
   pending_ = homing::Commands{};
@@ -134,19 +133,15 @@ void ControlLoop::take_mailbox(homing::Inputs& inputs) {
     if (jog_dir_[a] != 0 && loop_jog_[a] == 0) modbus_motion_ = true;
     loop_jog_[a] = jog_dir_[a];
   }
-  inputs.commands.jog = loop_jog_;
   if (settings_pending_) {
     settings_ = new_settings_;
     settings_pending_ = false;
   }
-  if (sim_ && !sim_ops_.empty()) {
+  if (sim_)
     for (auto& op : sim_ops_) op(*sim_);
-    sim_ops_.clear();
-  }
   sim_ops_.clear();
   loop_permit_ = permit_coil_;
-  inputs.homing_permit = inputs.homing_permit || loop_permit_;
-  inputs.settings_lost = settings_lost_pending_;
+  out.settings_lost = settings_lost_pending_;
   settings_lost_pending_ = false;
 }
 
@@ -164,13 +159,14 @@ void ControlLoop::run_period(double wall_dt_s) {
   const int steps = sim_dt <= 0 ? 1 : std::max(1, static_cast<int>(std::ceil(sim_dt / nominal - 1e-9)));
   const double dt = sim_dt / steps;
   for (int i = 0; i < steps; ++i) {
+    Mailbox mail;
+    if (i == 0) take_mailbox(mail);
     io_->advance(outputs_, dt);
     homing::Inputs inputs = io_->read();
-    if (i == 0) take_mailbox(inputs);
-    else {
-      inputs.commands.jog = loop_jog_;
-      inputs.homing_permit = inputs.homing_permit || loop_permit_;
-    }
+    inputs.commands = mail.commands;
+    inputs.commands.jog = loop_jog_;
+    inputs.homing_permit = inputs.homing_permit || loop_permit_;
+    inputs.settings_lost = mail.settings_lost;
     inputs.communication_lost = watchdog_expired();
     const std::int64_t t0 = monotonic_ns();
     const homing::StepResult r = engine_.step(settings_, inputs, dt);

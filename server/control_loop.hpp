@@ -92,7 +92,11 @@ class ControlLoop {
 
  private:
   void thread_main();
-  void take_mailbox(homing::Inputs& inputs);
+  struct Mailbox {
+    homing::Commands commands{};
+    bool settings_lost = false;
+  };
+  void take_mailbox(Mailbox& out);
   bool watchdog_expired() const;
   void record_trace(const homing::Status& status);
 
