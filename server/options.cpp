@@ -97,7 +97,10 @@ std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv) {
   app.set_config("--config", "", "TOML config file; every option below can be a key in it")
       ->check(CLI::ExistingFile);
   app.add_option("--tcp", tcp, "Modbus TCP listen address HOST:PORT")->capture_default_str();
-  app.add_flag("--no-tcp,--no_tcp", [&o](std::int64_t) { o.tcp_enabled = false; }, "Serve RTU only");
+  // A bool flag: CLI11 2.1's integer flag callback throws std::invalid_argument
+  // (uncaught: abort) on a value like `--no-tcp=yess` or `no-tcp = "on?"`.
+  bool no_tcp = false;
+  app.add_flag("--no-tcp,--no_tcp", no_tcp, "Serve RTU only");
   app.add_option("--rtu", o.rtu_device, "Serial device for Modbus RTU (e.g. /dev/ttyUSB0)");
   app.add_option("--baud", o.baud, "RTU baud rate")
       ->check(CLI::IsMember({1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200}))
@@ -158,6 +161,7 @@ std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv) {
       what += " (config file " + cfg->as<std::string>() + ")";
     return std::unexpected(what);
   }
+  if (no_tcp) o.tcp_enabled = false;
   if (auto cfg = app.get_option("--config"); cfg->count() > 0) {
     o.config_path = cfg->as<std::string>();
     if (auto r = check_config_file(o.config_path, app); !r) return std::unexpected(r.error());

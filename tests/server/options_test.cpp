@@ -51,6 +51,7 @@ TEST_CASE("homingd exits non-zero with one line naming a wrong option") {
       {{"--unit", "0"}, "--unit"},
       {{"--word-order", "middle"}, "--word-order"},
       {{"--no-such-option"}, "--no-such-option"},
+      {{"--no-tcp=trux"}, "--no-tcp"},  // was an uncaught std::invalid_argument (abort), found by fuzz_config
   };
   for (const Case& c : cases) {
     std::vector<std::string> argv{homingd_path(), "--db", db};
