@@ -119,3 +119,31 @@ TEST_CASE("diagnostics show the control loop running and the daemon's memory") {
   CHECK(c.read("diag.tcp_clients") == 1);
   CHECK(c.read("diag.loop_late_max_us") >= c.read("diag.loop_late_p50_us"));
 }
+
+TEST_CASE("status.command_count moves with every command, so a result is matched to its command") {
+  Daemon d;
+  Client c = Client::tcp(d.port());
+  const auto n0 = c.read("status.command_count");
+  REQUIRE(c.write("cmd.reset_alarm", 1) == 0);
+  REQUIRE(wait_until([&] { return c.read("status.command_count") == n0 + 1; }, 3s));
+  CHECK(c.read("status.last_command_result") == 1);  // accepted
+  REQUIRE(c.write("sim.estop", 1) == 0);
+  REQUIRE(c.write("cmd.home_all", 1) == 0);
+  REQUIRE(wait_until([&] { return c.read("status.command_count") == n0 + 2; }, 3s));
+  CHECK(c.read("status.last_command_result") == 4);  // refused_estop
+}
+
+TEST_CASE("axis.<a>.alarm_value gives the figure the alarm text quotes") {
+  Daemon d;
+  Client c = Client::tcp(d.port());
+  c.set("axis.x.max_seek_travel", um(40));
+  c.set("sim.x.fault", 2);  // sensor stuck inactive
+  REQUIRE(c.write("cmd.home.x", 1) == 0);
+  REQUIRE(wait_until([&] { return c.read("axis.x.alarm") != 0; }, 20s));
+  CHECK(c.read("axis.x.alarm") == 1);  // sensor_not_found
+  CHECK(std::abs(c.read("axis.x.alarm_value") - um(40)) <= 1);
+  REQUIRE(c.write("sim.x.fault", 0) == 0);
+  REQUIRE(c.write("cmd.reset_alarm", 1) == 0);
+  REQUIRE(wait_until([&] { return c.read("axis.x.alarm") == 0; }, 3s));
+  CHECK(c.read("axis.x.alarm_value") == 0);
+}
