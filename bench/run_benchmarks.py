@@ -671,7 +671,8 @@ def report(b, results, info, args, started, out_path, causes):
       "`axis.x.home_position`, 120–129, `pull_off` toggling by 1 µm so every write changes a setting) to a "
       "fresh homingd with no cycle running: homingd validates, commits to SQLite (WAL, synchronous=FULL: the "
       "setting and its audit row in one transaction) and only then answers. Beside it `sqlite_commit`: one "
-      "row updated and committed with the same journal settings, nothing else, in the same directory "
+      "row updated and committed with the same journal settings, nothing else (after 300 warm-up commits and "
+      "a checkpoint, so its WAL is at a steady size like a running daemon's), in the same directory "
       f"(`{os.path.relpath(b.work, ROOT) if b.work.startswith(ROOT) else b.work}`, on the disk the daemon "
       "would use), rounds alternating.")
     w("")
