@@ -10,6 +10,7 @@ packages=(
   catch2 libcli11-dev libtomlplusplus-dev libspdlog-dev libfmt-dev
   nlohmann-json3-dev libbenchmark-dev
   mbpoll socat python3-pymodbus python3-serial python3-serial-asyncio
+  clang-16 libclang-rt-16-dev
 )
 
 missing=()

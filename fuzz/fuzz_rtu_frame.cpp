@@ -1,0 +1,73 @@
+// libFuzzer target: the Modbus RTU request path after libmodbus's framing.
+// The input is a sequence of chunks [length][flags][frame: unit, PDU, CRC lo,
+// CRC hi]. Flag bit 0 asks the target to put the right CRC in the last two
+// bytes first (so the fuzzer reaches the handler without solving CRC-16);
+// otherwise the CRC is checked as given. As server/rtu_server.cpp receives
+// them from modbus_receive: a bad CRC, a frame shorter than 4 bytes, or a
+// unit that is neither the module's nor broadcast (0) never reaches the
+// handler; the rest go to ModbusService::handle with transport "rtu".
+//
+// Broadcast (unit 0) is applied but never answered: the frame is also played
+// as a unicast to the module on a twin service, and both must end up with the
+// same settings and the same motion after every frame, while the twin keeps
+// the request invariants of fuzz_common.hpp (also run on a locked service).
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "fuzz_common.hpp"
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  fuzz::quiet_logs();
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using fuzz::Harness;
+  Harness bus(Harness::Access::open, "rtu");      // gets the frames as they come
+  Harness twin(Harness::Access::open, "rtu");     // broadcasts as unicasts
+  Harness locked(Harness::Access::locked, "rtu");
+  std::size_t at = 0;
+  std::vector<std::uint8_t> frame;
+  while (size - at >= 2) {
+    const std::size_t length = data[at];
+    const bool fix_crc = data[at + 1] & 1;
+    at += 2;
+    if (size - at < length) break;
+    frame.assign(data + at, data + at + length);
+    at += length;
+    if (frame.size() < 4) continue;  // rtu_server: rc < 4 is ignored
+    const auto body = std::span<const std::uint8_t>(frame).first(frame.size() - 2);
+    if (fix_crc) {
+      const std::uint16_t crc = server::crc16(body);
+      frame[frame.size() - 2] = static_cast<std::uint8_t>(crc & 0xFF);
+      frame[frame.size() - 1] = static_cast<std::uint8_t>(crc >> 8);
+    }
+    const std::uint16_t crc = static_cast<std::uint16_t>(frame[frame.size() - 2] | (frame[frame.size() - 1] << 8));
+    if (server::crc16(body) != crc) continue;  // libmodbus: bad CRC, flushed
+    const std::uint8_t unit = frame[0];
+    if (unit != fuzz::kModuleUnit && unit != 0) continue;  // libmodbus: another unit on the bus
+    const auto pdu = std::span<const std::uint8_t>(frame).subspan(1, frame.size() - 3);
+
+    const server::Reply reply = unit == 0 ? bus.service->handle(0, pdu, bus.client) : bus.request(unit, pdu);
+    if (unit == 0) {
+      bus.step();
+      if (reply.send) fuzz::violated("a broadcast was answered", unit, pdu);
+    }
+    const server::Reply unicast = twin.request(fuzz::kModuleUnit, pdu);
+    (void)locked.request(fuzz::kModuleUnit, pdu);
+    if (unit == 0 && fuzz::accepted_write(pdu.empty() ? 0 : pdu[0], unicast)) bus.motion_allowed = true;
+    if (bus.settings() != twin.settings()) fuzz::violated("a broadcast and a unicast changed different settings", unit, pdu);
+    if (bus.moving() != twin.moving()) fuzz::violated("a broadcast and a unicast moved differently", unit, pdu);
+    // The reply as it goes on the line: unit, PDU, CRC that checks.
+    if (reply.send) {
+      const auto out = server::rtu_frame(unit, reply.pdu);
+      if (out.size() > 256 || server::crc16(out) != 0) fuzz::violated("reply RTU frame too long or bad CRC", unit, pdu);
+    }
+  }
+  bus.finish();
+  twin.finish();
+  locked.finish();
+  return 0;
+}

@@ -1,0 +1,103 @@
+// libFuzzer target: `homingd --import-settings FILE`. The input is written as
+// a settings TOML file and imported into a temporary database with
+// persistence::SettingsStore::import_file and registers::validate_settings_map
+// as the validator, as main.cpp does. Besides "no crash": a refused import
+// leaves load() exactly as before; an accepted one leaves only values the
+// daemon accepts at start (settings_from_raw rejects none) that pass the
+// validator again. After an accepted import the previous values are committed
+// back, so every input starts from the defaults.
+#include <unistd.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "fuzz_common.hpp"
+#include "persistence/settings_store.hpp"
+#include "registers/defaults.hpp"
+#include "registers/validate.hpp"
+
+namespace {
+
+struct Fixture {
+  std::filesystem::path dir;
+  std::string file;
+  std::unique_ptr<persistence::SettingsStore> store;
+};
+
+Fixture& fixture() {
+  static Fixture f = [] {
+    Fixture x;
+    x.dir = std::filesystem::temp_directory_path() / ("homing-fuzz-import-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(x.dir);
+    std::filesystem::create_directories(x.dir);
+    x.file = (x.dir / "settings.toml").string();
+    std::vector<persistence::SettingDefault> defaults;
+    for (const auto& [name, value] : registers::persisted_defaults()) defaults.push_back({name, value});
+    persistence::OpenReport report;
+    persistence::StoreOptions options;
+    options.backup_min_interval = std::chrono::hours(1);  // backups are not what is fuzzed here
+    auto store = persistence::SettingsStore::open((x.dir / "settings.db").string(), defaults, report, options);
+    if (!store) {
+      std::fprintf(stderr, "cannot open the fuzz database: %s\n", store.error().message.c_str());
+      std::abort();
+    }
+    x.store = std::make_unique<persistence::SettingsStore>(std::move(*store));
+    std::atexit([] {
+      std::error_code ec;
+      std::filesystem::remove_all(fixture().dir, ec);
+    });
+    return x;
+  }();
+  return f;
+}
+
+std::optional<persistence::Rejection> validate(const std::map<std::string, std::int64_t>& all) {
+  if (auto refusal = registers::validate_settings_map(all)) return persistence::Rejection{"", refusal->message};
+  return std::nullopt;
+}
+
+void check(bool ok, const char* what) {
+  if (!ok) fuzz::violated(what, 0, {});
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  fuzz::quiet_logs();
+  (void)fixture();
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  Fixture& f = fixture();
+  {
+    std::ofstream out(f.file, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+  }
+  const auto before = f.store->load();
+  const auto imported = f.store->import_file(f.file, validate);
+  const auto after = f.store->load();
+  if (!imported) {
+    check(!imported.error().message.empty(), "a refused import without a message");
+    check(after == before, "a refused import changed the settings");
+    return 0;
+  }
+  const auto from_raw = registers::settings_from_raw(after);
+  check(from_raw.rejected.empty(), "an accepted import stored a value the daemon rejects at start");
+  check(!validate(after).has_value(), "an accepted import stored settings the validator refuses");
+  for (const auto& c : imported->changes) {
+    auto it = after.find(c.name);
+    check(it != after.end() && it->second == c.new_value, "a reported change is not what is stored");
+  }
+  // Back to the previous values for the next input.
+  std::vector<persistence::SettingWrite> restore;
+  for (const auto& [name, value] : before) restore.push_back({name, value});
+  check(f.store->commit(restore, persistence::ChangeSource{"fuzz", "restore"}).has_value(), "restore failed");
+  check(f.store->load() == before, "restore did not restore");
+  return 0;
+}
