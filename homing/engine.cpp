@@ -121,6 +121,8 @@ void Engine::stop_all(const Settings& settings) {
     AxisRun& run = axes_[a];
     run.command = stop_command(settings.axes[a].acceleration_mm_per_s2);
     run.push_output = false;
+    // Switching the commutator back changes the source of this input.
+    if (run.commutator_output) filter_reset_[a] = true;
     run.commutator_output = false;
     run.in_cycle = false;
     run.aligning = false;
@@ -128,9 +130,6 @@ void Engine::stop_all(const Settings& settings) {
     const bool moving = run.motor.velocity_mm_per_s != 0;
     if (moving) run.phase = Phase::stopping;
     else if (run.phase != Phase::done) run.phase = Phase::idle;
-  }
-  if (cycle_active_) {
-    for (std::size_t c = 0; c < kAxisCount; ++c) filter_reset_[c] = filter_reset_[c] || false;
   }
   cycle_active_ = false;
   step_index_ = -1;

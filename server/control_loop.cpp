@@ -1,6 +1,10 @@
 #include "control_loop.hpp"
 
 #include <pthread.h>
+#include <sched.h>
+#include <spdlog/spdlog.h>
+
+#include <cstring>
 #include <time.h>
 
 #include <algorithm>
@@ -25,10 +29,20 @@ ControlLoop::ControlLoop(const homing::Settings& settings, std::unique_ptr<Machi
 
 ControlLoop::~ControlLoop() { stop(); }
 
-void ControlLoop::start() {
+void ControlLoop::start(int rt_priority) {
   if (running_.exchange(true)) return;
   stop_requested_ = false;
   thread_ = std::thread([this] { thread_main(); });
+  if (rt_priority > 0) {
+    sched_param param{};
+    param.sched_priority = rt_priority;
+    if (const int rc = pthread_setschedparam(thread_.native_handle(), SCHED_FIFO, &param); rc != 0)
+      spdlog::warn("--rt-priority {}: real-time scheduling refused ({}); the control loop runs at normal "
+                   "priority and may be late under load (grant CAP_SYS_NICE or set rtprio in limits.conf)",
+                   rt_priority, std::strerror(rc));
+    else
+      spdlog::info("control loop: SCHED_FIFO priority {}", rt_priority);
+  }
 }
 
 void ControlLoop::stop() {

@@ -64,7 +64,9 @@ class ControlLoop {
   ControlLoop(const ControlLoop&) = delete;
   ControlLoop& operator=(const ControlLoop&) = delete;
 
-  void start();
+  // rt_priority > 0: SCHED_FIFO at that priority for the control thread
+  // (a warning and normal scheduling when the system refuses).
+  void start(int rt_priority = 0);
   // Stops motion (abort, decelerate) and joins the thread.
   void stop();
 

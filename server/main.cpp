@@ -130,7 +130,7 @@ int main(int argc, char** argv) {
     if (auto r = rtu->open(); !r) return fail_start(r.error());
   }
 
-  loop.start();
+  loop.start(opt.rt_priority);
   server::Monitor monitor(loop, service, &*store, service.store_mutex(), [&tcp]() -> std::uint32_t {
     return tcp ? static_cast<std::uint32_t>(tcp->active_clients()) : 0;
   });

@@ -115,6 +115,10 @@ std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv) {
   app.add_option("--period-us,--period_us", o.period_us, "Control period in microseconds")
       ->check(CLI::Range(100, 100000))
       ->capture_default_str();
+  app.add_option("--rt-priority,--rt_priority", o.rt_priority,
+                 "SCHED_FIFO priority of the control loop thread (1..99); 0 = normal scheduling")
+      ->check(CLI::Range(0, 99))
+      ->capture_default_str();
   app.add_option("--word-order,--word_order", word_order, "Order of the two words of 32-bit values")
       ->check(CLI::IsMember({"high-first", "low-first"}))
       ->capture_default_str();

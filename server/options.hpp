@@ -23,6 +23,7 @@ struct Options {
   std::string db_path = "homingd.db";
   std::string backend = "sim";
   int period_us = 1000;
+  int rt_priority = 20;  // SCHED_FIFO for the control thread; 0 = normal scheduling
   registers::WordOrder word_order = registers::WordOrder::high_first;
   int max_clients = 32;
   int idle_timeout_s = 60;
