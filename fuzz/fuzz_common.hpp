@@ -4,7 +4,11 @@
 // on the default simulator, no settings store; and the invariants every
 // request must keep. A violated invariant aborts with a message (libFuzzer
 // then saves the input as a crash).
+#include <signal.h>
 #include <spdlog/spdlog.h>
+
+#include <cerrno>
+#include <filesystem>
 
 #include <cstdint>
 #include <cstdio>
@@ -31,6 +35,19 @@ namespace fuzz {
 }
 
 inline void quiet_logs() { spdlog::set_level(spdlog::level::off); }
+
+// Temporary files are named <prefix><pid>...; libFuzzer ends a timed run with
+// _Exit (no atexit), so files of processes that no longer exist are removed
+// here at start.
+inline void remove_stale_temp_files(const std::string& prefix) {
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(std::filesystem::temp_directory_path(), ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const long pid = std::strtol(name.c_str() + prefix.size(), nullptr, 10);
+    if (pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) std::filesystem::remove_all(e.path(), ec);
+  }
+}
 
 constexpr std::uint8_t kModuleUnit = 1;
 constexpr std::uint8_t kSimUnit = 247;

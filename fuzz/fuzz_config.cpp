@@ -36,6 +36,7 @@ void check(bool ok, const char* what) {
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   fuzz::quiet_logs();
+  fuzz::remove_stale_temp_files("homing-fuzz-config-");
   std::atexit([] { std::remove(config_path().c_str()); });
   return 0;
 }

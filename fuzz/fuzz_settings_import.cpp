@@ -69,6 +69,7 @@ void check(bool ok, const char* what) {
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   fuzz::quiet_logs();
+  fuzz::remove_stale_temp_files("homing-fuzz-import-");
   (void)fixture();
   return 0;
 }
