@@ -37,6 +37,7 @@ void check(bool ok, const char* what) {
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   fuzz::quiet_logs();
   fuzz::remove_stale_temp_files("homing-fuzz-config-");
+  (void)config_path();  // constructed before the handler is registered: destroyed after it ran
   std::atexit([] { std::remove(config_path().c_str()); });
   return 0;
 }

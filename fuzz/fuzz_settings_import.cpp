@@ -47,10 +47,6 @@ Fixture& fixture() {
       std::abort();
     }
     x.store = std::make_unique<persistence::SettingsStore>(std::move(*store));
-    std::atexit([] {
-      std::error_code ec;
-      std::filesystem::remove_all(fixture().dir, ec);
-    });
     return x;
   }();
   return f;
@@ -70,7 +66,12 @@ void check(bool ok, const char* what) {
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   fuzz::quiet_logs();
   fuzz::remove_stale_temp_files("homing-fuzz-import-");
-  (void)fixture();
+  (void)fixture();  // constructed before the handler is registered: destroyed after it ran
+  std::atexit([] {
+    fixture().store.reset();
+    std::error_code ec;
+    std::filesystem::remove_all(fixture().dir, ec);
+  });
   return 0;
 }
 
