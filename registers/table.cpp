@@ -44,8 +44,6 @@ constexpr std::int64_t kLengthMax = 100'000'000;
 constexpr std::int64_t kFeedMax = 60'000;  // mm/min
 constexpr std::int64_t kAccelMax = 60'000;  // mm/s²
 
-constexpr Type H16 = Type::u16;
-constexpr Table HR = Table::holding_register;
 constexpr Table IR = Table::input_register;
 constexpr Table CO = Table::coil;
 constexpr Table DI = Table::discrete_input;
