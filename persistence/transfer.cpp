@@ -1,164 +1,32 @@
 // Export and import of all settings as a human-readable TOML file.
-#include <fcntl.h>
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
-#include <unistd.h>
 
-#include <cerrno>
-#include <cstring>
-#include <ctime>
-#include <fstream>
-#include <sstream>
-#include <toml++/toml.h>
-
+#include "persistence/settings_file.hpp"
 #include "persistence/settings_store.hpp"
 #include "persistence/store_impl.hpp"
 
 namespace persistence {
 
-namespace {
-
-constexpr std::string_view kFormat = "homing-module-settings";
-constexpr std::int64_t kFormatVersion = 1;
-
-std::string quote_key(std::string_view k) {
-  std::string out = "\"";
-  for (char c : k) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  out += '"';
-  return out;
-}
-
-std::string utc_text(std::int64_t ms) {
-  std::time_t t = static_cast<std::time_t>(ms / 1000);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
-Error file_error(const std::string& file, std::string_view what, int err) {
-  ErrorKind kind = ErrorKind::io;
-  if (err == EROFS || err == EACCES || err == EPERM) kind = ErrorKind::read_only;
-  if (err == ENOSPC || err == EDQUOT || err == EFBIG) kind = ErrorKind::disk_full;
-  return Error{kind, fmt::format("{}: {} failed: {}", file, what, std::strerror(err))};
-}
-
-std::string_view type_name(toml::node_type t) {
-  switch (t) {
-    case toml::node_type::string: return "string";
-    case toml::node_type::floating_point: return "decimal number";
-    case toml::node_type::boolean: return "boolean";
-    case toml::node_type::array: return "array";
-    case toml::node_type::date:
-    case toml::node_type::time:
-    case toml::node_type::date_time: return "date/time";
-    default: return "value of another kind";
-  }
-}
-
-struct Entry {
-  std::int64_t value;
-  std::uint32_t line;
-};
-
-// Flattens [settings] (quoted dotted keys or nested tables) into name -> value.
-std::optional<Error> flatten(const std::string& file, const toml::table& table, const std::string& prefix,
-                             std::map<std::string, Entry>& out) {
-  for (const auto& [key, node] : table) {
-    std::string name = prefix.empty() ? std::string(key.str()) : prefix + "." + std::string(key.str());
-    auto line = node.source().begin.line;
-    if (const auto* sub = node.as_table()) {
-      if (auto e = flatten(file, *sub, name, out)) return e;
-      continue;
-    }
-    const auto* i = node.as_integer();
-    if (!i)
-      return Error{ErrorKind::invalid, fmt::format("{}:{}: '{}' must be an integer (the raw register value), not a "
-                                                   "{}; nothing was imported",
-                                                   file, line, name, type_name(node.type()))};
-    if (out.contains(name))
-      return Error{ErrorKind::invalid, fmt::format("{}:{}: '{}' is given twice; nothing was imported", file, line, name)};
-    out[name] = Entry{i->get(), line};
-  }
-  return std::nullopt;
-}
-
-}  // namespace
-
 Status SettingsStore::export_file(const std::string& file) const {
   std::string text;
   {
     std::lock_guard lock(impl_->mu);
-    text += "# Homing module settings: raw register values by register name.\n";
-    text += fmt::format("# Exported {} from {}.\n", utc_text(impl_->now_ms()), impl_->path);
-    text += "# Import checks every value exactly like a Modbus write; a bad file changes nothing.\n";
-    text += fmt::format("format = \"{}\"\nformat_version = {}\n\n[settings]\n", kFormat, kFormatVersion);
-    for (const auto& [name, value] : impl_->values) text += fmt::format("{} = {}\n", quote_key(name), value);
+    text = settings_file_text(impl_->values, impl_->path, impl_->now_ms());
   }
-  const std::string tmp = file + ".tmp";
-  int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return std::unexpected(file_error(tmp, "creating the export file", errno));
-  std::size_t done = 0;
-  while (done < text.size()) {
-    ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      int err = errno;
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      return std::unexpected(file_error(tmp, "writing the export file", err));
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  if (::fsync(fd) != 0) {
-    int err = errno;
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    return std::unexpected(file_error(tmp, "fsync of the export file", err));
-  }
-  ::close(fd);
-  if (::rename(tmp.c_str(), file.c_str()) != 0) {
-    int err = errno;
-    ::unlink(tmp.c_str());
-    return std::unexpected(file_error(file, "renaming the export file into place", err));
+  if (auto w = write_file_atomically(file, text); !w) {
+    Error e = w.error();
+    e.message = "settings export: " + e.message;
+    return std::unexpected(e);
   }
   impl_->log->info("settings exported to {}", file);
   return {};
 }
 
 Result<ImportReport> SettingsStore::import_file(const std::string& file, const Validator& validate) {
-  toml::table doc;
-  try {
-    doc = toml::parse_file(file);
-  } catch (const toml::parse_error& e) {
-    const auto& src = e.source();
-    if (src.begin.line == 0)
-      return fail(ErrorKind::invalid, fmt::format("{}: cannot read the file: {}; nothing was imported", file,
-                                                  e.description()));
-    return fail(ErrorKind::invalid, fmt::format("{}:{}:{}: not valid TOML: {}; nothing was imported", file,
-                                                src.begin.line, src.begin.column, e.description()));
-  }
-  if (auto fmt_node = doc["format"]; fmt_node) {
-    auto v = fmt_node.value<std::string>();
-    if (!v || *v != kFormat)
-      return fail(ErrorKind::invalid, fmt::format("{}:{}: 'format' must be \"{}\"; nothing was imported", file,
-                                                  fmt_node.node()->source().begin.line, kFormat));
-  }
-  if (auto ver = doc["format_version"]; ver) {
-    auto v = ver.value<std::int64_t>();
-    if (!v || *v > kFormatVersion)
-      return fail(ErrorKind::invalid, fmt::format("{}:{}: format_version must be at most {}; nothing was imported",
-                                                  file, ver.node()->source().begin.line, kFormatVersion));
-  }
-  const toml::table* settings = doc["settings"].as_table();
-  if (!settings)
-    return fail(ErrorKind::invalid, fmt::format("{}: no [settings] table; nothing was imported", file));
-  std::map<std::string, Entry> entries;
-  if (auto e = flatten(file, *settings, "", entries)) return std::unexpected(*e);
+  auto read = read_settings_file(file);
+  if (!read) return std::unexpected(read.error());
+  const SettingsFileEntries& entries = *read;
 
   std::lock_guard lock(impl_->mu);
   auto& m = *impl_;

@@ -1,16 +1,11 @@
 #include "settings_io.hpp"
 
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
-#include <cstring>
-#include <ctime>
-#include <toml++/toml.h>
 
 #include "homing/settings_check.hpp"
+#include "persistence/settings_file.hpp"
 #include "registers/defaults.hpp"
 #include "registers/lookup.hpp"
 #include "registers/validate.hpp"
@@ -198,135 +193,23 @@ std::expected<void, std::string> execute_plan(Connection& c, const WritePlan& pl
 }
 
 // ------------------------------------------------------------------ file
-namespace {
+// The layout is persistence's (persistence/settings_file.hpp): a file exported
+// here imports into a database and the other way round.
 
-constexpr std::string_view kFormat = "homing-module-settings";
-constexpr std::int64_t kFormatVersion = 1;
-
-std::string quote_key(std::string_view k) {
-  std::string out = "\"";
-  for (char ch : k) {
-    if (ch == '"' || ch == '\\') out += '\\';
-    out += ch;
-  }
-  out += '"';
-  return out;
-}
-
-std::string utc_text(std::int64_t ms) {
-  std::time_t t = static_cast<std::time_t>(ms / 1000);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
-std::string_view node_kind(toml::node_type t) {
-  switch (t) {
-    case toml::node_type::string: return "string";
-    case toml::node_type::floating_point: return "decimal number";
-    case toml::node_type::boolean: return "boolean";
-    case toml::node_type::array: return "array";
-    default: return "value of another kind";
-  }
-}
-
-struct Entry {
-  std::int64_t value;
-  std::uint32_t line;
-};
-
-std::optional<std::string> flatten(const std::string& file, const toml::table& table, const std::string& prefix,
-                                   std::map<std::string, Entry>& out) {
-  for (const auto& [key, node] : table) {
-    std::string name = prefix.empty() ? std::string(key.str()) : prefix + "." + std::string(key.str());
-    const auto line = node.source().begin.line;
-    if (const auto* sub = node.as_table()) {
-      if (auto e = flatten(file, *sub, name, out)) return e;
-      continue;
-    }
-    const auto* i = node.as_integer();
-    if (!i)
-      return fmt::format("{}:{}: '{}' must be an integer (the raw register value), not a {}; nothing was imported",
-                         file, line, name, node_kind(node.type()));
-    if (out.contains(name)) return fmt::format("{}:{}: '{}' is given twice; nothing was imported", file, line, name);
-    out[name] = Entry{i->get(), line};
-  }
-  return std::nullopt;
-}
-
-}  // namespace
-
-// Same layout as persistence::SettingsStore::export_file (persistence/transfer.cpp).
 std::string settings_file_text(const RawMap& values, const std::string& source, std::int64_t now_ms) {
-  std::string text;
-  text += "# Homing module settings: raw register values by register name.\n";
-  text += fmt::format("# Exported {} from {}.\n", utc_text(now_ms), source);
-  text += "# Import checks every value exactly like a Modbus write; a bad file changes nothing.\n";
-  text += fmt::format("format = \"{}\"\nformat_version = {}\n\n[settings]\n", kFormat, kFormatVersion);
-  for (const auto& [name, value] : values) text += fmt::format("{} = {}\n", quote_key(name), value);
-  return text;
+  return persistence::settings_file_text(values, source, now_ms);
 }
 
 std::expected<void, std::string> write_file_atomically(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return std::unexpected(fmt::format("{}: cannot create: {}", tmp, std::strerror(errno)));
-  std::size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      const int e = errno;
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      return std::unexpected(fmt::format("{}: write failed: {}", tmp, std::strerror(e)));
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
-    const int e = errno;
-    ::unlink(tmp.c_str());
-    return std::unexpected(fmt::format("{}: fsync failed: {}", tmp, std::strerror(e)));
-  }
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int e = errno;
-    ::unlink(tmp.c_str());
-    return std::unexpected(fmt::format("{}: rename failed: {}", path, std::strerror(e)));
-  }
+  if (auto w = persistence::write_file_atomically(path, text); !w) return std::unexpected(w.error().message);
   return {};
 }
 
 std::expected<RawMap, std::string> read_settings_file(const std::string& file) {
-  toml::table doc;
-  try {
-    doc = toml::parse_file(file);
-  } catch (const toml::parse_error& e) {
-    const auto& src = e.source();
-    if (src.begin.line == 0)
-      return std::unexpected(fmt::format("{}: cannot read the file: {}; nothing was imported", file, e.description()));
-    return std::unexpected(fmt::format("{}:{}:{}: not valid TOML: {}; nothing was imported", file, src.begin.line,
-                                       src.begin.column, e.description()));
-  }
-  if (auto f = doc["format"]; f) {
-    auto v = f.value<std::string>();
-    if (!v || *v != kFormat)
-      return std::unexpected(fmt::format("{}:{}: 'format' must be \"{}\"; nothing was imported", file,
-                                         f.node()->source().begin.line, kFormat));
-  }
-  if (auto ver = doc["format_version"]; ver) {
-    auto v = ver.value<std::int64_t>();
-    if (!v || *v > kFormatVersion)
-      return std::unexpected(fmt::format("{}:{}: format_version must be at most {}; nothing was imported", file,
-                                         ver.node()->source().begin.line, kFormatVersion));
-  }
-  const toml::table* settings = doc["settings"].as_table();
-  if (!settings) return std::unexpected(fmt::format("{}: no [settings] table; nothing was imported", file));
-  std::map<std::string, Entry> entries;
-  if (auto e = flatten(file, *settings, "", entries)) return std::unexpected(*e);
+  auto entries = persistence::read_settings_file(file);
+  if (!entries) return std::unexpected(entries.error().message);
   RawMap out;
-  for (const auto& [name, e] : entries) {
+  for (const auto& [name, e] : *entries) {
     const Register* r = registers::find_register(name);
     if (!r || r->unit != Unit::module || r->table != Table::holding_register || !r->persisted)
       return std::unexpected(fmt::format("{}:{}: unknown register '{}'; nothing was imported", file, e.line, name));
