@@ -441,7 +441,7 @@ Result<std::vector<Change>> SettingsStore::commit(const std::vector<SettingWrite
     changes.error().message += "; nothing was written, the old settings stay in force";
     return changes;
   }
-  if (!changes->empty()) {
+  if (!changes->empty() && impl_->opt.backup_on_commit) {
     if (auto s = impl_->backup_if_due_locked(); !s) impl_->log->warn("{}", s.error().message);
   }
   return changes;

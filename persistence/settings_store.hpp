@@ -57,6 +57,9 @@ struct StoreOptions {
   // previous one is younger than this; a later commit, backup_if_due() or
   // close() then writes it. 0 = after every commit.
   std::chrono::milliseconds backup_min_interval{1000};
+  // false: commit() never writes the backup itself; the owner calls
+  // backup_if_due() from an idle tick, so no acknowledged write waits for it.
+  bool backup_on_commit = true;
   bool read_only = false;  // for tools: no migration, no defaults, no restore
   std::string vfs;         // SQLite VFS name; empty = default (tests inject faults)
   std::shared_ptr<spdlog::logger> logger;  // default: spdlog::default_logger()

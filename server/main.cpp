@@ -76,7 +76,9 @@ int main(int argc, char** argv) {
   std::vector<persistence::SettingDefault> defaults;
   for (const auto& [name, value] : registers::persisted_defaults()) defaults.push_back({name, value});
   persistence::OpenReport report;
-  auto store = persistence::SettingsStore::open(opt.db_path, defaults, report);
+  persistence::StoreOptions store_options;
+  store_options.backup_on_commit = false;  // the monitor writes backups: no answer waits for one
+  auto store = persistence::SettingsStore::open(opt.db_path, defaults, report, store_options);
   if (!store) return fail_start("--db " + opt.db_path + ": " + store.error().message);
   if (!opt.export_settings.empty()) {
     if (auto r = store->export_file(opt.export_settings); !r) return fail_start("--export-settings: " + r.error().message);
@@ -131,7 +133,7 @@ int main(int argc, char** argv) {
   }
 
   loop.start(opt.rt_priority);
-  server::Monitor monitor(loop, service, &*store, service.store_mutex(), [&tcp]() -> std::uint32_t {
+  server::Monitor monitor(loop, service, &*store, [&tcp]() -> std::uint32_t {
     return tcp ? static_cast<std::uint32_t>(tcp->active_clients()) : 0;
   });
   monitor.start();
@@ -158,10 +160,7 @@ int main(int argc, char** argv) {
   loop.stop();
   monitor.stop();
   tcp.reset();
-  {
-    std::lock_guard lock(service.store_mutex());
-    store->close();
-  }
+  store->close();
   spdlog::info("stopped cleanly");
   return 0;
 }

@@ -35,8 +35,6 @@ class ModbusService final : public RequestHandler {
   // Called by the monitor with the history summary.
   void set_extras(const registers::StatusExtras& extras);
   homing::Settings settings() const;
-  // Guards the settings store too: whoever else uses the store takes it.
-  std::mutex& store_mutex() { return mutex_; }
 
  private:
   enum class Target { module, simulator };

@@ -15,8 +15,8 @@ std::int64_t unix_ms() {
 }
 
 Monitor::Monitor(ControlLoop& loop, ModbusService& service, persistence::SettingsStore* store,
-                 std::mutex& store_mutex, std::function<std::uint32_t()> tcp_clients)
-    : loop_(loop), service_(service), store_(store), store_mutex_(store_mutex), tcp_clients_(std::move(tcp_clients)) {}
+                 std::function<std::uint32_t()> tcp_clients)
+    : loop_(loop), service_(service), store_(store), tcp_clients_(std::move(tcp_clients)) {}
 
 namespace {
 
@@ -49,10 +49,8 @@ void Monitor::housekeeping(std::int64_t now_ms) {
   last_housekeeping_ms_ = now_ms;
   refresh_diagnostics();
   service_.set_extras(extras_);
-  if (store_) {
-    std::lock_guard lock(store_mutex_);
+  if (store_)
     if (auto r = store_->backup_if_due(); !r) spdlog::warn("settings backup not written: {}", r.error().message);
-  }
 }
 
 Monitor::~Monitor() { stop(); }
@@ -75,13 +73,10 @@ void Monitor::stop() {
 void Monitor::refresh_summary() {
   if (!store_) return;
   registers::StatusExtras& extras = extras_;
-  {
-    std::lock_guard lock(store_mutex_);
-    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-      if (auto s = store_->correction_summary(a, 10); s && s->count > 0) {
-        extras.correction_mean_mm[a] = s->mean;
-        extras.correction_spread_mm[a] = s->spread;
-      }
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    if (auto s = store_->correction_summary(a, 10); s && s->count > 0) {
+      extras.correction_mean_mm[a] = s->mean;
+      extras.correction_spread_mm[a] = s->spread;
     }
   }
   service_.set_extras(extras_);
@@ -141,10 +136,8 @@ void Monitor::poll(std::int64_t now_ms) {
     }
     if (run.result == 0) spdlog::info("homing done in {} ms", now_ms - run_start_ms_);
     else spdlog::warn("homing ended with alarm {}", homing::alarm_name(static_cast<homing::AlarmCode>(run.result)));
-    if (store_) {
-      std::lock_guard lock(store_mutex_);
+    if (store_)
       if (auto r = store_->record_homing_run(run); !r) spdlog::error("history not recorded: {}", r.error().message);
-    }
     refresh_summary();
   }
   last_ = st;

@@ -15,7 +15,9 @@ namespace server {
 
 class Monitor {
  public:
-  Monitor(ControlLoop& loop, ModbusService& service, persistence::SettingsStore* store, std::mutex& store_mutex,
+  // The store is thread-safe on its own: the monitor's history, summary and
+  // backups never hold the Modbus side's lock.
+  Monitor(ControlLoop& loop, ModbusService& service, persistence::SettingsStore* store,
           std::function<std::uint32_t()> tcp_clients = {});
   ~Monitor();
   void start();
@@ -31,7 +33,6 @@ class Monitor {
   ControlLoop& loop_;
   ModbusService& service_;
   persistence::SettingsStore* store_;
-  std::mutex& store_mutex_;
   std::function<std::uint32_t()> tcp_clients_;
   registers::StatusExtras extras_{};
   std::int64_t last_housekeeping_ms_ = 0;

@@ -112,6 +112,24 @@ TEST_CASE("each committed change batch leaves a verified backup, keeping the las
   CHECK_FALSE(std::filesystem::exists(db + ".bak.tmp"));
 }
 
+TEST_CASE("with backups off the commit path, a commit waits for no backup and the owner's tick writes it",
+          "[persistence][backup]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  OpenReport report;
+  auto o = test::options();
+  o.backup_on_commit = false;
+  auto store = test::open_ok(db, report, o);
+  std::filesystem::remove(db + ".bak");  // whatever the first start left
+  REQUIRE(store.commit({{"axis.x.mode", 4}}, test::kTcp));
+  CHECK_FALSE(std::filesystem::exists(db + ".bak"));
+  CHECK(store.backup_pending());
+  REQUIRE(store.backup_if_due());
+  REQUIRE(std::filesystem::exists(db + ".bak"));
+  CHECK(test::sql_int(db + ".bak", "SELECT value FROM settings WHERE name='axis.x.mode'") == 4);
+  CHECK_FALSE(store.backup_pending());
+}
+
 TEST_CASE("backups are deferred while commits come fast, and written by close", "[persistence][backup]") {
   test::TempDir dir;
   const auto db = dir.file("settings.db");
