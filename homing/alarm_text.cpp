@@ -2,12 +2,15 @@
 #include <fmt/format.h>
 
 #include "alarms.hpp"
+#include "gantry.hpp"
 #include "settings_check.hpp"
 
 namespace homing {
 
 std::string describe_alarm(std::size_t axis, const Alarm& a, const Settings& settings) {
-  const AxisSettings& s = settings.axes[axis];
+  // Figures from the settings the axis moves with (a slave its master's).
+  const Settings moves = motion_settings(settings);
+  const AxisSettings& s = moves.axes[axis];
   const char X = kAxisUpper[axis];
   const auto u = axis_unit(axis);
   const auto ph = phase_name(a.phase);
@@ -25,6 +28,9 @@ std::string describe_alarm(std::size_t axis, const Alarm& a, const Settings& set
                          "{:g} {}; lower seek_feedrate or raise acceleration", X, a.value, u,
                          s.max_stop_distance_mm, u);
     case AlarmCode::not_released:
+      if (a.phase == Phase::assign)
+        return fmt::format("{}: shared home/limit sensor still active after the pull-off of {:g} {}; raise "
+                           "pull_off so the axis comes to rest off its sensor", X, s.pull_off_mm, u);
       return fmt::format("{}: home sensor still active after backing off {:g} {} (phase {}); check "
                          "for a stuck or shorted sensor, sensor_nc, or raise max_backoff", X,
                          s.max_backoff_mm, u, ph);
@@ -35,9 +41,10 @@ std::string describe_alarm(std::size_t axis, const Alarm& a, const Settings& set
       return fmt::format("{}: software-slaved axis has no home sensor of its own (mode {}); give it a "
                          "switch mode and wire its sensor", X, mode_name(s.mode));
     case AlarmCode::misalignment:
-      return fmt::format("{}: gantry misaligned by {:.3f} {}, more than max_misalignment {:g} {}; "
-                         "check both home sensors and square the gantry mechanically", X, a.value, u,
-                         s.max_misalignment_mm, u);
+      return fmt::format("{}: gantry stopped during {} before racking by {:.3f} {}, more than "
+                         "max_misalignment {:g} {}; check both home sensors (a dead or stuck sensor, "
+                         "wiring, switch_compensation) and square the gantry mechanically", X, ph, a.value,
+                         u, s.max_misalignment_mm, u);
     case AlarmCode::hard_limit:
       return fmt::format("{}: shared home/limit sensor tripped at {:.3f} {} after homing; jog the axis "
                          "off the sensor after reset and re-home", X, a.value, u);

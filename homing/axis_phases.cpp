@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "engine.hpp"
+#include "gantry.hpp"
 #include "settings_check.hpp"
 
 namespace homing {
@@ -16,7 +17,7 @@ struct PhaseRunner {
   const Settings& settings;
   std::size_t axis;
   Run& run;
-  AxisSettings s;             // the settings this axis homes with (a commutator slave uses its master's)
+  AxisSettings s;             // the settings this axis homes with (a slave inherits its master's: gantry.hpp)
   int channel;                // input carrying this axis's home sensor
   int partner;                // gantry partner, -1 if none
   bool is_slave;
@@ -25,37 +26,41 @@ struct PhaseRunner {
 
   PhaseRunner(Engine& engine, const Settings& st, std::size_t a)
       : e(engine), settings(st), axis(a), run(engine.axes_[a]), s(st.axes[a]) {
-    const int m = master_of(st.axes[a]);
-    is_slave = m >= 0;
+    is_slave = gantry_master(st, a) >= 0;
     partner = e.partner_of(st, a);
-    if (is_slave && st.axes[a].slave_mode == SlaveMode::external_commutator) {
-      const AxisSettings& own = st.axes[a];
-      s = st.axes[static_cast<std::size_t>(m)];
-      // The slave motor only corrects the gantry's skew: its search is bounded
-      // by the pull-off plus the allowed misalignment.
-      s.max_seek_travel_mm = s.pull_off_mm + own.max_misalignment_mm + s.max_stop_distance_mm;
-      s.max_misalignment_mm = own.max_misalignment_mm;
-      s.switch_compensation_mm = own.switch_compensation_mm;
-      s.pre_move_mode = PreMove::none;
-      s.home_position_mm = own.home_position_mm;
-      s.final_move_enable = false;
-      if (mode_is_pushing(s.mode))
-        s.mode = mode_reapproaches(s.mode) ? HomingMode::switch_reapproach : HomingMode::switch_release;
-    }
     channel = e.sensor_channel(st, a);
     dir = s.direction == Direction::positive ? 1.0 : -1.0;
     seek_v = mm_per_min_to_mm_per_s(s.seek_feedrate_mm_per_min);
     latch_v = mm_per_min_to_mm_per_s(s.latch_feedrate_mm_per_min);
     accel = s.acceleration_mm_per_s2;
+    if (commutator_slave()) {
+      // The slave motor alone only corrects the gantry's skew, from its
+      // master's reference edge: slowly (latch feedrate), on its switch edge
+      // alone, and never further than the allowed misalignment (the gantry
+      // guard stops it before the pair could rack beyond it).
+      s.max_seek_travel_mm = s.max_misalignment_mm;
+      s.pre_move_mode = PreMove::none;
+      s.final_move_enable = false;
+      if (mode_is_pushing(s.mode) || s.mode == HomingMode::switch_index)
+        s.mode = mode_reapproaches(s.mode) ? HomingMode::switch_reapproach : HomingMode::switch_release;
+      seek_v = latch_v;
+    }
   }
 
   bool commutator_slave() const {
     return is_slave && settings.axes[axis].slave_mode == SlaveMode::external_commutator;
   }
+  bool commutator_master() const {
+    return partner >= 0 && !is_slave && is_commutator_slave(settings, static_cast<std::size_t>(partner));
+  }
   bool software_pair() const {
     if (partner < 0) return false;
     const std::size_t slave = is_slave ? axis : static_cast<std::size_t>(partner);
     return settings.axes[slave].slave_mode == SlaveMode::own_output;
+  }
+  // The partner's home sensor (software-slaved pairs decide on both sensors).
+  bool partner_active() const {
+    return software_pair() && e.axes_[static_cast<std::size_t>(e.sensor_channel(settings, static_cast<std::size_t>(partner)))].sensor_active;
   }
   Run& partner_run() const { return e.axes_[static_cast<std::size_t>(partner)]; }
   const Engine::SensorEvent& event() const { return e.events_[static_cast<std::size_t>(channel)]; }
@@ -93,18 +98,38 @@ struct PhaseRunner {
   // -- phases --------------------------------------------------------------
 
   void pre_move() {
+    if (run.clearing) return clear_sensors();
     if (entry()) {
+      // A gantry decides for the pair: either side on its sensor counts.
       const bool needed = s.pre_move_mode == PreMove::always ||
-                          (s.pre_move_mode == PreMove::if_sensor_active && active());
+                          (s.pre_move_mode == PreMove::if_sensor_active && (active() || partner_active()));
       if (!needed) return enter(Phase::seek);
-      move_to(run.motor.position_mm - dir * s.pre_move_distance_mm, seek_v);
+      run.target_mm = run.motor.position_mm - dir * s.pre_move_distance_mm;
     }
     move_to(run.target_mm, seek_v);
     if (arrived()) enter(Phase::seek);
   }
 
+  // A gantry with either side on its sensor at the start of the seek first
+  // moves off both sensors together (latch feedrate, bounded by max_backoff),
+  // then seeks: both sides meet their sensors within their skew, so the pair
+  // cannot rack while one side seeks alone.
+  void clear_sensors() {
+    if (entry()) run.target_mm = run.motor.position_mm - dir * s.max_backoff_mm;
+    if (!active() && !partner_active()) {
+      run.clearing = false;
+      return enter(Phase::seek);
+    }
+    move_to(run.target_mm, latch_v);
+    if (arrived()) fail(AlarmCode::not_released, travelled());
+  }
+
   void seek() {
     if (entry()) {
+      if (software_pair() && (active() || partner_active())) {
+        run.clearing = true;
+        return enter(Phase::pre_move);
+      }
       if (active()) {
         // Already on the sensor (MASSO): no seek, no stop; find the edge.
         run.triggered = true;
@@ -112,32 +137,17 @@ struct PhaseRunner {
         run.stopped_after_trigger = true;
         return after_stop();
       }
-      run.command = velocity_command(dir * seek_v, accel);
-      run.command.has_limit = true;
-      run.command.limit_mm = run.phase_start_mm + dir * s.max_seek_travel_mm;
+      // Bounded by max_seek_travel, braking in time to rest at its end.
+      run.target_mm = run.phase_start_mm + dir * s.max_seek_travel_mm;
     }
     if (edge_to(true)) {
       run.triggered = true;
       run.trigger_mm = edge_mm();
       run.trigger_period_s = dt();
-      if (partner >= 0 && software_pair()) {
-        Run& p = partner_run();
-        if (!p.triggered) {
-          p.partner_marked = true;
-          p.mark_mm = p.motor.position_mm;
-        }
-      }
       return enter(Phase::stop);
     }
-    if (run.partner_marked && settings.axes[axis].slave_of != 0 &&
-        std::abs(run.motor.position_mm - run.mark_mm) > settings.axes[axis].max_misalignment_mm)
-      return fail(AlarmCode::misalignment, std::abs(run.motor.position_mm - run.mark_mm));
-    if (run.partner_marked && !is_slave && partner >= 0) {
-      const double limit = settings.axes[static_cast<std::size_t>(partner)].max_misalignment_mm;
-      if (std::abs(run.motor.position_mm - run.mark_mm) > limit)
-        return fail(AlarmCode::misalignment, std::abs(run.motor.position_mm - run.mark_mm));
-    }
-    if (travelled() >= s.max_seek_travel_mm - 1e-9) {
+    move_to(run.target_mm, seek_v);
+    if (arrived()) {
       if (commutator_slave()) return fail(AlarmCode::misalignment, travelled());
       return fail(AlarmCode::sensor_not_found, travelled());
     }
@@ -172,7 +182,7 @@ struct PhaseRunner {
   void push() {
     if (entry()) {
       run.push_output = true;
-      move_to(run.motor.position_mm + dir * s.push_distance_mm, latch_v);
+      run.target_mm = run.motor.position_mm + dir * s.push_distance_mm;
     }
     move_to(run.target_mm, latch_v);
     if (arrived()) {
@@ -183,9 +193,7 @@ struct PhaseRunner {
 
   void back_off() {
     if (entry()) {
-      run.command = velocity_command(-dir * latch_v, accel);
-      run.command.has_limit = true;
-      run.command.limit_mm = run.phase_start_mm - dir * s.max_backoff_mm;
+      run.target_mm = run.phase_start_mm - dir * s.max_backoff_mm;
       run.index_seen = false;
     }
     if (event().index) {
@@ -198,30 +206,20 @@ struct PhaseRunner {
       if (s.mode == HomingMode::switch_index) {
         // The release is accepted only after the debounce time: an index pulse
         // may already have passed beyond the release edge. It is the next one.
-        if (run.index_seen && beyond_release(run.index_seen_mm)) {
-          run.reference_mm = run.index_seen_mm;
-          return enter(Phase::pull_off);
-        }
+        if (run.index_seen && beyond_release(run.index_seen_mm)) return reference_found(run.index_seen_mm);
         return enter(Phase::index);
       }
-      run.reference_mm = run.release_mm;
-      return enter(Phase::pull_off);
+      return reference_found(run.release_mm);
     }
-    if (travelled() >= s.max_backoff_mm - 1e-9) fail(AlarmCode::not_released, travelled());
+    move_to(run.target_mm, latch_v);
+    if (arrived()) fail(AlarmCode::not_released, travelled());
   }
 
   void reapproach() {
-    if (entry()) {
-      run.command = velocity_command(dir * latch_v, accel);
-      run.command.has_limit = true;
-      run.command.limit_mm = run.phase_start_mm + dir * s.max_backoff_mm;
-    }
-    if (edge_to(true)) {
-      run.reference_mm = edge_mm();
-      return enter(Phase::pull_off);
-    }
-    if (at_rest() && std::abs(run.motor.position_mm - run.command.limit_mm) <= 1e-9)
-      fail(AlarmCode::reapproach_not_found, s.max_backoff_mm);
+    if (entry()) run.target_mm = run.phase_start_mm + dir * s.max_backoff_mm;
+    if (edge_to(true)) return reference_found(edge_mm());
+    move_to(run.target_mm, latch_v);
+    if (arrived()) fail(AlarmCode::reapproach_not_found, s.max_backoff_mm);
   }
 
   // The index search runs away from the sensor (-dir) from the release edge.
@@ -230,77 +228,78 @@ struct PhaseRunner {
   double index_bound() const { return s.index_pitch_mm * 1.1 + stop_distance_mm(latch_v, accel); }
 
   void index() {
-    if (entry()) {
-      run.command = velocity_command(-dir * latch_v, accel);
-      run.command.has_limit = true;
-      run.command.limit_mm = run.phase_start_mm - dir * index_bound();
-    }
+    if (entry()) run.target_mm = run.phase_start_mm - dir * index_bound();
     // A pulse in the same period but before the release edge is not the next one.
-    if (event().index && beyond_release(event().index_mm)) {
-      run.reference_mm = event().index_mm;
-      return enter(Phase::pull_off);
+    if (event().index && beyond_release(event().index_mm)) return reference_found(event().index_mm);
+    move_to(run.target_mm, latch_v);
+    if (arrived()) fail(AlarmCode::index_not_found, index_bound());
+  }
+
+  // The reference edge is located. A commutator master holds there (its
+  // slave aligns on its own edge from this point); everyone else pulls off.
+  void reference_found(double reference_mm) {
+    run.reference_mm = reference_mm;
+    if (commutator_master()) {
+      run.command = stop_command(accel);
+      return wait_for(Wait::slave_aligned, Phase::pull_off);
     }
-    if (travelled() >= index_bound() - 1e-9) fail(AlarmCode::index_not_found, index_bound());
+    enter(Phase::pull_off);
   }
 
   double rest_offset_mm() const {
+    // A commutator slave applies only its compensation on its own; the pull-off
+    // is made by the pair together on the one output.
+    if (commutator_slave()) return s.switch_compensation_mm;
     return s.pull_off_mm + (is_slave ? s.switch_compensation_mm : 0.0);
   }
 
   void pull_off() {
-    if (entry()) {
-      if (commutator_slave()) {
-        const Run& m = partner_run();
-        const double skew = (run.reference_mm - run.cycle_start_mm) - (m.reference_mm - m.cycle_start_mm);
-        if (std::abs(skew) > settings.axes[axis].max_misalignment_mm)
-          return fail(AlarmCode::misalignment, std::abs(skew));
-      }
-      run.target_mm = run.reference_mm - dir * rest_offset_mm();
-    }
-    move_to(run.target_mm, seek_v);
-    if (arrived()) enter(Phase::assign);
+    if (entry()) run.target_mm = run.reference_mm - dir * rest_offset_mm();
+    move_to(run.target_mm, commutator_slave() ? latch_v : seek_v);
+    if (!arrived()) return;
+    if (commutator_slave()) return aligned();
+    enter(Phase::assign);
   }
 
+  // Commutator slave: on its own edge (plus compensation). The output goes
+  // back to the master (once this motor is at rest) and the pair pulls off
+  // together; the master assigns both.
+  void aligned() {
+    run.aligning = false;
+    run.slave_aligned = true;
+    run.follow_master = true;
+    run.command = stop_command(accel);
+    wait_for(Wait::partner_assigned, Phase::done);
+  }
+
+  void set_home(Run& r, double reference_motor_mm, double machine_mm_at_rest) {
+    const double new_offset = machine_mm_at_rest - r.motor.position_mm;
+    r.trigger_position_mm = reference_motor_mm + r.offset_mm;
+    r.home_correction_mm = new_offset - r.offset_mm;
+    r.offset_mm = new_offset;
+    r.homed = true;
+    r.assigned = true;
+  }
   void set_home(double reference_motor_mm, double machine_mm_at_rest) {
-    const double new_offset = machine_mm_at_rest - run.motor.position_mm;
-    run.trigger_position_mm = reference_motor_mm + run.offset_mm;
-    run.home_correction_mm = new_offset - run.offset_mm;
-    run.offset_mm = new_offset;
-    run.homed = true;
-    run.assigned = true;
+    set_home(run, reference_motor_mm, machine_mm_at_rest);
   }
 
   void assign() {
-    if (commutator_slave() && run.aligning) {
-      // Alignment done: give the output back to the master.
-      partner_run().commutator_output = false;
-      e.filter_reset_[static_cast<std::size_t>(channel)] = true;
-      run.aligning = false;
-      run.slave_aligned = true;
-    }
+    // A shared home/limit sensor must be left behind, or it trips at once.
+    if (s.shared_limit && channel == static_cast<int>(axis) && active())
+      return fail(AlarmCode::not_released, s.pull_off_mm);
     set_home(run.reference_mm, s.home_position_mm);
-    if (software_pair() && partner_run().assigned) {
-      // Software-slaved squaring: both edges are measured from the same
-      // start, so their difference is the gantry's skew.
-      const std::size_t slave = is_slave ? axis : static_cast<std::size_t>(partner);
-      const Run& sl = e.axes_[slave];
-      const Run& m = e.axes_[is_slave ? static_cast<std::size_t>(partner) : axis];
-      const double skew = (sl.reference_mm - sl.cycle_start_mm) - (m.reference_mm - m.cycle_start_mm);
-      if (std::abs(skew) > settings.axes[slave].max_misalignment_mm) {
-        e.raise(settings, slave, Alarm{AlarmCode::misalignment, e.axes_[slave].phase, AxisField::none,
-                                       std::abs(skew), 0});
-        return;
-      }
+    if (commutator_master()) {
+      // The slave motor rests at the same distance from its own edge.
+      Run& sl = partner_run();
+      set_home(sl, sl.reference_mm, settings.axes[static_cast<std::size_t>(partner)].home_position_mm);
     }
     after_assign();
   }
 
   void after_assign() {
-    if (partner >= 0 && !is_slave) {
-      const Run& p = partner_run();
-      const bool ready = software_pair() ? p.assigned : p.slave_aligned;
-      if (!ready) return wait_for(software_pair() ? Wait::partner_assigned : Wait::slave_aligned, Phase::final_move);
-    }
+    if (partner >= 0 && !is_slave && software_pair() && !partner_run().assigned)
+      return wait_for(Wait::partner_assigned, Phase::final_move);
     if (is_slave) {
       // A software-slaved slave rests on its own edge until the master has
       // its own: locking earlier would drag it along the master's back-off
@@ -313,11 +312,8 @@ struct PhaseRunner {
   }
 
   void final_move() {
-    const bool wanted = s.mode == HomingMode::absolute_final ||
-                        (s.final_move_enable && s.mode != HomingMode::absolute &&
-                         s.mode != HomingMode::disabled);
     if (entry()) {
-      if (!wanted) return enter(Phase::done);
+      if (!final_move_wanted(s)) return enter(Phase::done);
       run.target_mm = s.final_position_mm - run.offset_mm;
     }
     move_to(run.target_mm, seek_v);
@@ -327,23 +323,22 @@ struct PhaseRunner {
   void waiting() {
     run.entered = true;
     if (run.wait == Wait::none) return;  // a later sequence step
-    if (run.follow_master && !run.aligning) {
-      // Commutator slave: moves with the master until the master has its edge.
-      const Run& m = partner_run();
-      if (commutator_slave() && m.assigned) {
-        run.follow_master = false;
-        run.aligning = true;
-        run.wait = Wait::none;
-        return enter(Phase::align_slave);
-      }
-      return;
-    }
     const Run& p = partner_run();
     bool ready = false;
     switch (run.wait) {
       case Wait::partner_stopped: ready = p.stopped_after_trigger; break;
       case Wait::partner_assigned: ready = p.assigned; break;
       case Wait::slave_aligned: ready = p.slave_aligned; break;
+      case Wait::master_at_reference:
+        // Commutator slave: moves with the master until the master holds,
+        // at rest, on its reference edge.
+        ready = p.phase == Phase::waiting && p.wait == Wait::slave_aligned && p.motor.velocity_mm_per_s == 0 &&
+                at_rest();
+        if (ready) {
+          run.follow_master = false;
+          run.aligning = true;
+        }
+        break;
       case Wait::none: break;
     }
     if (ready) {
@@ -372,9 +367,7 @@ struct PhaseRunner {
     run.phase_start_mm = run.motor.position_mm;
     if (commutator_slave()) {
       run.follow_master = true;
-      run.wait = Wait::slave_aligned;  // any value but none: this slave is active
-      run.phase = Phase::waiting;
-      return;
+      return wait_for(Wait::master_at_reference, Phase::align_slave);
     }
     switch (s.mode) {
       case HomingMode::disabled:

@@ -4,13 +4,17 @@
 #include <algorithm>
 #include <cmath>
 
+#include "gantry.hpp"
 #include "settings_check.hpp"
 
 namespace homing {
 
 Engine::Engine() = default;
 
-StepResult Engine::step(const Settings& settings, const Inputs& inputs, double dt_s) {
+StepResult Engine::step(const Settings& configured, const Inputs& inputs, double dt_s) {
+  // Every axis moves with the settings it inherits (a slave its master's).
+  const Settings settings = motion_settings(configured);
+  faults_ = check_settings(configured);
   dt_s = std::isfinite(dt_s) ? std::max(dt_s, 0.0) : 0.0;
   if (dt_s > 0) last_dt_s_ = dt_s;
   ++heartbeat_;
@@ -22,6 +26,8 @@ StepResult Engine::step(const Settings& settings, const Inputs& inputs, double d
   run_cycle(settings);
   run_motion(settings);
   follow_masters(settings);
+  guard_gantries(settings);
+  release_commutators(settings);
   publish(settings, inputs);
   first_step_ = false;
   return StepResult{outputs_, status_};
@@ -36,27 +42,21 @@ void Engine::advance_motion(double dt_s) {
 }
 
 int Engine::partner_of(const Settings& settings, std::size_t axis) const {
-  const int m = master_of(settings.axes[axis]);
-  if (m >= 0) return m;
-  for (std::size_t s = 0; s < kAxisCount; ++s)
-    if (master_of(settings.axes[s]) == static_cast<int>(axis)) return static_cast<int>(s);
-  return -1;
+  return gantry_partner(settings, axis);
 }
 
 // The input channel an axis reads its home sensor from: a commutator slave's
 // sensor is diverted onto its master's input.
 int Engine::sensor_channel(const Settings& settings, std::size_t axis) const {
-  const AxisSettings& s = settings.axes[axis];
-  if (master_of(s) >= 0 && s.slave_mode == SlaveMode::external_commutator) return master_of(s);
+  if (is_commutator_slave(settings, axis)) return gantry_master(settings, axis);
   return static_cast<int>(axis);
 }
 
 // The axis whose motor moves the carriage seen on an input channel.
 int Engine::channel_owner(const Settings& settings, std::size_t channel) const {
   if (axes_[channel].commutator_output) {
-    const int s = partner_of(settings, channel);
-    if (s >= 0 && master_of(settings.axes[static_cast<std::size_t>(s)]) == static_cast<int>(channel))
-      return s;
+    const int s = gantry_slave(settings, channel);
+    if (s >= 0) return s;
   }
   return static_cast<int>(channel);
 }
@@ -67,8 +67,10 @@ void Engine::read_inputs(const Settings& settings, const Inputs& inputs, double 
     const AxisInputs& in = inputs.axes[c];
     SensorEvent& ev = events_[c];
     ev = SensorEvent{};
-    const AxisRun& owner = axes_[static_cast<std::size_t>(channel_owner(settings, c))];
-    const bool nc = settings.axes[c].sensor_nc;
+    const std::size_t owner_axis = static_cast<std::size_t>(channel_owner(settings, c));
+    const AxisRun& owner = axes_[owner_axis];
+    // With the commutator on, the master's input carries the slave's switch.
+    const bool nc = settings.axes[owner_axis].sensor_nc;
     Debouncer& filter = sensor_filter_[c];
     if (first_step_ || filter_reset_[c]) {
       // A new source on this input (start-up, commutator switched): take its
@@ -87,7 +89,7 @@ void Engine::read_inputs(const Settings& settings, const Inputs& inputs, double 
       // placed in the middle of the period.
       if (filter.raw() != in.sensor_level) filter.transition(period_start_s + dt_s / 2, position_at_offset(dt_s / 2));
       AcceptedEdge edge;
-      if (filter.settle(time_s_, settings.axes[c].debounce_ms / 1000.0, edge)) {
+      if (filter.settle(time_s_, settings.axes[owner_axis].debounce_ms / 1000.0, edge)) {
         ev.edge = true;
         ev.accepted = edge;
         ev.accepted.to_level = edge.to_level != nc;  // now means "to active"
@@ -121,10 +123,11 @@ void Engine::stop_all(const Settings& settings) {
     AxisRun& run = axes_[a];
     run.command = stop_command(settings.axes[a].acceleration_mm_per_s2);
     run.push_output = false;
-    // Switching the commutator back changes the source of this input.
-    if (run.commutator_output) filter_reset_[a] = true;
-    run.commutator_output = false;
+    // The commutator is switched back by release_commutators once the slave
+    // motor is at rest: switching it under a moving motor would hand the
+    // pulses to the other motor.
     run.in_cycle = false;
+    run.clearing = false;
     run.aligning = false;
     run.jog_dir = 0;
     const bool moving = run.motor.velocity_mm_per_s != 0;
@@ -207,11 +210,16 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     AxisRun& run = axes_[a];
     const AxisSettings& s = settings.axes[a];
+    // A tripped shared limit stays "tripped" until its sensor releases: the
+    // reset is taken and the jog away from it allowed without re-latching.
+    if (limit_tripped_[a] && !run.sensor_active) limit_tripped_[a] = false;
     if (run.alarm || run.in_cycle || !run.homed) continue;
     const double pos = run.motor.position_mm + run.offset_mm;
-    if (s.shared_limit && run.sensor_active && sensor_channel(settings, a) == static_cast<int>(a)) {
+    if (s.shared_limit && run.sensor_active && !limit_tripped_[a] &&
+        sensor_channel(settings, a) == static_cast<int>(a)) {
       raise(settings, a, Alarm{AlarmCode::hard_limit, Phase::idle, AxisField::shared_limit, 0, 0});
       axes_[a].alarm.value = pos;
+      limit_tripped_[a] = true;
       continue;
     }
     const double tol = 1e-6;
@@ -243,7 +251,30 @@ CommandResult Engine::motion_refusal(const Settings& settings, std::size_t axis)
   if (comm_lost_) return CommandResult::refused_communication_lost;
   if (cycle_active_) return CommandResult::refused_busy;
   if (master_of(settings.axes[axis]) >= 0) return CommandResult::refused_slave_axis;
+  // The same rule set as homing: an axis (or its gantry partner) whose
+  // configuration is refused does not move at all.
+  // Every axis linked to this one by slave_of, directly or through others.
+  AxisMask group = axis_bit(axis);
+  for (std::size_t pass = 0; pass < kAxisCount; ++pass)
+    for (std::size_t s = 0; s < kAxisCount; ++s) {
+      const int m = master_of(settings.axes[s]);
+      if (m < 0 || m >= static_cast<int>(kAxisCount)) continue;
+      if (group & (axis_bit(s) | axis_bit(static_cast<std::size_t>(m))))
+        group |= axis_bit(s) | axis_bit(static_cast<std::size_t>(m));
+    }
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if ((group & axis_bit(a)) && faults_[a]) return CommandResult::refused_settings_fault;
+  if (limit_tripped_[axis]) return CommandResult::refused_hard_limit;
   return CommandResult::accepted;
+}
+
+// A jog is a motion command, except that an axis on a tripped shared limit
+// may always jog away from its sensor (only away) until it releases.
+CommandResult Engine::jog_refusal(const Settings& settings, std::size_t axis, std::int8_t dir) const {
+  const CommandResult r = motion_refusal(settings, axis);
+  if (r != CommandResult::refused_hard_limit) return r;
+  const double toward = settings.axes[axis].direction == Direction::positive ? 1.0 : -1.0;
+  return dir * toward < 0 ? CommandResult::accepted : CommandResult::refused_hard_limit;
 }
 
 void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
@@ -274,7 +305,9 @@ void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
     last_result_ = CommandResult::accepted;
   }
 
-  const bool start_edge = inputs.start_button && !prev_start_button_;
+  // A physical input acts on a press seen after start-up, never on a level
+  // held at power-up.
+  const bool start_edge = !first_step_ && inputs.start_button && !prev_start_button_;
   prev_start_button_ = inputs.start_button;
   const bool home_all = c.home_all || start_edge;
   const AxisMask home_axes = c.home_axes & kAllAxes;
@@ -293,6 +326,10 @@ void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const std::int8_t req = c.jog[a] > 0 ? 1 : (c.jog[a] < 0 ? -1 : 0);
     AxisRun& run = axes_[a];
+    if (first_step_) {  // a jog held at power-up waits for its release and a new press
+      prev_jog_request_[a] = req;
+      continue;
+    }
     if (req == 0) {
       if (run.phase == Phase::jog) {
         run.phase = Phase::stopping;
@@ -303,9 +340,9 @@ void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
         // still held
       } else if (req != prev_jog_request_[a]) {
         ++command_count_;
-        CommandResult r = motion_refusal(settings, a);
+        CommandResult r = jog_refusal(settings, a, req);
         const bool homed = run.homed || settings.axes[a].mode == HomingMode::disabled;
-        if (r == CommandResult::accepted && !homed &&
+        if (r == CommandResult::accepted && !homed && !limit_tripped_[a] &&
             settings.global.allowed_without_homing == AllowedWithoutHoming::none)
           r = CommandResult::refused_not_homed;
         if (r == CommandResult::accepted && run.phase == Phase::move) r = CommandResult::refused_busy;
@@ -359,9 +396,8 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
       const std::size_t master = m >= 0 ? static_cast<std::size_t>(m) : a;
       if (m >= 0 && all) continue;  // in a sequence, a slave's own bit is ignored
       out |= axis_bit(master);
-      const int s = partner_of(settings, master);
-      if (s >= 0 && master_of(settings.axes[static_cast<std::size_t>(s)]) == static_cast<int>(master))
-        out |= axis_bit(static_cast<std::size_t>(s));
+      const int s = gantry_slave(settings, master);
+      if (s >= 0) out |= axis_bit(static_cast<std::size_t>(s));
     }
     return out;
   };
@@ -377,9 +413,8 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
         unsequenced_ |= axis_bit(a);
     // A slave is assigned with its master, whatever its own mode.
     for (std::size_t a = 0; a < kAxisCount; ++a) {
-      const int m = master_of(settings.axes[a]);
-      if (m >= 0 && m < static_cast<int>(kAxisCount) && (unsequenced_ & axis_bit(static_cast<std::size_t>(m))))
-        unsequenced_ |= axis_bit(a);
+      const int m = gantry_master(settings, a);
+      if (m >= 0 && (unsequenced_ & axis_bit(static_cast<std::size_t>(m)))) unsequenced_ |= axis_bit(a);
     }
   } else {
     steps_[0] = with_partners(requested);
@@ -389,10 +424,14 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     // In a home-all, a slave's own bit is ignored, so a slave whose slave_of
     // names no usable master (itself, another slave) would never be covered
-    // and would silently stay unhomed: check every slave's configuration.
+    // and would silently stay unhomed: check every slave's configuration,
+    // and the unsequenced axes that get their position at the end.
     const bool slave = master_of(settings.axes[a]) >= 0;
-    if (!(covered & axis_bit(a)) && !(all && slave)) continue;
-    if (auto fault = check_axis(settings, a)) {
+    const bool involved = (covered | unsequenced_) & axis_bit(a);
+    const bool names_involved = slave && ((covered | unsequenced_) &
+                                          axis_bit(static_cast<std::size_t>(std::clamp(master_of(settings.axes[a]), 0, 5))));
+    if (!involved && !(all && slave) && !names_involved) continue;
+    if (const auto& fault = faults_[a]) {
       AxisRun& run = axes_[fault->axis];
       run.alarm = Alarm{fault->code(), Phase::idle, fault->field, fault->value,
                         static_cast<std::uint8_t>(fault->rule)};
@@ -417,12 +456,15 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
     run.triggered = false;
     run.stopped_after_trigger = false;
     run.assigned = false;
-    run.partner_marked = false;
+    run.clearing = false;
     run.slave_aligned = false;
     run.aligning = false;
     run.follow_master = false;
     run.cycle_start_mm = run.motor.position_mm;
   }
+  for (std::size_t sl = 0; sl < kAxisCount; ++sl)
+    if (const int m = gantry_master(settings, sl); m >= 0)
+      pair_rel0_[sl] = axes_[sl].motor.position_mm - axes_[static_cast<std::size_t>(m)].motor.position_mm;
   start_step(settings);
 }
 
@@ -438,17 +480,28 @@ bool Engine::start_step(const Settings& settings) {
   return false;
 }
 
-void Engine::finish_cycle(const Settings& settings) {
-  for (std::size_t a = 0; a < kAxisCount; ++a) {
-    if (!(unsequenced_ & axis_bit(a))) continue;
-    AxisRun& run = axes_[a];
-    const double new_offset = settings.axes[a].home_position_mm - run.motor.position_mm;
-    run.home_correction_mm = new_offset - run.offset_mm;
-    run.trigger_position_mm = run.motor.position_mm + run.offset_mm;
-    run.offset_mm = new_offset;
-    run.homed = true;
-    run.phase = Phase::done;
+// An axis in no sequence step is given its coordinate where it stands (MASSO);
+// an absolute axis always takes it from its encoder.
+void Engine::assign_unsequenced(const Settings& settings, std::size_t a) {
+  AxisRun& run = axes_[a];
+  const AxisSettings& s = settings.axes[a];
+  double machine_now = s.home_position_mm;
+  if (mode_is_absolute(s.mode)) {
+    if (!absolute_valid_[a]) return raise(settings, a, Alarm{AlarmCode::encoder_fault});
+    machine_now = absolute_mm_[a] - s.home_position_mm;
   }
+  const double new_offset = machine_now - run.motor.position_mm;
+  run.home_correction_mm = new_offset - run.offset_mm;
+  run.trigger_position_mm = run.motor.position_mm + run.offset_mm;
+  run.offset_mm = new_offset;
+  run.homed = true;
+  run.phase = Phase::done;
+}
+
+void Engine::finish_cycle(const Settings& settings) {
+  for (std::size_t a = 0; a < kAxisCount && cycle_active_; ++a)
+    if (unsequenced_ & axis_bit(a)) assign_unsequenced(settings, a);
+  if (!cycle_active_) return;  // an encoder fault ended the cycle
   for (AxisRun& run : axes_) run.in_cycle = false;
   cycle_active_ = false;
   step_index_ = -1;
@@ -476,7 +529,7 @@ void Engine::run_motion(const Settings& settings) {
     switch (run.phase) {
       case Phase::jog: {
         double v = mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min);
-        if (!homed && settings.global.allowed_without_homing == AllowedWithoutHoming::jog_reduced)
+        if (!homed && settings.global.allowed_without_homing != AllowedWithoutHoming::all)
           v = std::min(v, mm_per_min_to_mm_per_s(100.0));
         if (homed && s.soft_limits_enable) {
           const double limit = (run.jog_dir > 0 ? s.soft_limit_max_mm : s.soft_limit_min_mm) - run.offset_mm;
@@ -522,8 +575,8 @@ void Engine::run_motion(const Settings& settings) {
 // A slave is locked to its master except while it homes on its own sensor.
 void Engine::follow_masters(const Settings& settings) {
   for (std::size_t s = 0; s < kAxisCount; ++s) {
-    const int m = master_of(settings.axes[s]);
-    if (m < 0 || m >= static_cast<int>(kAxisCount)) continue;
+    const int m = gantry_master(settings, s);  // a refused pair is no pair: nothing follows
+    if (m < 0) continue;
     AxisRun& slave = axes_[s];
     const AxisRun& master = axes_[static_cast<std::size_t>(m)];
     const bool independent = slave.in_cycle && !slave.follow_master;
@@ -532,6 +585,58 @@ void Engine::follow_masters(const Settings& settings) {
     const double delta = slave.motor.position_mm - master.motor.position_mm;
     if (cmd.has_limit) cmd.limit_mm += delta;
     slave.command = cmd;
+  }
+}
+
+// A gantry never racks beyond its slave's max_misalignment, stopping distance
+// included, whatever the phase or the cause (a side on its sensor, a dead or
+// stuck sensor, a squaring beyond the limit): each period, where both sides
+// would come to rest if braked now, or after running this period's commands
+// for up to two periods, is compared with their relative position at the
+// start of the cycle. Before that could pass the limit, the pair is stopped
+// with a misalignment alarm.
+void Engine::guard_gantries(const Settings& settings) {
+  for (std::size_t sl = 0; sl < kAxisCount; ++sl) {
+    const int mi = gantry_master(settings, sl);
+    if (mi < 0) continue;
+    const std::size_t m = static_cast<std::size_t>(mi);
+    AxisRun& slave = axes_[sl];
+    const AxisRun& master = axes_[m];
+    if (!slave.in_cycle && !master.in_cycle) continue;  // locked together outside a cycle
+    const double limit = settings.axes[sl].max_misalignment_mm;
+    auto rest = [&](const AxisRun& run, std::size_t axis, double h) {
+      const MotionState at = integrate(run.motor, run.command, h);
+      const double v = at.velocity_mm_per_s;
+      const double d = stop_distance_mm(std::abs(v), settings.axes[axis].acceleration_mm_per_s2);
+      return at.position_mm + (v > 0 ? d : (v < 0 ? -d : 0.0));
+    };
+    const double horizon = 2 * last_dt_s_;
+    double worst = 0;
+    for (int k = 0; k <= 4; ++k) {
+      const double h = horizon * k / 4;
+      const double dev = (rest(slave, sl, h) - rest(master, m, h)) - pair_rel0_[sl];
+      worst = std::max(worst, std::abs(dev));
+    }
+    if (worst > limit) {
+      raise(settings, sl, Alarm{AlarmCode::misalignment, slave.phase, AxisField::max_misalignment, worst, 0});
+      follow_masters(settings);  // the slave brakes with the pair, not on its own old command
+    }
+  }
+}
+
+// The commutator output goes back to the master once the slave motor it was
+// driving is at rest and no longer aligning.
+void Engine::release_commutators(const Settings& settings) {
+  for (std::size_t m = 0; m < kAxisCount; ++m) {
+    AxisRun& master = axes_[m];
+    if (!master.commutator_output) continue;
+    const int sl = gantry_slave(settings, m);
+    const AxisRun* slave = sl >= 0 ? &axes_[static_cast<std::size_t>(sl)] : nullptr;
+    const bool busy = slave && slave->aligning && slave->in_cycle;
+    const bool moving = slave && slave->motor.velocity_mm_per_s != 0;
+    if (busy || moving) continue;
+    master.commutator_output = false;
+    filter_reset_[m] = true;
   }
 }
 
@@ -561,8 +666,22 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
     moving = moving || (!run.in_cycle && as.busy);
 
     AxisOutputs& out = outputs_.axes[a];
-    out.motion = run.command;
-    out.motor = run.motor;
+    // An output channel's position is continuous: when the commutator hands
+    // the master's output to the slave motor (and back), the channel goes on
+    // from where it was, so a pulse generator never sees a jump.
+    std::size_t source = a;
+    if (run.commutator_output)
+      if (const int sl = gantry_slave(settings, a); sl >= 0) source = static_cast<std::size_t>(sl);
+    if (source != channel_source_[a]) {
+      const double channel_mm = axes_[channel_source_[a]].motor.position_mm + channel_offset_[a];
+      channel_offset_[a] = channel_mm - axes_[source].motor.position_mm;
+      channel_source_[a] = source;
+    }
+    const AxisRun& src = axes_[source];
+    out.motion = src.command;
+    if (out.motion.has_limit) out.motion.limit_mm += channel_offset_[a];
+    out.motor = src.motor;
+    out.motor.position_mm += channel_offset_[a];
     out.enable = !estop_;
     out.push_output = run.push_output;
     out.commutator_output = run.commutator_output;

@@ -9,6 +9,7 @@
 #include "debounce.hpp"
 #include "io.hpp"
 #include "settings.hpp"
+#include "settings_check.hpp"
 #include "status.hpp"
 
 namespace homing {
@@ -55,10 +56,11 @@ class Engine {
     bool slave_aligned = false;   // commutator slave finished its own edge
     bool stopped_after_trigger = false;  // seek trigger found and the axis came to rest
     bool assigned = false;        // home position assigned in this cycle
-    bool partner_marked = false;  // gantry partner triggered first: mark_mm is where we were
-    double mark_mm = 0;
+    bool clearing = false;        // gantry: moving off the sensors together before the seek
     Phase next_phase = Phase::idle;  // where waiting goes once the partner is ready
-    enum class Wait : std::uint8_t { none, partner_stopped, partner_assigned, slave_aligned } wait = Wait::none;
+    enum class Wait : std::uint8_t {
+      none, partner_stopped, partner_assigned, slave_aligned, master_at_reference
+    } wait = Wait::none;
     bool aligning = false;        // commutator slave running its own edge search
     double trigger_position_mm = 0;
     double home_correction_mm = 0;
@@ -80,7 +82,11 @@ class Engine {
   void run_cycle(const Settings& settings);
   void run_motion(const Settings& settings);
   void follow_masters(const Settings& settings);
+  void guard_gantries(const Settings& settings);
+  void release_commutators(const Settings& settings);
   void publish(const Settings& settings, const Inputs& inputs);
+  void assign_unsequenced(const Settings& settings, std::size_t axis);
+  CommandResult jog_refusal(const Settings& settings, std::size_t axis, std::int8_t dir) const;
 
   void start_cycle(const Settings& settings, AxisMask requested, bool all);
   bool start_step(const Settings& settings);
@@ -107,6 +113,11 @@ class Engine {
   std::array<std::int8_t, kAxisCount> prev_jog_request_{};
   double last_dt_s_ = 0.001;
   std::array<double, kAxisCount> absolute_mm_{};
+  SettingsFaults faults_{};                      // the rule set on this period's settings
+  std::array<double, kAxisCount> pair_rel0_{};    // per slave: slave - master motor at cycle start
+  std::array<bool, kAxisCount> limit_tripped_{};  // shared limit tripped: jog away until released
+  std::array<std::size_t, kAxisCount> channel_source_{0, 1, 2, 3, 4, 5};  // axis driving each output
+  std::array<double, kAxisCount> channel_offset_{};  // output position - source motor position
 
   double time_s_ = 0;
   bool first_step_ = true;

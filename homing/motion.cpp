@@ -120,16 +120,25 @@ MotionCommand move_to_command(const MotionState& now, double target, double vmax
   const double d = target - now.position_mm;
   const double dir = d >= 0 ? 1.0 : -1.0;
   const double dist = std::abs(d);
-  // Largest speed from which braking at `a` still ends on the target, looking
-  // one period ahead so braking starts in time rather than one period late.
-  double v_brake = vmax;
-  if (a > 0) {
-    const double ad = a * dt;
-    v_brake = std::max(0.0, -0.5 * ad + std::sqrt(0.25 * ad * ad + 2.0 * a * dist));
+  if (dist <= 1e-12) return MotionCommand{0, a, true, target};
+  const double v_toward = now.velocity_mm_per_s * dir;  // > 0: already heading for the target
+  // Look further ahead than one period: a late period must not carry the
+  // motor past the point where braking at `a` still ends on the target.
+  const double horizon = std::max(dt, kBrakingHorizon_s);
+  if (a > 0 && v_toward > 0 && v_toward * horizon + v_toward * v_toward / (2.0 * a) >= dist) {
+    // Brake now with the constant deceleration that ends exactly on the
+    // target (never more than `a` unless already too fast to stop in time).
+    // Constant deceleration is exact whatever the period lengths.
+    const double needed = v_toward * v_toward / (2.0 * dist);
+    return MotionCommand{0, std::max(needed, 1e-9), true, target};
   }
-  double v = std::min(std::abs(vmax), v_brake);
+  double v = std::abs(vmax);
+  if (a > 0) {
+    const double ad = a * horizon;
+    v = std::min(v, std::max(0.0, -0.5 * ad + std::sqrt(0.25 * ad * ad + 2.0 * a * dist)));
+  }
   // Never stall short of the target: creep the last micrometres.
-  if (dist > 1e-9 && v < 1e-3) v = std::min(std::abs(vmax), 1e-3 + dist / std::max(dt, 1e-6));
+  if (v < 1e-3) v = std::min(std::abs(vmax), 1e-3 + dist / std::max(dt, 1e-6));
   return MotionCommand{dir * v, a, true, target};
 }
 

@@ -54,7 +54,11 @@ std::optional<double> crossing_time(const MotionPath& path, double x_mm);
 MotionCommand velocity_command(double velocity_mm_per_s, double acceleration_mm_per_s2);
 MotionCommand stop_command(double acceleration_mm_per_s2);
 // Trapezoidal move toward target: cruise at max_velocity, brake at acceleration
-// so the motor comes to rest exactly on the target.
+// so the motor comes to rest exactly on the target. Braking starts early
+// enough for a control period up to kBrakingHorizon_s long, and is then a
+// constant deceleration (<= acceleration) that ends on the target whatever
+// the lengths of the periods that follow: no dead stop on the limit.
+inline constexpr double kBrakingHorizon_s = 0.02;
 MotionCommand move_to_command(const MotionState& now, double target_mm,
                               double max_velocity_mm_per_s, double acceleration_mm_per_s2,
                               double dt_s);

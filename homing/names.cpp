@@ -131,6 +131,7 @@ std::string_view command_result_name(CommandResult r) {
     case CommandResult::refused_invalid: return "refused_invalid";
     case CommandResult::refused_communication_lost: return "refused_communication_lost";
     case CommandResult::refused_settings_fault: return "refused_settings_fault";
+    case CommandResult::refused_hard_limit: return "refused_hard_limit";
   }
   return "?";
 }

@@ -2,6 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
+
+#include "gantry.hpp"
 #include "motion.hpp"
 
 namespace homing {
@@ -35,6 +39,11 @@ std::optional<SettingsFault> check_motion(const AxisSettings& s, std::size_t axi
     return fault(axis, AxisField::push_distance, CheckRule::missing_distance, s.push_distance_mm);
   if (s.mode == HomingMode::switch_index && s.index_pitch_mm <= 0)
     return fault(axis, AxisField::index_pitch, CheckRule::missing_distance, s.index_pitch_mm);
+  if (const double needed = backoff_needed_mm(s); needed >= s.max_backoff_mm)
+    return fault(axis, mode_is_pushing(s.mode) ? AxisField::push_distance : AxisField::max_backoff,
+                 CheckRule::backoff_too_short, needed);
+  if (s.shared_limit && s.pull_off_mm <= 0)
+    return fault(axis, AxisField::pull_off, CheckRule::shared_limit_rests_on_sensor, s.pull_off_mm);
   return std::nullopt;
 }
 
@@ -45,30 +54,58 @@ std::optional<SettingsFault> check_limits(const AxisSettings& s, std::size_t axi
   auto outside = [&](double x) { return x < s.soft_limit_min_mm || x > s.soft_limit_max_mm; };
   if (s.mode != HomingMode::disabled && outside(s.home_position_mm) && !mode_is_absolute(s.mode))
     return fault(axis, AxisField::home_position, CheckRule::outside_soft_limits, s.home_position_mm);
-  const bool final_move = s.mode == HomingMode::absolute_final ||
-                          (s.final_move_enable && s.mode != HomingMode::absolute &&
-                           s.mode != HomingMode::disabled);
-  if (final_move && outside(s.final_position_mm))
+  if (final_move_wanted(s) && outside(s.final_position_mm))
     return fault(axis, AxisField::final_position, CheckRule::outside_soft_limits, s.final_position_mm);
   return std::nullopt;
 }
 
-std::optional<SettingsFault> check_slave(const Settings& settings, std::size_t axis) {
+// The rules of a gantry pair, checked on the slave. `pair` holds the settings
+// both axes move with (motion_settings).
+std::optional<SettingsFault> check_slave(const Settings& settings, const Settings& pair, std::size_t axis) {
   const AxisSettings& s = settings.axes[axis];
   const int m = master_of(s);
   if (m < 0) return std::nullopt;
   if (m == static_cast<int>(axis) || m >= static_cast<int>(kAxisCount))
     return fault(axis, AxisField::slave_of, CheckRule::slave_invalid, s.slave_of);
+  if (s.mode == HomingMode::disabled)
+    return fault(axis, AxisField::mode, CheckRule::disabled_in_gantry, s.slave_of);
   const AxisSettings& master = settings.axes[static_cast<std::size_t>(m)];
-  if (master_of(master) >= 0 || !mode_uses_switch(master.mode))
+  if (master.mode == HomingMode::disabled)
+    return fault(axis, AxisField::slave_of, CheckRule::disabled_in_gantry, s.slave_of);
+  if (master_of(master) >= 0)
+    return fault(axis, AxisField::slave_of, CheckRule::slave_of_slave, s.slave_of);
+  if (!mode_uses_switch(master.mode))
     return fault(axis, AxisField::slave_of, CheckRule::slave_invalid, s.slave_of);
   for (std::size_t other = 0; other < axis; ++other)  // one slave per master
     if (master_of(settings.axes[other]) == m)
       return fault(axis, AxisField::slave_of, CheckRule::slave_invalid, s.slave_of);
-  if (s.slave_mode == SlaveMode::own_output && !mode_uses_switch(s.mode))
+  if (!mode_uses_switch(s.mode))
     return fault(axis, AxisField::mode, CheckRule::slave_needs_sensor, static_cast<double>(s.mode));
   if (s.max_misalignment_mm <= 0)
     return fault(axis, AxisField::max_misalignment, CheckRule::not_positive, s.max_misalignment_mm);
+  const AxisSettings& moves = pair.axes[axis];
+  if (const double stop = gantry_stop_distance_mm(moves); stop >= s.max_misalignment_mm)
+    return fault(axis, AxisField::max_misalignment, CheckRule::gantry_stop_too_long, stop);
+  // The squaring moves the slave against its master by its sensor's skew plus
+  // this; alone it must leave room for a skew.
+  const double built_in = moves.pull_off_mm + s.switch_compensation_mm -
+                          pair.axes[static_cast<std::size_t>(m)].pull_off_mm;
+  if (std::abs(built_in) >= s.max_misalignment_mm)
+    return fault(axis, AxisField::switch_compensation, CheckRule::squaring_beyond_misalignment, built_in);
+  return std::nullopt;
+}
+
+std::optional<SettingsFault> check_axis_in(const Settings& settings, const Settings& pair, std::size_t axis) {
+  if (auto f = check_slave(settings, pair, axis)) return f;
+  const AxisSettings& s = pair.axes[axis];
+  if (auto f = check_limits(s, axis)) return f;
+  if (mode_uses_switch(s.mode)) return check_motion(s, axis);
+  if (s.mode == HomingMode::absolute_final || (s.final_move_enable && s.mode == HomingMode::manual)) {
+    if (s.seek_feedrate_mm_per_min <= 0)
+      return fault(axis, AxisField::seek_feedrate, CheckRule::not_positive, s.seek_feedrate_mm_per_min);
+    if (s.acceleration_mm_per_s2 <= 0)
+      return fault(axis, AxisField::acceleration, CheckRule::not_positive, s.acceleration_mm_per_s2);
+  }
   return std::nullopt;
 }
 
@@ -79,20 +116,38 @@ double seek_stop_distance_mm(const AxisSettings& s) {
   return stop_distance_mm(v, s.acceleration_mm_per_s2) + v * s.debounce_ms / 1000.0;
 }
 
+double backoff_needed_mm(const AxisSettings& s) {
+  return seek_stop_distance_mm(s) + (mode_is_pushing(s.mode) ? s.push_distance_mm : 0.0);
+}
+
+double gantry_stop_distance_mm(const AxisSettings& s) {
+  const double v = mm_per_min_to_mm_per_s(std::max(s.seek_feedrate_mm_per_min, s.jog_feedrate_mm_per_min));
+  return stop_distance_mm(v, s.acceleration_mm_per_s2);
+}
+
+bool final_move_wanted(const AxisSettings& s) {
+  return s.mode == HomingMode::absolute_final ||
+         (s.final_move_enable && s.mode != HomingMode::absolute && s.mode != HomingMode::disabled);
+}
+
 std::optional<SettingsFault> check_axis(const Settings& settings, std::size_t axis) {
-  const AxisSettings& s = settings.axes[axis];
-  if (auto f = check_slave(settings, axis)) return f;
-  if (auto f = check_limits(s, axis)) return f;
-  const bool slave = master_of(s) >= 0;
-  // A commutator slave moves with its master's homing settings; its own
-  // motion settings are not used for homing.
-  if (slave && s.slave_mode == SlaveMode::external_commutator) return std::nullopt;
-  if (mode_uses_switch(s.mode)) return check_motion(s, axis);
-  if (s.mode == HomingMode::absolute_final || (s.final_move_enable && s.mode == HomingMode::manual)) {
-    if (s.seek_feedrate_mm_per_min <= 0)
-      return fault(axis, AxisField::seek_feedrate, CheckRule::not_positive, s.seek_feedrate_mm_per_min);
-    if (s.acceleration_mm_per_s2 <= 0)
-      return fault(axis, AxisField::acceleration, CheckRule::not_positive, s.acceleration_mm_per_s2);
+  return check_axis_in(settings, motion_settings(settings), axis);
+}
+
+SettingsFaults check_settings(const Settings& settings) {
+  const Settings pair = motion_settings(settings);
+  SettingsFaults out{};
+  for (std::size_t a = 0; a < kAxisCount; ++a) out[a] = check_axis_in(settings, pair, a);
+  return out;
+}
+
+std::optional<SettingsFault> new_fault(const Settings& before, const Settings& after) {
+  const SettingsFaults old = check_settings(before);
+  const SettingsFaults now = check_settings(after);
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (!now[a]) continue;
+    const bool same = old[a] && old[a]->field == now[a]->field && old[a]->rule == now[a]->rule;
+    if (!same) return now[a];
   }
   return std::nullopt;
 }
@@ -134,6 +189,31 @@ std::string describe_fault(const SettingsFault& f, const Settings& settings) {
     case CheckRule::outside_soft_limits:
       return fmt::format("{} = {:g} {} lies outside the soft limits [{:g}, {:g}]", name, f.value, unit,
                          s.soft_limit_min_mm, s.soft_limit_max_mm);
+    case CheckRule::disabled_in_gantry:
+      return fmt::format("{}: a disabled axis can be neither master nor slave of a gantry; set "
+                         "axis.{}.slave_of = 0 first, or give both axes a homing mode", name, letter);
+    case CheckRule::slave_of_slave:
+      return fmt::format("{} = {:g} names an axis that is itself a slave; a slave's master must be "
+                         "an axis that is no slave", name, f.value);
+    case CheckRule::gantry_stop_too_long:
+      return fmt::format("the gantry needs {:.3f} {} to stop from its fastest speed (seek or jog "
+                         "feedrate, at the lower acceleration of the pair), not less than {} = {:g} {}; "
+                         "one side stalled by a drive fault would rack it: lower the master's "
+                         "feedrates, raise the accelerations or raise max_misalignment",
+                         f.value, unit, name, s.max_misalignment_mm, unit);
+    case CheckRule::squaring_beyond_misalignment:
+      return fmt::format("{} plus the slave's pull-off minus the master's is {:g} {}, not less than "
+                         "axis.{}.max_misalignment = {:g} {}: every homing would end in a misalignment alarm",
+                         name, f.value, unit, letter, s.max_misalignment_mm, unit);
+    case CheckRule::backoff_too_short:
+      return fmt::format("axis.{}.max_backoff = {:g} {} cannot release the sensor: the axis may come to "
+                         "rest {:.3f} {} past the trigger (stop distance{}); raise max_backoff{}",
+                         letter, s.max_backoff_mm, unit, f.value, unit,
+                         mode_is_pushing(s.mode) ? " plus push_distance" : "",
+                         mode_is_pushing(s.mode) ? " or lower push_distance" : "");
+    case CheckRule::shared_limit_rests_on_sensor:
+      return fmt::format("{} = {:g} {}: a shared home/limit sensor needs a pull-off greater than 0 so "
+                         "the axis comes to rest off its sensor", name, f.value, unit);
   }
   return "?";
 }

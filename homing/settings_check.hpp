@@ -2,6 +2,7 @@
 // The configuration check run before any motion (and by the register layer on
 // every settings write): refuses settings that cannot work, naming the setting.
 #include <cstdint>
+#include <array>
 #include <optional>
 #include <string>
 
@@ -22,6 +23,12 @@ enum class CheckRule : std::uint8_t {
   commutator_needs_switch_master,
   soft_limits_inverted,
   outside_soft_limits,      // home or final position outside the enabled soft limits
+  disabled_in_gantry,       // a disabled axis is neither master nor slave
+  slave_of_slave,           // the master named is itself a slave
+  gantry_stop_too_long,     // the pair cannot stop within max_misalignment
+  squaring_beyond_misalignment,  // pull-off difference + compensation alone exceed max_misalignment
+  backoff_too_short,        // max_backoff cannot release the sensor after the stop (and push)
+  shared_limit_rests_on_sensor,  // a shared home/limit sensor needs a pull-off off the sensor
 };
 
 struct SettingsFault {
@@ -35,11 +42,33 @@ struct SettingsFault {
   }
 };
 
-// Checks one axis as it would home. The whole settings are needed for slaves.
+// The one rule set. Checks one axis as it would move (jog, move, homing, in a
+// sequence step or not), with the settings it moves with (gantry.hpp). The
+// whole settings are needed for gantries. The engine runs it before every
+// cycle, jog and move; the register validation and the tools run it on every
+// write, so what the engine would refuse is refused at write time first.
 std::optional<SettingsFault> check_axis(const Settings& settings, std::size_t axis);
+
+// The first broken rule of each axis.
+using SettingsFaults = std::array<std::optional<SettingsFault>, kAxisCount>;
+SettingsFaults check_settings(const Settings& settings);
+
+// A fault of `after` that `before` does not have (same axis, setting and
+// rule): what a write would break. Settings already broken before the write
+// (an old database) do not block writes that leave them as they are.
+std::optional<SettingsFault> new_fault(const Settings& before, const Settings& after);
 
 // Stop distance of the seek, including the travel while the input is debounced.
 double seek_stop_distance_mm(const AxisSettings& s);
+// Distance the back-off may have to travel before the sensor can release:
+// the seek's stop distance plus, in pushing modes, the push.
+double backoff_needed_mm(const AxisSettings& s);
+// A gantry pair's stop distance from its fastest speed (seek or jog) at the
+// pair's acceleration: one side stalled by a drive fault, the other must
+// come to rest within max_misalignment.
+double gantry_stop_distance_mm(const AxisSettings& pair_motion);
+// The final move of a cycle is made for this axis.
+bool final_move_wanted(const AxisSettings& s);
 
 std::string describe_fault(const SettingsFault& fault, const Settings& settings);
 

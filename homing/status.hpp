@@ -28,8 +28,9 @@ enum class CommandResult : std::uint8_t {
   refused_invalid = 12,      // the command itself makes no sense (bad axis, bad target)
   refused_communication_lost = 13,
   refused_settings_fault = 14,  // the configuration check refused the cycle: see the axis alarm
+  refused_hard_limit = 15,   // on a tripped shared limit: only a jog away from the sensor is allowed
 };
-inline constexpr std::uint8_t kCommandResultCount = 15;
+inline constexpr std::uint8_t kCommandResultCount = 16;
 
 // status.interlocks: what blocks homing or motion now; 0 = free to move.
 namespace interlock {

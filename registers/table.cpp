@@ -99,7 +99,8 @@ constexpr EnumValue kCommandResults[] = {
     {11, "refused_cause_present", "reset refused: e-stop, drive fault or watchdog still active"},
     {12, "refused_invalid", "the command makes no sense (bad axis, bad target)"},
     {13, "refused_communication_lost", "the host watchdog expired"},
-    {14, "refused_settings_fault", "the configuration check refused the cycle: see the axis alarm"}};
+    {14, "refused_settings_fault", "the configuration check refused the command: see the axis alarm or homingctl check"},
+    {15, "refused_hard_limit", "on a tripped shared limit: only a jog away from the sensor is allowed until it releases"}};
 constexpr EnumValue kInterlocks[] = {  // meanings = homing::interlock_name
     {0, "estop", "emergency stop pressed"},
     {1, "drive_fault", "drive fault"},
@@ -171,7 +172,7 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "status.sequence_step", .table = IR, .offset = 2, .access = Access::r, .max = 6, .persisted = false, .key = Key::status_sequence_step, .description = "running sequence step 1..6, 0 when not homing"},
     {.pattern = "status.homing_cycles", .table = IR, .offset = 3, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::status_homing_cycles, .description = "homing cycles completed successfully since start"},
     {.pattern = "status.heartbeat", .table = IR, .offset = 5, .access = Access::r, .max = 65535, .persisted = false, .key = Key::status_heartbeat, .description = "increments every control period (wraps at 65535)"},
-    {.pattern = "status.last_command_result", .table = IR, .offset = 6, .type = Type::enumeration, .access = Access::r, .max = 14, .persisted = false, .key = Key::status_last_command_result, .values = kCommandResults, .description = "result of the last command coil written"},
+    {.pattern = "status.last_command_result", .table = IR, .offset = 6, .type = Type::enumeration, .access = Access::r, .max = 15, .persisted = false, .key = Key::status_last_command_result, .values = kCommandResults, .description = "result of the last command coil written"},
     {.pattern = "status.interlocks", .table = IR, .offset = 7, .type = Type::bitmask, .access = Access::r, .max = 511, .persisted = false, .key = Key::status_interlocks, .values = kInterlocks, .description = "what now blocks homing or motion; 0 = free to move"},
     {.pattern = "status.global_alarm", .table = IR, .offset = 8, .type = Type::enumeration, .access = Access::r, .max = 18, .persisted = false, .key = Key::status_global_alarm, .values = kAlarms, .description = "alarm not tied to one axis (e-stop at rest, settings lost)"},
     {.pattern = "status.alarm_axis", .table = IR, .offset = 9, .type = Type::enumeration, .access = Access::r, .max = 6, .persisted = false, .key = Key::status_alarm_axis, .values = kAlarmAxis, .description = "first axis with a latched alarm (1 = X ... 6 = C), 0 none"},

@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <bitset>
 
 #include "homing/settings_check.hpp"
 #include "registers/defaults.hpp"
@@ -86,7 +85,6 @@ std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t 
   if (!decoded) return std::unexpected(decoded.error());
 
   AcceptedWrite result{{}, settings, host, {}};
-  std::bitset<homing::kAxisCount> touched;
   for (const RawWrite& w : *decoded) {
     const Register& reg = *w.reg;
     std::int64_t old_raw = 0;
@@ -101,7 +99,6 @@ std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t 
     } else if (reg.persisted) {
       old_raw = setting_raw(result.settings, reg);
       set_setting_raw(result.settings, reg, w.raw);
-      if (reg.per_axis()) touched.set(static_cast<std::size_t>(reg.axis));
     } else {
       old_raw = host_raw(result.host, reg);
       set_host_raw(result.host, reg, w.raw);
@@ -109,21 +106,13 @@ std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t 
     if (old_raw != w.raw) result.changes.push_back({&reg, old_raw, w.raw});
   }
 
-  // The engine's own check, on the settings as they would be after the request.
-  for (std::size_t axis = 0; axis < homing::kAxisCount; ++axis) {
-    const homing::AxisSettings& s = result.settings.axes[axis];
-    if (s.mode == homing::HomingMode::disabled) continue;
-    const int master = homing::master_of(s);
-    const bool master_touched = master >= 0 && master < static_cast<int>(homing::kAxisCount) &&
-                                touched.test(static_cast<std::size_t>(master));
-    if (!touched.test(axis) && !master_touched) continue;
-    // A slave untouched by the request is only refused for if this request breaks it.
-    if (!touched.test(axis) && homing::check_axis(settings, axis)) continue;
-    if (const auto fault = homing::check_axis(result.settings, axis))
-      return std::unexpected(Refusal{
-          ExceptionCode::illegal_data_value,
-          fmt::format("{}; nothing was written", homing::describe_fault(*fault, result.settings))});
-  }
+  // The engine's own rule set, on the settings as they would be after the
+  // request: a write may not break a rule (the whole configuration is checked,
+  // so a write to a master that breaks its slave is refused too).
+  if (const auto fault = homing::new_fault(settings, result.settings))
+    return std::unexpected(Refusal{
+        ExceptionCode::illegal_data_value,
+        fmt::format("{}; nothing was written", homing::describe_fault(*fault, result.settings))});
   return result;
 }
 
@@ -137,11 +126,8 @@ std::optional<Refusal> validate_settings_map(const std::map<std::string, std::in
                      fmt::format("{} = {} is outside its range {}", name, format_value(*reg, raw), range_text(*reg))};
   }
   const SettingsFromRaw decoded = settings_from_raw(values);
-  for (std::size_t axis = 0; axis < homing::kAxisCount; ++axis) {
-    if (decoded.settings.axes[axis].mode == homing::HomingMode::disabled) continue;
-    if (const auto fault = homing::check_axis(decoded.settings, axis))
-      return Refusal{ExceptionCode::illegal_data_value, homing::describe_fault(*fault, decoded.settings)};
-  }
+  for (const auto& fault : homing::check_settings(decoded.settings))
+    if (fault) return Refusal{ExceptionCode::illegal_data_value, homing::describe_fault(*fault, decoded.settings)};
   return std::nullopt;
 }
 

@@ -112,8 +112,24 @@ SCENARIO("the start button starts home-all and the lamp shows homing done", "[se
   }
 }
 
+SCENARIO("a start button held at power-up starts nothing until it is released and pressed again",
+         "[sequence]") {
+  Rig r;
+  r.sim().set_start_button(true);
+  r.run_for(0.5);
+  CHECK_FALSE(r.status().homing);
+  CHECK(r.status().homing_cycles == 0);
+  CHECK(r.trace[0].path_mm == 0);
+  r.sim().set_start_button(false);
+  r.run_for(0.05);
+  r.sim().set_start_button(true);
+  r.run_until([&] { return r.status().homing; }, 1);
+  CHECK(r.status().homing);
+}
+
 SCENARIO("a held start button starts one cycle, not one per period", "[sequence]") {
   Rig r;
+  r.step();  // the press comes after start-up
   r.sim().set_start_button(true);
   r.run_until([&] { return r.status().homing; }, 1);
   r.run_until([&] { return !r.status().homing; }, 60);

@@ -57,7 +57,7 @@ TEST_CASE("homingctl set: engineering units and enum names, several values in on
   CHECK(c.read("axis.x.latch_feedrate") == 80);
 
   // Two settings that only work together, in two requests: max_stop_distance first.
-  r = ctl(d, {"set", "axis.y.seek_feedrate=12000", "axis.y.max_stop_distance=50"});
+  r = ctl(d, {"set", "axis.y.seek_feedrate=12000", "axis.y.max_stop_distance=50", "axis.y.max_backoff=60"});
   SHOW(r);
   REQUIRE(r.code() == 0);
   CHECK(c.read("axis.y.seek_feedrate") == 12000);

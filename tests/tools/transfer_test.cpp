@@ -121,6 +121,7 @@ TEST_CASE("homingctl import is checked like a Modbus write, ordered, and all or 
   // Valid together, but only in one order (max_stop_distance first): imported.
   replace_value(file, "axis.x.seek_feedrate", 12000);
   replace_value(file, "axis.x.max_stop_distance", 50000);
+  replace_value(file, "axis.x.max_backoff", 60000);  // the back-off must release after a 40 mm stop
   r = ctl(d, {"import", "--dry-run", file});
   CHECK(r.code() == 0);
   CHECK(holding_snapshot(c) == before);

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "homing/phases.hpp"
+#include "homing/gantry.hpp"
 #include "homing/settings_check.hpp"
 
 namespace homingctl {
@@ -31,11 +32,15 @@ bool CheckReport::ok() const {
 CheckReport check_settings(const homing::Settings& settings,
                            const std::array<std::optional<TriggerCam>, homing::kAxisCount>& cams) {
   CheckReport r;
+  // The engine's rule set, and the settings each axis really moves with (a
+  // slave its master's): the figures below are the ones the engine uses.
+  const homing::SettingsFaults faults = homing::check_settings(settings);
+  const homing::Settings moves = homing::motion_settings(settings);
   for (std::size_t i = 0; i < homing::kAxisCount; ++i) {
-    const homing::AxisSettings& s = settings.axes[i];
+    const homing::AxisSettings& s = moves.axes[i];
     AxisCheck c;
     c.axis = i;
-    c.enabled = s.mode != HomingMode::disabled;
+    c.enabled = s.mode != HomingMode::disabled || faults[i];
     c.stop_distance_mm = homing::seek_stop_distance_mm(s);
     c.max_stop_distance_mm = s.max_stop_distance_mm;
     const auto u = homing::axis_unit(i);
@@ -43,15 +48,14 @@ CheckReport check_settings(const homing::Settings& settings,
       r.axes.push_back(c);
       continue;
     }
-    if (auto f = homing::check_axis(settings, i)) c.fault = homing::describe_fault(*f, settings);
+    if (const auto& f = faults[i]) c.fault = homing::describe_fault(*f, settings);
     const double a = s.acceleration_mm_per_s2;
     const double seek_v = s.seek_feedrate_mm_per_min / 60.0, latch_v = s.latch_feedrate_mm_per_min / 60.0;
     const double latch_stop = a > 0 ? latch_v * latch_v / (2 * a) : 0;
     auto phase = [&](homing::Phase p, double t) {
       if (t > 0) c.phases.emplace_back(std::string(homing::phase_name(p)), t);
     };
-    const bool final_move = s.mode == HomingMode::absolute_final ||
-                            (s.final_move_enable && s.mode != HomingMode::absolute);
+    const bool final_move = homing::final_move_wanted(s);
     if (homing::mode_uses_switch(s.mode)) {
       if (s.pre_move_mode == homing::PreMove::always) phase(homing::Phase::pre_move, move_time(s.pre_move_distance_mm, seek_v, a));
       c.seek_worst_s = move_time(s.max_seek_travel_mm, seek_v, a);

@@ -74,7 +74,6 @@ std::expected<WritePlan, std::string> plan_write(const RawMap& current, const Ra
   const homing::Settings before = settings;
   homing::Settings after = settings;
   registers::HostRegisters host_after = host;
-  std::vector<bool> touched(homing::kAxisCount, false);
   for (const auto& [name, raw] : wanted) {
     const Register* r = registers::find_register(name);
     if (!r || r->unit != Unit::module || r->table != Table::holding_register)
@@ -87,20 +86,13 @@ std::expected<WritePlan, std::string> plan_write(const RawMap& current, const Ra
     if (it->second == raw) continue;
     plan.changes.push_back({r, it->second, raw});
     apply_raw(after, host_after, *r, raw);
-    if (r->per_axis()) touched[static_cast<std::size_t>(r->axis)] = true;
   }
   if (plan.changes.empty()) return plan;
 
-  // The final settings must pass the engine's check, as the daemon runs it.
-  for (std::size_t a = 0; check && a < homing::kAxisCount; ++a) {
-    if (after.axes[a].mode == homing::HomingMode::disabled) continue;
-    const int m = homing::master_of(after.axes[a]);
-    const bool master_touched = m >= 0 && m < static_cast<int>(homing::kAxisCount) && touched[static_cast<std::size_t>(m)];
-    if (!touched[a] && !master_touched) continue;
-    if (!touched[a] && homing::check_axis(before, a)) continue;
-    if (auto f = homing::check_axis(after, a))
+  // The final settings must pass the engine's rule set, as the daemon runs it.
+  if (check)
+    if (auto f = homing::new_fault(before, after))
       return std::unexpected(fmt::format("{}; nothing was written", homing::describe_fault(*f, after)));
-  }
 
   // One block per run touched, from the first to the last changed word,
   // the words in between at their current values.

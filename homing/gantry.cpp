@@ -1,0 +1,58 @@
+#include "gantry.hpp"
+
+#include <algorithm>
+
+namespace homing {
+
+int gantry_master(const Settings& settings, std::size_t axis) {
+  const AxisSettings& s = settings.axes[axis];
+  const int m = master_of(s);
+  if (m < 0 || m >= static_cast<int>(kAxisCount) || m == static_cast<int>(axis)) return -1;
+  const AxisSettings& master = settings.axes[static_cast<std::size_t>(m)];
+  if (s.mode == HomingMode::disabled || !mode_uses_switch(s.mode)) return -1;
+  if (master_of(master) >= 0 || !mode_uses_switch(master.mode)) return -1;
+  for (std::size_t other = 0; other < axis; ++other)  // one slave per master: the first
+    if (master_of(settings.axes[other]) == m) return -1;
+  return m;
+}
+
+int gantry_slave(const Settings& settings, std::size_t axis) {
+  for (std::size_t s = 0; s < kAxisCount; ++s)
+    if (gantry_master(settings, s) == static_cast<int>(axis)) return static_cast<int>(s);
+  return -1;
+}
+
+int gantry_partner(const Settings& settings, std::size_t axis) {
+  const int m = gantry_master(settings, axis);
+  return m >= 0 ? m : gantry_slave(settings, axis);
+}
+
+bool is_commutator_slave(const Settings& settings, std::size_t axis) {
+  return gantry_master(settings, axis) >= 0 &&
+         settings.axes[axis].slave_mode == SlaveMode::external_commutator;
+}
+
+Settings motion_settings(const Settings& settings) {
+  Settings out = settings;
+  for (std::size_t s = 0; s < kAxisCount; ++s) {
+    const int m = gantry_master(settings, s);
+    if (m < 0) continue;
+    const AxisSettings& own = settings.axes[s];
+    AxisSettings& master = out.axes[static_cast<std::size_t>(m)];
+    AxisSettings& slave = out.axes[s];
+    slave = settings.axes[static_cast<std::size_t>(m)];
+    slave.sensor_nc = own.sensor_nc;
+    slave.debounce_ms = own.debounce_ms;
+    slave.shared_limit = own.shared_limit;
+    if (own.slave_mode == SlaveMode::own_output) slave.pull_off_mm = own.pull_off_mm;
+    slave.switch_compensation_mm = own.switch_compensation_mm;
+    slave.max_misalignment_mm = own.max_misalignment_mm;
+    slave.slave_of = own.slave_of;
+    slave.slave_mode = own.slave_mode;
+    const double pair_accel = std::min(own.acceleration_mm_per_s2, master.acceleration_mm_per_s2);
+    slave.acceleration_mm_per_s2 = master.acceleration_mm_per_s2 = pair_accel;
+  }
+  return out;
+}
+
+}  // namespace homing

@@ -1,0 +1,31 @@
+#pragma once
+// Gantry pairs: which axes form one, and what a slave inherits from its master.
+// The engine, the configuration check, the register validation and the tools
+// all ask these functions, so the answer is the same everywhere.
+#include <cstddef>
+
+#include "settings.hpp"
+
+namespace homing {
+
+// The master of `axis` when axis is the slave of a pair that may move
+// (passes the gantry rules: an enabled slave of an enabled switch-homing
+// master that is no slave itself, the first slave of that master), else -1.
+int gantry_master(const Settings& settings, std::size_t axis);
+// The slave of `axis` when it is the master of a valid pair, else -1.
+int gantry_slave(const Settings& settings, std::size_t axis);
+// The other axis of a valid pair, else -1.
+int gantry_partner(const Settings& settings, std::size_t axis);
+bool is_commutator_slave(const Settings& settings, std::size_t axis);
+
+// The settings each axis actually moves with. A slave homes with its master's
+// motion settings (mode, direction, feedrates, travel and back-off limits,
+// pre-move, push distance, index pitch, home and final position, jog feedrate,
+// soft limits) and keeps only its own sensor settings (polarity, debounce,
+// shared limit), pull-off (software-slaved only: a commutator pair pulls off
+// on one output), switch compensation and max misalignment. Both axes of a
+// pair move with the lower of their two accelerations, so neither drive is
+// asked for more than it can do, in homing, jog, move and every stop.
+Settings motion_settings(const Settings& settings);
+
+}  // namespace homing

@@ -1,0 +1,338 @@
+// Named scenarios for the multi-axis motion-safety rules (issue 13): each one
+// was a way to move a machine wrongly before the rules below existed.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "homing/gantry.hpp"
+#include "homing/settings_check.hpp"
+#include "rig.hpp"
+#include "truth.hpp"
+
+using namespace rig;
+
+namespace {
+
+// X master, Y software-slaved to it; both sensors' cams end at 0 unless skewed.
+Rig software_pair(double slave_edge_mm = 0) {
+  Rig r;
+  r.settings.axes[1] = typical_axis();
+  r.settings.axes[1].slave_of = 1;
+  r.settings.axes[1].max_misalignment_mm = 2;
+  r.machine.axes[1].sensor_max_mm = slave_edge_mm;
+  return r;
+}
+
+// Largest change of the carriages' relative position (slave - master) seen
+// from the moment the watch starts.
+struct RackWatch {
+  double rel0 = 0;
+  double worst = 0;
+  void start(Rig& r) {
+    rel0 = r.actual(1) - r.actual(0);
+    worst = 0;
+    r.on_period = [this](Rig& rr) {
+      worst = std::max(worst, std::abs(rr.actual(1) - rr.actual(0) - rel0));
+    };
+  }
+};
+
+// Largest velocity change between two periods, relative to what the
+// acceleration allows in that period (1 = exactly at the limit).
+struct AccelWatch {
+  double prev_v = 0;
+  double engine_dt = 0;  // the period the engine integrated in the next step
+  double worst_ratio = 0;
+  std::size_t axis = 0;
+  void start(Rig& r, std::size_t a) {
+    axis = a;
+    prev_v = r.axis(a).velocity_mm_per_s;
+    engine_dt = r.ran_dt_s;
+    r.on_period = [this](Rig& rr) {
+      const double v = rr.axis(axis).velocity_mm_per_s;
+      const double allowed = motion_settings(rr.settings).axes[axis].acceleration_mm_per_s2 * engine_dt;
+      worst_ratio = std::max(worst_ratio, std::abs(v - prev_v) / allowed);
+      prev_v = v;
+      engine_dt = rr.ran_dt_s;
+    };
+  }
+};
+
+}  // namespace
+
+SCENARIO("a slave homes with its master's motion settings: its own direction, feedrates, mode and pre-move are ignored",
+         "[gantry][safety]") {
+  Rig r = software_pair(0.8);
+  AxisSettings& y = r.settings.axes[1];
+  y.direction = Direction::positive;
+  y.seek_feedrate_mm_per_min = 3000;
+  y.latch_feedrate_mm_per_min = 500;
+  y.mode = HomingMode::switch_reapproach;
+  y.pre_move_mode = PreMove::always;
+  y.max_seek_travel_mm = 5;
+  y.acceleration_mm_per_s2 = 2000;  // the pair moves with the lower one (X's 500)
+  REQUIRE_FALSE(check_axis(r.settings, 1));
+  RackWatch rack;
+  rack.start(r);
+  REQUIRE(r.home_all());
+  CHECK(rack.worst <= 0.8 + 1e-3);
+  // Square by the sensors: each side pulled off its own release edge.
+  CHECK(r.actual(0) == Approx(rest_point_mm(r.settings.axes[0], last_release_mm(r, 0))).margin(1e-3));
+  CHECK(r.actual(1) == Approx(rest_point_mm(r.settings.axes[0], last_release_mm(r, 1))).margin(1e-3));
+  CHECK(r.axis(1).position_mm == Approx(r.axis(0).position_mm).margin(1e-3));
+}
+
+SCENARIO("a gantry with one side starting on its sensor and the other side's sensor dead stops within max_misalignment",
+         "[gantry][safety]") {
+  for (std::size_t on_sensor : {0u, 1u}) {
+    Rig r = software_pair();
+    r.machine.axes[on_sensor].actual_position_mm = -3;  // on its cam
+    r.machine.axes[1 - on_sensor].actual_position_mm = -3;
+    r.machine.axes[1 - on_sensor].fault = sim::Fault::sensor_stuck_inactive;
+    RackWatch rack;
+    rack.start(r);
+    r.home_all();
+    r.run_until([&] { return !r.any_moving(); }, 5);
+    CHECK(r.status().alarm);
+    CHECK(r.axis(1).alarm.code == AlarmCode::misalignment);
+    CHECK(rack.worst <= 2 + 0.05);
+    CHECK_FALSE(r.axis(0).homed);
+  }
+}
+
+SCENARIO("pre-move if the sensor is active is decided for the pair", "[gantry][safety]") {
+  Rig r = software_pair(-4);  // the slave's cam ends 4 mm lower: only the slave starts on it
+  r.settings.axes[0].pre_move_mode = PreMove::if_sensor_active;
+  r.settings.axes[0].pre_move_distance_mm = 5;
+  r.machine.axes[0].actual_position_mm = 0.5;
+  r.machine.axes[1].actual_position_mm = -4.5;  // 0.5 mm onto its cam
+  r.settings.axes[1].max_misalignment_mm = 5;
+  RackWatch rack;
+  rack.start(r);
+  REQUIRE(r.home_all());
+  CHECK(r.saw(0, Phase::pre_move));
+  CHECK(r.saw(1, Phase::pre_move));
+  CHECK(rack.worst <= 1 + 0.01);  // the squaring itself (1 mm of skew), never more
+}
+
+SCENARIO("a stuck-active slave sensor stops the pair within max_misalignment", "[gantry][safety]") {
+  Rig r = software_pair();
+  r.machine.axes[1].fault = sim::Fault::sensor_stuck_active;
+  RackWatch rack;
+  rack.start(r);
+  r.home_all();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(r.status().alarm);
+  CHECK(rack.worst <= 2 + 0.05);
+}
+
+SCENARIO("after an alarm the pair brakes with the lower of the two accelerations", "[gantry][safety]") {
+  Rig r = software_pair();
+  r.settings.axes[1].acceleration_mm_per_s2 = 100;  // the slave's drive can do less
+  r.settings.axes[0].seek_feedrate_mm_per_min = 600;
+  REQUIRE_FALSE(check_axis(r.settings, 1));
+  r.pending.home_all = true;
+  r.step();
+  r.run_until([&] { return r.axis(1).phase == Phase::seek && r.axis(1).velocity_mm_per_s < -9.9; }, 5);
+  AccelWatch acc;
+  acc.start(r, 1);
+  r.pending.abort = true;
+  r.step();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(acc.worst_ratio <= 1.0 + 1e-6);
+  CHECK(motion_settings(r.settings).axes[0].acceleration_mm_per_s2 == 100);
+}
+
+SCENARIO("the seek brakes in time and comes to rest at max_seek_travel", "[safety]") {
+  Rig r;
+  r.machine.axes[0].fault = sim::Fault::sensor_stuck_inactive;
+  r.settings.axes[0].max_seek_travel_mm = 30;
+  const double x0 = r.actual(0);
+  AccelWatch acc;
+  acc.start(r, 0);
+  r.home_all();
+  CHECK(r.axis(0).alarm.code == AlarmCode::sensor_not_found);
+  CHECK(acc.worst_ratio <= 1.0 + 1e-6);
+  CHECK(x0 - r.actual(0) == Approx(30).margin(1e-6));
+}
+
+SCENARIO("the seek end stays within the acceleration when control periods come late", "[safety]") {
+  Rig r;
+  r.machine.axes[0].fault = sim::Fault::sensor_stuck_inactive;
+  r.settings.axes[0].max_seek_travel_mm = 30;
+  int n = 0;
+  r.next_dt = [&] { return (++n % 7 == 0) ? 0.009 : 0.001; };
+  AccelWatch acc;
+  acc.start(r, 0);
+  r.home_all();
+  CHECK(r.axis(0).alarm.code == AlarmCode::sensor_not_found);
+  CHECK(acc.worst_ratio <= 1.0 + 1e-6);
+}
+
+SCENARIO("an absolute axis in no sequence step takes its coordinate from its encoder", "[sequence][safety]") {
+  Rig r;
+  r.settings.axes[3] = typical_axis();
+  r.settings.axes[3].mode = HomingMode::absolute;
+  r.settings.axes[3].home_position_mm = 10;  // encoder offset
+  r.machine.axes[3].actual_position_mm = 43;
+  r.machine.axes[3].absolute_offset_mm = 5;
+  REQUIRE(r.home_all());
+  CHECK(r.axis(3).homed);
+  CHECK(r.axis(3).position_mm == Approx(43 + 5 - 10).margin(1e-9));
+  CHECK(r.trace[3].path_mm == 0);
+}
+
+SCENARIO("an unsequenced absolute axis without a valid encoder ends the cycle in an encoder fault", "[sequence][safety]") {
+  Rig r;
+  r.settings.axes[3] = typical_axis();
+  r.settings.axes[3].mode = HomingMode::absolute;
+  r.tweak_inputs = [](Inputs& in) { in.axes[3].absolute_valid = false; };
+  CHECK_FALSE(r.home_all());
+  CHECK(r.axis(3).alarm.code == AlarmCode::encoder_fault);
+  CHECK_FALSE(r.axis(3).homed);
+}
+
+SCENARIO("a disabled slave or a slave of a slave is refused everywhere and never follows its master", "[gantry][safety]") {
+  for (int variant = 0; variant < 2; ++variant) {
+    Rig r;
+    r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+    if (variant == 0) {
+      r.settings.axes[1].mode = HomingMode::disabled;  // Y disabled, yet named slave of X
+      r.settings.axes[1].slave_of = 1;
+    } else {
+      r.settings.axes[1] = typical_axis();
+      r.settings.axes[1].slave_of = 1;  // Y slave of X
+      r.settings.axes[2] = typical_axis();
+      r.settings.axes[2].slave_of = 2;  // Z slave of Y
+    }
+    const std::size_t bad = variant == 0 ? 1 : 2;
+    r.step();
+    const auto fault = check_axis(r.settings, bad);
+    REQUIRE(fault);
+    CHECK(fault->rule == (variant == 0 ? CheckRule::disabled_in_gantry : CheckRule::slave_of_slave));
+    CHECK(gantry_master(r.settings, bad) < 0);
+    r.clear_trace();
+    r.jog(0, +1);
+    r.run_for(0.5);
+    r.release_jogs();
+    CHECK(r.status().last_command_result == CommandResult::refused_settings_fault);
+    r.move(0, 50);
+    CHECK(r.status().last_command_result == CommandResult::refused_settings_fault);
+    r.pending.home_all = true;
+    r.step();
+    CHECK(r.status().last_command_result == CommandResult::refused_settings_fault);
+    r.run_for(0.2);
+    for (std::size_t a = 0; a < kAxisCount; ++a) CHECK(r.trace[a].path_mm == 0);
+  }
+}
+
+SCENARIO("a hard-limit trip can be recovered with alarm_clears_homed off: reset, then jog away only",
+         "[alarms][limits][safety]") {
+  Rig r;
+  r.settings.global.alarm_clears_homed = false;
+  r.settings.axes[0].shared_limit = true;
+  REQUIRE(r.home_all());
+  r.jog(0, -1);  // toward the sensor (homing direction negative)
+  r.run_until([&] { return r.status().alarm; }, 10);
+  r.release_jogs();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  REQUIRE(r.axis(0).alarm.code == AlarmCode::hard_limit);
+  REQUIRE(r.sim().sensor_active(0));
+  r.reset_alarm();
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  r.run_for(0.1);
+  CHECK_FALSE(r.status().alarm);  // not re-latched while still on the sensor
+  const double x = r.actual(0);
+  r.jog(0, -1);  // further onto the sensor: refused
+  r.run_for(0.2);
+  r.release_jogs();
+  CHECK(r.status().last_command_result == CommandResult::refused_hard_limit);
+  CHECK(r.actual(0) == x);
+  r.jog(0, +1);  // away: allowed until it releases, and on
+  r.run_until([&] { return !r.sim().sensor_active(0); }, 10);
+  r.run_for(0.2);
+  r.release_jogs();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK_FALSE(r.status().alarm);
+  CHECK(r.actual(0) > x);
+  CHECK_FALSE(r.sim().sensor_active(0));
+  WHEN("the axis later runs onto the sensor again") {
+    r.jog(0, -1);
+    r.run_until([&] { return r.status().alarm; }, 10);
+    r.release_jogs();
+    CHECK(r.axis(0).alarm.code == AlarmCode::hard_limit);
+  }
+}
+
+SCENARIO("a shared limit whose rest after pull-off is still on the sensor is refused, not homed", "[limits][safety]") {
+  GIVEN("no pull-off: refused by the rule set") {
+    AxisSettings s = typical_axis();
+    s.shared_limit = true;
+    s.pull_off_mm = 0;
+    Settings all;
+    all.axes[0] = s;
+    const auto f = check_axis(all, 0);
+    REQUIRE(f);
+    CHECK(f->rule == CheckRule::shared_limit_rests_on_sensor);
+  }
+  GIVEN("a re-approach edge and a pull-off shorter than the hysteresis") {
+    Rig r;
+    r.settings.axes[0].mode = HomingMode::switch_reapproach;
+    r.settings.axes[0].shared_limit = true;
+    r.settings.axes[0].pull_off_mm = 0.02;
+    r.machine.axes[0].hysteresis_mm = 0.1;
+    CHECK_FALSE(r.home_all());
+    CHECK(r.axis(0).alarm.code == AlarmCode::not_released);
+    CHECK(r.axis(0).alarm.phase == Phase::assign);
+    CHECK_FALSE(r.axis(0).homed);
+    CHECK(describe_alarm(0, r.axis(0).alarm, r.settings).find("raise pull_off") != std::string::npos);
+  }
+}
+
+SCENARIO("a push longer than the back-off can release is refused before any motion", "[safety]") {
+  Rig r;
+  r.settings.axes[0].mode = HomingMode::pushing_release;
+  r.settings.axes[0].push_distance_mm = 12;  // max_backoff 10
+  const auto f = check_axis(r.settings, 0);
+  REQUIRE(f);
+  CHECK(f->rule == CheckRule::backoff_too_short);
+  r.clear_trace();
+  CHECK_FALSE(r.home_all());
+  CHECK(r.axis(0).alarm.code == AlarmCode::settings_fault);
+  CHECK(r.trace[0].path_mm == 0);
+}
+
+SCENARIO("an unsequenced axis whose home position lies outside its soft limits is refused before any motion",
+         "[sequence][safety]") {
+  Rig r;
+  r.settings.axes[2] = typical_axis();  // Z, in no sequence step
+  r.settings.axes[2].soft_limits_enable = true;
+  r.settings.axes[2].home_position_mm = 600;  // limits [-1, 500]
+  r.clear_trace();
+  CHECK_FALSE(r.home_all());
+  CHECK(r.axis(2).alarm.code == AlarmCode::settings_fault);
+  CHECK(r.status().last_command_result == CommandResult::refused_settings_fault);
+  for (std::size_t a = 0; a < kAxisCount; ++a) CHECK(r.trace[a].path_mm == 0);
+}
+
+SCENARIO("a gantry that could not stop within max_misalignment is refused", "[gantry][safety]") {
+  Rig r = software_pair();
+  r.settings.axes[0].jog_feedrate_mm_per_min = 6000;  // 100 mm/s: 10 mm to stop at 500 mm/s²
+  const auto f = check_axis(r.settings, 1);
+  REQUIRE(f);
+  CHECK(f->rule == CheckRule::gantry_stop_too_long);
+  CHECK(describe_fault(*f, r.settings).find("max_misalignment") != std::string::npos);
+}
+
+SCENARIO("a jog held at power-up does not move until released and pressed again", "[safety]") {
+  Rig r;
+  r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+  r.jog(0, +1);
+  r.run_for(0.3);
+  CHECK(r.trace[0].path_mm == 0);
+  r.release_jogs();
+  r.run_for(0.05);
+  r.jog(0, +1);
+  r.run_for(0.3);
+  CHECK(r.trace[0].path_mm > 0);
+}
