@@ -182,3 +182,73 @@ TEST_CASE("making an axis a slave checks it against its master") {
   CHECK_THAT(refused.error().message, Catch::Contains("axis.y.slave_of"));
   CHECK(write_one("axis.y.slave_of", 1, s));  // slave of X, which homes on a switch
 }
+
+// The gantry and limit rules of the engine's one rule set, refused at write time.
+namespace {
+homing::Settings with_x_y_homing() {
+  homing::Settings s = default_settings();
+  s.axes[0].mode = homing::HomingMode::switch_release;
+  s.axes[1].mode = homing::HomingMode::switch_release;
+  return s;
+}
+void refused_naming(const std::expected<AcceptedWrite, Refusal>& w, const char* words) {
+  REQUIRE_FALSE(w);
+  CHECK(w.error().code == ExceptionCode::illegal_data_value);
+  CHECK_THAT(w.error().message, Catch::Contains(words) && Catch::Contains("nothing was written"));
+}
+}  // namespace
+
+TEST_CASE("a disabled axis named as a slave, or as a master, is refused at write time") {
+  homing::Settings s = with_x_y_homing();
+  s.axes[1].mode = homing::HomingMode::disabled;
+  refused_naming(write_one("axis.y.slave_of", 1, s), "disabled axis");
+  s = with_x_y_homing();
+  s.axes[1].slave_of = 1;
+  refused_naming(write_one("axis.x.mode", 0, s), "disabled axis");
+  refused_naming(write_one("axis.y.mode", 0, s), "disabled axis");
+}
+
+TEST_CASE("a slave of a slave is refused at write time") {
+  homing::Settings s = with_x_y_homing();
+  s.axes[2].mode = homing::HomingMode::switch_release;
+  s.axes[1].slave_of = 1;
+  refused_naming(write_one("axis.z.slave_of", 2, s), "itself a slave");
+}
+
+TEST_CASE("a slave's own feedrates and direction may differ: they are not used") {
+  homing::Settings s = with_x_y_homing();
+  s.axes[1].slave_of = 1;
+  CHECK(write_one("axis.y.seek_feedrate", 5000, s));
+  CHECK(write_one("axis.y.direction", 1, s));
+  CHECK(write_one("axis.y.latch_feedrate", 900, s));
+}
+
+TEST_CASE("a gantry that could not stop within its misalignment is refused at write time") {
+  homing::Settings s = with_x_y_homing();
+  s.axes[1].slave_of = 1;
+  refused_naming(write_one("axis.x.jog_feedrate", 6000, s), "max_misalignment");
+  refused_naming(write_one("axis.y.max_misalignment", 100, s), "max_misalignment");
+}
+
+TEST_CASE("a push the back-off cannot release is refused at write time") {
+  homing::Settings s = with_x_y_homing();
+  s.axes[0].mode = homing::HomingMode::pushing_release;
+  s.axes[0].push_distance_mm = 1;
+  refused_naming(write_one("axis.x.push_distance", 12000, s), "cannot release");
+}
+
+TEST_CASE("a shared limit without pull-off is refused at write time") {
+  homing::Settings s = with_x_y_homing();
+  s.axes[0].shared_limit = true;
+  refused_naming(write_one("axis.x.pull_off", 0, s), "off its sensor");
+}
+
+TEST_CASE("a write that leaves an already broken setting as it was is taken") {
+  // An old database may hold a combination the rules now refuse: writes that
+  // do not touch it (or do not make it worse) still go through.
+  homing::Settings s = with_x_y_homing();
+  s.axes[2].mode = homing::HomingMode::switch_release;
+  s.axes[2].latch_feedrate_mm_per_min = 5000;  // not slower than seek: broken
+  CHECK(write_one("axis.x.pull_off", 2000, s));
+  refused_naming(write_one("axis.y.latch_feedrate", 5000, s), "slower than seek_feedrate");
+}
