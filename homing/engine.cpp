@@ -264,7 +264,9 @@ CommandResult Engine::motion_refusal(const Settings& settings, std::size_t axis)
     }
   for (std::size_t a = 0; a < kAxisCount; ++a)
     if ((group & axis_bit(a)) && faults_[a]) return CommandResult::refused_settings_fault;
-  if (limit_tripped_[axis]) return CommandResult::refused_hard_limit;
+  const int partner = partner_of(settings, axis);
+  if (limit_tripped_[axis] || (partner >= 0 && limit_tripped_[static_cast<std::size_t>(partner)]))
+    return CommandResult::refused_hard_limit;
   return CommandResult::accepted;
 }
 
@@ -342,7 +344,9 @@ void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
         ++command_count_;
         CommandResult r = jog_refusal(settings, a, req);
         const bool homed = run.homed || settings.axes[a].mode == HomingMode::disabled;
-        if (r == CommandResult::accepted && !homed && !limit_tripped_[a] &&
+        const int p = partner_of(settings, a);
+        const bool recovering = limit_tripped_[a] || (p >= 0 && limit_tripped_[static_cast<std::size_t>(p)]);
+        if (r == CommandResult::accepted && !homed && !recovering &&
             settings.global.allowed_without_homing == AllowedWithoutHoming::none)
           r = CommandResult::refused_not_homed;
         if (r == CommandResult::accepted && run.phase == Phase::move) r = CommandResult::refused_busy;
