@@ -241,6 +241,7 @@ void ControlLoop::run_period(double wall_dt_s) {
     const homing::StepResult r = engine_.step(settings_, inputs, dt);
     const std::int64_t t1 = monotonic_ns();
     outputs_ = r.outputs;
+    io_->apply(outputs_);  // real hardware plays them from the instant the period began
     machine_time_s_ += dt;
     record_trace(r.status);
     const bool motion = r.status.homing || r.status.state == homing::MachineState::moving;

@@ -33,7 +33,7 @@ struct BackendConfig {
   std::int64_t tick_us = 10;          // pulse thread period; max step rate is 1/(2 tick)
   std::int64_t dir_setup_us = 5;      // direction stable before the next step edge
   std::int64_t input_debounce_ms = 10;  // start button and permit (sensors use the engine's debounce)
-  std::int64_t playback_delay_us = 0;   // 0: 1.5 control periods (see step_generator.hpp)
+  std::int64_t playback_delay_us = 0;   // pulses this late after the engine's period start (see step_generator.hpp)
   int rt_priority = 0;                  // SCHED_FIFO priority of the pulse thread, 0 = normal
 };
 

@@ -19,10 +19,10 @@ GpiodIo::GpiodIo(const BackendConfig& config, std::unique_ptr<LineApi> lines, Ru
   tick_ns_ = config.tick_us * 1000;
   input_debounce_ns_ = config.input_debounce_ms * 1'000'000;
   rt_priority_ = config.rt_priority;
-  // The engine's command for a period is known only when that period ends;
-  // play it back a period and a half later so the next one is always there.
-  playback_delay_ns_ = config.playback_delay_us > 0 ? config.playback_delay_us * 1000
-                                                    : std::int64_t{options_.control_period_us} * 1500;
+  // apply() hands over each period's command right after the engine computed
+  // it, so the pulses start where the engine's period starts: no delay is
+  // needed (one only shifts the reference by feed x delay).
+  playback_delay_ns_ = config.playback_delay_us * 1000;
 }
 
 std::expected<std::unique_ptr<GpiodIo>, std::string> GpiodIo::open(const BackendConfig& config,
@@ -121,11 +121,19 @@ void GpiodIo::advance(const Outputs& outputs, double dt_s) {
   }
   period_start_ns_ = period_end_ns_;
   period_end_ns_ += dt_ns;
+  (void)outputs;  // already running since apply()
+}
+
+void GpiodIo::apply(const Outputs& outputs) {
+  if (shut_down_) return;
+  // The engine's motor state is that of the instant its period began: the end
+  // of the period just read. The previous segment runs on until this one starts.
+  const std::int64_t start = period_end_ns_ + playback_delay_ns_;
   for (std::size_t i = 0; i < kAxisCount; ++i) {
     Axis& a = axes_[i];
     if (!a.configured) continue;
     const AxisOutputs& o = outputs.axes[i];
-    if (dt_ns > 0) a.generator->push(Segment{period_start_ns_ + playback_delay_ns_, o.motor, o.motion});
+    if (a.generator) a.generator->push(Segment{start, o.motor, o.motion});
     write(a.enable, o.enable);
     write(a.push, o.push_output);
     write(a.commutator, o.commutator_output);
