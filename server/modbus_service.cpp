@@ -294,6 +294,13 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
                      client.address, describe_changes(accepted->changes));
         return fail(fc, ExceptionCode::server_device_failure);
       }
+      if (config_.machine_check) {
+        if (auto problem = config_.machine_check(accepted->settings)) {
+          spdlog::warn("{} {}: settings write refused, the machine's wiring cannot do it (exception 03): {}; {}",
+                       client.transport, client.address, *problem, describe_changes(accepted->changes));
+          return fail(fc, ExceptionCode::illegal_data_value);
+        }
+      }
       if (loop_.snapshot().status.homing) {
         spdlog::warn("{} {}: settings write refused while a homing cycle runs (exception 06): {}",
                      client.transport, client.address, describe_changes(accepted->changes));

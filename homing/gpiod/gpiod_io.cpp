@@ -82,7 +82,8 @@ std::expected<void, std::string> GpiodIo::request_all(const BackendConfig& c) {
                    output(cfg.push, a.push), output(cfg.commutator, a.commutator), edges(cfg.home, a.home),
                    edges(cfg.index, a.index), level(cfg.drive_fault, 0, a.drive_fault)})
       if (!r) return r;
-    a.generator = std::make_unique<StepGenerator>(api, *step.id, *dir.id, cfg.steps_per_unit, dir_setup_ns_);
+    if (step.id && dir.id)  // an axis without an output of its own has no pulses to make
+      a.generator = std::make_unique<StepGenerator>(api, *step.id, *dir.id, cfg.steps_per_unit, dir_setup_ns_);
   }
   // Safety inputs act at once; the operator's inputs are debounced.
   for (auto r : {level(c.estop, 0, estop_), level(c.drive_fault, 0, drive_fault_),
@@ -170,7 +171,7 @@ Inputs GpiodIo::read() {
       input->take(period_start_ns_, end, rising_only, *edges, *level);
     }
     ai.drive_fault = sample(a.drive_fault);
-    if (a.generator->failed()) {
+    if (a.generator && a.generator->failed()) {
       // A step or dir write failed: the motor no longer follows the count.
       ai.drive_fault = true;
       if (a.reported_failure.empty()) {
@@ -196,7 +197,7 @@ void GpiodIo::shutdown() {
   if (pulse_thread_) pulse_thread_->stop();
   for (Axis& a : axes_) {
     if (!a.configured) continue;
-    a.generator->idle();
+    if (a.generator) a.generator->idle();
     write(a.enable, false);
     write(a.push, false);
     write(a.commutator, false);
