@@ -82,6 +82,7 @@ std::int64_t sim_raw(const Register& reg, const MachineConfig& config, const Sim
       case Key::sim_actual_position: return to_raw(reg, readback.actual_position_mm[i]);
       case Key::sim_sensor: return readback.sensor[i] ? 1 : 0;
       case Key::sim_at_hard_stop: return readback.at_hard_stop[i] ? 1 : 0;
+      case Key::sim_driven_by: return readback.driven_by[i];
       case Key::sim_lose_steps: return 0;
       case Key::sim_sensor_nc: return a.sensor_nc ? 1 : 0;
       case Key::sim_fault: return static_cast<std::int64_t>(a.fault);
@@ -105,13 +106,14 @@ std::expected<AcceptedSimWrite, Refusal> validate_sim_write(Table table, std::ui
                                                             const SimReadback& readback) {
   auto decoded = decode_write(Unit::simulator, table, start, values, order);
   if (!decoded) return std::unexpected(decoded.error());
-  AcceptedSimWrite out{{}, config, switches, {}, {}, false};
+  AcceptedSimWrite out{{}, config, switches, {}, {}, {}, false};
   for (const RawWrite& w : *decoded) {
     const Register& reg = *w.reg;
     const std::int64_t old_raw = sim_raw(reg, out.config, out.switches, readback);
     set_config_raw(out.config, out.switches, reg, w.raw);
     if (reg.per_axis()) {
       const auto i = static_cast<std::size_t>(reg.axis);
+      out.axes_written[i] = true;
       if (reg.key == Key::sim_actual_position) out.placed[i] = true;
       if (reg.key == Key::sim_lose_steps) out.lose_steps_mm[i] = to_engineering(reg, w.raw);
     }

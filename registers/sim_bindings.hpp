@@ -25,6 +25,7 @@ struct SimReadback {
   std::array<double, homing::kAxisCount> actual_position_mm{};  // Simulator::actual_position_mm
   std::array<bool, homing::kAxisCount> sensor{};                // Simulator::sensor_active
   std::array<bool, homing::kAxisCount> at_hard_stop{};          // Simulator::at_hard_stop
+  std::array<std::uint8_t, homing::kAxisCount> driven_by{};     // 0 own output, m + 1: Simulator::driving_output
 };
 
 // The table's defaults for the simulated machine (a home-all with
@@ -40,14 +41,17 @@ struct AcceptedSimWrite {
   std::vector<Change> changes;
   homing::sim::MachineConfig config;  // with the request applied (call Simulator::set_axis_config)
   SimSwitches switches;
+  std::array<bool, homing::kAxisCount> axes_written{};     // a sim.<a>.* register of that axis is written
   std::array<bool, homing::kAxisCount> placed{};           // actual_position written: Simulator::place
   std::array<double, homing::kAxisCount> lose_steps_mm{};  // Simulator::lose_steps, 0 = none
   bool seed_written = false;                               // Simulator::set_seed(config.seed)
 };
 
-// A write to the simulator unit, all or nothing, like validate_write. Not
-// decided here: exception 06 when actual_position is written while the axis
-// moves (the runtime asks Simulator::moving).
+// A write to the simulator unit, all or nothing, like validate_write, against
+// the configuration it will be applied to (the runtime calls it on the live
+// simulator, so two writes in a row never undo each other). Not decided here:
+// exception 06 when a sim.<a>.* register is written while that carriage moves
+// (the runtime asks Simulator::in_motion for every axes_written).
 std::expected<AcceptedSimWrite, Refusal> validate_sim_write(Table table, std::uint16_t start,
                                                             std::span<const std::uint16_t> values,
                                                             WordOrder order,

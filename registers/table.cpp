@@ -277,6 +277,7 @@ constexpr auto kSimAxisRows = std::to_array<Row>({
     {.pattern = "sim.<a>.lose_steps", .offset = 22, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .persisted = false, .key = Key::sim_lose_steps, .description = "writing N shifts the carriage by N without the controller knowing; reads back 0"},
     {.pattern = "sim.<a>.sensor", .table = DI, .type = Type::boolean, .access = Access::r, .max = 1, .persisted = false, .key = Key::sim_sensor, .description = "the simulated switch is active (raw, before polarity and debounce)"},
     {.pattern = "sim.<a>.at_hard_stop", .table = DI, .offset = 1, .type = Type::boolean, .access = Access::r, .max = 1, .persisted = false, .key = Key::sim_at_hard_stop, .description = "the carriage rests against a mechanical stop"},
+    {.pattern = "sim.<a>.driven_by", .table = IR, .access = Access::r, .max = 6, .persisted = false, .key = Key::sim_driven_by, .description = "the step output that moves this carriage: 0 its own; 1..6 that of master X..C, through an external commutator (from axis.<a>.slave_of and slave_mode)"},
 });
 
 // ---- expansion ----

@@ -23,6 +23,7 @@ ControlLoop::ControlLoop(const homing::Settings& settings, std::unique_ptr<Machi
     : settings_(settings), io_(std::move(io)), sim_(sim), period_us_(std::max(period_us, 50)),
       time_scale_(time_scale > 0 ? time_scale : 1.0) {
   heartbeat_changed_ns_ = monotonic_ns();
+  wire_commutators();
   // A first period with no elapsed time: the engine learns the inputs' levels.
   run_period(0);
 }
@@ -103,9 +104,58 @@ void ControlLoop::heartbeat_written(std::uint16_t value) {
   if (heartbeat_value_.exchange(value) != value) heartbeat_changed_ns_ = monotonic_ns();
 }
 
-void ControlLoop::sim_op(SimOp op) {
-  std::lock_guard lock(mailbox_mutex_);
-  sim_ops_.push_back(std::move(op));
+bool ControlLoop::edit_sim(const SimEdit& edit, std::chrono::milliseconds timeout) {
+  if (!sim_) return false;
+  if (!running_) {
+    // Stepped by hand: the caller is the only one running the loop.
+    std::lock_guard mail(mailbox_mutex_);
+    edit(*sim_, outputs_);
+    std::lock_guard lock(snapshot_mutex_);
+    publish_sim(snapshot_);
+    return true;
+  }
+  std::uint64_t seq = 0;
+  {
+    std::lock_guard lock(mailbox_mutex_);
+    seq = ++next_edit_seq_;
+    sim_edits_.push_back(PendingEdit{&edit, seq});
+  }
+  auto shown = [&] { return snapshot_.sim_edits_applied >= seq; };
+  {
+    std::unique_lock lock(snapshot_mutex_);
+    if (published_.wait_for(lock, timeout, shown)) return true;
+  }
+  {
+    // Not shown in time: withdraw it if the loop has not taken it yet. The loop
+    // runs edits holding this lock, so once it is ours a taken edit has run.
+    std::lock_guard lock(mailbox_mutex_);
+    const auto it = std::find_if(sim_edits_.begin(), sim_edits_.end(),
+                                 [&](const PendingEdit& p) { return p.seq == seq; });
+    if (it != sim_edits_.end()) {
+      sim_edits_.erase(it);
+      return false;
+    }
+  }
+  std::unique_lock lock(snapshot_mutex_);
+  published_.wait_for(lock, timeout, shown);
+  return true;
+}
+
+void ControlLoop::wire_commutators() {
+  if (!sim_) return;
+  std::array<int, homing::kAxisCount> slave_of_master;
+  slave_of_master.fill(-1);
+  for (std::size_t s = 0; s < homing::kAxisCount; ++s) {
+    const homing::AxisSettings& a = settings_.axes[s];
+    const int m = homing::master_of(a);
+    if (a.slave_mode != homing::SlaveMode::external_commutator || m < 0 || m >= static_cast<int>(homing::kAxisCount) ||
+        m == static_cast<int>(s))
+      continue;
+    auto& slot = slave_of_master[static_cast<std::size_t>(m)];
+    if (slot < 0) slot = static_cast<int>(s);  // two slaves on one output: the first is wired
+  }
+  for (std::size_t m = 0; m < homing::kAxisCount; ++m)
+    if (sim_->config().commutator_slave[m] != slave_of_master[m]) sim_->set_commutator_slave(m, slave_of_master[m]);
 }
 
 double LoopStats::lateness_percentile_us(double q) const {
@@ -150,10 +200,15 @@ void ControlLoop::take_mailbox(Mailbox& out) {
   if (settings_pending_) {
     settings_ = new_settings_;
     settings_pending_ = false;
+    wire_commutators();
   }
-  if (sim_)
-    for (auto& op : sim_ops_) op(*sim_);
-  sim_ops_.clear();
+  if (sim_) {
+    for (const PendingEdit& e : sim_edits_) {
+      (*e.edit)(*sim_, outputs_);
+      edits_applied_ = e.seq;
+    }
+  }
+  sim_edits_.clear();
   loop_permit_ = permit_coil_;
   out.settings_lost = settings_lost_pending_;
   settings_lost_pending_ = false;
@@ -186,6 +241,7 @@ void ControlLoop::run_period(double wall_dt_s) {
     const homing::StepResult r = engine_.step(settings_, inputs, dt);
     const std::int64_t t1 = monotonic_ns();
     outputs_ = r.outputs;
+    io_->apply(outputs_);  // real hardware plays them from the instant the period began
     machine_time_s_ += dt;
     record_trace(r.status);
     const bool motion = r.status.homing || r.status.state == homing::MachineState::moving;
@@ -212,21 +268,30 @@ void ControlLoop::run_period(double wall_dt_s) {
   s.outputs = outputs_;
   s.periods = loop_stats_.periods;
   if (++stats_publish_tick_ % 64 == 0) stats_ = loop_stats_;  // the histogram is 32 KiB: copy it now and then
-  if (sim_) {
-    s.has_sim = true;
-    s.machine_time_s = sim_->time_s();
-    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-      SimAxisView& v = s.sim[a];
-      v.actual_position_mm = sim_->actual_position_mm(a);
-      v.sensor = sim_->sensor_active(a);
-      v.at_hard_stop = sim_->at_hard_stop(a);
-      v.moving = sim_->moving(a);
-      v.config = sim_->axis_config(a);
-    }
-    s.sim_seed = sim_->config().seed;
-    s.sim_estop = sim_->inputs().estop;
-    s.sim_start_button = sim_->inputs().start_button;
+  publish_sim(s);
+  const bool edits_shown = s.sim_edits_applied != edits_applied_;
+  s.sim_edits_applied = edits_applied_;
+  lock.unlock();
+  if (edits_shown) published_.notify_all();  // a simulator write waits for this
+}
+
+void ControlLoop::publish_sim(Snapshot& s) const {
+  if (!sim_) return;
+  s.has_sim = true;
+  s.machine_time_s = sim_->time_s();
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    SimAxisView& v = s.sim[a];
+    v.actual_position_mm = sim_->actual_position_mm(a);
+    v.sensor = sim_->sensor_active(a);
+    v.at_hard_stop = sim_->at_hard_stop(a);
+    v.moving = sim_->moving(a);
+    const std::size_t o = sim_->driving_output(a);
+    v.driven_by = o == a ? 0 : static_cast<std::uint8_t>(o + 1);
+    v.config = sim_->axis_config(a);
   }
+  s.sim_seed = sim_->config().seed;
+  s.sim_estop = sim_->inputs().estop;
+  s.sim_start_button = sim_->inputs().start_button;
 }
 
 void ControlLoop::record_trace(const homing::Status& status) {

@@ -5,6 +5,8 @@
 // that the loop takes with try_lock, so a busy server never delays a period.
 #include <array>
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -24,6 +26,7 @@ struct SimAxisView {
   bool sensor = false;
   bool at_hard_stop = false;
   bool moving = false;
+  std::uint8_t driven_by = 0;  // 0 its own output, m + 1: master m's (external commutator)
   homing::sim::AxisConfig config{};
 };
 
@@ -37,6 +40,7 @@ struct Snapshot {
   std::uint64_t sim_seed = 0;
   bool sim_estop = false;
   bool sim_start_button = false;
+  std::uint64_t sim_edits_applied = 0;  // sequence number of the last simulator edit shown here
   double machine_time_s = 0;
   std::uint64_t periods = 0;
 };
@@ -56,7 +60,10 @@ struct LoopStats {
 
 class ControlLoop {
  public:
-  using SimOp = std::function<void(homing::sim::Simulator&)>;
+  // An edit of the live simulator, run inside the loop before the machine
+  // advances; next = the outputs that period is about to run (to tell which
+  // carriages move: Simulator::in_motion).
+  using SimEdit = std::function<void(homing::sim::Simulator& sim, const homing::Outputs& next)>;
 
   ControlLoop(const homing::Settings& settings, std::unique_ptr<MachineIo> io,
               homing::sim::Simulator* sim, int period_us, double time_scale);
@@ -81,7 +88,11 @@ class ControlLoop {
   void raise_settings_lost();
   // The host wrote host.heartbeat (the watchdog only cares that it changes).
   void heartbeat_written(std::uint16_t value);
-  void sim_op(SimOp op);
+  // Runs edit inside the loop and returns true once a snapshot that shows its
+  // effect is published, so a read that follows sees it. False when the loop
+  // did not take it within timeout: then it never runs. Without the loop
+  // thread (tests and fuzzers step run_period by hand) it runs at once.
+  bool edit_sim(const SimEdit& edit, std::chrono::milliseconds timeout);
 
   Snapshot snapshot() const;
   // The trace of the last finished homing cycle of one axis.
@@ -101,6 +112,9 @@ class ControlLoop {
   void take_mailbox(Mailbox& out);
   bool watchdog_expired() const;
   void record_trace(const homing::Status& status);
+  // MachineConfig::commutator_slave from settings_ (slave_of + external_commutator).
+  void wire_commutators();
+  void publish_sim(Snapshot& s) const;
 
   homing::Settings settings_;
   std::unique_ptr<MachineIo> io_;
@@ -117,7 +131,12 @@ class ControlLoop {
   std::array<std::uint64_t, homing::kAxisCount> jog_owner_{};
   bool settings_pending_ = false;
   homing::Settings new_settings_{};
-  std::vector<SimOp> sim_ops_;
+  struct PendingEdit {
+    const SimEdit* edit = nullptr;  // owned by the edit_sim caller, who waits for it
+    std::uint64_t seq = 0;
+  };
+  std::vector<PendingEdit> sim_edits_;
+  std::uint64_t next_edit_seq_ = 0;
   bool permit_coil_ = false;
   bool settings_lost_pending_ = false;
 
@@ -136,7 +155,10 @@ class ControlLoop {
   std::unique_ptr<std::array<AxisTrace, homing::kAxisCount>> published_trace_ =
       std::make_unique<std::array<AxisTrace, homing::kAxisCount>>();
 
+  std::uint64_t edits_applied_ = 0;  // loop-private: last simulator edit run
+
   mutable std::mutex snapshot_mutex_;
+  std::condition_variable published_;  // with snapshot_mutex_: snapshot_.sim_edits_applied grew
   Snapshot snapshot_{};
   LoopStats stats_{};       // published copy (under snapshot_mutex_)
   LoopStats loop_stats_{};  // the loop's own

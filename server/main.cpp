@@ -56,20 +56,15 @@ int main(int argc, char** argv) {
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   signal(SIGPIPE, SIG_IGN);
 
-  // The machine: GPIO lines named in the config file's [gpiod] table, opened
-  // first so that a wiring mistake is reported before anything else starts.
-  std::unique_ptr<server::MachineIo> machine;
-  homing::sim::Simulator* sim = nullptr;
+  // The machine's wiring: GPIO lines named in the config file's [gpiod]
+  // table, read first so that a mistake in it is reported before anything
+  // else starts. The lines are requested once the settings are known.
+  std::optional<homing::gpiod::BackendConfig> wiring;
   if (opt.backend == "gpiod") {
     if (opt.time_scale != 1.0) return fail_start("--time-scale: simulator only; the GPIO backend runs in real time");
     auto config = homing::gpiod::load_config(opt.config_path);
     if (!config) return fail_start("--backend gpiod: " + config.error());
-    homing::gpiod::RunOptions run;
-    run.control_period_us = opt.period_us;
-    run.warn = [](const std::string& m) { spdlog::warn("{}", m); };
-    auto io = homing::gpiod::GpiodIo::open(*config, std::make_unique<homing::gpiod::GpiodLines>(), run);
-    if (!io) return fail_start("--backend gpiod: " + io.error());
-    machine = std::move(*io);
+    wiring = std::move(*config);
   }
 
   // Settings: durable, from the register table's defaults on first start.
@@ -100,10 +95,26 @@ int main(int argc, char** argv) {
   }
   auto from_raw = registers::settings_from_raw(store->load());
   for (const auto& r : from_raw.rejected) spdlog::warn("settings: {}", r);
+  // Lines without an axis's step/dir are accepted in the config; the settings
+  // must not ask such an axis to move (checked again on every settings write).
+  if (wiring) {
+    if (auto problem = homing::gpiod::check_wiring(*wiring, from_raw.settings))
+      return fail_start("--backend gpiod: " + opt.config_path + ": the settings in " + opt.db_path +
+                        " do not fit the wiring: " + *problem);
+  }
   const auto rows = from_raw.settings.global.history_max_rows;
   if (auto r = store->set_limits(rows, rows); !r) spdlog::warn("settings: history limit not applied: {}", r.error().message);
 
-  if (!machine) {
+  std::unique_ptr<server::MachineIo> machine;
+  homing::sim::Simulator* sim = nullptr;
+  if (wiring) {
+    homing::gpiod::RunOptions run;
+    run.control_period_us = opt.period_us;
+    run.warn = [](const std::string& m) { spdlog::warn("{}", m); };
+    auto io = homing::gpiod::GpiodIo::open(*wiring, std::make_unique<homing::gpiod::GpiodLines>(), run);
+    if (!io) return fail_start("--backend gpiod: " + io.error());
+    machine = std::move(*io);
+  } else {
     auto sim_io = std::make_unique<server::SimulatorIo>(registers::default_sim_config());
     sim = &sim_io->sim();
     machine = std::move(sim_io);
@@ -118,6 +129,8 @@ int main(int argc, char** argv) {
   service_config.word_order = opt.word_order;
   for (const auto& entry : opt.write_allow) service_config.write_allow.push_back(*server::parse_cidr(entry));
   service_config.unlock_code = static_cast<std::uint16_t>(opt.unlock_code);
+  if (wiring)
+    service_config.machine_check = [w = *wiring](const homing::Settings& s) { return homing::gpiod::check_wiring(w, s); };
   server::ModbusService service(service_config, loop, &*store, from_raw.settings);
 
   std::unique_ptr<server::TcpServer> tcp;

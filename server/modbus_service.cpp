@@ -197,6 +197,7 @@ registers::SimReadback readback_of(const Snapshot& snap) {
     r.actual_position_mm[a] = snap.sim[a].actual_position_mm;
     r.sensor[a] = snap.sim[a].sensor;
     r.at_hard_stop[a] = snap.sim[a].at_hard_stop;
+    r.driven_by[a] = snap.sim[a].driven_by;
   }
   return r;
 }
@@ -293,6 +294,13 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
                      client.address, describe_changes(accepted->changes));
         return fail(fc, ExceptionCode::server_device_failure);
       }
+      if (config_.machine_check) {
+        if (auto problem = config_.machine_check(accepted->settings)) {
+          spdlog::warn("{} {}: settings write refused, the machine's wiring cannot do it (exception 03): {}; {}",
+                       client.transport, client.address, *problem, describe_changes(accepted->changes));
+          return fail(fc, ExceptionCode::illegal_data_value);
+        }
+      }
       if (loop_.snapshot().status.homing) {
         spdlog::warn("{} {}: settings write refused while a homing cycle runs (exception 06): {}",
                      client.transport, client.address, describe_changes(accepted->changes));
@@ -375,32 +383,62 @@ void ModbusService::run_commands(const std::vector<registers::CommandRequest>& c
 
 std::optional<Reply> ModbusService::write_sim(std::uint8_t fc, Table table, std::uint16_t start,
                                               std::span<const std::uint16_t> values, const ClientInfo& client) {
-  const Snapshot snap = loop_.snapshot();
-  auto accepted = registers::validate_sim_write(table, start, values, config_.word_order, config_of(snap),
-                                                registers::SimSwitches{snap.sim_estop, snap.sim_start_button},
-                                                readback_of(snap));
-  if (!accepted) return refusal_reply(fc, accepted.error(), client);
-  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-    if (accepted->placed[a] && snap.sim[a].moving) {
-      spdlog::info("{} {}: sim.{}.actual_position refused while the axis moves (exception 06)", client.transport,
-                   client.address, homing::kAxisLetters[a]);
-      return fail(fc, ExceptionCode::server_device_busy);
-    }
-  }
-  const registers::AcceptedSimWrite w = std::move(*accepted);
-  loop_.sim_op([w](homing::sim::Simulator& sim) {
+  // Address, access and range need no machine: refused here at once.
+  if (auto decoded = registers::decode_write(registers::Unit::simulator, table, start, values, config_.word_order);
+      !decoded)
+    return refusal_reply(fc, decoded.error(), client);
+  // The rest is decided and applied on the live simulator inside the control
+  // loop (never on a snapshot that may miss the previous write), and answered
+  // once a snapshot shows it: an acknowledged write holds and reads back.
+  std::optional<registers::Refusal> refused;
+  int busy_axis = -1;
+  std::vector<registers::Change> changes;
+  const ControlLoop::SimEdit edit = [&](homing::sim::Simulator& sim, const homing::Outputs& next) {
+    registers::SimReadback readback;
     for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-      homing::sim::AxisConfig c = w.config.axes[a];
-      sim.set_axis_config(a, c);
+      readback.actual_position_mm[a] = sim.actual_position_mm(a);
+      readback.sensor[a] = sim.sensor_active(a);
+      readback.at_hard_stop[a] = sim.at_hard_stop(a);
+    }
+    auto accepted = registers::validate_sim_write(
+        table, start, values, config_.word_order, sim.config(),
+        registers::SimSwitches{sim.inputs().estop, sim.inputs().start_button}, readback);
+    if (!accepted) {
+      refused = accepted.error();
+      return;
+    }
+    const registers::AcceptedSimWrite& w = *accepted;
+    // A carriage that moves (or is about to) is not touched at all.
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+      if (w.axes_written[a] && sim.in_motion(a, next)) {
+        busy_axis = static_cast<int>(a);
+        return;
+      }
+    }
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+      if (!w.axes_written[a]) continue;
+      sim.set_axis_config(a, w.config.axes[a]);
       if (w.placed[a]) sim.place(a, w.config.axes[a].actual_position_mm);
       if (w.lose_steps_mm[a] != 0) sim.lose_steps(a, w.lose_steps_mm[a]);
     }
     if (w.seed_written) sim.set_seed(w.config.seed);
     sim.set_estop(w.switches.estop);
     sim.set_start_button(w.switches.start_button);
-  });
-  if (!w.changes.empty())
-    spdlog::info("simulator changed by {} {}: {}", client.transport, client.address, describe_changes(w.changes));
+    changes = w.changes;
+  };
+  if (!loop_.edit_sim(edit, std::chrono::seconds(2))) {
+    spdlog::warn("{} {}: simulator write not taken by the control loop in time (exception 06)", client.transport,
+                 client.address);
+    return fail(fc, ExceptionCode::server_device_busy);
+  }
+  if (refused) return refusal_reply(fc, *refused, client);
+  if (busy_axis >= 0) {
+    spdlog::info("{} {}: simulator write to sim.{}.* refused while that carriage moves (exception 06)",
+                 client.transport, client.address, homing::kAxisLetters[static_cast<std::size_t>(busy_axis)]);
+    return fail(fc, ExceptionCode::server_device_busy);
+  }
+  if (!changes.empty())
+    spdlog::info("simulator changed by {} {}: {}", client.transport, client.address, describe_changes(changes));
   return std::nullopt;
 }
 

@@ -3,7 +3,9 @@
 // register table, durable settings writes, commands and the simulator unit.
 // Transports (TCP, RTU) call handle() with a PDU; fuzzers can too.
 #include <cstdint>
+#include <functional>
 #include <mutex>
+#include <string>
 #include <optional>
 #include <span>
 
@@ -22,6 +24,9 @@ struct ServiceConfig {
   registers::WordOrder word_order = registers::WordOrder::high_first;
   std::vector<Cidr> write_allow;  // empty: every TCP client may write
   std::uint16_t unlock_code = 0;  // 0: settings are never locked
+  // What the machine behind can do (GPIO wiring): settings it cannot run are
+  // refused with exception 03 and the returned reason. Empty: anything.
+  std::function<std::optional<std::string>(const homing::Settings&)> machine_check;
 };
 
 class ModbusService final : public RequestHandler {

@@ -111,6 +111,16 @@ std::expected<void, std::string> parse_axis(const Ctx& ctx, std::size_t a, const
                                "commutator, home, index, drive_fault)",
                                ctx.origin, section, key));
   }
+  // Neither: an axis with no output of its own (an external-commutator slave,
+  // moved by its master's output); whether the settings agree is checked
+  // once they are known (check_wiring).
+  if (!out.step && !out.dir) {
+    if (out.push || out.commutator)
+      return Error(fmt::format("{}: [{}] has no step/dir output, so no '{}' line either (an external commutator "
+                               "is wired on the master's axis)",
+                               ctx.origin, section, out.push ? "push" : "commutator"));
+    return {};
+  }
   if (!out.step || !out.dir)
     return Error(fmt::format("{}: [{}] needs both 'step' and 'dir' lines (the axis drives a step/dir motor)",
                              ctx.origin, section));
@@ -209,6 +219,44 @@ std::expected<BackendConfig, std::string> parse_config(const toml::table& root, 
   if (!any_axis) return Error(origin + ": [gpiod] configures no axis; add at least [gpiod.axes.X] with step, dir, steps_per_unit");
   if (auto r = check_unique(c, origin); !r) return Error(r.error());
   return c;
+}
+
+std::optional<std::string> check_wiring(const BackendConfig& config, const homing::Settings& settings) {
+  using homing::HomingMode;
+  auto letter = [](std::size_t a) { return std::string(1, kAxisUpper[a]); };
+  auto lower = [](std::size_t a) { return std::string(kAxisLetters[a]); };
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const homing::AxisSettings& s = settings.axes[a];
+    const AxisLines& lines = config.axes[a];
+    if (s.mode == HomingMode::disabled) continue;
+    const int m = homing::master_of(s);
+    const bool commutator_slave = s.slave_mode == homing::SlaveMode::external_commutator && m >= 0 &&
+                                  m < static_cast<int>(kAxisCount) && m != static_cast<int>(a);
+    if (commutator_slave) {
+      const auto mi = static_cast<std::size_t>(m);
+      const AxisLines& master = config.axes[mi];
+      if (!master.has_output())
+        return fmt::format("{0} is an external-commutator slave of {1} (axis.{2}.slave_of, slave_mode), but "
+                           "[gpiod.axes.{1}] has no step/dir output to drive both motors",
+                           letter(a), letter(mi), lower(a));
+      if (!master.commutator)
+        return fmt::format("{0} is an external-commutator slave of {1} (axis.{2}.slave_of, slave_mode), but "
+                           "[gpiod.axes.{1}] has no 'commutator' output line to switch {1}'s output to {0}",
+                           letter(a), letter(mi), lower(a));
+      continue;  // moved by the master's output; its switch is read on the master's home line
+    }
+    if (!lines.has_output())
+      return fmt::format("axis.{0}.mode is {1} (the axis can move) but [gpiod.axes.{2}] has no step/dir output; "
+                         "wire {2} or set axis.{0}.mode = 0 (disabled)",
+                         lower(a), static_cast<int>(s.mode), letter(a));
+    if (homing::mode_uses_switch(s.mode) && !lines.home)
+      return fmt::format("axis.{0}.mode {1} homes on a switch but [gpiod.axes.{2}] has no 'home' line", lower(a),
+                         static_cast<int>(s.mode), letter(a));
+    if (s.mode == HomingMode::switch_index && !lines.index)
+      return fmt::format("axis.{0}.mode 4 (switch + index) but [gpiod.axes.{1}] has no 'index' line", lower(a),
+                         letter(a));
+  }
+  return std::nullopt;
 }
 
 std::expected<BackendConfig, std::string> load_config(const std::string& path) {

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "homing/axes.hpp"
+#include "homing/settings.hpp"
 #include "line_api.hpp"
 
 namespace toml {
@@ -20,10 +21,13 @@ namespace homing::gpiod {
 
 struct AxisLines {
   bool configured = false;
-  double steps_per_unit = 0;  // motor steps per mm (per degree on A B C)
+  double steps_per_unit = 0;  // motor steps per mm (per degree on A B C); with step/dir only
   std::optional<LineSpec> step, dir, enable;            // outputs
   std::optional<LineSpec> push, commutator;             // outputs (pushing modes, gantry commutator)
   std::optional<LineSpec> home, index, drive_fault;     // inputs
+  // A step/dir output of its own. Without one the axis can only be an
+  // external-commutator slave (moved by its master's output) or never move.
+  bool has_output() const { return step.has_value(); }
 };
 
 struct BackendConfig {
@@ -33,12 +37,21 @@ struct BackendConfig {
   std::int64_t tick_us = 10;          // pulse thread period; max step rate is 1/(2 tick)
   std::int64_t dir_setup_us = 5;      // direction stable before the next step edge
   std::int64_t input_debounce_ms = 10;  // start button and permit (sensors use the engine's debounce)
-  std::int64_t playback_delay_us = 0;   // 0: 1.5 control periods (see step_generator.hpp)
+  std::int64_t playback_delay_us = 0;   // pulses this late after the engine's period start (see step_generator.hpp)
   int rt_priority = 0;                  // SCHED_FIFO priority of the pulse thread, 0 = normal
 };
 
 // origin names the file in errors ("config.toml: [gpiod.axes.X] step: ...").
 std::expected<BackendConfig, std::string> parse_config(const toml::table& root, const std::string& origin);
 std::expected<BackendConfig, std::string> load_config(const std::string& path);
+
+// Whether this wiring can do what the settings ask (checked at start and on
+// every settings write, since the [gpiod] table is read before the settings):
+// an axis that can move (mode not disabled) needs a step/dir output of its
+// own, unless it is an external-commutator slave; a commutator slave's master
+// needs step/dir and a `commutator` line; an axis homing on a switch needs a
+// `home` line (a commutator slave's switch is read on its master's). The
+// first problem in words, or nullopt.
+std::optional<std::string> check_wiring(const BackendConfig& config, const homing::Settings& settings);
 
 }  // namespace homing::gpiod

@@ -19,10 +19,10 @@ GpiodIo::GpiodIo(const BackendConfig& config, std::unique_ptr<LineApi> lines, Ru
   tick_ns_ = config.tick_us * 1000;
   input_debounce_ns_ = config.input_debounce_ms * 1'000'000;
   rt_priority_ = config.rt_priority;
-  // The engine's command for a period is known only when that period ends;
-  // play it back a period and a half later so the next one is always there.
-  playback_delay_ns_ = config.playback_delay_us > 0 ? config.playback_delay_us * 1000
-                                                    : std::int64_t{options_.control_period_us} * 1500;
+  // apply() hands over each period's command right after the engine computed
+  // it, so the pulses start where the engine's period starts: no delay is
+  // needed (one only shifts the reference by feed x delay).
+  playback_delay_ns_ = config.playback_delay_us * 1000;
 }
 
 std::expected<std::unique_ptr<GpiodIo>, std::string> GpiodIo::open(const BackendConfig& config,
@@ -82,7 +82,8 @@ std::expected<void, std::string> GpiodIo::request_all(const BackendConfig& c) {
                    output(cfg.push, a.push), output(cfg.commutator, a.commutator), edges(cfg.home, a.home),
                    edges(cfg.index, a.index), level(cfg.drive_fault, 0, a.drive_fault)})
       if (!r) return r;
-    a.generator = std::make_unique<StepGenerator>(api, *step.id, *dir.id, cfg.steps_per_unit, dir_setup_ns_);
+    if (step.id && dir.id)  // an axis without an output of its own has no pulses to make
+      a.generator = std::make_unique<StepGenerator>(api, *step.id, *dir.id, cfg.steps_per_unit, dir_setup_ns_);
   }
   // Safety inputs act at once; the operator's inputs are debounced.
   for (auto r : {level(c.estop, 0, estop_), level(c.drive_fault, 0, drive_fault_),
@@ -121,11 +122,19 @@ void GpiodIo::advance(const Outputs& outputs, double dt_s) {
   }
   period_start_ns_ = period_end_ns_;
   period_end_ns_ += dt_ns;
+  (void)outputs;  // already running since apply()
+}
+
+void GpiodIo::apply(const Outputs& outputs) {
+  if (shut_down_) return;
+  // The engine's motor state is that of the instant its period began: the end
+  // of the period just read. The previous segment runs on until this one starts.
+  const std::int64_t start = period_end_ns_ + playback_delay_ns_;
   for (std::size_t i = 0; i < kAxisCount; ++i) {
     Axis& a = axes_[i];
     if (!a.configured) continue;
     const AxisOutputs& o = outputs.axes[i];
-    if (dt_ns > 0) a.generator->push(Segment{period_start_ns_ + playback_delay_ns_, o.motor, o.motion});
+    if (a.generator) a.generator->push(Segment{start, o.motor, o.motion});
     write(a.enable, o.enable);
     write(a.push, o.push_output);
     write(a.commutator, o.commutator_output);
@@ -162,7 +171,7 @@ Inputs GpiodIo::read() {
       input->take(period_start_ns_, end, rising_only, *edges, *level);
     }
     ai.drive_fault = sample(a.drive_fault);
-    if (a.generator->failed()) {
+    if (a.generator && a.generator->failed()) {
       // A step or dir write failed: the motor no longer follows the count.
       ai.drive_fault = true;
       if (a.reported_failure.empty()) {
@@ -188,7 +197,7 @@ void GpiodIo::shutdown() {
   if (pulse_thread_) pulse_thread_->stop();
   for (Axis& a : axes_) {
     if (!a.configured) continue;
-    a.generator->idle();
+    if (a.generator) a.generator->idle();
     write(a.enable, false);
     write(a.push, false);
     write(a.commutator, false);

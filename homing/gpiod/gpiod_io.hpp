@@ -43,11 +43,17 @@ class GpiodIo final : public server::MachineIo {
                                                                   RunOptions options);
   ~GpiodIo() override;
 
+  // Moves the timeline on by the elapsed period (the outputs were already
+  // applied).
   void advance(const Outputs& outputs, double dt_s) override;
   Inputs read() override;
+  // Queues each axis's segment to start at the beginning of the period now
+  // beginning (+ playback_delay_us, 0 by default) and sets enable, push,
+  // commutator and the lamp.
+  void apply(const Outputs& outputs) override;
   void shutdown() override;
 
-  // For tests and diagnostics.
+  // For tests and diagnostics (nullptr for an axis without step/dir).
   StepGenerator* generator(std::size_t axis) { return axes_[axis].generator.get(); }
   std::int64_t playback_delay_ns() const { return playback_delay_ns_; }
   std::int64_t period_start_ns() const { return period_start_ns_; }

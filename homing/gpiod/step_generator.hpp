@@ -7,10 +7,14 @@
 // step count, so a step is never lost or invented: after any motion the
 // steps emitted equal round(engine position * steps_per_unit).
 //
-// Segments are played on a delayed timeline (the backend adds a playback
-// delay to each start): the engine's command for a period is only known when
-// the next period begins, so playing it back-to-back one period later keeps
-// the pulses continuous instead of jumping at every period.
+// Each segment starts at the instant the engine's period began (its motor
+// state is the engine's state at that instant): the backend hands it over
+// right after the engine's step (GpiodIo::apply), a few microseconds into the
+// period, and until then the previous segment runs on, as the engine's own
+// motion does when a period is late. The pulses are thus where the engine
+// computed them, and so is the reference edge. A playback delay (config
+// playback_delay_us, 0 by default) shifts the whole timeline later and the
+// reference by feed x delay.
 //
 // One tick makes at most one edge on the step line (rising, then falling on
 // the next tick), so the pulse width is one tick and the maximum step rate

@@ -13,8 +13,9 @@ struct EdgeRecord {
   std::size_t axis = 0;
   double time_s = 0;  // simulator time
   bool to_active = false;
-  double actual_mm = 0;
-  double motor_mm = 0;
+  double actual_mm = 0;  // where this carriage was at the edge
+  double motor_mm = 0;   // where the step output that drives it was (carriage - slip)
+  std::size_t output = 0;  // that output: the axis itself, or its commutator master
 };
 
 class EdgeRing {

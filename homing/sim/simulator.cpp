@@ -116,12 +116,42 @@ bool Simulator::reports_edges(std::size_t axis) const {
 
 void Simulator::advance(const Outputs& outputs, double dt_s) {
   dt_s = std::max(dt_s, 0.0);
-  for (std::size_t i = 0; i < kAxisCount; ++i) advance_axis(i, outputs.axes[i], dt_s);
+  for (std::size_t i = 0; i < kAxisCount; ++i) {
+    const std::size_t o = driving_output(i);
+    advance_axis(i, o, outputs.axes[o], connected(i, o, outputs), dt_s);
+  }
   route_sensors(outputs);
   time_s_ += dt_s;
 }
 
-void Simulator::advance_axis(std::size_t i, const AxisOutputs& out, double dt_s) {
+std::size_t Simulator::driving_output(std::size_t axis) const {
+  for (std::size_t m = 0; m < kAxisCount; ++m)
+    if (m != axis && config_.commutator_slave[m] == static_cast<int>(axis)) return m;
+  return axis;
+}
+
+int Simulator::wired_slave(std::size_t master) const {
+  const int s = config_.commutator_slave[master];
+  if (s < 0 || s >= static_cast<int>(kAxisCount) || static_cast<std::size_t>(s) == master) return -1;
+  return driving_output(static_cast<std::size_t>(s)) == master ? s : -1;  // the first master claiming it
+}
+
+bool Simulator::connected(std::size_t axis, std::size_t output, const Outputs& outputs) const {
+  if (output != axis) return true;  // a commutator slave: the master's output always reaches it
+  // A master's own carriage, unless its commutator routes the output to the slave.
+  return !(wired_slave(axis) >= 0 && outputs.axes[axis].commutator_output);
+}
+
+bool Simulator::in_motion(std::size_t axis, const Outputs& next) const {
+  if (axes_[axis].moving) return true;
+  const std::size_t o = driving_output(axis);
+  const AxisOutputs& drive = next.axes[o];
+  return connected(axis, o, next) &&
+         (drive.motor.velocity_mm_per_s != 0 || drive.motion.target_velocity_mm_per_s != 0);
+}
+
+void Simulator::advance_axis(std::size_t i, std::size_t output, const AxisOutputs& out, bool linked,
+                             double dt_s) {
   Axis& ax = axes_[i];
   AxisConfig& c = config_.axes[i];
   AxisInputs& in = own_[i];
@@ -132,6 +162,7 @@ void Simulator::advance_axis(std::size_t i, const AxisOutputs& out, double dt_s)
   // A fault or wiring change since the last period: the level steps at its start.
   if (electrical_level(i) != ax.reported_level) in.sensor_edges.add(0.0);
 
+  // Slip: this carriage minus the position of the output that drives it.
   SensorEvents events;
   const double slip_start_mm = ax.actual_mm - out.motor.position_mm;
   // The carriage jumped (place, lose_steps) or the cam moved while it stood still.
@@ -140,14 +171,16 @@ void Simulator::advance_axis(std::size_t i, const AxisOutputs& out, double dt_s)
   }
 
   const MotionPath motor = plan_path(out.motor, out.motion, dt_s);
-  const bool follows = c.fault != Fault::drive_fault;
+  // A faulted drive, or a master carriage while the commutator feeds its slave,
+  // stands still: the output's steps do not reach it.
+  const bool follows = linked && c.fault != Fault::drive_fault;
   const CarriagePath carriage = carriage_path(out.motor, motor, ax.actual_mm, stops_of(c), follows);
   for (std::size_t p = 0; p < carriage.count; ++p) {
     const CarriagePiece& piece = carriage.pieces[p];
     ax.sensor.sweep(piece.motion, piece.slip_mm, events);
     add_index_crossings(piece.motion, c.index_pitch_mm, c.index_offset_mm, in.index_edges);
   }
-  ax.moving = motor.end.velocity_mm_per_s != 0;
+  ax.moving = linked && motor.end.velocity_mm_per_s != 0;
   ax.actual_mm = carriage.count ? carriage.end_mm : ax.actual_mm;
   c.actual_position_mm = ax.actual_mm;
 
@@ -165,7 +198,7 @@ void Simulator::advance_axis(std::size_t i, const AxisOutputs& out, double dt_s)
     const SensorEvent& ev = events.items[e];
     const double t_s = time_s_ + ev.time_s;
     flush_bounce(t_s);
-    ax.ring.push(EdgeRecord{i, t_s, ev.to_active, ev.actual_mm, ev.actual_mm - ev.slip_mm});
+    ax.ring.push(EdgeRecord{i, t_s, ev.to_active, ev.actual_mm, ev.actual_mm - ev.slip_mm, output});
     if (report) in.sensor_edges.add(ev.time_s);
     ax.bounce.schedule(t_s, bounce_s);
   }
@@ -181,11 +214,10 @@ void Simulator::advance_axis(std::size_t i, const AxisOutputs& out, double dt_s)
 void Simulator::route_sensors(const Outputs& outputs) {
   for (std::size_t m = 0; m < kAxisCount; ++m) {
     inputs_.axes[m] = own_[m];
-    const int s = config_.commutator_slave[m];
+    const int s = wired_slave(m);
     // The diverter puts the slave's switch on the master's input; switching it
     // is a plain level change, with no edge time.
-    if (outputs.axes[m].commutator_output && s >= 0 && s < static_cast<int>(kAxisCount) &&
-        static_cast<std::size_t>(s) != m) {
+    if (outputs.axes[m].commutator_output && s >= 0) {
       inputs_.axes[m].sensor_level = own_[s].sensor_level;
       inputs_.axes[m].sensor_edges = own_[s].sensor_edges;
     }

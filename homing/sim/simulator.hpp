@@ -29,9 +29,22 @@ class Simulator {
   // settings_lost are never touched (the runtime owns them).
   const Inputs& inputs() const { return inputs_; }
 
-  // Runs every axis's outputs.axes[i].motion for dt_s starting from
-  // outputs.axes[i].motor (the engine's motor state now).
+  // Runs the step outputs for dt_s: output i plays outputs.axes[i].motion
+  // starting from outputs.axes[i].motor (the engine's motor state now) and
+  // moves the carriages wired to it (see driving_output).
   void advance(const Outputs& outputs, double dt_s);
+
+  // External-commutator wiring (MachineConfig::commutator_slave[m] = s): one
+  // step output, m's. While outputs.axes[m].commutator_output is off it moves
+  // carriages m and s alike (each within its own stops, each stopped by its
+  // own drive fault); while it is on it moves carriage s only and carriage m
+  // stays. outputs.axes[s].motion and .motor are ignored. The master's home
+  // input shows the slave's switch while the commutator is on.
+  // The step output that drives a carriage: its own, or its commutator master's.
+  std::size_t driving_output(std::size_t axis) const;
+  // The carriage moved at the end of the last period, or the outputs about to
+  // be run would move it (its output runs and is connected to it).
+  bool in_motion(std::size_t axis, const Outputs& next) const;
 
   // Knobs at run time (as Modbus writes them). set_axis_config keeps the
   // carriage where it is (its actual_position_mm is ignored: use place()).
@@ -42,6 +55,8 @@ class Simulator {
   bool place(std::size_t axis, double actual_mm);
   // Shifts the carriage by mm without the controller knowing (within the stops).
   void lose_steps(std::size_t axis, double mm);
+  // Wires axis slave (-1: none) to master's step output through a commutator.
+  // Takes effect at the next advance(); the carriages stay where they are.
   void set_commutator_slave(std::size_t master, int slave);
   void set_estop(bool pressed);
   void set_start_button(bool pressed);
@@ -53,7 +68,8 @@ class Simulator {
   // The physical switch: no fault, polarity or bounce.
   bool sensor_active(std::size_t axis) const { return axes_[axis].sensor.active(); }
   bool at_hard_stop(std::size_t axis) const;
-  // The motor is still running at the end of the last period.
+  // The output driving this carriage is still running at the end of the last
+  // period and is connected to it (a drive fault does not count: the motor runs).
   bool moving(std::size_t axis) const { return axes_[axis].moving; }
   double time_s() const { return time_s_; }
   const MachineConfig& config() const { return config_; }
@@ -79,7 +95,12 @@ class Simulator {
   };
 
   void reseed();
-  void advance_axis(std::size_t axis, const AxisOutputs& outputs, double dt_s);
+  // The commutator slave wired to master's output, or -1.
+  int wired_slave(std::size_t master) const;
+  // Whether output (driving_output(axis)) reaches carriage axis now.
+  bool connected(std::size_t axis, std::size_t output, const Outputs& outputs) const;
+  void advance_axis(std::size_t axis, std::size_t output, const AxisOutputs& drive, bool linked,
+                    double dt_s);
   bool electrical_level(std::size_t axis) const;
   bool reports_edges(std::size_t axis) const;
   void route_sensors(const Outputs& outputs);

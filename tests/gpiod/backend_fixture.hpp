@@ -63,9 +63,12 @@ struct Backend {
     if (!opened) throw std::logic_error(opened.error());
     io = std::move(*opened);
   }
-  // Ticks the pulse generators through [now, now + dt), then runs one
-  // control-loop period: advance(outputs, dt) and read().
+  // One control-loop period of dt that runs `outputs`, as the loop does it:
+  // apply(outputs) at its start (right after the engine's step that computed
+  // them), the pulse generators ticked through [now, now + dt), then
+  // advance(outputs, dt) and read() at its end.
   homing::Inputs period(const homing::Outputs& outputs, std::int64_t dt_ns, std::int64_t tick_ns = 20'000) {
+    io->apply(outputs);
     const std::int64_t end = now_ns + dt_ns;
     while (now_ns + tick_ns <= end) tick(now_ns + tick_ns);
     now_ns = end;

@@ -90,10 +90,11 @@ TEST_CASE("home-all from the start button through GPIO: bouncing switch, referen
   CHECK(m.chip->value("homing_done_lamp"));
   CHECK(m.chip->value("X.enable"));
   // The release edge is at -5 mm (+ one step: the first step above it). The
-  // engine's reference is late by latch feed x playback delay (1 mm/s x
-  // 1.5 ms = 1.5 um) at most, never by the debounce or the bounce.
+  // pulses play where the engine computed them (no playback delay), so the
+  // reference is the edge within one step, never moved by the debounce or
+  // the bounce.
   const double reference = engine.status().axes[0].trigger_position_mm;
-  CHECK(reference == Approx(kSwitchMm).margin(0.0025 + 0.0015 + 1e-6));
+  CHECK(reference == Approx(kSwitchMm).margin(0.0025 + 1e-6));
   // The motor rests at the pulled-off point: steps emitted = round(position * steps_per_unit).
   CHECK(m.io->generator(0)->position_steps() ==
         std::llround((reference + s.axes[0].pull_off_mm) * 400.0));

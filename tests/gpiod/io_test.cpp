@@ -135,3 +135,29 @@ TEST_CASE("a step line that cannot be written reports a drive fault on its axis"
   for (int i = 0; i < 5; ++i) b.period(out, kMs);
   CHECK(b.period(out, kMs).axes[0].drive_fault);
 }
+
+TEST_CASE("a period's pulses start at the instant the engine's period began, not a period and a half later") {
+  fixture::Backend b;
+  b.period(Outputs{}, 0);    // the control loop's first, empty period
+  b.period(Outputs{}, kMs);  // anchors the timeline
+  CHECK(b.io->playback_delay_ns() == 0);
+  Outputs out{};
+  out.axes[0].motion = homing::velocity_command(10, 0);  // 10 mm/s x 400 steps/mm: 4 steps per ms
+  b.period(out, kMs);  // applied right after the engine's step, then the period runs
+  CHECK(b.io->generator(0)->position_steps() == 4);  // where the engine's motion is at the period's end
+  out.axes[0].motor = homing::integrate(out.axes[0].motor, out.axes[0].motion, 0.001);
+  b.period(out, kMs);
+  CHECK(b.io->generator(0)->position_steps() == 8);
+}
+
+TEST_CASE("playback_delay_us shifts the pulses later by that much") {
+  auto cfg = fixture::config();
+  cfg.playback_delay_us = 500;
+  fixture::Backend b(cfg);
+  b.period(Outputs{}, 0);
+  b.period(Outputs{}, kMs);
+  Outputs out{};
+  out.axes[0].motion = homing::velocity_command(10, 0);
+  b.period(out, kMs);
+  CHECK(b.io->generator(0)->position_steps() == 2);  // half of the period played
+}

@@ -45,15 +45,16 @@ struct Axis {
 };
 
 // The engine's side: one segment per period, motor integrated with the same
-// motion function, handed over when the period ends (as advance() gets it)
-// and played back 1.5 ms after its start (the backend's playback delay).
+// motion function, handed over right after the engine's step, kStepNs into
+// the period (as GpiodIo::apply() gets it), starting at the period's start.
 struct EngineSide {
-  static constexpr std::int64_t kDelayNs = 1'500'000;
+  static constexpr std::int64_t kStepNs = 60'000;  // the engine's step and the input reads
   MotionState motor{};
   std::int64_t t_ns = 0;
   void period(Axis& axis, const MotionCommand& cmd, std::int64_t dt_ns) {
+    axis.run_until(t_ns + kStepNs);  // the previous segment runs on meanwhile
+    axis.gen->push(Segment{t_ns, motor, cmd});
     axis.run_until(t_ns + dt_ns);
-    axis.gen->push(Segment{t_ns + kDelayNs, motor, cmd});
     motor = integrate(motor, cmd, static_cast<double>(dt_ns) * 1e-9);
     t_ns += dt_ns;
   }
@@ -65,7 +66,6 @@ TEST_CASE("constant velocity: one step per 1/(v*steps_per_unit), evenly spaced, 
   Axis axis(100);  // 100 steps/mm at 10 mm/s: 1000 steps/s
   EngineSide e;
   for (int i = 0; i < 1000; ++i) e.period(axis, velocity_command(10, 0), 1'000'000);
-  axis.run_until(1'000'000'000 + EngineSide::kDelayNs);
   const auto steps = axis.rising_steps();
   CHECK(axis.gen->position_steps() == 1000);
   REQUIRE(steps.size() == 1000);

@@ -453,16 +453,128 @@ TEST_CASE("commutator routes the slave's sensor to the master's input") {
   CHECK(rig.sim.inputs().axes[0].sensor_level);
   CHECK(rig.sim.inputs().axes[0].sensor_edges.count == 0);  // a switch-over has no edge time
   CHECK(rig.sim.inputs().axes[1].sensor_level);
-  // Only the slave moves (as when aligning): its edge shows on the master's input.
+  // The master's output now moves only the slave (as when aligning): its edge
+  // shows on the master's input.
   rig.sensor[0].clear();
-  rig.run(1, velocity_command(10, 0), 400);
+  rig.run(0, velocity_command(10, 0), 400);
   REQUIRE(rig.sensor[0].size() == 1);
   CHECK(rig.sensor[0][0].time_s == Approx(0.002 + 0.3).epsilon(1e-12));
   CHECK_FALSE(rig.sensor[0][0].level);
   CHECK(rig.sim.actual_position_mm(0) == 0);
+  CHECK(rig.sim.actual_position_mm(1) == Approx(4));
   rig.out.axes[0].commutator_output = false;
   rig.step(0, stop_command(100));
   CHECK_FALSE(rig.sim.inputs().axes[0].sensor_level);
+}
+
+namespace {
+
+// X master, Y its external-commutator slave; no cams unless a test sets them.
+MachineConfig commutator_machine(double x_mm, double y_mm) {
+  MachineConfig c;
+  for (auto& a : c.axes) a = cam(1, -1);
+  c.axes[0].actual_position_mm = x_mm;
+  c.axes[1].actual_position_mm = y_mm;
+  c.commutator_slave[0] = 1;
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("commutator wiring: the master's output moves both carriages, with the commutator on only the slave's") {
+  Rig rig(commutator_machine(10, 20));
+  // The slave has no output of its own: whatever the engine leaves in it is ignored.
+  rig.out.axes[1].motion = velocity_command(-50, 0);
+  rig.run(0, velocity_command(10, 0), 100);  // 1 mm
+  CHECK(rig.sim.actual_position_mm(0) == Approx(11).margin(1e-9));
+  CHECK(rig.sim.actual_position_mm(1) == Approx(21).margin(1e-9));
+  CHECK(rig.sim.moving(0));
+  CHECK(rig.sim.moving(1));
+  CHECK(rig.sim.driving_output(0) == 0);
+  CHECK(rig.sim.driving_output(1) == 0);
+
+  rig.out.axes[0].commutator_output = true;
+  rig.run(0, velocity_command(10, 0), 200);  // 2 mm more on the output
+  CHECK(rig.sim.actual_position_mm(0) == Approx(11).margin(1e-9));
+  CHECK(rig.sim.actual_position_mm(1) == Approx(23).margin(1e-9));
+  CHECK_FALSE(rig.sim.moving(0));
+  CHECK(rig.sim.moving(1));
+
+  rig.out.axes[0].commutator_output = false;
+  rig.move_to(0, 0, 10, 1000);  // back 3 mm on the output: both carriages
+  CHECK(rig.sim.actual_position_mm(0) == Approx(8).margin(1e-9));
+  CHECK(rig.sim.actual_position_mm(1) == Approx(20).margin(1e-9));
+  CHECK_FALSE(rig.sim.moving(0));
+  CHECK_FALSE(rig.sim.moving(1));
+}
+
+TEST_CASE("commutator wiring: each carriage stops at its own mechanical stop and its own drive fault") {
+  MachineConfig c = commutator_machine(10, 20);
+  c.axes[0].hard_stop_max_mm = 12;
+  Rig rig(c);
+  rig.run(0, velocity_command(10, 0), 500);  // 5 mm on the output
+  CHECK(rig.sim.actual_position_mm(0) == Approx(12).margin(1e-9));  // pushed against its stop
+  CHECK(rig.sim.at_hard_stop(0));
+  CHECK(rig.sim.actual_position_mm(1) == Approx(25).margin(1e-9));
+
+  AxisConfig y = rig.sim.axis_config(1);
+  y.fault = Fault::drive_fault;
+  rig.sim.set_axis_config(1, y);
+  rig.run(0, velocity_command(-10, 0), 300);  // 3 mm back: the slave's drive does not follow
+  CHECK(rig.sim.actual_position_mm(0) == Approx(9).margin(1e-9));  // steps lost at the stop stay lost
+  CHECK(rig.sim.actual_position_mm(1) == Approx(25).margin(1e-9));
+  CHECK(rig.sim.inputs().axes[1].drive_fault);
+  CHECK_FALSE(rig.sim.inputs().axes[0].drive_fault);
+}
+
+TEST_CASE("commutator wiring: a slave's edge records its own carriage and the master output's position") {
+  MachineConfig c = commutator_machine(10, 20);
+  c.axes[1].sensor_min_mm = 22.5;  // the slave's cam
+  c.axes[1].sensor_max_mm = 100;
+  Rig rig(c);
+  rig.run(0, velocity_command(10, 0), 100);  // both +1 mm: output at 1
+  rig.out.axes[0].commutator_output = true;
+  rig.run(0, velocity_command(10, 0), 200);  // the slave alone reaches 23
+  const auto edge = rig.sim.last_edge(1);
+  REQUIRE(edge);
+  CHECK(edge->to_active);
+  CHECK(edge->actual_mm == Approx(22.5));
+  CHECK(edge->output == 0);
+  CHECK(edge->motor_mm == Approx(2.5));  // the output's count at that instant (slave slip 20)
+  CHECK(edge->time_s == Approx(0.25).epsilon(1e-9));
+  CHECK_FALSE(rig.sim.last_edge(0));  // nothing on the master's own switch
+  CHECK(rig.sim.inputs().axes[0].sensor_level);  // the master's input shows the slave's switch
+}
+
+TEST_CASE("commutator wiring: in_motion tells which carriage the next outputs move") {
+  Rig rig(commutator_machine(10, 20));
+  Outputs next{};
+  next.axes[0].motion = velocity_command(10, 100);
+  CHECK(rig.sim.in_motion(0, next));
+  CHECK(rig.sim.in_motion(1, next));
+  CHECK_FALSE(rig.sim.in_motion(2, next));
+  next.axes[0].commutator_output = true;
+  CHECK_FALSE(rig.sim.in_motion(0, next));
+  CHECK(rig.sim.in_motion(1, next));
+  next = Outputs{};
+  next.axes[1].motion = velocity_command(10, 100);  // the slave's own output does not exist
+  CHECK_FALSE(rig.sim.in_motion(1, next));
+}
+
+TEST_CASE("commutator wiring follows set_commutator_slave at run time") {
+  Rig rig(commutator_machine(10, 20));
+  rig.sim.set_commutator_slave(0, -1);
+  CHECK(rig.sim.driving_output(1) == 1);
+  rig.run(0, velocity_command(10, 0), 100);
+  CHECK(rig.sim.actual_position_mm(0) == Approx(11).margin(1e-9));
+  CHECK(rig.sim.actual_position_mm(1) == Approx(20).margin(1e-9));  // unwired: only its own output moves it
+  rig.run(1, velocity_command(10, 0), 100);
+  CHECK(rig.sim.actual_position_mm(1) == Approx(21).margin(1e-9));
+  rig.sim.set_commutator_slave(0, 1);
+  rig.out.axes[1].motion = stop_command(0);
+  rig.run(0, velocity_command(10, 0), 100);
+  CHECK(rig.sim.actual_position_mm(0) == Approx(13).margin(1e-9));
+  CHECK(rig.sim.actual_position_mm(1) == Approx(22).margin(1e-9));
 }
 
 TEST_CASE("global inputs follow the setters") {

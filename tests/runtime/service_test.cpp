@@ -6,7 +6,10 @@
 #include <filesystem>
 #include <memory>
 
+#include <toml++/toml.h>
+
 #include "fault_vfs.hpp"
+#include "homing/gpiod/config.hpp"
 #include "persistence/settings_store.hpp"
 #include "registers/defaults.hpp"
 #include "registers/lookup.hpp"
@@ -24,7 +27,7 @@ struct Module {
   std::unique_ptr<server::ModbusService> service;
   server::ClientInfo client{7, "tcp", "127.0.0.1:50000"};
 
-  explicit Module(bool faulty_disk) {
+  explicit Module(bool faulty_disk, server::ServiceConfig config = {}) {
     char tmpl[] = "/tmp/runtime_test_XXXXXX";
     dir = ::mkdtemp(tmpl);
     std::vector<persistence::SettingDefault> defaults;
@@ -42,7 +45,7 @@ struct Module {
     auto io = std::make_unique<server::SimulatorIo>(registers::default_sim_config());
     auto* sim = &io->sim();
     loop = std::make_unique<server::ControlLoop>(settings, std::move(io), sim, 1000, 1.0);
-    service = std::make_unique<server::ModbusService>(server::ServiceConfig{}, *loop, store.get(), settings);
+    service = std::make_unique<server::ModbusService>(std::move(config), *loop, store.get(), settings);
   }
   ~Module() {
     service.reset();
@@ -68,6 +71,11 @@ struct Module {
     return request({16, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), 0, 2, 4,
                     static_cast<std::uint8_t>(u >> 24), static_cast<std::uint8_t>(u >> 16),
                     static_cast<std::uint8_t>(u >> 8), static_cast<std::uint8_t>(u)});
+  }
+  std::vector<std::uint8_t> write_u16(std::string_view name, std::uint16_t v) {
+    const auto a = address(name);
+    return request({6, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), static_cast<std::uint8_t>(v >> 8),
+                    static_cast<std::uint8_t>(v)});
   }
   std::vector<std::uint8_t> coil(std::string_view name) {
     const auto a = address(name);
@@ -115,4 +123,41 @@ TEST_CASE("settings lost at start block homing until the alarm is reset over Mod
   m.coil("cmd.home_all");
   m.periods(3);
   CHECK(m.loop->snapshot().status.homing);
+}
+
+TEST_CASE("a settings write that the GPIO wiring cannot run is refused with exception 03 and changes nothing") {
+  // X, Y and Z have motors, A B C have no lines.
+  auto wiring = homing::gpiod::parse_config(toml::parse(R"(
+[gpiod]
+chip = "gpiochip0"
+[gpiod.axes.X]
+steps_per_unit = 400
+step = 1
+dir = 2
+home = 3
+[gpiod.axes.Y]
+steps_per_unit = 400
+step = 4
+dir = 5
+home = 6
+[gpiod.axes.Z]
+steps_per_unit = 400
+step = 8
+dir = 9
+home = 10
+)"), "cabinet.toml");
+  REQUIRE(wiring);
+  server::ServiceConfig config;
+  config.machine_check = [w = *wiring](const homing::Settings& s) { return homing::gpiod::check_wiring(w, s); };
+  Module m(false, config);
+  // A would move on its own output, which it does not have.
+  auto reply = m.write_u16("axis.a.mode", 2);
+  REQUIRE(reply.size() == 2);
+  CHECK(reply[0] == (6 | 0x80));
+  CHECK(reply[1] == 3);
+  CHECK(m.store->value("axis.a.mode") == 0);
+  CHECK(m.service->settings().axes[3].mode == homing::HomingMode::disabled);
+  // Y is wired: its mode may change.
+  CHECK(m.write_u16("axis.y.mode", 3).size() == 5);
+  CHECK(m.store->value("axis.y.mode") == 3);
 }
