@@ -254,7 +254,13 @@ struct PhaseRunner {
   }
 
   void pull_off() {
-    if (entry()) run.target_mm = run.reference_mm - dir * rest_offset_mm();
+    if (entry()) {
+      run.target_mm = run.reference_mm - dir * rest_offset_mm();
+      // The master holds where its braking left it, a little past its own
+      // edge: the slave stands as far past its own, so the pull-off made
+      // together leaves both at the same distance from their edges.
+      if (commutator_slave()) run.target_mm += partner_run().motor.position_mm - partner_run().reference_mm;
+    }
     move_to(run.target_mm, commutator_slave() ? latch_v : seek_v);
     if (!arrived()) return;
     if (commutator_slave()) return aligned();

@@ -137,11 +137,7 @@ SCENARIO("homing the master alone homes its slave too; the slave's own sequence 
   }
 }
 
-// [!mayfail] until the engine drives the pair through the master's output
-// (issue 13): the simulator now wires an external-commutator slave as the
-// spec says (one step/dir output, the master's), and today's engine moves the
-// slave's own output while aligning, which reaches no motor.
-SCENARIO("external commutator: the master is held while the slave finds its own edge", "[gantry][!mayfail]") {
+SCENARIO("external commutator: the master is held while the slave finds its own edge", "[gantry]") {
   Rig r = commutator_gantry(100.8);
   double x_when_master_assigned = 0;
   bool commutator_seen = false, master_moved_while_aligning = false;
@@ -177,11 +173,7 @@ SCENARIO("external commutator: the master is held while the slave finds its own 
   }
 }
 
-// [!mayfail] until the engine drives the pair through the master's output
-// (issue 13): the simulator now wires an external-commutator slave as the
-// spec says (one step/dir output, the master's), and today's engine moves the
-// slave's own output while aligning, which reaches no motor.
-SCENARIO("external commutator: the switch compensation is applied by the slave", "[gantry][!mayfail]") {
+SCENARIO("external commutator: the switch compensation is applied by the slave", "[gantry]") {
   Rig r = commutator_gantry(100, 0.2);
   REQUIRE(r.home_all());
   const double tol = edge_tolerance_mm(r.settings.axes[0], r.dt_s);
