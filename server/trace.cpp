@@ -16,6 +16,7 @@ void TraceRecorder::begin(double period_s) {
   stride_ = 1;
   tick_ = 0;
   start_s_ = -1;
+  latest_kept_ = true;
   active_ = true;
 }
 
@@ -31,7 +32,15 @@ void TraceRecorder::record(double time_s, const homing::Status& status,
     if (involved_[a] && !t.reference_time_s && s.phase == homing::Phase::pull_off)
       t.reference_time_s = time_s - start_s_;
   }
-  if (tick_++ % stride_ != 0) return;
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    const homing::AxisStatus& s = status.axes[a];
+    latest_[a] = TraceSample{time_s - start_s_, s.phase, motor_mm[a], s.velocity_mm_per_s, s.sensor};
+  }
+  latest_kept_ = tick_++ % stride_ == 0;
+  if (latest_kept_) keep_latest();
+}
+
+void TraceRecorder::keep_latest() {
   if (traces_[0].count == kTraceCapacity) {
     // Full: keep every other sample and halve the rate from now on.
     for (AxisTrace& t : traces_) {
@@ -42,14 +51,15 @@ void TraceRecorder::record(double time_s, const homing::Status& status,
   }
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     AxisTrace& t = traces_[a];
-    const homing::AxisStatus& s = status.axes[a];
-    t.samples[t.count++] = TraceSample{time_s - start_s_, s.phase, motor_mm[a], s.velocity_mm_per_s, s.sensor};
+    t.samples[t.count++] = latest_[a];
   }
+  latest_kept_ = true;
 }
 
 void TraceRecorder::finish(double time_s, const homing::Status& status,
                            const std::array<double, homing::kAxisCount>& motor_mm) {
   if (!active_) return;
+  if (!latest_kept_) keep_latest();
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     AxisTrace& t = traces_[a];
     const homing::AxisStatus& s = status.axes[a];

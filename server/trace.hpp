@@ -48,13 +48,19 @@ class TraceRecorder {
   void begin(double period_s);
   // One control period of a running cycle; motor positions from the outputs.
   void record(double time_s, const homing::Status& status, const std::array<double, homing::kAxisCount>& motor_mm);
-  // The cycle ended: fills in references and alarms.
+  // The cycle ended: fills in references and alarms, and keeps the last
+  // recorded period even when the halved rate skipped it, so the trace ends
+  // where the axes came to rest.
   void finish(double time_s, const homing::Status& status, const std::array<double, homing::kAxisCount>& motor_mm);
   const std::array<AxisTrace, homing::kAxisCount>& traces() const { return traces_; }
   bool active() const { return active_; }
 
  private:
+  void keep_latest();
+
   std::array<AxisTrace, homing::kAxisCount> traces_{};
+  std::array<TraceSample, homing::kAxisCount> latest_{};  // the last recorded period
+  bool latest_kept_ = true;
   std::array<bool, homing::kAxisCount> involved_{};
   double start_s_ = 0;
   double period_s_ = 0.001;

@@ -79,7 +79,7 @@ TEST_CASE("index input: only rising edges are reported") {
   CHECK(in.axes[0].index_edges.time_s[0] == Approx(0.0001).margin(1e-9));
 }
 
-TEST_CASE("start button and permit are debounced; e-stop and drive fault act at once") {
+TEST_CASE("start button and permit are debounced, e-stop and drive fault act at once") {
   fixture::Backend b;
   b.period(Outputs{}, kMs);
   b.chip->set_level_silently("start_button", true);
@@ -102,7 +102,7 @@ TEST_CASE("start button and permit are debounced; e-stop and drive fault act at 
   for (int i = 0; i < 20; ++i) CHECK(b.period(Outputs{}, kMs).start_button);
 }
 
-TEST_CASE("enable, lamp, push and commutator follow the engine's outputs; exit leaves them off") {
+TEST_CASE("enable, lamp, push and commutator follow the engine's outputs and are off after shutdown") {
   auto cfg = fixture::config();
   cfg.axes[0].push = homing::gpiod::LineSpec{"X.push", "gpiochip0", 6u};
   cfg.axes[0].commutator = homing::gpiod::LineSpec{"X.commutator", "gpiochip0", 7u};

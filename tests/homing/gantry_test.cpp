@@ -116,7 +116,7 @@ SCENARIO("after squaring, jogging the master moves the slave with it", "[gantry]
   }
 }
 
-SCENARIO("homing the master alone homes its slave too; the slave's own sequence bit is ignored",
+SCENARIO("homing the master alone homes its slave too, the slave's own sequence bit is ignored",
          "[gantry]") {
   Rig r = software_gantry(100.5);
   r.settings.global.sequence_steps = {axis_bit(1), axis_bit(0), 0, 0, 0, 0};

@@ -146,7 +146,7 @@ TEST_CASE("homingctl usage errors exit 2, an unreachable module exits 3, --help 
   }
 }
 
-TEST_CASE("homingctl home waits for the result; a failing homing exits 1 with the alarm text") {
+TEST_CASE("homingctl home waits for the result, a failing homing exits 1 with the alarm text") {
   Daemon d;
   Client c = Client::tcp(d.port());
   auto r = ctl(d, {"set", "axis.x.pull_off=2", "axis.x.home_position=-5"});

@@ -19,7 +19,7 @@ std::size_t count_of(const std::string& s, const std::string& what) {
 }
 }  // namespace
 
-TEST_CASE("homingctl trace of a real cycle: SVG with axes, phases and the reference edge; CSV; JSON") {
+TEST_CASE("homingctl trace of a real cycle as SVG with axes, phases and the reference edge, as CSV and as JSON") {
   Daemon d;
   TempDir dir;
   REQUIRE(ctl(d, {"set", "axis.x.pull_off=2", "axis.x.home_position=-5", "axis.x.mode=switch_reapproach"}).code() == 0);
@@ -93,7 +93,7 @@ TEST_CASE("homingctl trace of a failing cycle shows the alarm") {
   CHECK(j["reference_edge"].is_null());
 }
 
-TEST_CASE("homingctl over RTU: status and home; traces need TCP, said in words") {
+TEST_CASE("homingctl over RTU: status and home work, trace says in words that it needs TCP") {
   PtyPair pty;
   Daemon d({.extra = {"--rtu", pty.server_end()}});
   const std::vector<std::string> rtu{HOMINGCTL_PATH, "--rtu", pty.client_end(), "--baud", "19200", "--parity", "E"};
