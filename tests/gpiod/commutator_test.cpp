@@ -70,7 +70,7 @@ TEST_CASE("config: an axis without step and dir is accepted, half a step/dir pai
              Catch::Contains("[gpiod.axes.Y] has no step/dir output, so no 'commutator' line either"));
 }
 
-TEST_CASE("the master's commutator line follows the engine's commutator output; the slave has no pulses") {
+TEST_CASE("the master's commutator line follows the engine's commutator output and the slave has no pulses") {
   fixture::Backend b(fixture::config(kGantry));
   REQUIRE(b.io->generator(0) != nullptr);
   CHECK(b.io->generator(1) == nullptr);
