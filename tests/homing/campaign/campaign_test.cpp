@@ -65,7 +65,7 @@ TEST_CASE(kName, "[campaign]") {
   const std::uint64_t runs = env_u64("HOMING_CAMPAIGN_RUNS", 2000);
   const std::uint64_t first = env_u64("HOMING_CAMPAIGN_SEED", 1);
   const bool survey = env_u64("HOMING_CAMPAIGN_SURVEY", 0) != 0;
-  std::uint64_t homed = 0, refused = 0, unexpected = 0, failures = 0, periods = 0;
+  std::uint64_t homed = 0, refused = 0, unexpected = 0, failures = 0, periods = 0, passed_periods = 0;
   std::map<std::string, std::pair<std::uint64_t, std::uint64_t>> classes;  // what -> (count, first seed)
   std::map<std::string, std::uint64_t> refusals;
   for (std::uint64_t i = 0; i < runs; ++i) {
@@ -77,7 +77,10 @@ TEST_CASE(kName, "[campaign]") {
       ++unexpected;
       refusals.emplace(o.unexpected_refusal.substr(0, o.unexpected_refusal.find(';')), o.seed);
     }
-    if (!o.failed) continue;
+    if (!o.failed) {
+      passed_periods += o.periods;
+      continue;
+    }
     ++failures;
     auto [it, fresh] = classes.emplace(o.failure.what, std::make_pair(0, o.seed));
     ++it->second.first;
@@ -91,10 +94,11 @@ TEST_CASE(kName, "[campaign]") {
                            campaign::report(o, kName).c_str());
   }
   if (survey) {
-    std::printf("\n%llu runs, %llu failed, %llu homed at least once, %llu refused (%llu of them generated valid), %llu periods\n",
+    std::printf("\n%llu runs, %llu failed, %llu homed at least once, %llu refused (%llu of them generated valid), %llu periods (%llu per run that passed)\n",
                 static_cast<unsigned long long>(runs), static_cast<unsigned long long>(failures),
                 static_cast<unsigned long long>(homed), static_cast<unsigned long long>(refused),
-                static_cast<unsigned long long>(unexpected), static_cast<unsigned long long>(periods));
+                static_cast<unsigned long long>(unexpected), static_cast<unsigned long long>(periods),
+                static_cast<unsigned long long>(runs > failures ? passed_periods / (runs - failures) : 0));
     for (const auto& [what, c] : classes)
       std::printf("%6llu  first seed %-8llu %s\n", static_cast<unsigned long long>(c.first),
                   static_cast<unsigned long long>(c.second), what.c_str());

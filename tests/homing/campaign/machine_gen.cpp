@@ -155,9 +155,10 @@ struct Gen {
     double far_away = 0;
     const double depth_max = std::min(cam_len - 1, 0.8 * (s.max_backoff_mm - hyst - slack - 0.2));
     const double sensor_room = limits(s, hyst, shared, rest_f - edge_f + depth_max, far_away);
-    // The seek must reach the sensor from wherever a cycle may start: the
-    // start, or where a final move, a jog or lost steps (3 mm) left it.
-    const double farthest = std::max(gap, rest_f - edge_f + far_away + 3);
+    // The seek must reach the sensor from wherever a cycle may start: where a
+    // final move, a jog or lost steps (3 mm) left it, from the rest point or
+    // from the start (an unsequenced axis is assigned where it stands).
+    const double farthest = std::max(gap, rest_f - edge_f) + far_away + 3;
     s.max_seek_travel_mm = std::max(farthest, 0.0) + s.pre_move_distance_mm + over + slack + d.u(1, 20);
     set_cam(a, dir, edge_f, cam_len, start_f);
     const double in_f = pushing ? edge_f - over - d.u(0, s.push_distance_mm * 0.8) - 1e-3
@@ -250,8 +251,9 @@ struct Gen {
     const double rest_f = reference_f(e, c, edge_f, index_r) + e.pull_off_mm + e.switch_compensation_mm;
     p.skew_mm = p.bad_skew ? d.sign() * (1.3 * pd.misalignment + budget + d.u(0.3, 3)) : d.u(-1, 1) * budget;
     if (p.commutator && mode_is_pushing(ms.mode)) {
+      // Trailing: the slave starts further from its edge than the master from its own.
       const double lead = (reference_f(e, c, edge_f, index_r) - edge_f) - (reference_f(ms, mc, edge_m_f, master_index_r) - edge_m_f);
-      p.skew_mm = std::abs(p.skew_mm) + std::max(0.0, lead);
+      p.skew_mm = std::min(0.0, lead) - std::abs(p.skew_mm);
     }
     const double start_f = start_m_f + (rest_f - rest_m_f) - p.skew_mm;
     p.rest_rel_mm = mirror(dir, rest_f) - mirror(dir, rest_m_f);

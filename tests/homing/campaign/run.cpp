@@ -221,6 +221,14 @@ void Run::recover() {
       r_.sim().set_axis_config(a, c);
     }
   }
+  // And those an alarm left past their cam (a short cam, a dead sensor).
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const AxisSettings e = effective(r_.settings, a);
+    const auto& c = r_.sim().axis_config(a);
+    const double x = r_.actual(a);
+    const bool past = dir_of(e) > 0 ? x > c.sensor_max_mm : x < c.sensor_min_mm;
+    if (mode_uses_switch(e.mode) && (past || m_.plan[a].short_cam) && !w_->truth[a].valid) faulted |= axis_bit(a);
+  }
   put_back(faulted);
   w_->dead_sensor = 0;
   if (d_.chance(0.5)) encoder_invalid_ = 0;
@@ -453,11 +461,12 @@ Outcome Run::run() {
   out.seed = m_.seed;
   if (auto f = check_settings(r_.settings)) {
     out.refused = true;
-    if (m_.invalid == Invalid::none) out.unexpected_refusal = describe_fault(*f, r_.settings);
     const int p = f->axis < kAxisCount ? partner_index(r_.settings, f->axis) : -1;
     if (m_.invalid == Invalid::none && master_index(r_.settings, f->axis) >= 0 && p >= 0 && inherited_field(f->field))
       w_->fail("the configuration check judges a slave by a setting it inherits from its master",
                describe_fault(*f, r_.settings));
+    else if (m_.invalid == Invalid::none)
+      out.unexpected_refusal = describe_fault(*f, r_.settings);
   } else if (m_.invalid != Invalid::none) {
     w_->fail(std::string("the configuration check accepts a ") + invalid_name(m_.invalid));
   }
@@ -469,7 +478,7 @@ Outcome Run::run() {
   if (ok() && !out.refused) follow_ups();
   out.failed = !ok();
   if (out.failed) out.failure = w_->failure();
-  out.story = story(m_);
+  if (out.failed) out.story = story(m_);
   out.log = log_.str();
   out.ever_homed = ever_homed_;
   out.periods = r_.periods;

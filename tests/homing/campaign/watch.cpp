@@ -20,6 +20,7 @@ std::string fmt_axis(std::size_t a, rig::Rig& r, double x) {
 }  // namespace
 
 Watch::Watch(rig::Rig& r, const Machine& m) : r_(r), m_(m) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) eff_[a] = effective(r_.settings, a);
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     x_prev_[a] = r_.actual(a);
     traced_[a] = Phase::idle;
@@ -55,7 +56,7 @@ void Watch::fail(const std::string& what, const std::string& detail) {
   if (failure_.what.empty() && !ignored(what)) failure_ = Failure{what, detail};
 }
 
-double Watch::accel_limit(std::size_t a) const { return effective(r_.settings, a).acceleration_mm_per_s2; }
+double Watch::accel_limit(std::size_t a) const { return eff_[a].acceleration_mm_per_s2; }
 
 void Watch::begin_window(const CyclePlan& p, bool is_refused) {
   in_window = true;
@@ -127,7 +128,7 @@ void Watch::period() {
 void Watch::axis_period(std::size_t a, double engine_dt) {
   const Status& st = r_.status();
   const AxisStatus& as = st.axes[a];
-  const AxisSettings e = effective(r_.settings, a);
+  const AxisSettings& e = eff_[a];
   const double x = r_.actual(a);
   const double x_eng = x_prev_[a];  // the carriage when the engine's status was taken (before this period ran)
   const double v = as.velocity_mm_per_s;
@@ -198,7 +199,18 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
       std::ostringstream o;
       o << fmt_axis(a, r_, x) << "; velocity " << v_prev_[a] << " -> " << v << " in " << engine_dt * 1000
         << " ms, at most " << acc * engine_dt << " at " << acc << "/s2";
-      fail("velocity changed faster than the acceleration", o.str());
+      // The class names the phase that commanded it (the one before this
+      // status), and whether it was a dead stop or the higher acceleration
+      // of a gantry's two: they are different bugs.
+      const double own = r_.settings.axes[a].acceleration_mm_per_s2;
+      const int partner = partner_index(r_.settings, a);
+      std::string how = v == 0 ? "a dead stop" : "a velocity change";
+      if (partner >= 0 && dv <= own * engine_dt * (1 + 1e-9) + 1e-6) how = "a gantry side at its own, not the pair's lower, acceleration";
+      else if (partner >= 0 && dv <= r_.settings.axes[static_cast<std::size_t>(partner)].acceleration_mm_per_s2 * engine_dt * (1 + 1e-9) + 1e-6)
+        how = "a gantry side at its partner's acceleration, beyond its own";
+      fail(std::string("velocity changed faster than the acceleration: ") + how + " in phase " +
+               std::string(phase_name(phase_prev_[a])),
+           o.str());
     }
   }
 
@@ -241,6 +253,7 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
 
   x_prev_[a] = x;
   v_prev_[a] = v;
+  phase_prev_[a] = as.phase;
 }
 
 void Watch::racking() {
@@ -258,7 +271,8 @@ void Watch::racking() {
       o << "slave " << kAxisUpper[s] << " vs master " << kAxisUpper[mi] << ": " << dev << " from "
         << (in_window ? "where the cycle started" : "where the pair was locked") << ", allowed " << limit << "; "
         << fmt_axis(mi, r_, r_.actual(mi)) << "; " << fmt_axis(s, r_, r_.actual(s));
-      fail(in_window ? "a gantry racked beyond its max misalignment" : "a locked gantry racked outside a cycle", o.str());
+      const std::string topology = r_.settings.axes[s].slave_mode == SlaveMode::external_commutator ? " (external commutator)" : " (software-slaved)";
+      fail((in_window ? "a gantry racked beyond its max misalignment" : "a locked gantry racked outside a cycle") + topology, o.str());
     }
   }
 }
@@ -336,7 +350,12 @@ void Watch::on_flip(std::size_t a, double x) {
     std::ostringstream o;
     o << fmt_axis(a, r_, x) << "; the truth is " << pos;
     if (t.has_rest) o << " (reference edge at rest point " << t.rest << ")";
-    fail("homed with a coordinate other than its mode defines", o.str());
+    std::string kind = (plan.unsequenced & bit) ? "unsequenced " : "";
+    if (master_index(r_.settings, a) >= 0)
+      kind += r_.settings.axes[a].slave_mode == SlaveMode::external_commutator ? "commutator slave, " : "software slave, ";
+    kind += std::string(mode_name(e.mode));
+    if (m_.plan[a].differs) kind += ", its own inherited fields differ";
+    fail("homed with a coordinate other than its mode defines (" + kind + ")", o.str());
   }
 }
 

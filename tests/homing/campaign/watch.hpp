@@ -69,6 +69,7 @@ class Watch {
 
   rig::Rig& r_;
   const Machine& m_;
+  std::array<AxisSettings, kAxisCount> eff_{};  // what each axis homes with (the settings never change in a run)
   Failure failure_{};
   std::array<double, kAxisCount> x_prev_{}, v_prev_{};
   std::array<bool, kAxisCount> homed_prev_{};
@@ -88,6 +89,7 @@ class Watch {
   std::array<double, kAxisCount> release_{}, trigger_{};
   std::array<bool, kAxisCount> has_release_{}, has_trigger_{};
   std::array<Phase, kAxisCount> traced_{};
+  std::array<Phase, kAxisCount> phase_prev_{};
 };
 
 }  // namespace campaign
