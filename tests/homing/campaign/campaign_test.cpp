@@ -44,6 +44,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <array>
 #include <map>
 
 #include "replay.hpp"
@@ -67,10 +68,14 @@ TEST_CASE(kName, "[campaign]") {
   const bool survey = env_u64("HOMING_CAMPAIGN_SURVEY", 0) != 0;
   std::uint64_t homed = 0, refused = 0, unexpected = 0, failures = 0, periods = 0, passed_periods = 0;
   std::map<std::string, std::pair<std::uint64_t, std::uint64_t>> classes;  // what -> (count, first seed)
+  std::map<std::string, std::string> more_seeds;                          // what -> a few more seeds
   std::map<std::string, std::uint64_t> refusals;
+  std::array<std::uint64_t, campaign::act::kCount> acts{};
   for (std::uint64_t i = 0; i < runs; ++i) {
     const campaign::Outcome o = campaign::run_seed(first + i);
     periods += o.periods;
+    for (int k = 0; k < campaign::act::kCount; ++k)
+      if (o.acts & (1u << k)) ++acts[static_cast<std::size_t>(k)];
     if (o.ever_homed) ++homed;
     if (o.refused) ++refused;
     if (!o.unexpected_refusal.empty()) {
@@ -83,7 +88,7 @@ TEST_CASE(kName, "[campaign]") {
     }
     ++failures;
     auto [it, fresh] = classes.emplace(o.failure.what, std::make_pair(0, o.seed));
-    ++it->second.first;
+    if (++it->second.first > 1 && it->second.first <= 6) more_seeds[o.failure.what] += " " + std::to_string(o.seed);
     if (!survey) {
       // Printed whole: the story's lines are long, Catch would wrap them.
       std::printf("\n%s", campaign::report(o, kName).c_str());
@@ -100,8 +105,12 @@ TEST_CASE(kName, "[campaign]") {
                 static_cast<unsigned long long>(unexpected), static_cast<unsigned long long>(periods),
                 static_cast<unsigned long long>(runs > failures ? passed_periods / (runs - failures) : 0));
     for (const auto& [what, c] : classes)
-      std::printf("%6llu  first seed %-8llu %s\n", static_cast<unsigned long long>(c.first),
-                  static_cast<unsigned long long>(c.second), what.c_str());
+      std::printf("%6llu  first seed %-8llu %s   (also%s)\n", static_cast<unsigned long long>(c.first),
+                  static_cast<unsigned long long>(c.second), what.c_str(), more_seeds[what].c_str());
+    std::printf("runs that:");
+    for (int k = 0; k < campaign::act::kCount; ++k)
+      std::printf(" %s %llu;", campaign::act::name(k), static_cast<unsigned long long>(acts[static_cast<std::size_t>(k)]));
+    std::printf("\n");
     for (const auto& [why, seed] : refusals) std::printf("refused valid machine, seed %llu: %s\n", static_cast<unsigned long long>(seed), why.c_str());
   }
   INFO(runs << " runs: " << homed << " homed at least once, " << refused << " refused by the check");

@@ -267,7 +267,9 @@ struct Gen {
       // where it is when the master reaches its own.
       const double m_stop_f = std::min(mirror(dir, mc.hard_stop_min_mm), mirror(dir, mc.hard_stop_max_mm));
       const double rides = p.commutator ? (start_f - start_m_f) - (edge_f - edge_m_f) : 0.0;
-      in_f = edge_f - std::max(over + 1e-3, (edge_m_f - m_stop_f) - rides + d.u(-0.1, 0.1) * pd.misalignment);
+      // (Once square it no longer trails: the commutator slave's stop lies no nearer.)
+      const double jitter = d.u(p.commutator ? 0.0 : -0.1, 0.1) * pd.misalignment;
+      in_f = edge_f - std::max(over + 1e-3, (edge_m_f - m_stop_f) + std::max(0.0, -rides) + jitter);
     } else {
       const double m_in_f = std::min(mirror(dir, mc.hard_stop_min_mm), mirror(dir, mc.hard_stop_max_mm));
       in_f = std::min(in_f, m_in_f + (start_f - start_m_f) - slack - 5);

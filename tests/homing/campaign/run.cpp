@@ -160,6 +160,7 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
       if (!done[i] && r_.sim().time_s() - t0 >= events[i].at_s) {
         done[i] = true;
         apply(events[i], causes);
+        acts_ |= act::event_in_cycle;
       }
     if (button_periods > 0 && --button_periods == 0) r_.sim().set_start_button(false);
     const bool home_again = r_.pending.home_all;
@@ -181,7 +182,17 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
     say(o.str());
   }
   if (ok()) verdict(*w_, r_, m_, causes, cycles_before);
-  if (r_.status().state == MachineState::homed) ever_homed_ = true;
+  if (r_.status().state == MachineState::homed && w_->alarms_seen == 0 && ok()) {
+    ever_homed_ = true;
+    acts_ |= act::homed;
+    if (by_button) acts_ |= act::start_button_cycle;
+    if (++homed_cycles_ > 1) acts_ |= act::rehomed;
+    if (alarm_seen_) acts_ |= act::alarm_then_homed;
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if (m_.plan[a].role == Role::slave && (plan.covered & axis_bit(a)))
+        acts_ |= m_.plan[a].commutator ? act::homed_commutator_gantry : act::homed_software_gantry;
+  }
+  if (w_->alarms_seen) alarm_seen_ = true;
   w_->tampered = 0;
   return ok() && !r_.status().alarm && w_->alarms_seen == 0;
 }
@@ -288,6 +299,7 @@ void Run::exercise_motion() {
     settle(10);
     if (!outside && !r_.status().alarm && ok() && std::abs(r_.axis(a).position_mm - target) > 1e-9)
       w_->fail("a move did not arrive", std::to_string(r_.axis(a).position_mm) + " for " + std::to_string(target));
+    if (ok()) acts_ |= act::jog_and_move;
   }
   if (slave >= 0 && d_.chance(0.3) && !r_.status().alarm) {
     r_.move(static_cast<std::size_t>(slave), r_.axis(static_cast<std::size_t>(slave)).position_mm + 1);
@@ -360,6 +372,7 @@ void Run::hard_limit_recovery() {
   if (std::abs(r_.actual(a) - x1) <= 1e-9) w_->fail("a jog away from a tripped shared-limit sensor did not move the axis",
                                                    std::string(command_result_name(r_.status().last_command_result)));
   else if (!released || r_.status().alarm) w_->fail("a jog away from a tripped shared-limit sensor did not release it");
+  else acts_ |= act::hard_limit_recovered;
   w_->set_outside_movers(0);
 }
 
@@ -393,6 +406,8 @@ void Run::lost_steps() {
   if (r_.sim().axis_config(a).noise_mm == 0 && std::abs(r_.axis(a).home_correction_mm - lost) > tol)
     w_->fail("the home correction differs from the steps lost",
              std::to_string(r_.axis(a).home_correction_mm) + " for " + std::to_string(lost));
+  else if (r_.sim().axis_config(a).noise_mm == 0)
+    acts_ |= act::lost_steps_corrected;
 }
 
 void Run::follow_ups() {
@@ -448,12 +463,15 @@ void Run::jog_invalid_slave() {
   w_->set_outside_movers(movers);
   say(std::string("jog ") + kAxisUpper[mi] + ", which " + kAxisUpper[a] + " names as its master");
   r_.jog(mi, dir_of(r_.settings.axes[mi]) > 0 ? -1 : 1);
-  r_.run_for(0.2);
+  const double end = r_.sim().time_s() + 0.2;
+  while (r_.sim().time_s() < end && ok()) {
+    step();
+    if (std::abs(r_.actual(a) - x) > 1e-9)
+      w_->fail(std::string("a slave the configuration check refuses (") + invalid_name(v) + ") followed its master's jog");
+  }
   r_.release_jogs();
   settle(10);
   w_->set_outside_movers(0);
-  if (std::abs(r_.actual(a) - x) > 1e-9)
-    w_->fail(std::string("a slave the configuration check refuses (") + invalid_name(v) + ") followed its master's jog");
 }
 
 Outcome Run::run() {
@@ -482,6 +500,7 @@ Outcome Run::run() {
   out.log = log_.str();
   out.ever_homed = ever_homed_;
   out.periods = r_.periods;
+  out.acts = acts_;
   return out;
 }
 

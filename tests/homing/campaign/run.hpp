@@ -14,6 +14,28 @@
 
 namespace campaign {
 
+// What a run got to do (for the survey's coverage figures).
+namespace act {
+inline constexpr std::uint32_t homed = 1u << 0;
+inline constexpr std::uint32_t homed_software_gantry = 1u << 1;
+inline constexpr std::uint32_t homed_commutator_gantry = 1u << 2;
+inline constexpr std::uint32_t event_in_cycle = 1u << 3;
+inline constexpr std::uint32_t jog_and_move = 1u << 4;
+inline constexpr std::uint32_t hard_limit_recovered = 1u << 5;
+inline constexpr std::uint32_t lost_steps_corrected = 1u << 6;
+inline constexpr std::uint32_t start_button_cycle = 1u << 7;
+inline constexpr std::uint32_t rehomed = 1u << 8;
+inline constexpr std::uint32_t alarm_then_homed = 1u << 9;
+inline constexpr int kCount = 10;
+inline const char* name(int i) {
+  static const char* names[] = {"homed",           "homed a software-slaved gantry", "homed a commutator gantry",
+                                "event in a cycle", "jogged and moved",             "recovered from a hard-limit trip",
+                                "lost steps corrected", "cycle started by the button", "homed again",
+                                "homed after an alarm"};
+  return names[i];
+}
+}  // namespace act
+
 struct Outcome {
   std::uint64_t seed = 0;
   bool failed = false;
@@ -24,6 +46,7 @@ struct Outcome {
   bool refused = false;
   std::string unexpected_refusal;  // the check refused a machine generated to be valid
   std::uint64_t periods = 0;
+  std::uint32_t acts = 0;
 };
 
 class Run {
@@ -59,6 +82,9 @@ class Run {
   AxisMask encoder_invalid_ = 0;
   bool ever_homed_ = false;
   double last_cycle_s_ = 1;
+  std::uint32_t acts_ = 0;
+  int homed_cycles_ = 0;
+  bool alarm_seen_ = false;
 };
 
 Outcome run_seed(std::uint64_t seed);

@@ -119,7 +119,10 @@ void Watch::period() {
     fail("a start button held at power-up started home-all");
     powerup_started = true;
   }
-  if (in_window && refused && st.homing) fail("a cycle the configuration check refuses started");
+  if (in_window && refused && st.homing) {
+    fail("a cycle the configuration check refuses started");
+    refused = false;  // it runs: hold it to the rules of a running cycle from here
+  }
   for (std::size_t a = 0; a < kAxisCount; ++a) axis_period(a, engine_dt);
   if (!powerup_started) racking();
   alarm_prev_ = st.alarm;
@@ -166,7 +169,9 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
                        (dead_sensor & axis_bit(static_cast<std::size_t>(master)));
     if (pushing && (push_phase || (dead_sensor & bit) || rides)) pushed_to_stop_[a] = true;
     if (!(pushing && pushed_to_stop_[a]))
-      fail("a carriage ran into a mechanical stop", fmt_axis(a, r_, x));
+      fail(std::string("a carriage ran into a mechanical stop") +
+               (m_.plan[a].differs ? " (a slave whose own inherited fields differ)" : ""),
+           fmt_axis(a, r_, x));
   } else {
     pushed_to_stop_[a] = false;
   }
@@ -240,6 +245,7 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
       std::ostringstream o;
       o << fmt_axis(a, r_, x) << "; the truth is " << pos_eng;
       fail("a homed axis's coordinate drifted from the truth", o.str());
+      truth[a].valid = false;
     }
     const double pos = x + truth[a].offset;
     const double tol = truth[a].tol + 1e-6;
@@ -266,12 +272,24 @@ void Watch::racking() {
     const double limit = in_window ? r_.settings.axes[s].max_misalignment_mm + 1e-3 +
                                          mm_per_min_to_mm_per_s(ms.seek_feedrate_mm_per_min) * m_.max_dt_s
                                    : 1e-6;
+    // Locked and homed, both sides have the same machine position (each was
+    // assigned the master's home position at its own rest point).
+    const AxisStatus& ss = r_.status().axes[s];
+    const AxisStatus& ms_st = r_.status().axes[mi];
+    if (!in_window && ss.homed && ms_st.homed && truth[s].valid && truth[mi].valid &&
+        std::abs(ss.position_mm - ms_st.position_mm) > truth[s].tol + truth[mi].tol + 1e-6) {
+      std::ostringstream o;
+      o << "slave " << kAxisUpper[s] << " at " << ss.position_mm << ", master " << kAxisUpper[mi] << " at "
+        << ms_st.position_mm;
+      fail("a locked gantry's two sides disagree on their machine position", o.str());
+    }
     if (dev > limit) {
       std::ostringstream o;
       o << "slave " << kAxisUpper[s] << " vs master " << kAxisUpper[mi] << ": " << dev << " from "
         << (in_window ? "where the cycle started" : "where the pair was locked") << ", allowed " << limit << "; "
         << fmt_axis(mi, r_, r_.actual(mi)) << "; " << fmt_axis(s, r_, r_.actual(s));
-      const std::string topology = r_.settings.axes[s].slave_mode == SlaveMode::external_commutator ? " (external commutator)" : " (software-slaved)";
+      std::string topology = r_.settings.axes[s].slave_mode == SlaveMode::external_commutator ? " (external commutator" : " (software-slaved";
+      topology += m_.plan[s].differs ? ", the slave's own inherited fields differ)" : ")";
       fail((in_window ? "a gantry racked beyond its max misalignment" : "a locked gantry racked outside a cycle") + topology, o.str());
     }
   }
@@ -356,6 +374,7 @@ void Watch::on_flip(std::size_t a, double x) {
     kind += std::string(mode_name(e.mode));
     if (m_.plan[a].differs) kind += ", its own inherited fields differ";
     fail("homed with a coordinate other than its mode defines (" + kind + ")", o.str());
+    truth[a].valid = false;  // one failure, not one per period after it
   }
 }
 
