@@ -29,17 +29,23 @@
 //     the encoder; manual and unsequenced: the home position where it stood);
 //   - a reset after a hard-limit trip is taken and only a jog away moves.
 //
-// Run count: HOMING_CAMPAIGN_RUNS (default 2000: about a minute in a
+// Run count: HOMING_CAMPAIGN_RUNS (default 2000: some 40 s in a
 // RelWithDebInfo build on the 2-core machine); first seed: HOMING_CAMPAIGN_SEED
 // (default 1); run i uses seed first + i. The first failure stops the
 // campaign and prints its seed, the machine as a story, what the script did,
 // and the command that replays it; replay_seed(seed) (replay.hpp) turns it
-// into a named scenario. HOMING_CAMPAIGN_SURVEY=1 runs on past failures and
-// prints each distinct failure with its first seed.
+// into a named scenario (replays_test.cpp). HOMING_CAMPAIGN_TRACE=1 prints
+// every phase change of a replayed run. HOMING_CAMPAIGN_SURVEY=1 runs on past
+// failures and prints each distinct failure with its first seeds, the
+// coverage (how many runs homed a gantry, recovered from a hard-limit trip...)
+// and the settings the check refused although generated valid;
+// HOMING_CAMPAIGN_IGNORE="class|class" leaves failures whose class contains
+// one of these uncounted, to see past a known bug.
 //
-// Before a release, run a long campaign from a fresh seed, e.g.
+// Before a release, run a long campaign from a fresh seed (about 20 ms a
+// run: a million runs is some six hours on one core; split it over cores
+// with disjoint seed ranges), e.g.
 //   HOMING_CAMPAIGN_RUNS=1000000 HOMING_CAMPAIGN_SEED=$RANDOM$RANDOM build/bin/homing_tests "[campaign]"
-// (several hours; split it over cores with disjoint seed ranges).
 #include <catch2/catch.hpp>
 
 #include <cstdio>
@@ -58,7 +64,7 @@ std::uint64_t env_u64(const char* name, std::uint64_t fallback) {
   return std::strtoull(v, nullptr, 10);
 }
 
-constexpr const char* kName = "the campaign: random machines over the whole configuration space";
+constexpr const char* kName = campaign::kTestName;
 
 }  // namespace
 

@@ -51,7 +51,7 @@ void Run::power_up() {
   step();
   w_->powering_up = false;
   // An engine that (wrongly) judged a command at power-up: put the machine back.
-  if (w_->powerup_started) {
+  if (w_->powerup_started && ok()) {
     r_.pending.abort = true;
     step();
     settle(10);

@@ -14,6 +14,10 @@
 
 namespace campaign {
 
+// The campaign's TEST_CASE: a seed replays with
+//   HOMING_CAMPAIGN_SEED=<seed> HOMING_CAMPAIGN_RUNS=1 build/bin/homing_tests "<kTestName>"
+inline constexpr const char* kTestName = "the campaign: random machines over the whole configuration space";
+
 // What a run got to do (for the survey's coverage figures).
 namespace act {
 inline constexpr std::uint32_t homed = 1u << 0;
@@ -89,6 +93,6 @@ class Run {
 
 Outcome run_seed(std::uint64_t seed);
 // A failed run told for a reader: the failure, how to replay it, the machine, the script.
-std::string report(const Outcome& o, const char* test_name);
+std::string report(const Outcome& o, const char* test_name = kTestName);
 
 }  // namespace campaign
