@@ -9,7 +9,13 @@ void Run::exercise_motion() {
   std::vector<std::size_t> cand;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const AxisSettings e = effective(r_.settings, a);
-    if (master_index(r_.settings, a) < 0 && homed_axis(a) && e.soft_limits_enable && e.mode != HomingMode::disabled)
+    // Not one standing on its tripped shared-limit sensor: only a jog away is its to make.
+    const int sl = slave_index(r_.settings, a);
+    const bool on_limit = (r_.settings.axes[a].shared_limit && r_.axis(a).sensor) ||
+                          (sl >= 0 && r_.settings.axes[static_cast<std::size_t>(sl)].shared_limit &&
+                           r_.axis(static_cast<std::size_t>(sl)).sensor);
+    if (master_index(r_.settings, a) < 0 && homed_axis(a) && e.soft_limits_enable && e.mode != HomingMode::disabled &&
+        !on_limit)
       cand.push_back(a);
   }
   if (cand.empty() || r_.status().alarm) return;
@@ -58,7 +64,8 @@ void Run::hard_limit_recovery() {
   std::vector<std::size_t> cand;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const AxisSettings e = effective(r_.settings, a);
-    if (master_index(r_.settings, a) < 0 && homed_axis(a) && r_.settings.axes[a].shared_limit && !mode_is_pushing(e.mode))
+    if (master_index(r_.settings, a) < 0 && homed_axis(a) && r_.settings.axes[a].shared_limit && !mode_is_pushing(e.mode) &&
+        !r_.axis(a).sensor)
       cand.push_back(a);
   }
   if (cand.empty() || r_.status().alarm) return;
