@@ -1,0 +1,31 @@
+#pragma once
+// The campaign's only source of randomness: one generator per purpose, each
+// seeded from the run's seed, so a seed repeats a run exactly.
+#include <cstddef>
+#include <cstdint>
+#include <initializer_list>
+#include <random>
+
+namespace campaign {
+
+class Dice {
+ public:
+  Dice(std::uint64_t seed, std::uint32_t stream) {
+    std::seed_seq seq{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32), stream};
+    rng_.seed(seq);
+  }
+  double u(double lo, double hi) { return lo >= hi ? lo : std::uniform_real_distribution<double>(lo, hi)(rng_); }
+  bool chance(double p) { return u(0, 1) < p; }
+  int integer(int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng_); }
+  double sign() { return chance(0.5) ? 1.0 : -1.0; }
+  template <class T>
+  T pick(std::initializer_list<T> items) {
+    const auto i = std::uniform_int_distribution<std::size_t>(0, items.size() - 1)(rng_);
+    return *(items.begin() + static_cast<std::ptrdiff_t>(i));
+  }
+
+ private:
+  std::mt19937_64 rng_;
+};
+
+}  // namespace campaign

@@ -1,0 +1,379 @@
+// Builds one random machine from a seed. Positions are drawn in a "frame"
+// where the axis homes toward negative (the sensor's cam lies below its edge,
+// the carriage starts above it), then mirrored for an axis homing positive.
+#include <algorithm>
+#include <cmath>
+
+#include "gen.hpp"
+#include "homing/motion.hpp"
+
+namespace campaign {
+namespace gen {
+
+double Gen::overshoot(const AxisSettings& s) const {
+  const double v = mm_per_min_to_mm_per_s(s.seek_feedrate_mm_per_min);
+  return s.max_stop_distance_mm + v * m.max_dt_s + 1e-3;
+}
+
+void Gen::draw_motion(AxisSettings& s, sim::AxisConfig& c, const PairDraw& pd) {
+  s.direction = d.chance(0.5) ? Direction::negative : Direction::positive;
+  double seek_v = d.u(5, 40);
+  double jog_v = d.u(2, 20);
+  s.acceleration_mm_per_s2 = d.u(100, 2000);
+  const double a_pair = std::min(s.acceleration_mm_per_s2, pd.accel);
+  if (pd.pair) {
+    // A gantry stops from seek and jog feedrate within its misalignment.
+    const double v_cap = std::sqrt(2 * a_pair * pd.misalignment * 0.7);
+    seek_v = std::min(seek_v, v_cap);
+    jog_v = std::min(jog_v, v_cap);
+  }
+  const double latch_v = d.u(std::min(0.5, seek_v / 3), std::min(5.0, seek_v / 2));
+  s.seek_feedrate_mm_per_min = per_min(seek_v);
+  s.latch_feedrate_mm_per_min = per_min(latch_v);
+  s.jog_feedrate_mm_per_min = per_min(jog_v);
+  s.debounce_ms = d.chance(0.5) ? 0 : d.u(0, 4);
+  c.bounce_ms = s.debounce_ms > 1 && d.chance(0.5) ? d.u(0, s.debounce_ms * 0.9) : 0;
+  const double debounce = std::max(s.debounce_ms, pd.debounce_ms);
+  const double bounce = std::max(c.bounce_ms, pd.bounce_ms);
+  const double needed = stop_distance_mm(seek_v, a_pair) + seek_v * debounce / 1000;
+  s.max_stop_distance_mm = (needed + seek_v * bounce / 1000) * d.u(1.0, 3.0) + d.u(0, 0.1);
+  c.hysteresis_mm = d.u(0, 0.2);
+  c.noise_mm = d.chance(0.5) ? 0 : d.u(0, 0.01);
+  s.sensor_nc = c.sensor_nc = d.chance(0.3);
+  const double hyst = std::max(c.hysteresis_mm, pd.hysteresis);
+  s.max_backoff_mm = overshoot(s) + hyst + 0.1 + d.u(0.5, 5);
+  s.pull_off_mm = d.chance(0.2) ? 0 : d.u(0.1, 3);
+  s.home_position_mm = d.u(-10, 10);
+  s.pre_move_mode = d.pick({PreMove::none, PreMove::if_sensor_active, PreMove::always});
+  s.pre_move_distance_mm = d.u(0.5, 5);
+  s.push_distance_mm = d.u(0.3, 3);
+  s.index_pitch_mm = d.u(1, 5);
+  if (mode_is_pushing(s.mode)) s.max_backoff_mm += s.push_distance_mm;
+}
+
+double Gen::reference_f(const AxisSettings& e, const sim::AxisConfig& c, double edge_f, double index_r) {
+  if (mode_reapproaches(e.mode)) return edge_f;
+  const double release = edge_f + c.hysteresis_mm;
+  return e.mode == HomingMode::switch_index ? release + index_r : release;
+}
+
+void Gen::place_index(sim::AxisConfig& c, double dir, double pitch, double release_f, double index_r) {
+  c.index_pitch_mm = pitch;
+  c.index_offset_mm = mirror(dir, release_f + index_r);
+}
+
+void Gen::set_cam(std::size_t a, double dir, double edge_f, double cam_len, double start_f) {
+  sim::AxisConfig& c = m.sim.axes[a];
+  const double p = mirror(dir, edge_f), q = mirror(dir, edge_f - cam_len);
+  c.sensor_min_mm = std::min(p, q);
+  c.sensor_max_mm = std::max(p, q);
+  c.actual_position_mm = mirror(dir, start_f);
+  m.plan[a].cam_edge_mm = p;
+}
+
+void Gen::set_stops(std::size_t a, double dir, double in_f, double out_f) {
+  sim::AxisConfig& c = m.sim.axes[a];
+  c.hard_stop_min_mm = std::min(mirror(dir, in_f), mirror(dir, out_f));
+  c.hard_stop_max_mm = std::max(mirror(dir, in_f), mirror(dir, out_f));
+}
+
+double Gen::limits(AxisSettings& s, double hyst, bool shared, double room_max, double& far_away) {
+  const double dir = dir_of(s);
+  const bool pushing = mode_is_pushing(s.mode);
+  double sensor_room = pushing ? d.u(0, s.pull_off_mm + hyst) : d.u(0.5, 30);
+  if (shared) sensor_room = d.chance(0.7) ? s.pull_off_mm + hyst + d.u(1, 10) : d.u(0, s.pull_off_mm * 0.5);
+  sensor_room = std::min(sensor_room, std::max(room_max, 0.0));
+  const double away_room = d.u(0.5, 30);
+  s.soft_limits_enable = d.chance(0.5);
+  s.final_move_enable = d.chance(0.3);
+  double final_away = d.u(-20, 20);
+  if (pushing || shared) final_away = d.u(0, 20);
+  final_away = std::max(final_away, -std::max(room_max, 0.0));
+  if (s.soft_limits_enable) final_away = std::clamp(final_away, -sensor_room, away_room);
+  // Machine coordinates: away from the sensor is -dir.
+  const double lim_a = s.home_position_mm - dir * away_room, lim_b = s.home_position_mm + dir * sensor_room;
+  s.soft_limit_min_mm = std::min(lim_a, lim_b);
+  s.soft_limit_max_mm = std::max(lim_a, lim_b);
+  s.final_position_mm = s.home_position_mm - dir * final_away;
+  far_away = std::max({0.0, s.final_move_enable ? final_away : 0.0, s.soft_limits_enable ? away_room : 0.0});
+  return sensor_room;
+}
+
+void Gen::place_switch(std::size_t a, double hyst_pair, double slack, bool shared, double& index_r) {
+  AxisSettings& s = m.settings.axes[a];
+  sim::AxisConfig& c = m.sim.axes[a];
+  const double dir = dir_of(s);
+  const double over = overshoot(s);
+  const double hyst = std::max(c.hysteresis_mm, hyst_pair);
+  s.max_backoff_mm += slack;
+  const double edge_f = d.u(-50, 50);
+  const double cam_len = over + hyst + 2 * slack + d.u(0.5, 30);
+  // Off the sensor by more than a slave's start may differ from this one's.
+  double gap = d.u(0.5, 25) + slack;
+  const bool pushing = mode_is_pushing(s.mode);
+  if (!pushing && d.chance(0.15)) {
+    const double depth_room = std::min(cam_len, s.max_backoff_mm - hyst - slack - 0.2) * 0.8;
+    if (depth_room > 0.05) gap = -d.u(0, depth_room);
+  }
+  index_r = s.index_pitch_mm * d.u(0.15, 0.85);
+  if (s.mode == HomingMode::switch_index) place_index(c, dir, s.index_pitch_mm, edge_f + c.hysteresis_mm, index_r);
+  const double start_f = edge_f + gap;
+  const double rest_f = reference_f(s, c, edge_f, index_r) + s.pull_off_mm;
+  double far_away = 0;
+  const double depth_max = std::min(cam_len - 1, 0.8 * (s.max_backoff_mm - hyst - slack - 0.2));
+  const double sensor_room = limits(s, hyst, shared, rest_f - edge_f + depth_max, far_away);
+  // The seek must reach the sensor from wherever a cycle may start: where a
+  // final move, a jog or lost steps (3 mm) left it, from the rest point or
+  // from the start (an unsequenced axis is assigned where it stands).
+  const double farthest = std::max(gap, rest_f - edge_f) + far_away + 3;
+  s.max_seek_travel_mm = std::max(farthest, 0.0) + s.pre_move_distance_mm + over + slack + d.u(1, 20);
+  set_cam(a, dir, edge_f, cam_len, start_f);
+  const double in_f = pushing ? edge_f - over - d.u(0, s.push_distance_mm * 0.8) - 1e-3
+                              : std::min(edge_f - (std::abs(gap) + s.max_seek_travel_mm + over + 5),
+                                         rest_f - sensor_room - 60);
+  const double out_f = std::max(start_f, rest_f + far_away) + s.pre_move_distance_mm + s.max_backoff_mm + 120;
+  set_stops(a, dir, in_f, out_f);
+  m.plan[a].start_gap_mm = gap;
+}
+
+void Gen::still_axis(std::size_t a) {
+  AxisSettings& s = m.settings.axes[a];
+  sim::AxisConfig& c = m.sim.axes[a];
+  draw_motion(s, c, PairDraw{});
+  const double start = d.u(-50, 50);
+  c.actual_position_mm = start;
+  c.sensor_min_mm = start + d.u(200, 300);
+  c.sensor_max_mm = c.sensor_min_mm + 10;
+  c.hard_stop_min_mm = start - 200;
+  c.hard_stop_max_mm = start + 500;
+  c.absolute_offset_mm = 2 * s.home_position_mm - start + d.u(-5, 5);
+  s.final_move_enable = d.chance(0.3);
+  s.final_position_mm = s.home_position_mm + d.u(-20, 20);
+  s.soft_limits_enable = s.mode == HomingMode::manual && d.chance(0.5);
+  s.soft_limit_min_mm = std::min(s.home_position_mm, s.final_position_mm) - d.u(0.5, 30);
+  s.soft_limit_max_mm = std::max(s.home_position_mm, s.final_position_mm) + d.u(0.5, 30);
+  if (s.mode == HomingMode::absolute_final) {
+    // The final move starts from what the encoder says.
+    const double machine_now = start + c.absolute_offset_mm - s.home_position_mm;
+    s.final_position_mm = machine_now + d.u(-20, 20);
+  }
+}
+
+void Gen::place_slave(std::size_t si, std::size_t mi, const PairDraw& pd, double budget, double slack,
+                      double master_index_r) {
+  const AxisSettings& ms = m.settings.axes[mi];
+  const sim::AxisConfig& mc = m.sim.axes[mi];
+  AxisSettings& s = m.settings.axes[si];
+  sim::AxisConfig& c = m.sim.axes[si];
+  AxisPlan& p = m.plan[si];
+  const AxisSettings own = s;  // the slave's own values, drawn before the master's
+  p.differs = d.chance(0.5);
+  if (p.differs) {
+    draw_motion(s, c, PairDraw{});
+    s.mode = d.pick({HomingMode::manual, HomingMode::switch_release, HomingMode::switch_reapproach,
+                     HomingMode::switch_index, HomingMode::absolute, HomingMode::absolute_final,
+                     HomingMode::pushing_release, HomingMode::pushing_reapproach});
+    s.max_seek_travel_mm = d.u(1, 300);
+    s.soft_limits_enable = d.chance(0.5);
+    s.soft_limit_min_mm = d.u(-100, 0);
+    s.soft_limit_max_mm = d.u(0, 100);
+    s.final_move_enable = d.chance(0.5);
+    s.final_position_mm = d.u(-50, 50);
+  } else {
+    s = ms;
+  }
+  s.acceleration_mm_per_s2 = pd.accel;
+  s.debounce_ms = pd.debounce_ms;
+  s.max_misalignment_mm = pd.misalignment;
+  s.slave_of = static_cast<std::uint8_t>(mi + 1);
+  s.slave_mode = p.commutator ? SlaveMode::external_commutator : SlaveMode::own_output;
+  s.sensor_nc = own.sensor_nc;
+  s.pull_off_mm = own.pull_off_mm;
+  s.switch_compensation_mm = own.switch_compensation_mm;
+  s.shared_limit = own.shared_limit;
+  c = sim::AxisConfig{};
+  c.bounce_ms = pd.bounce_ms;
+  c.hysteresis_mm = pd.hysteresis;
+  c.noise_mm = d.chance(0.5) ? 0 : d.u(0, 0.01);
+  c.sensor_nc = s.sensor_nc;
+  if (p.commutator) m.sim.commutator_slave[mi] = static_cast<int>(si);
+
+  const AxisSettings e = effective(m.settings, si);
+  const double dir = dir_of(ms);
+  const double edge_m_f = mirror(dir, m.plan[mi].cam_edge_mm);
+  const double edge_f = edge_m_f + d.u(-20, 20);
+  const double over = overshoot(ms);
+  const double cam_len = over + pd.hysteresis + 2 * slack + d.u(0.5, 30);
+  double index_r = master_index_r;
+  if (ms.mode == HomingMode::switch_index) {
+    index_r = std::clamp(master_index_r + d.u(-0.1, 0.1) * budget, 0.1 * ms.index_pitch_mm, 0.9 * ms.index_pitch_mm);
+    place_index(c, dir, ms.index_pitch_mm, edge_f + c.hysteresis_mm, index_r);
+  }
+  const double start_m_f = mirror(dir, mc.actual_position_mm);
+  const double rest_m_f = reference_f(ms, mc, edge_m_f, master_index_r) + ms.pull_off_mm;
+  const double rest_f = reference_f(e, c, edge_f, index_r) + e.pull_off_mm + e.switch_compensation_mm;
+  p.skew_mm = p.bad_skew ? d.sign() * (1.3 * pd.misalignment + budget + d.u(0.3, 3)) : d.u(-1, 1) * budget;
+  if (p.commutator && mode_is_pushing(ms.mode)) {
+    // Trailing: the slave starts further from its edge than the master from its own.
+    const double lead = (reference_f(e, c, edge_f, index_r) - edge_f) - (reference_f(ms, mc, edge_m_f, master_index_r) - edge_m_f);
+    p.skew_mm = std::min(0.0, lead) - std::abs(p.skew_mm);
+  }
+  const double start_f = start_m_f + (rest_f - rest_m_f) - p.skew_mm;
+  p.rest_rel_mm = mirror(dir, rest_f) - mirror(dir, rest_m_f);
+  p.budget_mm = budget;
+  set_cam(si, dir, edge_f, cam_len, start_f);
+  p.start_gap_mm = start_f - edge_f;
+  double in_f = edge_f - (std::abs(p.start_gap_mm) + ms.max_seek_travel_mm + over + 2 * slack + 5);
+  if (mode_is_pushing(ms.mode)) {
+    // The slave's stop about as far behind its sensor as the master's. With
+    // a commutator the slave rides on the master's output: its stop lies
+    // where it is when the master reaches its own.
+    const double m_stop_f = std::min(mirror(dir, mc.hard_stop_min_mm), mirror(dir, mc.hard_stop_max_mm));
+    const double rides = p.commutator ? (start_f - start_m_f) - (edge_f - edge_m_f) : 0.0;
+    // (Once square it no longer trails: the commutator slave's stop lies no nearer.)
+    const double jitter = d.u(p.commutator ? 0.0 : -0.1, 0.1) * pd.misalignment;
+    in_f = edge_f - std::max(over + 1e-3, (edge_m_f - m_stop_f) + std::max(0.0, -rides) + jitter);
+  } else {
+    const double m_in_f = std::min(mirror(dir, mc.hard_stop_min_mm), mirror(dir, mc.hard_stop_max_mm));
+    in_f = std::min(in_f, m_in_f + (start_f - start_m_f) - slack - 5);
+  }
+  const double m_out_f = std::max(mirror(dir, mc.hard_stop_min_mm), mirror(dir, mc.hard_stop_max_mm));
+  const double out_f = std::max(start_f + ms.pre_move_distance_mm + ms.max_backoff_mm + 120,
+                                m_out_f + (start_f - start_m_f) + slack + 5);
+  set_stops(si, dir, in_f, out_f);
+}
+
+void Gen::gantry(std::size_t mi, std::size_t si, bool commutator) {
+  PairDraw pd;
+  pd.pair = true;
+  pd.accel = d.u(100, 2000);
+  pd.debounce_ms = d.chance(0.5) ? 0 : d.u(0, 4);
+  pd.bounce_ms = pd.debounce_ms > 1 && d.chance(0.5) ? d.u(0, pd.debounce_ms * 0.9) : 0;
+  pd.hysteresis = d.u(0, 0.2);
+  pd.misalignment = d.u(0.5, 5);
+  AxisPlan& mp = m.plan[mi];
+  AxisPlan& sp = m.plan[si];
+  mp.role = Role::master;
+  sp.role = Role::slave;
+  mp.partner = static_cast<int>(si);
+  sp.partner = static_cast<int>(mi);
+  mp.commutator = sp.commutator = commutator;
+  sp.bad_skew = d.chance(0.2);
+  AxisSettings& ms = m.settings.axes[mi];
+  AxisSettings& ss = m.settings.axes[si];
+  ms.mode = commutator ? d.pick({HomingMode::switch_release, HomingMode::switch_reapproach,
+                                 HomingMode::pushing_release, HomingMode::pushing_reapproach})
+                       : d.pick({HomingMode::switch_release, HomingMode::switch_reapproach,
+                                 HomingMode::switch_index, HomingMode::pushing_release,
+                                 HomingMode::pushing_reapproach});
+  const bool pushing = mode_is_pushing(ms.mode);
+  ms.shared_limit = !pushing && d.chance(0.2);
+  ss = AxisSettings{};
+  ss.shared_limit = !pushing && d.chance(0.2);
+  ss.sensor_nc = d.chance(0.3);
+  ss.switch_compensation_mm = d.chance(0.5) ? 0 : d.u(-0.5, 0.5);
+  draw_motion(ms, m.sim.axes[mi], pd);
+  if (ms.shared_limit && mode_reapproaches(ms.mode)) ms.pull_off_mm = std::max(ms.pull_off_mm, 0.35);
+  ss.pull_off_mm = d.chance(0.2) ? 0 : d.u(0.1, 3);
+  if (ss.shared_limit && mode_reapproaches(ms.mode)) ss.pull_off_mm = std::max(ss.pull_off_mm, 0.35);
+  if (commutator && pushing) {
+    // Riding on the master's output into the stops, the slave must not get
+    // ahead of it: same rest offset from its edge, and a skew that trails.
+    if (ms.pull_off_mm - ss.switch_compensation_mm < 0) ss.switch_compensation_mm = 0;
+    ss.pull_off_mm = ms.pull_off_mm - ss.switch_compensation_mm;
+  }
+  // What the geometry needs on top of the skew: both sensors' hysteresis,
+  // the pull-off and compensation difference, the stops' spread when
+  // pushing, and for a commutator the slave's search back over the
+  // master's pull-off past its own edge and its stop.
+  const double seek_v = mm_per_min_to_mm_per_s(ms.seek_feedrate_mm_per_min);
+  const double a_pair = std::min(ms.acceleration_mm_per_s2, pd.accel);
+  double extras = 2 * 0.2 + 0.05 + std::abs(ss.pull_off_mm + ss.switch_compensation_mm - ms.pull_off_mm);
+  if (commutator) extras += ms.pull_off_mm + stop_distance_mm(seek_v, a_pair) + seek_v * m.max_dt_s + 0.2;
+  // Widen the limit rather than squeeze the geometry.
+  if (extras > 0.5 * pd.misalignment) pd.misalignment = extras / 0.5 * d.u(1.0, 1.5);
+  if (pushing) extras += 0.2 * pd.misalignment;
+  const double budget = std::max(0.0, 0.6 * pd.misalignment - extras);
+  const double slack = budget + extras + (sp.bad_skew ? 1.3 * pd.misalignment + budget + 3 : 0);
+  double index_r = 0;
+  place_switch(mi, pd.hysteresis, slack, ms.shared_limit || ss.shared_limit, index_r);
+  place_slave(si, mi, pd, budget, slack, index_r);
+  sp.extras_mm = 2 * 0.2 + 0.05;
+}
+
+void Gen::roles_and_modes() {
+  std::array<std::size_t, kAxisCount> order{0, 1, 2, 3, 4, 5};
+  for (std::size_t i = kAxisCount - 1; i > 0; --i) std::swap(order[i], order[static_cast<std::size_t>(d.integer(0, static_cast<int>(i)))]);
+  const int pairs = d.chance(0.4) ? 0 : (d.chance(0.75) ? 1 : 2);
+  std::size_t next = 0;
+  for (int p = 0; p < pairs; ++p) {
+    const std::size_t mi = order[next++], si = order[next++];
+    gantry(mi, si, d.chance(0.4));
+  }
+  for (; next < kAxisCount; ++next) {
+    const std::size_t a = order[next];
+    AxisSettings& s = m.settings.axes[a];
+    s.mode = d.pick({HomingMode::disabled, HomingMode::manual, HomingMode::switch_release,
+                     HomingMode::switch_release, HomingMode::switch_reapproach, HomingMode::switch_reapproach,
+                     HomingMode::switch_index, HomingMode::absolute, HomingMode::absolute_final,
+                     HomingMode::pushing_release, HomingMode::pushing_reapproach});
+    if (mode_uses_switch(s.mode)) {
+      s.shared_limit = !mode_is_pushing(s.mode) && d.chance(0.25);
+      draw_motion(s, m.sim.axes[a], PairDraw{});
+      if (s.shared_limit && mode_reapproaches(s.mode)) {
+        // Resting off the sensor needs a pull-off beyond the release hysteresis.
+        const auto& c = m.sim.axes[a];
+        s.pull_off_mm = std::max(s.pull_off_mm, c.hysteresis_mm + 4 * c.noise_mm + 0.1);
+      }
+      double r = 0;
+      place_switch(a, 0, 0, s.shared_limit, r);
+    } else {
+      still_axis(a);
+    }
+  }
+}
+
+void Gen::sequence() {
+  auto& steps = m.settings.global.sequence_steps;
+  steps.fill(0);
+  const int n = d.integer(1, 6);
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const AxisSettings& s = m.settings.axes[a];
+    const auto step = [&] { return static_cast<std::size_t>(d.integer(0, n - 1)); };
+    if (m.plan[a].role == Role::slave) {
+      if (d.chance(0.3)) steps[step()] |= axis_bit(a);  // ignored
+      continue;
+    }
+    if (s.mode == HomingMode::disabled) {
+      if (d.chance(0.3)) steps[step()] |= axis_bit(a);
+      continue;
+    }
+    if (d.chance(0.12)) continue;  // unsequenced
+    steps[step()] |= axis_bit(a);
+    if (d.chance(0.05)) steps[step()] |= axis_bit(a);
+  }
+}
+
+Machine Gen::build() {
+  m.max_dt_s = d.chance(0.3) ? 0.002 : d.u(0.005, 0.010);
+  for (auto& c : m.sim.axes) c = sim::AxisConfig{};
+  roles_and_modes();
+  sequence();
+  GlobalSettings& g = m.settings.global;
+  g.alarm_clears_homed = d.chance(0.5);
+  g.allowed_without_homing = d.chance(0.85) ? AllowedWithoutHoming::all : AllowedWithoutHoming::jog_reduced;
+  g.permit_required = d.chance(0.2);
+  m.sim.seed = m.seed;
+  causes();
+  events();
+  m.start_held_at_powerup = d.chance(0.15);
+  m.powerup_periods = d.integer(1, 50);
+  m.start_by_button = d.chance(0.25);
+  return m;
+}
+
+}  // namespace gen
+
+Machine generate(std::uint64_t seed) { return gen::Gen(seed).build(); }
+
+}  // namespace campaign

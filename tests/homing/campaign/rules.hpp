@@ -1,0 +1,155 @@
+#pragma once
+// The rules the campaign holds the engine to, written once: what an axis homes
+// with (a slave: its master's motion settings, its own sensor settings), which
+// axes a cycle covers, in which step, and which may move.
+#include <array>
+#include <cstddef>
+#include <optional>
+
+#include "homing/settings.hpp"
+#include "homing/settings_check.hpp"
+
+namespace campaign {
+
+using namespace homing;
+
+// -1 when the axis is not a slave (or names no axis), else its master.
+inline int master_index(const Settings& s, std::size_t a) {
+  const int m = master_of(s.axes[a]);
+  return m >= 0 && m < static_cast<int>(kAxisCount) && m != static_cast<int>(a) ? m : -1;
+}
+
+// The slave of master m, or -1.
+inline int slave_index(const Settings& s, std::size_t m) {
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (master_index(s, a) == static_cast<int>(m)) return static_cast<int>(a);
+  return -1;
+}
+
+inline int partner_index(const Settings& s, std::size_t a) {
+  const int m = master_index(s, a);
+  return m >= 0 ? m : slave_index(s, a);
+}
+
+// The settings an axis homes, jogs and moves with. A slave takes its master's
+// motion settings and keeps its own sensor settings, pull-off, compensation,
+// misalignment and shared limit; the pair moves with the lower acceleration.
+inline AxisSettings effective(const Settings& s, std::size_t a) {
+  AxisSettings e = s.axes[a];
+  const int p = partner_index(s, a);
+  if (p < 0) return e;
+  const int m = master_index(s, a);
+  if (m >= 0) {
+    const AxisSettings& own = s.axes[a];
+    e = s.axes[static_cast<std::size_t>(m)];
+    e.sensor_nc = own.sensor_nc;
+    e.debounce_ms = own.debounce_ms;
+    e.pull_off_mm = own.pull_off_mm;
+    e.switch_compensation_mm = own.switch_compensation_mm;
+    e.max_misalignment_mm = own.max_misalignment_mm;
+    e.shared_limit = own.shared_limit;
+    e.slave_of = own.slave_of;
+    e.slave_mode = own.slave_mode;
+  }
+  e.acceleration_mm_per_s2 =
+      std::min(s.axes[a].acceleration_mm_per_s2, s.axes[static_cast<std::size_t>(p)].acceleration_mm_per_s2);
+  return e;
+}
+
+inline bool final_move_wanted(const AxisSettings& e) {
+  return e.mode == HomingMode::absolute_final ||
+         (e.final_move_enable && e.mode != HomingMode::absolute && e.mode != HomingMode::disabled);
+}
+
+inline double dir_of(const AxisSettings& e) { return e.direction == Direction::positive ? 1.0 : -1.0; }
+
+// Fields a slave takes from its master: its own values there must be ignored.
+inline bool inherited_field(AxisField f) {
+  switch (f) {
+    case AxisField::mode:
+    case AxisField::direction:
+    case AxisField::seek_feedrate:
+    case AxisField::latch_feedrate:
+    case AxisField::max_seek_travel:
+    case AxisField::max_stop_distance:
+    case AxisField::max_backoff:
+    case AxisField::home_position:
+    case AxisField::final_position:
+    case AxisField::final_move_enable:
+    case AxisField::pre_move_mode:
+    case AxisField::pre_move_distance:
+    case AxisField::push_distance:
+    case AxisField::index_pitch:
+    case AxisField::soft_limit_min:
+    case AxisField::soft_limit_max:
+    case AxisField::soft_limits_enable:
+    case AxisField::jog_feedrate:
+      return true;
+    default:
+      return false;
+  }
+}
+
+// The configuration check as a whole (it is growing from a per-axis check
+// into a whole-settings check): the first refusal, if any.
+inline std::optional<SettingsFault> check_settings(const Settings& s) {
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (auto f = check_axis(s, a)) return f;
+  return std::nullopt;
+}
+
+// What one cycle covers.
+struct CyclePlan {
+  bool all = false;
+  AxisMask covered = 0;      // home in a sequence step (with or without motion)
+  AxisMask unsequenced = 0;  // assigned at the end of a home-all, without motion
+  AxisMask movers = 0;       // may move during the cycle
+  std::array<int, kAxisCount> step{};  // 1..6 for covered axes, 0 otherwise
+};
+
+inline bool moves_when_homing(const Settings& s, std::size_t a) {
+  const AxisSettings e = effective(s, a);
+  return mode_uses_switch(e.mode) || final_move_wanted(e);
+}
+
+inline CyclePlan plan_cycle(const Settings& s, bool all, AxisMask requested) {
+  CyclePlan p;
+  p.all = all;
+  auto cover = [&](std::size_t a, int step) {
+    if (p.covered & axis_bit(a)) return;
+    p.covered |= axis_bit(a);
+    p.step[a] = step;
+  };
+  auto cover_with_slave = [&](std::size_t a, int step) {
+    cover(a, step);
+    const int sl = slave_index(s, a);
+    if (sl >= 0) cover(static_cast<std::size_t>(sl), step);
+  };
+  if (all) {
+    for (int i = 0; i < 6; ++i)
+      for (std::size_t a = 0; a < kAxisCount; ++a)
+        if ((s.global.sequence_steps[static_cast<std::size_t>(i)] & axis_bit(a)) && master_index(s, a) < 0)
+          cover_with_slave(a, i + 1);
+    for (std::size_t a = 0; a < kAxisCount; ++a) {
+      if (p.covered & axis_bit(a)) continue;
+      const int m = master_index(s, a);
+      if (m < 0 && s.axes[a].mode != HomingMode::disabled) p.unsequenced |= axis_bit(a);
+    }
+    for (std::size_t a = 0; a < kAxisCount; ++a) {
+      const int m = master_index(s, a);
+      if (m >= 0 && (p.unsequenced & axis_bit(static_cast<std::size_t>(m)))) p.unsequenced |= axis_bit(a);
+    }
+  } else {
+    for (std::size_t a = 0; a < kAxisCount; ++a) {
+      if (!(requested & axis_bit(a))) continue;
+      const int m = master_index(s, a);
+      cover_with_slave(m >= 0 ? static_cast<std::size_t>(m) : a, 1);
+    }
+  }
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if ((p.covered & axis_bit(a)) && s.axes[a].mode != HomingMode::disabled && moves_when_homing(s, a))
+      p.movers |= axis_bit(a);
+  return p;
+}
+
+}  // namespace campaign

@@ -1,0 +1,349 @@
+#include "run.hpp"
+
+#include "../truth.hpp"
+#include "homing/motion.hpp"
+
+namespace campaign {
+
+Run::Run(std::uint64_t seed) : m_(generate(seed)), d_(seed, 2), periods_(seed, 3) {
+  r_.settings = m_.settings;
+  r_.machine = m_.sim;
+  const double max_dt = m_.max_dt_s;
+  // Late periods: most about 1 ms, one in ten late by up to max_dt.
+  r_.next_dt = [this, max_dt] { return periods_.chance(0.1) ? periods_.u(0.001, max_dt) : periods_.u(0.0005, 0.0015); };
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (m_.plan[a].encoder_invalid) encoder_invalid_ |= axis_bit(a);
+  r_.tweak_inputs = [this](Inputs& in) {
+    in.communication_lost = comm_lost_;
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if (encoder_invalid_ & axis_bit(a)) in.axes[a].absolute_valid = false;
+  };
+  r_.sim().set_homing_permit(true);
+  w_ = std::make_unique<Watch>(r_, m_);
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const sim::Fault f = m_.plan[a].start_fault;
+    if (f == sim::Fault::sensor_stuck_inactive || (f == sim::Fault::wire_break && !r_.settings.axes[a].sensor_nc))
+      w_->dead_sensor |= axis_bit(a);
+  }
+  r_.on_period = [this](rig::Rig&) { w_->period(); };
+}
+
+void Run::say(const std::string& what) { log_ << "  t " << r_.sim().time_s() << ": " << what << "\n"; }
+
+void Run::settle(double max_s) {
+  r_.run_until([&] { return (!r_.any_moving() && [&] {
+                              for (std::size_t a = 0; a < kAxisCount; ++a)
+                                if (r_.sim().moving(a)) return false;
+                              return true;
+                            }()) || !ok(); }, max_s);
+}
+
+bool Run::homed_axis(std::size_t a) const { return w_->truth[a].valid && r_.status().axes[a].homed; }
+
+void Run::power_up() {
+  if (m_.start_held_at_powerup) {
+    say("power-up with the start button held");
+    r_.sim().set_start_button(true);
+  }
+  w_->powering_up = true;
+  for (int i = 0; i < m_.powerup_periods && ok(); ++i) step();
+  r_.sim().set_start_button(false);
+  step();
+  w_->powering_up = false;
+  // An engine that (wrongly) judged a command at power-up: put the machine back.
+  if (w_->powerup_started && ok()) {
+    r_.pending.abort = true;
+    step();
+    settle(10);
+    r_.reset_alarm();
+    settle(10);
+    put_back(kAllAxes);
+    w_->powerup_started = false;
+  }
+}
+
+std::vector<Event> Run::random_events(const CyclePlan& plan, double estimate) {
+  std::vector<Event> out;
+  if (!d_.chance(0.5)) return out;
+  Event e;
+  e.kind = static_cast<EventKind>(d_.integer(0, static_cast<int>(EventKind::count) - 1));
+  e.at_s = d_.u(0, estimate);
+  std::vector<std::size_t> movers;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (plan.movers & axis_bit(a)) movers.push_back(a);
+  if (movers.empty()) return out;
+  e.axis = movers[static_cast<std::size_t>(d_.integer(0, static_cast<int>(movers.size()) - 1))];
+  const bool sensor = e.kind == EventKind::stuck_active || e.kind == EventKind::stuck_inactive || e.kind == EventKind::wire_break;
+  if (sensor && !mode_uses_switch(effective(r_.settings, e.axis).mode)) return out;
+  if (e.kind == EventKind::permit_off && !r_.settings.global.permit_required) return out;
+  out.push_back(e);
+  return out;
+}
+
+void Run::apply(const Event& e, Causes& causes) {
+  say(std::string(event_name(e.kind)) + " on " + kAxisUpper[e.axis]);
+  auto set_fault = [&](sim::Fault f) {
+    auto c = r_.sim().axis_config(e.axis);
+    c.fault = f;
+    r_.sim().set_axis_config(e.axis, c);
+  };
+  switch (e.kind) {
+    case EventKind::abort: r_.pending.abort = true; break;
+    case EventKind::estop: r_.sim().set_estop(true); break;
+    case EventKind::drive_fault:
+      set_fault(sim::Fault::drive_fault);
+      w_->carriage_jumped(e.axis);  // the motor runs on without the carriage
+      break;
+    case EventKind::stuck_active:
+      set_fault(sim::Fault::sensor_stuck_active);
+      w_->tampered |= axis_bit(e.axis);
+      break;
+    case EventKind::stuck_inactive:
+      set_fault(sim::Fault::sensor_stuck_inactive);
+      w_->tampered |= axis_bit(e.axis);
+      w_->dead_sensor |= axis_bit(e.axis);
+      break;
+    case EventKind::wire_break:
+      set_fault(sim::Fault::wire_break);
+      w_->tampered |= axis_bit(e.axis);
+      if (!r_.settings.axes[e.axis].sensor_nc) w_->dead_sensor |= axis_bit(e.axis);
+      break;
+    case EventKind::comm_lost: comm_lost_ = true; break;
+    case EventKind::permit_off: r_.sim().set_homing_permit(false); break;
+    case EventKind::reset: r_.pending.reset_alarm = true; break;
+    case EventKind::home_again: r_.pending.home_all = true; break;
+    case EventKind::count: break;
+  }
+  event_cause(causes, e, r_.settings);
+}
+
+// One homing cycle, to its end and the machine at rest, then its verdict.
+bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_button) {
+  const CyclePlan plan = plan_cycle(r_.settings, all, mask);
+  const bool refused = check_settings(r_.settings).has_value();
+  Causes causes = standing_causes(r_, m_, plan, refused, encoder_invalid_);
+  const std::uint32_t cycles_before = r_.status().homing_cycles;
+  w_->begin_window(plan, refused);
+  w_->alarms_seen = 0;
+  {
+    std::ostringstream o;
+    o << (all ? "home all" : "home axes ");
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if (!all && (mask & axis_bit(a))) o << kAxisUpper[a];
+    o << (by_button ? " by the start button" : " by command") << (refused ? " (the check refuses it)" : "");
+    say(o.str());
+  }
+  int button_periods = 0;
+  if (by_button) {
+    r_.sim().set_start_button(true);
+    button_periods = d_.integer(1, 30);
+  } else if (all) {
+    r_.pending.home_all = true;
+  } else {
+    r_.pending.home_axes = mask;
+  }
+  const double t0 = r_.sim().time_s();
+  step();
+  const CommandResult res = r_.status().last_command_result;
+  if (refused) {
+    if (r_.status().homing) w_->fail("a cycle the configuration check refuses started");
+  } else if (res != CommandResult::accepted || !r_.status().homing) {
+    // Nothing started it: a cycle that ended in its first period (every axis
+    // without motion) is the only excuse.
+    if (res != CommandResult::accepted)
+      w_->fail("a home command was not accepted", std::string(command_result_name(res)));
+  }
+  const double limit = time_bound(r_, m_, plan);
+  std::vector<bool> done(events.size(), false);
+  while (r_.status().homing && r_.sim().time_s() - t0 < limit && ok()) {
+    for (std::size_t i = 0; i < events.size(); ++i)
+      if (!done[i] && r_.sim().time_s() - t0 >= events[i].at_s) {
+        done[i] = true;
+        apply(events[i], causes);
+        acts_ |= act::event_in_cycle;
+      }
+    if (button_periods > 0 && --button_periods == 0) r_.sim().set_start_button(false);
+    const bool home_again = r_.pending.home_all;
+    step();
+    if (home_again) {
+      const CommandResult again = r_.status().last_command_result;
+      if (r_.status().homing && again != CommandResult::already_running && again != CommandResult::refused_busy)
+        w_->fail("a second home command during a cycle was not refused", std::string(command_result_name(again)));
+    }
+  }
+  r_.sim().set_start_button(false);
+  if (r_.status().homing && ok()) w_->fail("a cycle did not end within its time bound");
+  settle(10);
+  last_cycle_s_ = r_.sim().time_s() - t0;
+  w_->end_window();
+  {
+    std::ostringstream o;
+    o << "cycle ended " << state_name(r_.status().state) << ", alarms " << alarm_list(w_->alarms_seen);
+    say(o.str());
+  }
+  if (ok()) verdict(*w_, r_, m_, causes, cycles_before);
+  if (r_.status().state == MachineState::homed && w_->alarms_seen == 0 && ok()) {
+    ever_homed_ = true;
+    acts_ |= act::homed;
+    if (by_button) acts_ |= act::start_button_cycle;
+    if (++homed_cycles_ > 1) acts_ |= act::rehomed;
+    if (alarm_seen_) acts_ |= act::alarm_then_homed;
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if (m_.plan[a].role == Role::slave && (plan.covered & axis_bit(a)))
+        acts_ |= m_.plan[a].commutator ? act::homed_commutator_gantry : act::homed_software_gantry;
+  }
+  if (w_->alarms_seen) alarm_seen_ = true;
+  w_->tampered = 0;
+  return ok() && !r_.status().alarm && w_->alarms_seen == 0;
+}
+
+// Clear every cause, then reset: the reset must be taken.
+// The technician pushes carriages back where they started (a sensor fault
+// may have let a seek run past its cam); a gantry's both sides together.
+void Run::put_back(AxisMask mask) {
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (mask & axis_bit(a)) {
+      const int p = partner_index(r_.settings, a);
+      if (p >= 0) mask |= axis_bit(static_cast<std::size_t>(p));
+    }
+  bool any = false;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if ((mask & axis_bit(a)) && r_.actual(a) != m_.sim.axes[a].actual_position_mm)
+      any = r_.sim().place(a, m_.sim.axes[a].actual_position_mm) || any;
+  if (!any) return;
+  say("carriages put back by hand: " + std::to_string(mask));
+  w_->carriages_placed();
+  // The inputs (the encoders) show the new places after a period.
+  for (int i = 0; i < 3; ++i) step();
+}
+
+void Run::recover() {
+  say("recover: e-stop released, faults cleared, permit on, reset");
+  r_.sim().set_estop(false);
+  r_.sim().set_homing_permit(true);
+  comm_lost_ = false;
+  settle(10);
+  AxisMask faulted = 0;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    auto c = r_.sim().axis_config(a);
+    if (c.fault != sim::Fault::none) {
+      if (c.fault != sim::Fault::drive_fault) faulted |= axis_bit(a);
+      c.fault = sim::Fault::none;
+      r_.sim().set_axis_config(a, c);
+    }
+  }
+  // And those an alarm left past their cam (a short cam, a dead sensor).
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const AxisSettings e = effective(r_.settings, a);
+    const auto& c = r_.sim().axis_config(a);
+    const double x = r_.actual(a);
+    const bool past = dir_of(e) > 0 ? x > c.sensor_max_mm : x < c.sensor_min_mm;
+    if (mode_uses_switch(e.mode) && (past || m_.plan[a].short_cam) && !w_->truth[a].valid) faulted |= axis_bit(a);
+  }
+  put_back(faulted);
+  w_->dead_sensor = 0;
+  if (d_.chance(0.5)) encoder_invalid_ = 0;
+  for (int i = 0; i < 3; ++i) step();
+  settle(10);
+  if (!r_.status().alarm) return;
+  r_.reset_alarm();
+  if (r_.status().last_command_result != CommandResult::accepted)
+    w_->fail("a reset with no cause left was refused", std::string(command_result_name(r_.status().last_command_result)));
+  for (int i = 0; i < 3; ++i) step();
+  if (r_.status().alarm && ok()) {
+    std::string codes;
+    bool hard = false;
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if (r_.axis(a).alarm) {
+        codes += std::string(1, kAxisUpper[a]) + " " + std::string(alarm_name(r_.axis(a).alarm.code)) + "; ";
+        hard = hard || r_.axis(a).alarm.code == AlarmCode::hard_limit;
+      }
+    w_->fail(hard ? "after a hard-limit trip the alarm latched again right after the reset"
+                  : "an alarm latched again right after a reset with no cause left",
+             codes);
+  }
+}
+
+void Run::follow_ups() {
+  const int acts = d_.integer(1, 4);
+  for (int i = 0; i < acts && ok(); ++i) {
+    if (r_.status().alarm || r_.sim().inputs().estop) {
+      recover();
+      if (ok() && d_.chance(0.6)) {
+        const CyclePlan plan = plan_cycle(r_.settings, true, 0);
+        cycle(true, 0, random_events(plan, last_cycle_s_), d_.chance(0.2));
+      }
+      continue;
+    }
+    switch (d_.integer(0, 4)) {
+      case 0: exercise_motion(); break;
+      case 1: hard_limit_recovery(); break;
+      case 2: lost_steps(); break;
+      case 3: {
+        // Home some axes again, perhaps with something happening.
+        AxisMask mask = 0;
+        for (std::size_t a = 0; a < kAxisCount; ++a)
+          if (r_.settings.axes[a].mode != HomingMode::disabled && d_.chance(0.4)) mask |= axis_bit(a);
+        if (!mask) break;
+        const CyclePlan plan = plan_cycle(r_.settings, false, mask);
+        cycle(false, mask, random_events(plan, last_cycle_s_), false);
+        break;
+      }
+      default: {
+        const CyclePlan plan = plan_cycle(r_.settings, true, 0);
+        cycle(true, 0, random_events(plan, last_cycle_s_), d_.chance(0.2));
+        break;
+      }
+    }
+  }
+}
+
+Outcome Run::run() {
+  Outcome out;
+  out.seed = m_.seed;
+  if (auto f = check_settings(r_.settings)) {
+    out.refused = true;
+    const int p = f->axis < kAxisCount ? partner_index(r_.settings, f->axis) : -1;
+    if (m_.invalid == Invalid::none && master_index(r_.settings, f->axis) >= 0 && p >= 0 && inherited_field(f->field))
+      w_->fail("the configuration check judges a slave by a setting it inherits from its master",
+               describe_fault(*f, r_.settings));
+    else if (m_.invalid == Invalid::none)
+      out.unexpected_refusal = describe_fault(*f, r_.settings);
+  } else if (m_.invalid != Invalid::none) {
+    w_->fail(std::string("the configuration check accepts a ") + invalid_name(m_.invalid));
+  }
+  if (ok()) power_up();
+  if (ok()) {
+    cycle(true, 0, m_.events, m_.start_by_button);
+    if (out.refused && ok()) jog_invalid_slave();
+  }
+  if (ok() && !out.refused) follow_ups();
+  out.failed = !ok();
+  if (out.failed) out.failure = w_->failure();
+  if (out.failed) out.story = story(m_);
+  out.log = log_.str();
+  out.ever_homed = ever_homed_;
+  out.periods = r_.periods;
+  out.acts = acts_;
+  return out;
+}
+
+Outcome run_seed(std::uint64_t seed) { return Run(seed).run(); }
+
+}  // namespace campaign
+
+namespace campaign {
+
+std::string report(const Outcome& o, const char* test_name) {
+  std::ostringstream r;
+  r << "FAILED: " << o.failure.what << "\n";
+  if (!o.failure.detail.empty()) r << "  " << o.failure.detail << "\n";
+  r << "replay: HOMING_CAMPAIGN_SEED=" << o.seed << " HOMING_CAMPAIGN_RUNS=1 build/bin/homing_tests \"" << test_name
+    << "\"  (HOMING_CAMPAIGN_TRACE=1 prints every phase change), or as a named scenario: replay_seed(" << o.seed
+    << ")\nthe machine:\n"
+    << o.story << "what happened:\n"
+    << o.log;
+  return r.str();
+}
+
+}  // namespace campaign

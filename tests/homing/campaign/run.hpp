@@ -1,0 +1,98 @@
+#pragma once
+// One run of the campaign: a generated machine, powered up, homed, and put
+// through random acts (faults, aborts, resets, re-homes, jogs, moves, lost
+// steps, a hard-limit trip), every period checked by the Watch.
+#include <cstdint>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "dice.hpp"
+#include "machine.hpp"
+#include "verdict.hpp"
+#include "watch.hpp"
+
+namespace campaign {
+
+// The campaign's TEST_CASE: a seed replays with
+//   HOMING_CAMPAIGN_SEED=<seed> HOMING_CAMPAIGN_RUNS=1 build/bin/homing_tests "<kTestName>"
+inline constexpr const char* kTestName = "the campaign: random machines over the whole configuration space";
+
+// What a run got to do (for the survey's coverage figures).
+namespace act {
+inline constexpr std::uint32_t homed = 1u << 0;
+inline constexpr std::uint32_t homed_software_gantry = 1u << 1;
+inline constexpr std::uint32_t homed_commutator_gantry = 1u << 2;
+inline constexpr std::uint32_t event_in_cycle = 1u << 3;
+inline constexpr std::uint32_t jog_and_move = 1u << 4;
+inline constexpr std::uint32_t hard_limit_recovered = 1u << 5;
+inline constexpr std::uint32_t lost_steps_corrected = 1u << 6;
+inline constexpr std::uint32_t start_button_cycle = 1u << 7;
+inline constexpr std::uint32_t rehomed = 1u << 8;
+inline constexpr std::uint32_t alarm_then_homed = 1u << 9;
+inline constexpr int kCount = 10;
+inline const char* name(int i) {
+  static const char* names[] = {"homed",           "homed a software-slaved gantry", "homed a commutator gantry",
+                                "event in a cycle", "jogged and moved",             "recovered from a hard-limit trip",
+                                "lost steps corrected", "cycle started by the button", "homed again",
+                                "homed after an alarm"};
+  return names[i];
+}
+}  // namespace act
+
+struct Outcome {
+  std::uint64_t seed = 0;
+  bool failed = false;
+  Failure failure{};
+  std::string story;  // the machine
+  std::string log;    // what the script did, when
+  bool ever_homed = false;
+  bool refused = false;
+  std::string unexpected_refusal;  // the check refused a machine generated to be valid
+  std::uint64_t periods = 0;
+  std::uint32_t acts = 0;
+};
+
+class Run {
+ public:
+  explicit Run(std::uint64_t seed);
+  Outcome run();
+
+ private:
+  bool ok() const { return !w_->failed(); }
+  void step() { r_.step(); }
+  void settle(double max_s = 10);
+  void say(const std::string& what);
+  void power_up();
+  bool cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_button);
+  void apply(const Event& e, Causes& causes);
+  void recover();
+  void jog_invalid_slave();
+  void put_back(AxisMask mask);
+  void exercise_motion();
+  void hard_limit_recovery();
+  void lost_steps();
+  std::vector<Event> random_events(const CyclePlan& plan, double estimate);
+  void follow_ups();
+  bool homed_axis(std::size_t a) const;
+
+  Machine m_;
+  rig::Rig r_;
+  Dice d_;
+  Dice periods_;
+  std::unique_ptr<Watch> w_;
+  std::ostringstream log_;
+  bool comm_lost_ = false;
+  AxisMask encoder_invalid_ = 0;
+  bool ever_homed_ = false;
+  double last_cycle_s_ = 1;
+  std::uint32_t acts_ = 0;
+  int homed_cycles_ = 0;
+  bool alarm_seen_ = false;
+};
+
+Outcome run_seed(std::uint64_t seed);
+// A failed run told for a reader: the failure, how to replay it, the machine, the script.
+std::string report(const Outcome& o, const char* test_name = kTestName);
+
+}  // namespace campaign

@@ -1,0 +1,381 @@
+#include "watch.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+
+#include "../truth.hpp"
+
+namespace campaign {
+namespace {
+
+std::string fmt_axis(std::size_t a, rig::Rig& r, double x) {
+  const AxisStatus& s = r.status().axes[a];
+  std::ostringstream o;
+  o << kAxisUpper[a] << " in phase " << phase_name(s.phase) << ", carriage " << x << ", position " << s.position_mm
+    << ", velocity " << s.velocity_mm_per_s << ", alarm " << alarm_name(s.alarm.code) << ", at t " << r.sim().time_s();
+  return o.str();
+}
+
+}  // namespace
+
+Watch::Watch(rig::Rig& r, const Machine& m) : r_(r), m_(m) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) eff_[a] = effective(r_.settings, a);
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    x_prev_[a] = r_.actual(a);
+    traced_[a] = Phase::idle;
+  }
+  for (std::size_t s = 0; s < kAxisCount; ++s)
+    if (m_.plan[s].role == Role::slave) rel_ref_[s] = r_.actual(s) - r_.actual(static_cast<std::size_t>(m_.plan[s].partner));
+  ran_dt_prev_ = r_.ran_dt_s;
+  if (const char* t = std::getenv("HOMING_CAMPAIGN_TRACE")) trace_axes = *t ? 1 : 0;
+}
+
+namespace {
+
+// HOMING_CAMPAIGN_IGNORE="class|class...": failures whose class contains one
+// of these are not counted, so that a survey sees past a known bug.
+bool ignored(const std::string& what) {
+  static const std::string list = [] {
+    const char* v = std::getenv("HOMING_CAMPAIGN_IGNORE");
+    return std::string(v ? v : "");
+  }();
+  std::size_t start = 0;
+  while (start < list.size()) {
+    std::size_t end = list.find('|', start);
+    if (end == std::string::npos) end = list.size();
+    if (end > start && what.find(list.substr(start, end - start)) != std::string::npos) return true;
+    start = end + 1;
+  }
+  return false;
+}
+
+}  // namespace
+
+void Watch::fail(const std::string& what, const std::string& detail) {
+  if (failure_.what.empty() && !ignored(what)) failure_ = Failure{what, detail};
+}
+
+double Watch::accel_limit(std::size_t a) const { return eff_[a].acceleration_mm_per_s2; }
+
+void Watch::begin_window(const CyclePlan& p, bool is_refused) {
+  in_window = true;
+  plan = p;
+  refused = is_refused;
+  flipped = 0;
+  tampered = 0;
+  path.fill(0);
+  window_start_s = r_.sim().time_s();
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    window_start_x[a] = r_.actual(a);
+    has_release_[a] = has_trigger_[a] = false;
+    // The cycle assigns these again: the old truth no longer holds.
+    if (!refused && ((p.covered | p.unsequenced) & axis_bit(a))) truth[a].valid = false;
+  }
+  for (std::size_t s = 0; s < kAxisCount; ++s)
+    if (m_.plan[s].role == Role::slave) rel_ref_[s] = r_.actual(s) - r_.actual(static_cast<std::size_t>(m_.plan[s].partner));
+}
+
+void Watch::end_window() {
+  in_window = false;
+  for (std::size_t s = 0; s < kAxisCount; ++s)
+    if (m_.plan[s].role == Role::slave) rel_ref_[s] = r_.actual(s) - r_.actual(static_cast<std::size_t>(m_.plan[s].partner));
+}
+
+void Watch::set_outside_movers(AxisMask mask) { outside_ = mask; }
+
+void Watch::carriages_placed() {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (std::abs(r_.actual(a) - x_prev_[a]) > 0) truth[a].valid = false;
+    x_prev_[a] = r_.actual(a);
+    alarm_x0_[a] = rest_x_[a] = r_.actual(a);
+  }
+  for (std::size_t s = 0; s < kAxisCount; ++s)
+    if (m_.plan[s].role == Role::slave) rel_ref_[s] = r_.actual(s) - r_.actual(static_cast<std::size_t>(m_.plan[s].partner));
+}
+
+void Watch::carriage_jumped(std::size_t a) {
+  truth[a].valid = false;
+  x_prev_[a] = r_.actual(a);
+}
+
+void Watch::period() {
+  const double engine_dt = ran_dt_prev_;  // the engine integrated the period before this one
+  ran_dt_prev_ = r_.ran_dt_s;
+  const Status& st = r_.status();
+  for (const AxisStatus& as : st.axes)
+    if (as.alarm.code != AlarmCode::none) alarms_seen |= 1u << static_cast<unsigned>(as.alarm.code);
+  if (st.global_alarm != AlarmCode::none) alarms_seen |= 1u << static_cast<unsigned>(st.global_alarm);
+  if (st.alarm && !alarm_prev_) {
+    alarm_periods_ = 0;
+    for (std::size_t a = 0; a < kAxisCount; ++a) {
+      alarm_v0_[a] = std::max(std::abs(v_prev_[a]), std::abs(st.axes[a].velocity_mm_per_s));
+      alarm_x0_[a] = x_prev_[a];
+      rested_[a] = false;
+    }
+  }
+  if (st.alarm) ++alarm_periods_;
+  if (powering_up && (st.homing || st.command_count != 0)) {
+    fail("a start button held at power-up started home-all");
+    powerup_started = true;
+  }
+  if (in_window && refused && st.homing) {
+    fail("a cycle the configuration check refuses started");
+    refused = false;  // it runs: hold it to the rules of a running cycle from here
+  }
+  for (std::size_t a = 0; a < kAxisCount; ++a) axis_period(a, engine_dt);
+  if (!powerup_started) racking();
+  alarm_prev_ = st.alarm;
+}
+
+void Watch::axis_period(std::size_t a, double engine_dt) {
+  const Status& st = r_.status();
+  const AxisStatus& as = st.axes[a];
+  const AxisSettings& e = eff_[a];
+  const double x = r_.actual(a);
+  const double x_eng = x_prev_[a];  // the carriage when the engine's status was taken (before this period ran)
+  const double v = as.velocity_mm_per_s;
+  const double step = std::abs(x - x_prev_[a]);
+  const bool moved = step > 1e-12;
+  const AxisMask bit = axis_bit(a);
+  const bool drive_faulted = r_.sim().axis_config(a).fault == sim::Fault::drive_fault;
+  const int master = master_index(r_.settings, a);
+  if (in_window) path[a] += step;
+
+  if (trace_axes && as.phase != traced_[a]) {
+    traced_[a] = as.phase;
+    std::printf("t %.4f %s\n", r_.sim().time_s(), fmt_axis(a, r_, x).c_str());
+  }
+
+  // The flip to homed, with the edges as they stood before this period.
+  // A switch mode must have been unhomed by its cycle first; the others are
+  // assigned (again) when their step begins.
+  if (in_window && (plan.covered & bit) && as.homed && !(flipped & bit) && e.mode != HomingMode::disabled &&
+      (!mode_uses_switch(e.mode) || !homed_prev_[a]))
+    on_flip(a, x_eng);
+  if (!as.homed) truth[a].valid = false;
+  homed_prev_[a] = as.homed;
+  if (in_window && (plan.covered & bit) && !(flipped & bit)) track_edges(a);
+
+  // Mechanical stops: touched only while pushing into them.
+  if (r_.sim().at_hard_stop(a)) {
+    const bool pushing = mode_is_pushing(e.mode);
+    const bool push_phase =
+        as.phase == Phase::push || (master >= 0 && st.axes[static_cast<std::size_t>(master)].phase == Phase::push);
+    // Pushing into it, or a pushing axis whose dead sensor let the seek run into
+    // the stop just behind it: allowed until the carriage leaves the stop.
+    // A commutator slave rides along with its master's output, into its stop too.
+    const bool rides = master >= 0 && r_.settings.axes[a].slave_mode == SlaveMode::external_commutator &&
+                       (dead_sensor & axis_bit(static_cast<std::size_t>(master)));
+    if (pushing && (push_phase || (dead_sensor & bit) || rides)) pushed_to_stop_[a] = true;
+    if (!(pushing && pushed_to_stop_[a]))
+      fail(std::string("a carriage ran into a mechanical stop") +
+               (m_.plan[a].differs ? " (a slave whose own inherited fields differ)" : ""),
+           fmt_axis(a, r_, x));
+  } else {
+    pushed_to_stop_[a] = false;
+  }
+
+  // Motion only where the configuration and the script allow it.
+  const AxisMask allowed = (in_window && !refused ? plan.movers : AxisMask{0}) | outside_ | (powerup_started ? kAllAxes : 0);
+  if (allowed & bit) grace_[a] = true;
+  if (moved && !(allowed & bit) && !grace_[a]) {
+    if (refused && in_window) fail("motion although the configuration check refused the cycle", fmt_axis(a, r_, x));
+    else if (e.mode == HomingMode::disabled) fail("a disabled axis moved", fmt_axis(a, r_, x));
+    else if (in_window && (plan.unsequenced & bit)) fail("an unsequenced axis moved", fmt_axis(a, r_, x));
+    else if (in_window && (plan.covered & bit)) fail("an axis whose mode does not move moved", fmt_axis(a, r_, x));
+    else if (in_window) fail("an axis outside the cycle moved", fmt_axis(a, r_, x));
+    else fail("an axis moved that nothing commanded", fmt_axis(a, r_, x));
+  }
+  if (in_window && (plan.movers & bit) && moved && !st.alarm) {
+    if (st.homing && st.sequence_step != plan.step[a])
+      fail("an axis moved outside its sequence step",
+           fmt_axis(a, r_, x) + "; its step " + std::to_string(plan.step[a]) + ", running " + std::to_string(st.sequence_step));
+    if (!mode_uses_switch(e.mode) && as.phase != Phase::final_move && as.phase != Phase::stopping)
+      fail("a manual or absolute axis moved outside its final move", fmt_axis(a, r_, x));
+  }
+  if (!(allowed & bit) && v == 0 && !r_.sim().moving(a)) grace_[a] = false;
+
+  // Acceleration: no velocity change beyond what the axis (the pair) can do.
+  const double acc = accel_limit(a);
+  if (!drive_faulted && acc > 0 && engine_dt > 0) {
+    const double dv = std::abs(v - v_prev_[a]);
+    if (dv > acc * engine_dt * (1 + 1e-9) + 1e-6) {
+      std::ostringstream o;
+      o << fmt_axis(a, r_, x) << "; velocity " << v_prev_[a] << " -> " << v << " in " << engine_dt * 1000
+        << " ms, at most " << acc * engine_dt << " at " << acc << "/s2";
+      // The class names the phase that commanded it (the one before this
+      // status), and whether it was a dead stop or the higher acceleration
+      // of a gantry's two: they are different bugs.
+      const double own = r_.settings.axes[a].acceleration_mm_per_s2;
+      const int partner = partner_index(r_.settings, a);
+      std::string how = v == 0 ? "a dead stop" : "a velocity change";
+      if (partner >= 0 && dv <= own * engine_dt * (1 + 1e-9) + 1e-6) how = "a gantry side at its own, not the pair's lower, acceleration";
+      else if (partner >= 0 && dv <= r_.settings.axes[static_cast<std::size_t>(partner)].acceleration_mm_per_s2 * engine_dt * (1 + 1e-9) + 1e-6)
+        how = "a gantry side at its partner's acceleration, beyond its own";
+      fail(std::string("velocity changed faster than the acceleration: ") + how + " in phase " +
+               std::string(phase_name(phase_prev_[a])),
+           o.str());
+    }
+  }
+
+  // While an alarm is latched: only the braking of what it stopped.
+  if (st.alarm && !drive_faulted) {
+    if (alarm_periods_ > 1 && std::abs(v) > std::abs(v_prev_[a]) + 1e-9)
+      fail("speed rose while an alarm is latched", fmt_axis(a, r_, x));
+    const double v0 = alarm_v0_[a];
+    const double bound = (acc > 0 ? stop_distance_mm(v0, acc) : 0) + v0 * m_.max_dt_s + 1e-6;
+    if (std::abs(x - alarm_x0_[a]) > bound) {
+      std::ostringstream o;
+      o << fmt_axis(a, r_, x) << "; " << std::abs(x - alarm_x0_[a]) << " since the alarm, stop distance from " << v0
+        << " is " << bound;
+      fail("travelled beyond its stop distance after an alarm", o.str());
+    }
+    if (rested_[a] && std::abs(x - rest_x_[a]) > 1e-12) fail("motion while an alarm is latched, after rest", fmt_axis(a, r_, x));
+    if (!rested_[a] && v == 0 && !r_.sim().moving(a)) {
+      rested_[a] = true;
+      rest_x_[a] = x;
+    }
+  }
+
+  // A homed axis: its coordinate is the truth's, and its carriage stays inside enforced soft limits.
+  if (truth[a].valid && as.homed) {
+    const double pos_eng = x_eng + truth[a].offset;
+    if (std::abs(as.position_mm - pos_eng) > truth[a].tol + 1e-6) {
+      std::ostringstream o;
+      o << fmt_axis(a, r_, x) << "; the truth is " << pos_eng;
+      fail("a homed axis's coordinate drifted from the truth", o.str());
+      truth[a].valid = false;
+    }
+    const double pos = x + truth[a].offset;
+    const double tol = truth[a].tol + 1e-6;
+    if (e.soft_limits_enable && !in_window && (pos < e.soft_limit_min_mm - tol || pos > e.soft_limit_max_mm + tol)) {
+      std::ostringstream o;
+      o << fmt_axis(a, r_, x) << "; machine position (truth) " << pos << " outside [" << e.soft_limit_min_mm << ", "
+        << e.soft_limit_max_mm << "]";
+      fail("a homed carriage passed an enforced soft limit", o.str());
+    }
+  }
+
+  x_prev_[a] = x;
+  v_prev_[a] = v;
+  phase_prev_[a] = as.phase;
+}
+
+void Watch::racking() {
+  for (std::size_t s = 0; s < kAxisCount; ++s) {
+    if (m_.plan[s].role != Role::slave) continue;
+    const std::size_t mi = static_cast<std::size_t>(m_.plan[s].partner);
+    const double rel = r_.actual(s) - r_.actual(mi);
+    const double dev = std::abs(rel - rel_ref_[s]);
+    const AxisSettings& ms = r_.settings.axes[mi];
+    const double limit = in_window ? r_.settings.axes[s].max_misalignment_mm + 1e-3 +
+                                         mm_per_min_to_mm_per_s(ms.seek_feedrate_mm_per_min) * m_.max_dt_s
+                                   : 1e-6;
+    // Locked and homed, both sides have the same machine position (each was
+    // assigned the master's home position at its own rest point).
+    const AxisStatus& ss = r_.status().axes[s];
+    const AxisStatus& ms_st = r_.status().axes[mi];
+    if (!in_window && ss.homed && ms_st.homed && truth[s].valid && truth[mi].valid &&
+        std::abs(ss.position_mm - ms_st.position_mm) > truth[s].tol + truth[mi].tol + 1e-6) {
+      std::ostringstream o;
+      o << "slave " << kAxisUpper[s] << " at " << ss.position_mm << ", master " << kAxisUpper[mi] << " at "
+        << ms_st.position_mm;
+      fail("a locked gantry's two sides disagree on their machine position", o.str());
+    }
+    if (dev > limit) {
+      std::ostringstream o;
+      o << "slave " << kAxisUpper[s] << " vs master " << kAxisUpper[mi] << ": " << dev << " from "
+        << (in_window ? "where the cycle started" : "where the pair was locked") << ", allowed " << limit << "; "
+        << fmt_axis(mi, r_, r_.actual(mi)) << "; " << fmt_axis(s, r_, r_.actual(s));
+      std::string topology = r_.settings.axes[s].slave_mode == SlaveMode::external_commutator ? " (external commutator" : " (software-slaved";
+      topology += m_.plan[s].differs ? ", the slave's own inherited fields differ)" : ")";
+      fail((in_window ? "a gantry racked beyond its max misalignment" : "a locked gantry racked outside a cycle") + topology, o.str());
+    }
+  }
+}
+
+void Watch::track_edges(std::size_t a) {
+  if (auto e = r_.sim().last_edge(a, false); e && e->time_s >= window_start_s) {
+    release_[a] = e->actual_mm;
+    has_release_[a] = true;
+  }
+  if (auto e = r_.sim().last_edge(a, true); e && e->time_s >= window_start_s) {
+    trigger_[a] = e->actual_mm;
+    has_trigger_[a] = true;
+  }
+}
+
+bool Watch::reference_edge(std::size_t a, double& ref) {
+  const AxisSettings e = effective(r_.settings, a);
+  if (mode_reapproaches(e.mode)) {
+    ref = trigger_[a];
+    return has_trigger_[a];
+  }
+  if (!has_release_[a]) return false;
+  ref = release_[a];
+  if (e.mode == HomingMode::switch_index) {
+    // The first index pulse beyond the release edge, away from the sensor.
+    const auto& c = r_.sim().axis_config(a);
+    const double dir = dir_of(e);
+    if (c.index_pitch_mm <= 0) return false;
+    const double k = dir < 0 ? std::floor((ref - c.index_offset_mm) / c.index_pitch_mm) + 1
+                             : std::ceil((ref - c.index_offset_mm) / c.index_pitch_mm) - 1;
+    ref = c.index_offset_mm + k * c.index_pitch_mm;
+  }
+  return true;
+}
+
+void Watch::assign_unsequenced() {
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if ((plan.unsequenced & axis_bit(a)) && !(flipped & axis_bit(a)) && r_.status().axes[a].homed) on_flip(a, r_.actual(a));
+}
+
+void Watch::on_flip(std::size_t a, double x) {
+  const AxisMask bit = axis_bit(a);
+  flipped |= bit;
+  const AxisSettings e = effective(r_.settings, a);
+  const AxisStatus& as = r_.status().axes[a];
+  const auto& c = r_.sim().axis_config(a);
+  Truth t;
+  t.valid = true;
+  if (!(plan.covered & bit) && !(plan.unsequenced & bit)) {
+    fail("an axis outside the cycle was homed", fmt_axis(a, r_, x));
+    return;
+  }
+  if (mode_is_absolute(e.mode)) {
+    t.offset = c.absolute_offset_mm - e.home_position_mm;
+  } else if (plan.unsequenced & bit) {
+    t.offset = e.home_position_mm - x;
+  } else if (e.mode == HomingMode::manual) {
+    t.offset = e.home_position_mm - window_start_x[a];
+  } else {
+    if (tampered & bit) return;  // its sensor lied: no truth to hold it to
+    double ref = 0;
+    if (!reference_edge(a, ref)) {
+      fail("homed without the sensor edge its mode uses", fmt_axis(a, r_, x));
+      return;
+    }
+    const double comp = master_index(r_.settings, a) >= 0 ? e.switch_compensation_mm : 0.0;
+    t.rest = rig::rest_point_mm(e, ref, comp);
+    t.has_rest = true;
+    t.offset = e.home_position_mm - t.rest;
+    t.tol = rig::edge_tolerance_mm(e, 0.001) + 1e-9;
+  }
+  truth[a] = t;
+  const double pos = x + t.offset;
+  if (std::abs(as.position_mm - pos) > t.tol + 1e-6) {
+    std::ostringstream o;
+    o << fmt_axis(a, r_, x) << "; the truth is " << pos;
+    if (t.has_rest) o << " (reference edge at rest point " << t.rest << ")";
+    std::string kind = (plan.unsequenced & bit) ? "unsequenced " : "";
+    if (master_index(r_.settings, a) >= 0)
+      kind += r_.settings.axes[a].slave_mode == SlaveMode::external_commutator ? "commutator slave, " : "software slave, ";
+    kind += std::string(mode_name(e.mode));
+    if (m_.plan[a].differs) kind += ", its own inherited fields differ";
+    fail("homed with a coordinate other than its mode defines (" + kind + ")", o.str());
+    truth[a].valid = false;  // one failure, not one per period after it
+  }
+}
+
+}  // namespace campaign

@@ -1,0 +1,95 @@
+#pragma once
+// The invariants checked every control period against the simulator's truth,
+// and the truth itself: where each homed axis's machine coordinate must be.
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+#include "../rig.hpp"
+#include "machine.hpp"
+
+namespace campaign {
+
+struct Failure {
+  std::string what;    // short and stable: the failure's class
+  std::string detail;  // figures of this instance
+};
+
+// machine coordinate = carriage + offset, while valid.
+struct Truth {
+  bool valid = false;
+  double offset = 0;
+  double tol = 1e-9;
+  bool has_rest = false;  // switch modes: where the axis must rest after pull-off
+  double rest = 0;
+};
+
+class Watch {
+ public:
+  Watch(rig::Rig& r, const Machine& m);
+
+  void period();  // every control period, after the simulator ran it
+
+  // The script tells what may move.
+  void begin_window(const CyclePlan& plan, bool refused);
+  void end_window();                     // the machine is at rest after the cycle
+  void set_outside_movers(AxisMask mask);  // jogs and moves between cycles
+  void carriage_jumped(std::size_t a);   // lost steps: coordinates no longer known
+  void assign_unsequenced();             // a home-all ended: unsequenced axes now hold their home position
+  void carriages_placed();               // put back by hand: gantries locked where they stand now
+
+  void fail(const std::string& what, const std::string& detail = "");
+  bool failed() const { return !failure_.what.empty(); }
+  const Failure& failure() const { return failure_; }
+
+  std::array<Truth, kAxisCount> truth{};
+  AxisMask dead_sensor = 0;     // a sensor that can no longer trigger (pushing seeks may hit the stop)
+  AxisMask tampered = 0;        // a sensor fault during this window: its edges are not the cam's
+  std::uint32_t alarms_seen = 0;  // bit per AlarmCode, since the script last cleared it
+  AxisMask flipped = 0;         // axes the engine marked homed during the window
+  std::array<double, kAxisCount> path{};  // carriage path in the window
+  bool in_window = false;
+  double window_start_s = 0;
+  std::array<double, kAxisCount> window_start_x{};
+  CyclePlan plan{};
+  bool refused = false;
+  std::uint64_t trace_axes = 0;  // HOMING_CAMPAIGN_TRACE: phase changes on stdout
+  bool powering_up = false;      // no command may be judged yet (a start button held since power-up)
+  bool powerup_started = false;  // ... and yet one was: what it moved is that failure, not another
+
+  double accel_limit(std::size_t a) const;
+
+ private:
+  void axis_period(std::size_t a, double engine_dt);
+  void racking();
+  void on_flip(std::size_t a, double x);
+  bool reference_edge(std::size_t a, double& ref);
+  void track_edges(std::size_t a);
+
+  rig::Rig& r_;
+  const Machine& m_;
+  std::array<AxisSettings, kAxisCount> eff_{};  // what each axis homes with (the settings never change in a run)
+  Failure failure_{};
+  std::array<double, kAxisCount> x_prev_{}, v_prev_{};
+  std::array<bool, kAxisCount> homed_prev_{};
+  std::array<bool, kAxisCount> grace_{};        // braking after its motion was taken away
+  std::array<bool, kAxisCount> pushed_to_stop_{};
+  AxisMask outside_ = 0;
+  double ran_dt_prev_ = 0.001;
+  // Alarm braking.
+  bool alarm_prev_ = false;
+  int alarm_periods_ = 0;
+  std::array<double, kAxisCount> alarm_v0_{}, alarm_x0_{};
+  std::array<bool, kAxisCount> rested_{};
+  std::array<double, kAxisCount> rest_x_{};
+  // Gantry racking.
+  std::array<double, kAxisCount> rel_ref_{};   // per slave
+  // Sensor edges as they stood before this period (the reference of an axis assigned now).
+  std::array<double, kAxisCount> release_{}, trigger_{};
+  std::array<bool, kAxisCount> has_release_{}, has_trigger_{};
+  std::array<Phase, kAxisCount> traced_{};
+  std::array<Phase, kAxisCount> phase_prev_{};
+};
+
+}  // namespace campaign
