@@ -306,6 +306,10 @@ struct PhaseRunner {
   void after_assign() {
     if (partner >= 0 && !is_slave && software_pair() && !partner_run().assigned)
       return wait_for(Wait::partner_assigned, Phase::final_move);
+    // The final move starts only with the slave locked to this axis, or the
+    // slave would miss its first period and end apart from its master.
+    if (partner >= 0 && !is_slave && software_pair() && !partner_run().follow_master)
+      return wait_for(Wait::slave_locked, Phase::final_move);
     if (is_slave) {
       // A software-slaved slave rests on its own edge until the master has
       // its own: locking earlier would drag it along the master's back-off
@@ -335,6 +339,7 @@ struct PhaseRunner {
       case Wait::partner_stopped: ready = p.stopped_after_trigger; break;
       case Wait::partner_assigned: ready = p.assigned; break;
       case Wait::slave_aligned: ready = p.slave_aligned; break;
+      case Wait::slave_locked: ready = p.follow_master; break;
       case Wait::master_at_reference:
         // Commutator slave: moves with the master until the master holds,
         // at rest, on its reference edge.

@@ -59,7 +59,7 @@ class Engine {
     bool clearing = false;        // gantry: moving off the sensors together before the seek
     Phase next_phase = Phase::idle;  // where waiting goes once the partner is ready
     enum class Wait : std::uint8_t {
-      none, partner_stopped, partner_assigned, slave_aligned, master_at_reference
+      none, partner_stopped, partner_assigned, slave_aligned, master_at_reference, slave_locked
     } wait = Wait::none;
     bool aligning = false;        // commutator slave running its own edge search
     double trigger_position_mm = 0;

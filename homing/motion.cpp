@@ -127,9 +127,12 @@ MotionCommand move_to_command(const MotionState& now, double target, double vmax
   const double horizon = std::max(dt, kBrakingHorizon_s);
   if (a > 0 && v_toward > 0 && v_toward * horizon + v_toward * v_toward / (2.0 * a) >= dist) {
     // Brake now with the constant deceleration that ends exactly on the
-    // target (never more than `a` unless already too fast to stop in time).
-    // Constant deceleration is exact whatever the period lengths.
+    // target. Constant deceleration is exact whatever the period lengths.
     const double needed = v_toward * v_toward / (2.0 * dist);
+    // Too fast to stop there at `a` (the target came closer than the stop,
+    // e.g. an edge seen a period late): brake at `a`, pass it, come back,
+    // rather than stop harder than the drive can.
+    if (needed > a * (1 + 1e-9)) return MotionCommand{0, a, false, 0};
     return MotionCommand{0, std::max(needed, 1e-9), true, target};
   }
   double v = std::abs(vmax);

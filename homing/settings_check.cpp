@@ -81,6 +81,10 @@ std::optional<SettingsFault> check_slave(const Settings& settings, const Setting
       return fault(axis, AxisField::slave_of, CheckRule::slave_invalid, s.slave_of);
   if (!mode_uses_switch(s.mode))
     return fault(axis, AxisField::mode, CheckRule::slave_needs_sensor, static_cast<double>(s.mode));
+  // One output pushing both motors into their stops moves them apart with no
+  // sensor watching; the commutator alignment squares the pair instead.
+  if (s.slave_mode == SlaveMode::external_commutator && mode_is_pushing(master.mode))
+    return fault(axis, AxisField::slave_mode, CheckRule::commutator_needs_switch_master, 1);
   if (s.max_misalignment_mm <= 0)
     return fault(axis, AxisField::max_misalignment, CheckRule::not_positive, s.max_misalignment_mm);
   const AxisSettings& moves = pair.axes[axis];
@@ -182,7 +186,9 @@ std::string describe_fault(const SettingsFault& f, const Settings& settings) {
       return fmt::format("{} is a software-slaved axis in mode {}: it needs its own home sensor "
                          "(a switch or pushing mode)", kAxisUpper[f.axis], mode_name(s.mode));
     case CheckRule::commutator_needs_switch_master:
-      return fmt::format("{}: the master of an external-commutator slave must home on a switch", name);
+      return fmt::format("{}: the master of an external-commutator slave must home on a switch edge, "
+                         "not in a pushing mode (pushing one output into the stops moves the two motors "
+                         "apart unwatched; the commutator alignment squares the gantry)", name);
     case CheckRule::soft_limits_inverted:
       return fmt::format("axis.{}.soft_limit_min ({:g}) must be below soft_limit_max ({:g})", letter,
                          s.soft_limit_min_mm, s.soft_limit_max_mm);

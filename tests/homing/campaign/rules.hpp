@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <optional>
 
+#include "homing/gantry.hpp"
 #include "homing/settings.hpp"
 #include "homing/settings_check.hpp"
 
@@ -31,42 +32,24 @@ inline int partner_index(const Settings& s, std::size_t a) {
   return m >= 0 ? m : slave_index(s, a);
 }
 
-// The settings an axis homes, jogs and moves with. A slave takes its master's
-// motion settings and keeps its own sensor settings, pull-off, compensation,
-// misalignment and shared limit; the pair moves with the lower acceleration.
-inline AxisSettings effective(const Settings& s, std::size_t a) {
-  AxisSettings e = s.axes[a];
-  const int p = partner_index(s, a);
-  if (p < 0) return e;
-  const int m = master_index(s, a);
-  if (m >= 0) {
-    const AxisSettings& own = s.axes[a];
-    e = s.axes[static_cast<std::size_t>(m)];
-    e.sensor_nc = own.sensor_nc;
-    e.debounce_ms = own.debounce_ms;
-    e.pull_off_mm = own.pull_off_mm;
-    e.switch_compensation_mm = own.switch_compensation_mm;
-    e.max_misalignment_mm = own.max_misalignment_mm;
-    e.shared_limit = own.shared_limit;
-    e.slave_of = own.slave_of;
-    e.slave_mode = own.slave_mode;
-  }
-  e.acceleration_mm_per_s2 =
-      std::min(s.axes[a].acceleration_mm_per_s2, s.axes[static_cast<std::size_t>(p)].acceleration_mm_per_s2);
-  return e;
-}
+// The settings an axis homes, jogs and moves with: the engine's one
+// definition (homing/gantry.hpp, documented in README "what a slave
+// inherits"): a slave of a valid pair takes its master's motion settings and
+// keeps its own sensor settings, pull-off (software-slaved only: a commutator
+// pair pulls off together on one output), compensation, misalignment and
+// shared limit; the pair moves with the lower acceleration.
+inline AxisSettings effective(const Settings& s, std::size_t a) { return motion_settings(s).axes[a]; }
 
-inline bool final_move_wanted(const AxisSettings& e) {
-  return e.mode == HomingMode::absolute_final ||
-         (e.final_move_enable && e.mode != HomingMode::absolute && e.mode != HomingMode::disabled);
-}
+using homing::final_move_wanted;
 
 inline double dir_of(const AxisSettings& e) { return e.direction == Direction::positive ? 1.0 : -1.0; }
 
 // Fields a slave takes from its master: its own values there must be ignored.
 inline bool inherited_field(AxisField f) {
   switch (f) {
-    case AxisField::mode:
+    // Not mode: a slave's own mode says whether it has a sensor of its own
+    // (a switch or pushing mode; anything else is slave_sensor_missing). The
+    // phases it runs follow its master's mode.
     case AxisField::direction:
     case AxisField::seek_feedrate:
     case AxisField::latch_feedrate:
@@ -90,11 +73,10 @@ inline bool inherited_field(AxisField f) {
   }
 }
 
-// The configuration check as a whole (it is growing from a per-axis check
-// into a whole-settings check): the first refusal, if any.
-inline std::optional<SettingsFault> check_settings(const Settings& s) {
-  for (std::size_t a = 0; a < kAxisCount; ++a)
-    if (auto f = check_axis(s, a)) return f;
+// The engine's whole rule set: the first refusal, if any.
+inline std::optional<SettingsFault> first_fault(const Settings& s) {
+  for (const auto& f : homing::check_settings(s))
+    if (f) return f;
   return std::nullopt;
 }
 

@@ -120,7 +120,7 @@ void Run::apply(const Event& e, Causes& causes) {
 // One homing cycle, to its end and the machine at rest, then its verdict.
 bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_button) {
   const CyclePlan plan = plan_cycle(r_.settings, all, mask);
-  const bool refused = check_settings(r_.settings).has_value();
+  const bool refused = first_fault(r_.settings).has_value();
   Causes causes = standing_causes(r_, m_, plan, refused, encoder_invalid_);
   const std::uint32_t cycles_before = r_.status().homing_cycles;
   w_->begin_window(plan, refused);
@@ -301,7 +301,7 @@ void Run::follow_ups() {
 Outcome Run::run() {
   Outcome out;
   out.seed = m_.seed;
-  if (auto f = check_settings(r_.settings)) {
+  if (auto f = first_fault(r_.settings)) {
     out.refused = true;
     const int p = f->axis < kAxisCount ? partner_index(r_.settings, f->axis) : -1;
     if (m_.invalid == Invalid::none && master_index(r_.settings, f->axis) >= 0 && p >= 0 && inherited_field(f->field))

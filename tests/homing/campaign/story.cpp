@@ -102,7 +102,7 @@ std::string story(const Machine& m) {
   }
   if (m.invalid != Invalid::none)
     o << "  INVALID SETTINGS on " << kAxisUpper[m.invalid_axis] << ": " << invalid_name(m.invalid) << "\n";
-  if (auto f = check_settings(st)) o << "  the configuration check says: " << describe_fault(*f, st) << "\n";
+  if (auto f = first_fault(st)) o << "  the configuration check says: " << describe_fault(*f, st) << "\n";
   else o << "  the configuration check accepts these settings\n";
   o << "  power-up: " << m.powerup_periods << " periods" << (m.start_held_at_powerup ? " with the start button held" : "")
     << "; first cycle started by " << (m.start_by_button ? "the start button" : "the Modbus command")
