@@ -202,7 +202,16 @@ struct PhaseRunner {
     }
     if (edge_to(false)) {
       run.release_mm = edge_mm();
-      if (mode_reapproaches(s.mode)) return enter(Phase::reapproach);
+      run.released = true;
+      if (mode_reapproaches(s.mode)) {
+        // A gantry turns back toward its sensors together, or one side would
+        // run toward its sensor while the other still backs off.
+        if (software_pair() && !partner_run().released) {
+          run.command = stop_command(accel);
+          return wait_for(Wait::partner_released, Phase::reapproach);
+        }
+        return enter(Phase::reapproach);
+      }
       if (s.mode == HomingMode::switch_index) {
         // The release is accepted only after the debounce time: an index pulse
         // may already have passed beyond the release edge. It is the next one.
@@ -239,9 +248,17 @@ struct PhaseRunner {
   // slave aligns on its own edge from this point); everyone else pulls off.
   void reference_found(double reference_mm) {
     run.reference_mm = reference_mm;
+    run.at_reference = true;
     if (commutator_master()) {
       run.command = stop_command(accel);
       return wait_for(Wait::slave_aligned, Phase::pull_off);
+    }
+    // A software gantry pulls off together: the side that found its edge
+    // first holds there, or it would race ahead by a whole pull-off while
+    // the other still backs off at latch feedrate.
+    if (software_pair() && !partner_run().at_reference) {
+      run.command = stop_command(accel);
+      return wait_for(Wait::partner_at_reference, Phase::pull_off);
     }
     enter(Phase::pull_off);
   }
@@ -308,7 +325,7 @@ struct PhaseRunner {
       return wait_for(Wait::partner_assigned, Phase::final_move);
     // The final move starts only with the slave locked to this axis, or the
     // slave would miss its first period and end apart from its master.
-    if (partner >= 0 && !is_slave && software_pair() && !partner_run().follow_master)
+    if (partner >= 0 && !is_slave && !partner_run().follow_master)
       return wait_for(Wait::slave_locked, Phase::final_move);
     if (is_slave) {
       // A software-slaved slave rests on its own edge until the master has
@@ -340,6 +357,8 @@ struct PhaseRunner {
       case Wait::partner_assigned: ready = p.assigned; break;
       case Wait::slave_aligned: ready = p.slave_aligned; break;
       case Wait::slave_locked: ready = p.follow_master; break;
+      case Wait::partner_released: ready = p.released && at_rest(); break;
+      case Wait::partner_at_reference: ready = p.at_reference && at_rest(); break;
       case Wait::master_at_reference:
         // Commutator slave: moves with the master until the master holds,
         // at rest, on its reference edge.

@@ -461,6 +461,8 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
     run.stopped_after_trigger = false;
     run.assigned = false;
     run.clearing = false;
+    run.released = false;
+    run.at_reference = false;
     run.slave_aligned = false;
     run.aligning = false;
     run.follow_master = false;

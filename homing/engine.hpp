@@ -57,9 +57,12 @@ class Engine {
     bool stopped_after_trigger = false;  // seek trigger found and the axis came to rest
     bool assigned = false;        // home position assigned in this cycle
     bool clearing = false;        // gantry: moving off the sensors together before the seek
+    bool released = false;        // the back-off found the release edge in this cycle
+    bool at_reference = false;    // the reference edge is located in this cycle
     Phase next_phase = Phase::idle;  // where waiting goes once the partner is ready
     enum class Wait : std::uint8_t {
-      none, partner_stopped, partner_assigned, slave_aligned, master_at_reference, slave_locked
+      none, partner_stopped, partner_assigned, slave_aligned, master_at_reference, slave_locked,
+      partner_released, partner_at_reference
     } wait = Wait::none;
     bool aligning = false;        // commutator slave running its own edge search
     double trigger_position_mm = 0;

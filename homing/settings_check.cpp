@@ -42,8 +42,10 @@ std::optional<SettingsFault> check_motion(const AxisSettings& s, std::size_t axi
   if (const double needed = backoff_needed_mm(s); needed >= s.max_backoff_mm)
     return fault(axis, mode_is_pushing(s.mode) ? AxisField::push_distance : AxisField::max_backoff,
                  CheckRule::backoff_too_short, needed);
-  if (s.shared_limit && s.pull_off_mm <= 0)
-    return fault(axis, AxisField::pull_off, CheckRule::shared_limit_rests_on_sensor, s.pull_off_mm);
+  // A slave rests pull-off + compensation away from its edge.
+  const double rest = s.pull_off_mm + (master_of(s) >= 0 ? s.switch_compensation_mm : 0.0);
+  if (s.shared_limit && rest <= 0)
+    return fault(axis, AxisField::pull_off, CheckRule::shared_limit_rests_on_sensor, rest);
   return std::nullopt;
 }
 
@@ -81,10 +83,12 @@ std::optional<SettingsFault> check_slave(const Settings& settings, const Setting
       return fault(axis, AxisField::slave_of, CheckRule::slave_invalid, s.slave_of);
   if (!mode_uses_switch(s.mode))
     return fault(axis, AxisField::mode, CheckRule::slave_needs_sensor, static_cast<double>(s.mode));
-  // One output pushing both motors into their stops moves them apart with no
-  // sensor watching; the commutator alignment squares the pair instead.
-  if (s.slave_mode == SlaveMode::external_commutator && mode_is_pushing(master.mode))
-    return fault(axis, AxisField::slave_mode, CheckRule::commutator_needs_switch_master, 1);
+  // Pushing into the stops makes the motors lose steps by different amounts
+  // with no sensor watching: the pair would rack unseen. A gantry squares on
+  // its two sensors instead (pushing modes are for one axis with two drives
+  // on one output, the hardware-slaved gantry).
+  if (mode_is_pushing(master.mode))
+    return fault(axis, AxisField::slave_of, CheckRule::commutator_needs_switch_master, s.slave_of);
   if (s.max_misalignment_mm <= 0)
     return fault(axis, AxisField::max_misalignment, CheckRule::not_positive, s.max_misalignment_mm);
   const AxisSettings& moves = pair.axes[axis];
@@ -186,9 +190,10 @@ std::string describe_fault(const SettingsFault& f, const Settings& settings) {
       return fmt::format("{} is a software-slaved axis in mode {}: it needs its own home sensor "
                          "(a switch or pushing mode)", kAxisUpper[f.axis], mode_name(s.mode));
     case CheckRule::commutator_needs_switch_master:
-      return fmt::format("{}: the master of an external-commutator slave must home on a switch edge, "
-                         "not in a pushing mode (pushing one output into the stops moves the two motors "
-                         "apart unwatched; the commutator alignment squares the gantry)", name);
+      return fmt::format("{} = {:g}: the master of a gantry must home on a switch edge, not in a pushing "
+                         "mode (pushing into the stops makes the two motors lose steps unwatched and racks "
+                         "the gantry; the pair squares on its two sensors; pushing modes are for one axis "
+                         "with two drives on one output)", name, f.value);
     case CheckRule::soft_limits_inverted:
       return fmt::format("axis.{}.soft_limit_min ({:g}) must be below soft_limit_max ({:g})", letter,
                          s.soft_limit_min_mm, s.soft_limit_max_mm);
@@ -218,8 +223,9 @@ std::string describe_fault(const SettingsFault& f, const Settings& settings) {
                          mode_is_pushing(s.mode) ? " plus push_distance" : "",
                          mode_is_pushing(s.mode) ? " or lower push_distance" : "");
     case CheckRule::shared_limit_rests_on_sensor:
-      return fmt::format("{} = {:g} {}: a shared home/limit sensor needs a pull-off greater than 0 so "
-                         "the axis comes to rest off its sensor", name, f.value, unit);
+      return fmt::format("{}: the axis would rest {:g} {} from its edge (pull-off, plus a slave's "
+                         "switch_compensation); a shared home/limit sensor needs more than 0 so the axis "
+                         "comes to rest off its sensor", name, f.value, unit);
   }
   return "?";
 }

@@ -20,7 +20,7 @@ enum class CheckRule : std::uint8_t {
   missing_distance,         // pre-move, push or index pitch needed by the mode
   slave_invalid,            // slave_of names itself, a slave, or an axis that does not home
   slave_needs_sensor,       // a software-slaved axis must have its own home sensor
-  commutator_needs_switch_master,
+  commutator_needs_switch_master,  // a gantry's master may not home in a pushing mode
   soft_limits_inverted,
   outside_soft_limits,      // home or final position outside the enabled soft limits
   disabled_in_gantry,       // a disabled axis is neither master nor slave

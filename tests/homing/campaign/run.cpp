@@ -267,7 +267,9 @@ void Run::recover() {
 void Run::follow_ups() {
   const int acts = d_.integer(1, 4);
   for (int i = 0; i < acts && ok(); ++i) {
-    if (r_.status().alarm || r_.sim().inputs().estop) {
+    if (r_.status().alarm || r_.sim().inputs().estop || comm_lost_) {
+      // A watchdog that expired after the motion ended raises nothing but
+      // still refuses motion: the link comes back first.
       recover();
       if (ok() && d_.chance(0.6)) {
         const CyclePlan plan = plan_cycle(r_.settings, true, 0);

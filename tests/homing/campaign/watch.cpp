@@ -296,6 +296,12 @@ void Watch::racking() {
 }
 
 void Watch::track_edges(std::size_t a) {
+  // A commutator slave's reference is the edge it finds alone, with the
+  // commutator on; its compensation move may cross its sensor again, and the
+  // pair's pull-off releases it once more with the commutator off.
+  if (m_.plan[a].role == Role::slave && r_.settings.axes[a].slave_mode == SlaveMode::external_commutator &&
+      !r_.engine.outputs().axes[static_cast<std::size_t>(m_.plan[a].partner)].commutator_output)
+    return;
   if (auto e = r_.sim().last_edge(a, false); e && e->time_s >= window_start_s) {
     release_[a] = e->actual_mm;
     has_release_[a] = true;
