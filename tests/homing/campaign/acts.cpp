@@ -163,7 +163,7 @@ void Run::lost_steps() {
 void Run::jog_invalid_slave() {
   const Invalid v = m_.invalid;
   if (v != Invalid::slave_of_disabled && v != Invalid::slave_of_slave && v != Invalid::two_slaves &&
-      v != Invalid::master_not_on_switch && v != Invalid::slave_disabled)
+      v != Invalid::master_not_on_switch && v != Invalid::slave_disabled && v != Invalid::slave_without_sensor)
     return;
   const std::size_t a = m_.invalid_axis;
   const int named = static_cast<int>(r_.settings.axes[a].slave_of) - 1;
