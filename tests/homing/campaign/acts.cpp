@@ -64,8 +64,10 @@ void Run::hard_limit_recovery() {
   std::vector<std::size_t> cand;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const AxisSettings e = effective(r_.settings, a);
+    // A sensor the simulator has blinded (stuck inactive, an open NO circuit)
+    // cannot trip: the jog would run into the stop with nothing to tell the engine.
     if (master_index(r_.settings, a) < 0 && homed_axis(a) && r_.settings.axes[a].shared_limit && !mode_is_pushing(e.mode) &&
-        !r_.axis(a).sensor)
+        !r_.axis(a).sensor && r_.sim().axis_config(a).fault == sim::Fault::none)
       cand.push_back(a);
   }
   if (cand.empty() || r_.status().alarm) return;
@@ -148,7 +150,9 @@ void Run::lost_steps() {
   r_.sim().lose_steps(a, lost);
   w_->carriage_jumped(a);
   if (r_.sim().at_hard_stop(a)) return;
-  const bool all = d_.chance(0.5);
+  // A home-all measures the loss only where it homes the axis on its edge: an
+  // unsequenced axis is assigned where it stands (correction 0); home it alone.
+  const bool all = d_.chance(0.5) && (plan_cycle(r_.settings, true, 0).covered & axis_bit(a));
   if (!cycle(all, axis_bit(a), {}, false)) return;
   const double tol = 2 * rig::edge_tolerance_mm(s, 0.001) + 1e-9;
   if (r_.sim().axis_config(a).noise_mm == 0 && std::abs(r_.axis(a).home_correction_mm - lost) > tol)
@@ -163,7 +167,7 @@ void Run::lost_steps() {
 void Run::jog_invalid_slave() {
   const Invalid v = m_.invalid;
   if (v != Invalid::slave_of_disabled && v != Invalid::slave_of_slave && v != Invalid::two_slaves &&
-      v != Invalid::master_not_on_switch && v != Invalid::slave_disabled)
+      v != Invalid::master_not_on_switch && v != Invalid::slave_disabled && v != Invalid::slave_without_sensor)
     return;
   const std::size_t a = m_.invalid_axis;
   const int named = static_cast<int>(r_.settings.axes[a].slave_of) - 1;

@@ -113,6 +113,20 @@ void Gen::invalid_settings() {
       st.axes[a].max_misalignment_mm = stop_distance_mm(v, e.acceleration_mm_per_s2) * d.u(0.2, 0.9);
       break;
     }
+    case Invalid::pushing_master:
+      if (!pick_axis(axes_where([&](std::size_t x) { return m.plan[x].role == Role::master; }), a)) return;
+      st.axes[a].mode = d.pick({HomingMode::pushing_release, HomingMode::pushing_reapproach});
+      st.axes[a].max_backoff_mm += st.axes[a].push_distance_mm;
+      break;
+    case Invalid::slave_without_sensor:
+      if (!pick_axis(axes_where([&](std::size_t x) { return m.plan[x].role == Role::slave; }), a)) return;
+      st.axes[a].mode = d.pick({HomingMode::manual, HomingMode::absolute, HomingMode::absolute_final});
+      break;
+    case Invalid::shared_limit_on_sensor:
+      if (!pick_axis(axes_where([&](std::size_t x) { return is_switch_axis(x) && !mode_is_pushing(st.axes[x].mode); }), a)) return;
+      st.axes[a].shared_limit = true;
+      st.axes[a].pull_off_mm = 0;
+      break;
     case Invalid::none:
     case Invalid::count:
       return;
@@ -149,11 +163,13 @@ void Gen::causes() {
     std::size_t a = 0;
     if (pick_axis(axes_where([&](std::size_t x) {
           return m.plan[x].role == Role::plain && is_switch_axis(x) && mode_reapproaches(m.settings.axes[x].mode) &&
-                 !mode_is_pushing(m.settings.axes[x].mode);
+                 !mode_is_pushing(m.settings.axes[x].mode) && m.sim.axes[x].hysteresis_mm > 0.02;
         }), a)) {
       AxisSettings& s = m.settings.axes[a];
       s.shared_limit = true;
-      s.pull_off_mm = d.chance(0.5) ? 0 : d.u(0, m.sim.axes[a].hysteresis_mm * 0.5);
+      // Off its edge by less than the hysteresis: the check accepts it (a
+      // pull-off of 0 it refuses: Invalid::shared_limit_on_sensor).
+      s.pull_off_mm = d.u(0.1, 0.5) * m.sim.axes[a].hysteresis_mm;
       s.final_move_enable = false;
       m.plan[a].rest_on_sensor = true;
     }
@@ -234,7 +250,10 @@ const char* invalid_name(Invalid v) {
                                 "master that does not home on a switch",
                                 "slave of itself",
                                 "disabled slave",
-                                "gantry stop distance beyond max misalignment"};
+                                "gantry stop distance beyond max misalignment",
+                                "gantry master in a pushing mode",
+                                "slave without a sensor of its own",
+                                "shared limit resting on its sensor (no pull-off)"};
   return names[static_cast<int>(v)];
 }
 

@@ -31,6 +31,9 @@ enum class Invalid : std::uint8_t {
   slave_of_itself,
   slave_disabled,
   gantry_stop_beyond_misalignment,
+  pushing_master,
+  slave_without_sensor,
+  shared_limit_on_sensor,
   count
 };
 const char* invalid_name(Invalid v);

@@ -170,8 +170,9 @@ void Gen::place_slave(std::size_t si, std::size_t mi, const PairDraw& pd, double
   p.differs = d.chance(0.5);
   if (p.differs) {
     draw_motion(s, c, PairDraw{});
-    s.mode = d.pick({HomingMode::manual, HomingMode::switch_release, HomingMode::switch_reapproach,
-                     HomingMode::switch_index, HomingMode::absolute, HomingMode::absolute_final,
+    // Its own mode only says it has a sensor of its own: any switch or
+    // pushing mode (anything else is refused: slave_needs_sensor).
+    s.mode = d.pick({HomingMode::switch_release, HomingMode::switch_reapproach, HomingMode::switch_index,
                      HomingMode::pushing_release, HomingMode::pushing_reapproach});
     s.max_seek_travel_mm = d.u(1, 300);
     s.soft_limits_enable = d.chance(0.5);
@@ -261,11 +262,11 @@ void Gen::gantry(std::size_t mi, std::size_t si, bool commutator) {
   sp.bad_skew = d.chance(0.2);
   AxisSettings& ms = m.settings.axes[mi];
   AxisSettings& ss = m.settings.axes[si];
-  ms.mode = commutator ? d.pick({HomingMode::switch_release, HomingMode::switch_reapproach,
-                                 HomingMode::pushing_release, HomingMode::pushing_reapproach})
+  // A gantry squares on its two sensors: no pushing master, with or without
+  // a commutator (commutator_needs_switch_master).
+  ms.mode = commutator ? d.pick({HomingMode::switch_release, HomingMode::switch_reapproach})
                        : d.pick({HomingMode::switch_release, HomingMode::switch_reapproach,
-                                 HomingMode::switch_index, HomingMode::pushing_release,
-                                 HomingMode::pushing_reapproach});
+                                 HomingMode::switch_index});
   const bool pushing = mode_is_pushing(ms.mode);
   ms.shared_limit = !pushing && d.chance(0.2);
   ss = AxisSettings{};
@@ -273,14 +274,17 @@ void Gen::gantry(std::size_t mi, std::size_t si, bool commutator) {
   ss.sensor_nc = d.chance(0.3);
   ss.switch_compensation_mm = d.chance(0.5) ? 0 : d.u(-0.5, 0.5);
   draw_motion(ms, m.sim.axes[mi], pd);
-  if (ms.shared_limit && mode_reapproaches(ms.mode)) ms.pull_off_mm = std::max(ms.pull_off_mm, 0.35);
+  // A shared limit rests off its sensor: beyond the release hysteresis after
+  // a reapproach, beyond the release point otherwise (for a slave: its
+  // pull-off, the master's with a commutator, plus its compensation).
+  const double shared_rest = mode_reapproaches(ms.mode) ? 0.35 : 0.1;
+  if (ms.shared_limit) ms.pull_off_mm = std::max(ms.pull_off_mm, shared_rest);
   ss.pull_off_mm = d.chance(0.2) ? 0 : d.u(0.1, 3);
-  if (ss.shared_limit && mode_reapproaches(ms.mode)) ss.pull_off_mm = std::max(ss.pull_off_mm, 0.35);
-  if (commutator && pushing) {
-    // Riding on the master's output into the stops, the slave must not get
-    // ahead of it: same rest offset from its edge, and a skew that trails.
-    if (ms.pull_off_mm - ss.switch_compensation_mm < 0) ss.switch_compensation_mm = 0;
-    ss.pull_off_mm = ms.pull_off_mm - ss.switch_compensation_mm;
+  if (ss.shared_limit) {
+    if (commutator)
+      ss.switch_compensation_mm = std::max(ss.switch_compensation_mm, shared_rest - ms.pull_off_mm);
+    else
+      ss.pull_off_mm = std::max(ss.pull_off_mm, shared_rest - ss.switch_compensation_mm);
   }
   // What the geometry needs on top of the skew: both sensors' hysteresis,
   // the pull-off and compensation difference, the stops' spread when
@@ -324,6 +328,8 @@ void Gen::roles_and_modes() {
         // Resting off the sensor needs a pull-off beyond the release hysteresis.
         const auto& c = m.sim.axes[a];
         s.pull_off_mm = std::max(s.pull_off_mm, c.hysteresis_mm + 4 * c.noise_mm + 0.1);
+      } else if (s.shared_limit) {
+        s.pull_off_mm = std::max(s.pull_off_mm, 0.1);  // beyond the release point
       }
       double r = 0;
       place_switch(a, 0, 0, s.shared_limit, r);

@@ -115,6 +115,13 @@ void Run::apply(const Event& e, Causes& causes) {
     case EventKind::count: break;
   }
   event_cause(causes, e, r_.settings);
+  // A slave's sensor blinded (stuck inactive, an open NO circuit) while the
+  // slave searches off it looks exactly like its release edge: the engine
+  // squares there, short of a skew it cannot see any more. Nothing can tell.
+  if (master_index(r_.settings, e.axis) >= 0 && (w_->dead_sensor & axis_bit(e.axis))) {
+    const std::string skew = std::string(1, kAxisUpper[e.axis]) + "'s skew beyond its max misalignment";
+    std::erase(causes.must, skew);
+  }
 }
 
 // One homing cycle, to its end and the machine at rest, then its verdict.
