@@ -118,6 +118,7 @@ struct PhaseRunner {
     if (entry()) run.target_mm = run.motor.position_mm - dir * s.max_backoff_mm;
     if (!active() && !partner_active()) {
       run.clearing = false;
+      run.cleared = true;
       return enter(Phase::seek);
     }
     move_to(run.target_mm, latch_v);
@@ -146,7 +147,10 @@ struct PhaseRunner {
       run.trigger_period_s = dt();
       return enter(Phase::stop);
     }
-    move_to(run.target_mm, seek_v);
+    // Just off both sensors, the pair meets them again within the clearing
+    // distance: at latch feedrate, so the side that meets its sensor first
+    // does not stop much shorter than the other and rack the pair.
+    move_to(run.target_mm, run.cleared ? latch_v : seek_v);
     if (arrived()) {
       if (commutator_slave()) return fail(AlarmCode::misalignment, travelled());
       return fail(AlarmCode::sensor_not_found, travelled());

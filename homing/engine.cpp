@@ -461,6 +461,7 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
     run.stopped_after_trigger = false;
     run.assigned = false;
     run.clearing = false;
+    run.cleared = false;
     run.released = false;
     run.at_reference = false;
     run.slave_aligned = false;

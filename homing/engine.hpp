@@ -57,6 +57,7 @@ class Engine {
     bool stopped_after_trigger = false;  // seek trigger found and the axis came to rest
     bool assigned = false;        // home position assigned in this cycle
     bool clearing = false;        // gantry: moving off the sensors together before the seek
+    bool cleared = false;         // ...done: the sensors are near, seek at latch feedrate
     bool released = false;        // the back-off found the release edge in this cycle
     bool at_reference = false;    // the reference edge is located in this cycle
     Phase next_phase = Phase::idle;  // where waiting goes once the partner is ready
