@@ -122,6 +122,10 @@ void Run::apply(const Event& e, Causes& causes) {
     const std::string skew = std::string(1, kAxisUpper[e.axis]) + "'s skew beyond its max misalignment";
     std::erase(causes.must, skew);
   }
+  // Likewise a sensor stuck active that goes dead during the back-off: to the
+  // engine that is its release edge, and it homes there.
+  if (w_->dead_sensor & axis_bit(e.axis))
+    std::erase(causes.must, std::string(1, kAxisUpper[e.axis]) + "'s faulty sensor");
 }
 
 // One homing cycle, to its end and the machine at rest, then its verdict.

@@ -41,6 +41,16 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
       if (mover) c.must.push_back(std::string(1, kAxisUpper[a]) + "'s cam shorter than its stop");
     }
     if (p.rest_on_sensor) c.allow({AlarmCode::settings_fault, AlarmCode::not_released});
+    // A cycle that starts deeper in the cam than max_backoff can release (a
+    // jog or move left it there) backs off straight away and must give up.
+    if (mover && mode_uses_switch(e.mode) && f == sim::Fault::none) {
+      const auto& cfg = r.sim().axis_config(a);
+      const double x = r.actual(a);
+      const double depth = dir_of(e) < 0 ? cfg.sensor_max_mm - x : x - cfg.sensor_min_mm;
+      const bool inside = x >= cfg.sensor_min_mm && x <= cfg.sensor_max_mm;
+      if (inside && depth + cfg.hysteresis_mm + 4 * cfg.noise_mm >= e.max_backoff_mm)
+        c.allow({AlarmCode::not_released});
+    }
     // An unsequenced shared-limit axis is assigned where it stands: on its sensor, that is a trip.
     if ((plan.unsequenced & bit) && r.settings.axes[a].shared_limit) c.allow({AlarmCode::hard_limit});
     if (p.role == Role::slave && mover) {
