@@ -160,8 +160,10 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
   // Mechanical stops: touched only while pushing into them.
   if (r_.sim().at_hard_stop(a)) {
     const bool pushing = mode_is_pushing(e.mode);
+    // A push stopped by an alarm brakes on into the stop it was pushing into.
     const bool push_phase =
-        as.phase == Phase::push || (master >= 0 && st.axes[static_cast<std::size_t>(master)].phase == Phase::push);
+        as.phase == Phase::push || (master >= 0 && st.axes[static_cast<std::size_t>(master)].phase == Phase::push) ||
+        (as.phase == Phase::stopping && braking_push_[a]);
     // Pushing into it, or a pushing axis whose dead sensor let the seek run into
     // the stop just behind it: allowed until the carriage leaves the stop.
     // A commutator slave rides along with its master's output, into its stop too.
@@ -259,6 +261,8 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
 
   x_prev_[a] = x;
   v_prev_[a] = v;
+  if (as.phase == Phase::stopping && phase_prev_[a] == Phase::push) braking_push_[a] = true;
+  if (as.phase != Phase::stopping) braking_push_[a] = false;
   phase_prev_[a] = as.phase;
 }
 

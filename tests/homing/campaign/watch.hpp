@@ -90,6 +90,7 @@ class Watch {
   std::array<bool, kAxisCount> has_release_{}, has_trigger_{};
   std::array<Phase, kAxisCount> traced_{};
   std::array<Phase, kAxisCount> phase_prev_{};
+  std::array<bool, kAxisCount> braking_push_{};  // stopping from a push cut short
 };
 
 }  // namespace campaign
