@@ -141,7 +141,9 @@ struct Harness {
     if (access == Access::read_only && accepted) violated("a client outside --write-allow got a write accepted", unit, pdu);
     // Settings change only by an accepted write of holding registers to the module.
     if (settings() != before) {
-      if (!(accepted && unit == kModuleUnit && (fc == 6 || fc == 16 || fc == 23)))
+      // Over TCP, unit ids 0xFF and 0 address the module too.
+      const bool module_unit = unit == kModuleUnit || (client.transport == "tcp" && (unit == 0 || unit == 0xFF));
+      if (!(accepted && module_unit && (fc == 6 || fc == 16 || fc == 23)))
         violated("settings changed by a request that was not an accepted settings write", unit, pdu);
       if (access == Access::locked && !maybe_unlocked && !contains_code(pdu, kUnlockCode))
         violated("locked settings changed without the unlock code", unit, pdu);

@@ -87,6 +87,10 @@ void ModbusService::disconnected(const ClientInfo& client) {
 Reply ModbusService::handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) {
   if (pdu.empty()) return Reply{};
   if (unit == config_.unit_id) return dispatch(Target::module, pdu, client, false);
+  // The Modbus TCP implementation guide: a device addressed by its IP address
+  // answers unit id 0xFF, and 0 is accepted for direct addressing too (many
+  // clients and SCADA drivers send one of them by default).
+  if (client.transport == "tcp" && (unit == 0xFF || unit == 0)) return dispatch(Target::module, pdu, client, false);
   if (config_.sim_unit_id && unit == *config_.sim_unit_id) return dispatch(Target::simulator, pdu, client, false);
   if (unit == 0 && client.transport == "rtu") {
     dispatch(Target::module, pdu, client, true);  // applied, never answered

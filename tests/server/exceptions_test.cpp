@@ -391,11 +391,29 @@ TEST_CASE("FC43/14 read device identification answers our identity, not libmodbu
   CHECK(raw_tcp_transaction(d.port(), 1, {0x2B, 0x0D, 0x01, 0x00}) == std::vector<std::uint8_t>{0xAB, 0x01});
 }
 
+TEST_CASE("over TCP unit ids 0xFF and 0 address the module itself, as the TCP implementation guide says") {
+  Daemon d;
+  Client c = Client::tcp(d.port());
+  c.use_unit(0xFF);
+  std::uint16_t w[1];
+  REQUIRE(modbus_read_input_registers(c.ctx(), reg("status.map_version").address, 1, w) == 1);
+  CHECK(w[0] == registers::kMapVersion);
+  REQUIRE(modbus_write_register(c.ctx(), reg("axis.x.jog_feedrate").address, 1234) == 1);
+  c.use_unit(1);
+  CHECK(c.read("axis.x.jog_feedrate") == 1234);
+  // Unit 0 in the MBAP header (raw, so no client library treats it as a broadcast).
+  const auto answer = raw_tcp_transaction(d.port(), 0, {0x04, static_cast<std::uint8_t>(reg("status.map_version").address >> 8),
+                                                       static_cast<std::uint8_t>(reg("status.map_version").address & 0xFF), 0x00, 0x01});
+  REQUIRE(answer.size() == 4);
+  CHECK(answer[0] == 0x04);
+  CHECK(((answer[2] << 8) | answer[3]) == registers::kMapVersion);
+}
+
 TEST_CASE("an unknown unit id over TCP is exception 0B, nothing changes") {
   Daemon d;
   Client c = Client::tcp(d.port());
   const auto before = holding_snapshot(c);
-  for (int unit : {2, 5, 100, 246, 255}) {
+  for (int unit : {2, 5, 100, 246, 254}) {
     INFO("unit " << unit);
     c.use_unit(unit);
     std::uint16_t w[2];
