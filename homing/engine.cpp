@@ -14,7 +14,9 @@ Engine::Engine() = default;
 StepResult Engine::step(const Settings& configured, const Inputs& inputs, double dt_s) {
   // Every axis moves with the settings it inherits (a slave its master's).
   const Settings settings = motion_settings(configured);
-  faults_ = check_settings(configured);
+  // The rule set runs only when a command needs it, not every period.
+  configured_ = &configured;
+  faults_checked_ = false;
   dt_s = std::isfinite(dt_s) ? std::max(dt_s, 0.0) : 0.0;
   if (dt_s > 0) last_dt_s_ = dt_s;
   ++heartbeat_;
@@ -39,6 +41,14 @@ void Engine::advance_motion(double dt_s) {
     run.last_command = run.command;
     run.motor = integrate(run.motor, run.command, dt_s);
   }
+}
+
+const SettingsFaults& Engine::faults() const {
+  if (!faults_checked_) {
+    faults_ = check_settings(*configured_);
+    faults_checked_ = true;
+  }
+  return faults_;
 }
 
 int Engine::partner_of(const Settings& settings, std::size_t axis) const {
@@ -263,7 +273,7 @@ CommandResult Engine::motion_refusal(const Settings& settings, std::size_t axis)
         group |= axis_bit(s) | axis_bit(static_cast<std::size_t>(m));
     }
   for (std::size_t a = 0; a < kAxisCount; ++a)
-    if ((group & axis_bit(a)) && faults_[a]) return CommandResult::refused_settings_fault;
+    if ((group & axis_bit(a)) && faults()[a]) return CommandResult::refused_settings_fault;
   const int partner = partner_of(settings, axis);
   if (limit_tripped_[axis] || (partner >= 0 && limit_tripped_[static_cast<std::size_t>(partner)]))
     return CommandResult::refused_hard_limit;
@@ -435,7 +445,7 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
     const bool names_involved = slave && ((covered | unsequenced_) &
                                           axis_bit(static_cast<std::size_t>(std::clamp(master_of(settings.axes[a]), 0, 5))));
     if (!involved && !(all && slave) && !names_involved) continue;
-    if (const auto& fault = faults_[a]) {
+    if (const auto& fault = faults()[a]) {
       AxisRun& run = axes_[fault->axis];
       run.alarm = Alarm{fault->code(), Phase::idle, fault->field, fault->value,
                         static_cast<std::uint8_t>(fault->rule)};

@@ -117,7 +117,11 @@ class Engine {
   std::array<std::int8_t, kAxisCount> prev_jog_request_{};
   double last_dt_s_ = 0.001;
   std::array<double, kAxisCount> absolute_mm_{};
-  SettingsFaults faults_{};                      // the rule set on this period's settings
+  // The rule set on this period's settings (as configured), computed on first use.
+  const SettingsFaults& faults() const;
+  const Settings* configured_ = nullptr;  // valid during step() only
+  mutable SettingsFaults faults_{};
+  mutable bool faults_checked_ = false;
   std::array<double, kAxisCount> pair_rel0_{};    // per slave: slave - master motor at cycle start
   std::array<bool, kAxisCount> limit_tripped_{};  // shared limit tripped: jog away until released
   std::array<std::size_t, kAxisCount> channel_source_{0, 1, 2, 3, 4, 5};  // axis driving each output
