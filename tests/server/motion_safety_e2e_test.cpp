@@ -159,3 +159,24 @@ TEST_CASE("over Modbus an absolute axis in no sequence step takes its coordinate
   REQUIRE(state_of(c) == static_cast<int>(homing::MachineState::homed));
   CHECK(c.read("axis.a.position") == um(43 + 5 - 10));
 }
+
+TEST_CASE("over Modbus a push the back-off cannot release is refused at write time: exception 03, nothing written") {
+  Daemon d({.time_scale = 10});
+  Client c = Client::tcp(d.port());
+  c.set("axis.x.mode", 7);  // pushing, release edge
+  const auto push = c.read("axis.x.push_distance");
+  CHECK(c.write("axis.x.push_distance", um(c.read_mm("axis.x.max_backoff") + 1)) == MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+  CHECK(c.read("axis.x.push_distance") == push);
+}
+
+TEST_CASE("over Modbus an unsequenced axis whose home position lies outside its soft limits cannot be configured") {
+  Daemon d({.time_scale = 10});
+  Client c = Client::tcp(d.port());
+  c.set("axis.a.mode", 1);  // manual, in no sequence step
+  c.set("axis.a.soft_limit_min", um(-10));
+  c.set("axis.a.soft_limit_max", um(10));
+  c.set("axis.a.home_position", um(5));
+  c.set("axis.a.soft_limits_enable", 1);
+  CHECK(c.write("axis.a.home_position", um(50)) == MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+  CHECK(c.read("axis.a.home_position") == um(5));
+}
