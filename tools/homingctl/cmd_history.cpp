@@ -1,0 +1,38 @@
+// history: the module's history from its database file (history.hpp).
+#include <fmt/format.h>
+
+#include "cli.hpp"
+#include "history.hpp"
+
+namespace homingctl {
+
+namespace {
+
+struct HistoryOptions {
+  std::string db = "homingd.db";
+  std::size_t runs = 20, changes = 20;
+};
+
+int history(const Context& ctx, const HistoryOptions& o) {
+  auto h = read_history(o.db, o.runs, o.changes);
+  if (!h) {
+    fmt::print(stderr, "homingctl history: {}\n", h.error());
+    return kFailed;
+  }
+  if (ctx.json) print_json(h->json); else fmt::print("{}", h->text);
+  return kOk;
+}
+
+}  // namespace
+
+void add_history_command(Commands& commands) {
+  auto o = std::make_shared<HistoryOptions>();
+  auto* sub = commands.add("history", "recent homing runs and settings changes (reads the daemon's database "
+                                      "file read-only: not served over Modbus)",
+                           [o](Context& ctx) { return history(ctx, *o); });
+  sub->add_option("--db", o->db, "the daemon's --db file")->capture_default_str();
+  sub->add_option("-n,--runs", o->runs, "homing runs shown")->capture_default_str();
+  sub->add_option("--changes", o->changes, "settings changes shown")->capture_default_str();
+}
+
+}  // namespace homingctl
