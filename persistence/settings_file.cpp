@@ -6,9 +6,10 @@
 
 #include <cerrno>
 #include <cstring>
-#include <ctime>
 #include <optional>
 #include <toml++/toml.h>
+
+#include "persistence/time_text.hpp"
 
 namespace persistence {
 namespace {
@@ -24,15 +25,6 @@ std::string quote_key(std::string_view k) {
   }
   out += '"';
   return out;
-}
-
-std::string utc_text(std::int64_t ms) {
-  std::time_t t = static_cast<std::time_t>(ms / 1000);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
 }
 
 Error file_error(const std::string& file, std::string_view what, int err) {
@@ -83,7 +75,7 @@ std::string settings_file_text(const std::map<std::string, std::int64_t>& values
                                std::int64_t now_ms) {
   std::string text;
   text += "# Homing module settings: raw register values by register name.\n";
-  text += fmt::format("# Exported {} from {}.\n", utc_text(now_ms), source);
+  text += fmt::format("# Exported {} from {}.\n", time_text(now_ms, TimeZone::utc), source);
   text += "# Import checks every value exactly like a Modbus write; a bad file changes nothing.\n";
   text += fmt::format("format = \"{}\"\nformat_version = {}\n\n[settings]\n", kFormat, kFormatVersion);
   for (const auto& [name, value] : values) text += fmt::format("{} = {}\n", quote_key(name), value);

@@ -11,19 +11,13 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include <ctime>
-
 #include "persistence/settings_store.hpp"
+#include "persistence/time_text.hpp"
 
 namespace {
 
 std::string local_time(std::int64_t ms) {
-  std::time_t t = static_cast<std::time_t>(ms / 1000);
-  std::tm tm{};
-  localtime_r(&t, &tm);
-  char buf[40];
-  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%S", &tm);
-  return fmt::format("{}.{:03}", buf, ms % 1000);
+  return fmt::format("{}.{:03}", persistence::time_text(ms, persistence::TimeZone::local), ms % 1000);
 }
 
 constexpr const char* kAxis[] = {"X", "Y", "Z", "A", "B", "C"};

@@ -4,11 +4,10 @@
 #include <spdlog/spdlog.h>
 #include <sys/stat.h>
 
-#include <ctime>
-
 #include "homing/alarms.hpp"
 #include "homing/axes.hpp"
 #include "persistence/settings_store.hpp"
+#include "persistence/time_text.hpp"
 #include "registers/lookup.hpp"
 #include "values.hpp"
 
@@ -16,14 +15,7 @@ namespace homingctl {
 
 namespace {
 
-std::string local_time(std::int64_t ms) {
-  std::time_t t = static_cast<std::time_t>(ms / 1000);
-  std::tm tm{};
-  localtime_r(&t, &tm);
-  char buf[40];
-  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%S", &tm);
-  return buf;
-}
+std::string local_time(std::int64_t ms) { return persistence::time_text(ms, persistence::TimeZone::local); }
 
 std::string shown(const std::string& name, std::int64_t raw) {
   const registers::Register* r = registers::find_register(name);
