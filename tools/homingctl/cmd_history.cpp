@@ -1,4 +1,5 @@
-// history: the module's history from its database file (history.hpp).
+// history: the module's history from its database file (history.hpp), the
+// one front end for it (homing-settings points here).
 #include <fmt/format.h>
 
 #include "cli.hpp"
@@ -10,11 +11,11 @@ namespace {
 
 struct HistoryOptions {
   std::string db = "homingd.db";
-  std::size_t runs = 20, changes = 20;
+  HistoryRequest request;
 };
 
 int history(const Context& ctx, const HistoryOptions& o) {
-  auto h = read_history(o.db, o.runs, o.changes);
+  auto h = read_history(o.db, o.request);
   if (!h) {
     fmt::print(stderr, "homingctl history: {}\n", h.error());
     return kFailed;
@@ -31,8 +32,11 @@ void add_history_command(Commands& commands) {
                                       "file read-only: not served over Modbus)",
                            [o](Context& ctx) { return history(ctx, *o); });
   sub->add_option("--db", o->db, "the daemon's --db file")->capture_default_str();
-  sub->add_option("-n,--runs", o->runs, "homing runs shown")->capture_default_str();
-  sub->add_option("--changes", o->changes, "settings changes shown")->capture_default_str();
+  sub->add_option("-n,--runs", o->request.runs, "homing runs shown")->capture_default_str();
+  sub->add_option("--changes", o->request.changes, "settings changes shown")->capture_default_str();
+  sub->add_option("--corrections", o->request.corrections,
+                  "home correction per axis (mean, spread, stddev) over this many runs (0 = not shown)")
+      ->capture_default_str();
 }
 
 }  // namespace homingctl
