@@ -362,3 +362,19 @@ TEST_CASE("homingctl status quotes the figure the alarm was raised with, not the
   CHECK(r.out.find(fmt::format("racking by {:.3f} mm", figure)) != std::string::npos);
   CHECK(r.out.find(fmt::format("racking by {:.3f} mm", position)) == std::string::npos);
 }
+
+TEST_CASE("homingctl exits 3 when no device answers at its unit id (exception 0B), for reads and writes") {
+  Daemon d;
+  for (std::vector<std::string> args : {std::vector<std::string>{"--unit", "9", "status"},
+                                        std::vector<std::string>{"--unit", "9", "get", "axis.x.pull_off"},
+                                        std::vector<std::string>{"--unit", "9", "set", "axis.x.pull_off=2"},
+                                        std::vector<std::string>{"--unit", "9", "abort"}}) {
+    auto r = ctl(d, args);
+    SHOW(r);
+    CHECK(r.code() == 3);
+    CHECK(r.err.find("exception 0B: no device answers at this unit id") != std::string::npos);
+  }
+  // Nothing was written through another unit id by mistake.
+  Client c = Client::tcp(d.port());
+  CHECK(c.read_mm("axis.x.pull_off") != Approx(2.0));
+}
