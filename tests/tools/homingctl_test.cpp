@@ -158,7 +158,7 @@ TEST_CASE("homingctl home waits for the result, a failing homing exits 1 with th
   {
     SHOW(r);
     REQUIRE(r.code() == 0);
-    CHECK(r.out.find("home all: homed") != std::string::npos);
+    CHECK(r.out.find("home all: done, X = -5.000 mm") != std::string::npos);
   }
   CHECK(c.read("axis.x.position") == -5000);
   CHECK(c.read_mm("sim.x.actual_position") == Approx(0.05 + 2.0).margin(0.02));
@@ -245,7 +245,7 @@ TEST_CASE("homingctl abort, reset, jog and move") {
   {
     SHOW(r);
     CHECK(r.code() == 0);
-    CHECK(r.out.find("move X to 12.5 mm") != std::string::npos);
+    CHECK(r.out.find("move X to 12.5 mm: done, X = 12.500 mm") != std::string::npos);
   }
   CHECK(c.read("axis.x.position") == 12500);
   // Outside the soft limits: refused in words.
