@@ -159,6 +159,9 @@ TEST_CASE("homingctl home waits for the result, a failing homing exits 1 with th
     SHOW(r);
     REQUIRE(r.code() == 0);
     CHECK(r.out.find("home all: done, X = -5.000 mm") != std::string::npos);
+    // Progress while it waited, on stderr (stdout keeps the result line).
+    CHECK(r.err.find("step 2: X seek") != std::string::npos);
+    CHECK(r.out.find("step 2: X seek") == std::string::npos);
   }
   CHECK(c.read("axis.x.position") == -5000);
   CHECK(c.read_mm("sim.x.actual_position") == Approx(0.05 + 2.0).margin(0.02));
