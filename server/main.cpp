@@ -12,6 +12,7 @@
 #include "control_loop.hpp"
 #include "homing/gpiod/gpiod_io.hpp"
 #include "homing/gpiod/gpiod_lines.hpp"
+#include "homing/sim/simulator_io.hpp"
 #include "modbus_service.hpp"
 #include "monitor.hpp"
 #include "options.hpp"
@@ -20,7 +21,6 @@
 #include "registers/sim_bindings.hpp"
 #include "registers/validate.hpp"
 #include "rtu_server.hpp"
-#include "simulator_io.hpp"
 #include "tcp_server.hpp"
 
 namespace {
@@ -105,8 +105,7 @@ int main(int argc, char** argv) {
   const auto rows = from_raw.settings.global.history_max_rows;
   if (auto r = store->set_limits(rows, rows); !r) spdlog::warn("settings: history limit not applied: {}", r.error().message);
 
-  std::unique_ptr<server::MachineIo> machine;
-  homing::sim::Simulator* sim = nullptr;
+  std::unique_ptr<homing::MachineIo> machine;
   if (wiring) {
     homing::gpiod::RunOptions run;
     run.control_period_us = opt.period_us;
@@ -115,17 +114,15 @@ int main(int argc, char** argv) {
     if (!io) return fail_start("--backend gpiod: " + io.error());
     machine = std::move(*io);
   } else {
-    auto sim_io = std::make_unique<server::SimulatorIo>(registers::default_sim_config());
-    sim = &sim_io->sim();
-    machine = std::move(sim_io);
+    machine = std::make_unique<homing::sim::SimulatorIo>(registers::default_sim_config());
   }
-  server::ControlLoop loop(from_raw.settings, std::move(machine), sim, opt.period_us, opt.time_scale);
+  server::ControlLoop loop(from_raw.settings, std::move(machine), opt.period_us, opt.time_scale);
   if (store->settings_lost()) loop.raise_settings_lost();
 
   server::ServiceConfig service_config;
   service_config.unit_id = static_cast<std::uint8_t>(opt.unit_id);
   service_config.sim_unit_id = static_cast<std::uint8_t>(opt.sim_unit_id);
-  if (!sim) service_config.sim_unit_id = std::nullopt;  // no simulator behind real GPIO
+  if (!loop.has_sim()) service_config.sim_unit_id = std::nullopt;  // no simulator behind real GPIO
   service_config.word_order = opt.word_order;
   for (const auto& entry : opt.write_allow) service_config.write_allow.push_back(*server::parse_cidr(entry));
   service_config.unlock_code = static_cast<std::uint16_t>(opt.unlock_code);
@@ -158,7 +155,7 @@ int main(int argc, char** argv) {
   if (tcp) where += "tcp " + opt.tcp_host + ":" + std::to_string(opt.tcp_port);
   if (rtu) where += std::string(where.empty() ? "" : ", ") + "rtu " + opt.rtu_device + " " + std::to_string(opt.baud) +
                     " 8" + opt.parity + std::to_string(opt.stop_bits);
-  const std::string sim_unit = sim ? ", simulator unit " + std::to_string(opt.sim_unit_id) : std::string();
+  const std::string sim_unit = loop.has_sim() ? ", simulator unit " + std::to_string(opt.sim_unit_id) : std::string();
   std::printf("homingd: listening on %s (unit %d%s, backend %s, db %s)\n", where.c_str(), opt.unit_id,
               sim_unit.c_str(), opt.backend.c_str(), opt.db_path.c_str());
   std::fflush(stdout);
