@@ -133,8 +133,8 @@ struct Session {
     nlohmann::json positions = nlohmann::json::object();
     for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
       if (settings.axes[a].mode == homing::HomingMode::disabled) continue;
-      pos += fmt::format("{}{} {:.3f}{}", pos.empty() ? "" : ", ", homing::kAxisUpper[a], s.axes[a].position,
-                         s.axes[a].homed ? "" : " (not homed)");
+      pos += fmt::format("{}{} = {:.3f} {}{}", pos.empty() ? "" : ", ", homing::kAxisUpper[a], s.axes[a].position,
+                         homing::axis_unit(a), s.axes[a].homed ? "" : " (not homed)");
       positions[std::string(homing::kAxisLetters[a])] = s.axes[a].position;
     }
     res.json["positions"] = positions;
@@ -144,7 +144,9 @@ struct Session {
       res.message = fmt::format("{} failed: {}", what, fmt::join(al, "\n  "));
       res.json["ok"] = false;
     } else {
-      res.message = fmt::format("{}: {} ({})", what, homing::state_name(s.state), pos);
+      // The outcome first: the machine state alone ("not_homed" after a move)
+      // reads like a failure when the command did what it was asked.
+      res.message = fmt::format("{}: done, {}", what, pos);
       for (const auto& a : al) res.message += "\n  " + a;
       res.json["ok"] = true;
     }
@@ -215,7 +217,7 @@ ActionResult home(Connection& c, const std::vector<std::string>& targets, const 
     if (last.exit_code != 0) return last;
     if (st->state != homing::MachineState::homed && all) {
       last.exit_code = 1;
-      last.message = fmt::format("{} ended {}", what, homing::state_name(st->state));
+      last.message = fmt::format("{}: not done, the machine ended {}", what, homing::state_name(st->state));
       return last;
     }
   }
