@@ -21,6 +21,7 @@
 #include "registers/validate.hpp"
 #include "rtu_server.hpp"
 #include "simulator_io.hpp"
+#include "systemd_notify.hpp"
 #include "tcp_server.hpp"
 
 namespace {
@@ -162,9 +163,12 @@ int main(int argc, char** argv) {
   std::printf("homingd: listening on %s (unit %d%s, backend %s, db %s)\n", where.c_str(), opt.unit_id,
               sim_unit.c_str(), opt.backend.c_str(), opt.db_path.c_str());
   std::fflush(stdout);
+  server::SystemdNotifier systemd([&loop] { return loop.snapshot().periods; });  // Type=notify, WatchdogSec=
+  systemd.ready("listening on " + where);
 
   int sig = 0;
   sigwait(&signals, &sig);
+  systemd.stopping();
   spdlog::info("{} received: stopping motion and shutting down", sig == SIGINT ? "SIGINT" : "SIGTERM");
   if (tcp) tcp->stop();
   if (rtu) rtu->stop();

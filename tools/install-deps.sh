@@ -6,7 +6,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config
-  libmodbus-dev libgpiod-dev libsqlite3-dev sqlite3
+  libmodbus-dev libgpiod-dev libsqlite3-dev sqlite3 libsystemd-dev
   catch2 libcli11-dev libtomlplusplus-dev libspdlog-dev libfmt-dev
   nlohmann-json3-dev libbenchmark-dev
   mbpoll socat python3-pymodbus python3-serial python3-serial-asyncio
