@@ -11,6 +11,8 @@ packages=(
   nlohmann-json3-dev libbenchmark-dev
   mbpoll socat python3-pymodbus python3-serial python3-serial-asyncio
   clang-16 libclang-rt-16-dev
+  # the .deb and its tests: dpkg-shlibdeps (cpack), systemd-analyze, file
+  dpkg-dev systemd file
 )
 
 missing=()
