@@ -1,6 +1,9 @@
 // homingctl against a real homingd (simulator backend, --time-scale 10): every
 // command, text and --json, a refused write, a failing homing, exit codes.
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
+
+#include <cmath>
 
 #include "tools_helpers.hpp"
 
@@ -336,4 +339,26 @@ TEST_CASE("homingctl history reads the daemon's database read-only while it runs
   r = run_program({HOMINGCTL_PATH, "history", "--db", d.db() + ".missing"}, 30s);
   CHECK(r.code() == 1);
   CHECK(r.err.find("no such database") != std::string::npos);
+}
+
+TEST_CASE("homingctl status quotes the figure the alarm was raised with, not the axis position") {
+  Daemon d;
+  Client c = Client::tcp(d.port());
+  // A gantry (Y slaved to X) whose slave sensor is dead: the racking guard
+  // stops it and quotes the misalignment it saw.
+  REQUIRE(ctl(d, {"set", "axis.z.mode=disabled", "sequence.step1=3", "sequence.step2=0", "axis.y.slave_of=1"}).code() == 0);
+  REQUIRE(ctl(d, {"set", "sim.y.fault=sensor_stuck_inactive"}).code() == 0);
+  auto r = ctl(d, {"home"});
+  {
+    SHOW(r);
+    REQUIRE(r.code() == 1);
+  }
+  REQUIRE(c.read("axis.y.alarm") == static_cast<int>(homing::AlarmCode::misalignment));
+  const double figure = c.read_mm("axis.y.alarm_value");
+  const double position = c.read_mm("axis.y.position");
+  REQUIRE(std::abs(figure - position) > 0.001);  // the two would read differently
+  r = ctl(d, {"status"});
+  SHOW(r);
+  CHECK(r.out.find(fmt::format("racking by {:.3f} mm", figure)) != std::string::npos);
+  CHECK(r.out.find(fmt::format("racking by {:.3f} mm", position)) == std::string::npos);
 }

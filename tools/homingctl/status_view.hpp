@@ -16,6 +16,7 @@ struct AxisView {
   homing::Phase phase = homing::Phase::idle;
   homing::AlarmCode alarm = homing::AlarmCode::none;
   homing::Phase alarm_phase = homing::Phase::idle;
+  double alarm_value = 0;  // axis.<a>.alarm_value: distance travelled, misalignment, ...
   double position = 0, velocity = 0, phase_distance = 0, stop_distance = 0;
   bool homed = false, sensor = false, busy = false;
 };
