@@ -95,6 +95,7 @@ TEST_CASE("homingd.service is Type=notify with a watchdog, restarts on failure a
   const std::string watchdog = one(unit, "Service.WatchdogSec");
   CHECK(std::regex_match(watchdog, std::regex("[1-9][0-9]*s")));
   CHECK(one(unit, "Service.Restart") == "on-failure");
+  CHECK(one(unit, "Service.RestartPreventExitStatus") == "2");  // a config mistake is not restarted forever
   CHECK(words(one(unit, "Service.ExecStart")) ==
         std::vector<std::string>{"/usr/bin/homingd", "--config", "/etc/homingd/homingd.toml"});
   CHECK(one(unit, "Install.WantedBy") == "multi-user.target");
