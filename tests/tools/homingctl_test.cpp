@@ -158,7 +158,10 @@ TEST_CASE("homingctl home waits for the result, a failing homing exits 1 with th
   {
     SHOW(r);
     REQUIRE(r.code() == 0);
-    CHECK(r.out.find("home all: homed") != std::string::npos);
+    CHECK(r.out.find("home all: done, X = -5.000 mm") != std::string::npos);
+    // Progress while it waited, on stderr (stdout keeps the result line).
+    CHECK(r.err.find("step 2: X seek") != std::string::npos);
+    CHECK(r.out.find("step 2: X seek") == std::string::npos);
   }
   CHECK(c.read("axis.x.position") == -5000);
   CHECK(c.read_mm("sim.x.actual_position") == Approx(0.05 + 2.0).margin(0.02));
@@ -245,7 +248,7 @@ TEST_CASE("homingctl abort, reset, jog and move") {
   {
     SHOW(r);
     CHECK(r.code() == 0);
-    CHECK(r.out.find("move X to 12.5 mm") != std::string::npos);
+    CHECK(r.out.find("move X to 12.5 mm: done, X = 12.500 mm") != std::string::npos);
   }
   CHECK(c.read("axis.x.position") == 12500);
   // Outside the soft limits: refused in words.
@@ -361,4 +364,20 @@ TEST_CASE("homingctl status quotes the figure the alarm was raised with, not the
   SHOW(r);
   CHECK(r.out.find(fmt::format("racking by {:.3f} mm", figure)) != std::string::npos);
   CHECK(r.out.find(fmt::format("racking by {:.3f} mm", position)) == std::string::npos);
+}
+
+TEST_CASE("homingctl exits 3 when no device answers at its unit id (exception 0B), for reads and writes") {
+  Daemon d;
+  for (std::vector<std::string> args : {std::vector<std::string>{"--unit", "9", "status"},
+                                        std::vector<std::string>{"--unit", "9", "get", "axis.x.pull_off"},
+                                        std::vector<std::string>{"--unit", "9", "set", "axis.x.pull_off=2"},
+                                        std::vector<std::string>{"--unit", "9", "abort"}}) {
+    auto r = ctl(d, args);
+    SHOW(r);
+    CHECK(r.code() == 3);
+    CHECK(r.err.find("exception 0B: no device answers at this unit id") != std::string::npos);
+  }
+  // Nothing was written through another unit id by mistake.
+  Client c = Client::tcp(d.port());
+  CHECK(c.read_mm("axis.x.pull_off") != Approx(2.0));
 }

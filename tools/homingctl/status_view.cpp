@@ -149,6 +149,24 @@ std::string render_status(const StatusView& s, const homing::Settings& settings,
   return out;
 }
 
+std::string progress_line(const StatusView& s, const homing::Settings& settings, bool distances) {
+  std::string axes;
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    const AxisView& x = s.axes[a];
+    const bool moving_phase = x.phase != homing::Phase::idle && x.phase != homing::Phase::waiting &&
+                              x.phase != homing::Phase::done;
+    if (!x.busy || !moving_phase || settings.axes[a].mode == homing::HomingMode::disabled) continue;
+    axes += fmt::format("{}{} {}", axes.empty() ? "" : ", ", homing::kAxisUpper[a], homing::phase_name(x.phase));
+    if (!distances) continue;
+    const double bound = phase_bound_mm(x.phase, settings.axes[a]);
+    const double done = std::abs(x.phase_distance);
+    axes += bound > 0 ? fmt::format(" {:.1f} / {:g} {}", std::min(done, bound), bound, homing::axis_unit(a))
+                      : fmt::format(" {:.1f} {}", done, homing::axis_unit(a));
+  }
+  if (axes.empty()) return "";
+  return s.sequence_step ? fmt::format("step {}: {}", s.sequence_step, axes) : axes;
+}
+
 nlohmann::json status_json(const StatusView& s, const homing::Settings& settings) {
   nlohmann::json j;
   j["state"] = std::string(homing::state_name(s.state));

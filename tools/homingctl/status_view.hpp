@@ -43,6 +43,9 @@ std::string global_alarm_text(homing::AlarmCode code, const homing::Settings& se
 std::string interlocks_text(std::uint16_t bits);
 
 std::string render_status(const StatusView& s, const homing::Settings& settings, bool progress);
+// One line of what a running cycle does now ("step 1: X seek 12.3 / 250 mm, Y seek ..."),
+// without the distances when `distances` is false; empty when nothing moves.
+std::string progress_line(const StatusView& s, const homing::Settings& settings, bool distances);
 nlohmann::json status_json(const StatusView& s, const homing::Settings& settings);
 
 // Bound of the phase an axis is in (for a progress bar), 0 if none.
