@@ -7,6 +7,12 @@
 #include <algorithm>
 #include <string>
 
+#include "homing/alarms.hpp"
+#include "homing/phases.hpp"
+#include "homing/settings.hpp"
+#include "homing/sim/config.hpp"
+#include "homing/status.hpp"
+
 namespace registers {
 namespace {
 
@@ -49,106 +55,43 @@ constexpr Table CO = Table::coil;
 constexpr Table DI = Table::discrete_input;
 constexpr Quantity LEN = Quantity::length_um;
 
-// ---- enum values (numbers are the engine's enum values; tests compare names) ----
-constexpr EnumValue kModes[] = {
-    {0, "disabled", "does not home; counts as homed"},
-    {1, "manual", "no movement: the current position becomes the home position"},
-    {2, "switch_release", "seek the switch, back off; the release edge is the reference"},
-    {3, "switch_reapproach", "as 2, then approach again at latch feedrate; that edge is the reference"},
-    {4, "switch_index", "release edge, then the next encoder index pulse"},
-    {5, "absolute", "position from the absolute encoder, no movement"},
-    {6, "absolute_final", "absolute, then move to final_position"},
-    {7, "pushing_release", "seek, push into the mechanical stop, release edge"},
-    {8, "pushing_reapproach", "seek, push into the mechanical stop, re-approach edge"},
-};
-constexpr EnumValue kDirections[] = {{0, "negative", "seek toward the negative end"},
-                                     {1, "positive", "seek toward the positive end"}};
-constexpr EnumValue kPreMoves[] = {
-    {0, "none", "no pre-move"},
-    {1, "if_sensor_active", "move pre_move_distance away first if the sensor is already active"},
-    {2, "always", "always move pre_move_distance away before seeking"}};
+// ---- enum values ----
+// The engine's enums: names and texts come from their tables in homing/
+// (enum_info.hpp), so a register's value list is the engine's own.
+template <class Entry, std::size_t N>
+constexpr std::array<EnumValue, N> values_of(const Entry (&table)[N]) {
+  std::array<EnumValue, N> out{};
+  for (std::size_t i = 0; i < N; ++i)
+    out[i] = {static_cast<std::int64_t>(table[i].value), table[i].name, table[i].text};
+  return out;
+}
+// Bitmask registers: the value of a bit is its number.
+template <std::size_t N>
+constexpr std::array<EnumValue, N> bits_of(const homing::interlock::BitInfo (&table)[N]) {
+  std::array<EnumValue, N> out{};
+  for (std::size_t i = 0; i < N; ++i) out[i] = {table[i].bit, table[i].name, table[i].text};
+  return out;
+}
+constexpr auto kModes = values_of(homing::kHomingModeInfo);
+constexpr auto kDirections = values_of(homing::kDirectionInfo);
+constexpr auto kPreMoves = values_of(homing::kPreMoveInfo);
+constexpr auto kSlaveModes = values_of(homing::kSlaveModeInfo);
+constexpr auto kAllowed = values_of(homing::kAllowedWithoutHomingInfo);
+constexpr auto kStates = values_of(homing::kMachineStateInfo);
+constexpr auto kCommandResults = values_of(homing::kCommandResultInfo);
+constexpr auto kInterlocks = bits_of(homing::interlock::kInfo);
+constexpr auto kAlarms = values_of(homing::kAlarmInfo);
+constexpr auto kPhases = values_of(homing::kPhaseInfo);
+constexpr auto kSimFaults = values_of(homing::sim::kFaultInfo);
+// Register encodings of axes (not engine enums).
 constexpr EnumValue kSlaveOf[] = {{0, "none", "not a slave"},  {1, "x", "slave of X"},
                                   {2, "y", "slave of Y"},      {3, "z", "slave of Z"},
                                   {4, "a", "slave of A"},      {5, "b", "slave of B"},
                                   {6, "c", "slave of C"}};
-constexpr EnumValue kSlaveModes[] = {
-    {0, "own_output", "own step output, own home sensor (software squaring)"},
-    {1, "external_commutator", "external commutator on the master's output"}};
-constexpr EnumValue kAllowed[] = {{0, "all", "every command is allowed before homing"},
-                                  {1, "jog_reduced", "only jog, at reduced speed (100 mm/min)"},
-                                  {2, "none", "nothing moves before homing"}};
 constexpr EnumValue kAxisBits[] = {{0, "x", "X"}, {1, "y", "Y"}, {2, "z", "Z"},
                                    {3, "a", "A"}, {4, "b", "B"}, {5, "c", "C"}};
-constexpr EnumValue kStates[] = {{0, "not_homed", "not homed"},
-                                 {1, "homing", "a homing cycle runs"},
-                                 {2, "homed", "all homing axes are homed"},
-                                 {3, "alarm", "an alarm is latched; reset it"},
-                                 {4, "moving", "a jog or move runs"}};
-constexpr EnumValue kCommandResults[] = {
-    {0, "none", "no command yet"},
-    {1, "accepted", "the last command started"},
-    {2, "already_running", "the same command still runs; not restarted"},
-    {3, "refused_alarm", "an alarm is latched: reset first"},
-    {4, "refused_estop", "emergency stop is active"},
-    {5, "refused_drive_fault", "a drive reports a fault"},
-    {6, "refused_busy", "another homing cycle or motion runs"},
-    {7, "refused_not_homed", "not allowed before homing (global.allowed_without_homing)"},
-    {8, "refused_no_permit", "global.permit_required and host.homing_permit is off"},
-    {9, "refused_soft_limit", "target outside the soft limits"},
-    {10, "refused_slave_axis", "a slave axis is commanded through its master"},
-    {11, "refused_cause_present", "reset refused: e-stop, drive fault or watchdog still active"},
-    {12, "refused_invalid", "the command makes no sense (bad axis, bad target)"},
-    {13, "refused_communication_lost", "the host watchdog expired"},
-    {14, "refused_settings_fault", "the configuration check refused the command: see the axis alarm or homingctl check"},
-    {15, "refused_hard_limit", "on a tripped shared limit: only a jog away from the sensor is allowed until it releases"}};
-constexpr EnumValue kInterlocks[] = {  // meanings = homing::interlock_name
-    {0, "estop", "emergency stop pressed"},
-    {1, "drive_fault", "drive fault"},
-    {2, "alarm_latched", "alarm latched (reset required)"},
-    {3, "settings_lost", "settings lost (reset required)"},
-    {4, "communication_lost", "communication lost (watchdog expired)"},
-    {5, "permit_missing", "homing permit off"},
-    {6, "not_homed", "not homed (motion limited)"},
-    {7, "homing_active", "homing cycle running"},
-    {8, "motion_active", "jog or move running"}};
-constexpr EnumValue kAlarms[] = {
-    {0, "none", "no alarm"},
-    {1, "sensor_not_found", "seek travelled max_seek_travel without a trigger"},
-    {2, "overrun_during_stop", "sensor released while stopping: trigger too short"},
-    {3, "stop_distance_exceeded", "came to rest further than max_stop_distance"},
-    {4, "not_released", "sensor still active after max_backoff"},
-    {5, "index_not_found", "no index pulse within one index pitch"},
-    {6, "slave_sensor_missing", "a slave axis has no home sensor"},
-    {7, "misalignment", "gantry misalignment beyond max_misalignment"},
-    {8, "hard_limit", "shared home sensor tripped after homing"},
-    {9, "soft_limit", "soft limit reached"},
-    {10, "aborted", "aborted by command"},
-    {11, "emergency_stop", "emergency stop"},
-    {12, "drive_fault", "drive fault"},
-    {13, "settings_fault", "settings cannot work (see the message)"},
-    {14, "communication_lost", "host watchdog expired"},
-    {15, "settings_lost", "stored settings lost"},
-    {16, "reapproach_not_found", "re-approach travelled max_backoff without a trigger"},
-    {17, "permit_withdrawn", "homing permit went off during a cycle"},
-    {18, "encoder_fault", "no valid absolute encoder position"}};
-constexpr EnumValue kPhases[] = {
-    {0, "idle", ""},           {1, "waiting", "later sequence step or gantry partner"},
-    {2, "pre_move", ""},       {3, "seek", ""},
-    {4, "stop", "decelerating after the trigger"},
-    {5, "push", "pushing into the mechanical stop"},
-    {6, "back_off", ""},       {7, "reapproach", ""},
-    {8, "index", ""},          {9, "pull_off", ""},
-    {10, "assign", ""},        {11, "final_move", ""},
-    {12, "align_slave", "external commutator: the slave finds its own edge"},
-    {13, "done", ""},          {14, "jog", ""},
-    {15, "move", ""},          {16, "stopping", "decelerating after an alarm or abort"}};
 constexpr EnumValue kAlarmAxis[] = {{0, "none", "no axis alarm"}, {1, "x", "X"}, {2, "y", "Y"},
                                     {3, "z", "Z"}, {4, "a", "A"},  {5, "b", "B"}, {6, "c", "C"}};
-constexpr EnumValue kSimFaults[] = {{0, "none", "no fault"},
-                                    {1, "sensor_stuck_active", "sensor reads active everywhere"},
-                                    {2, "sensor_stuck_inactive", "sensor never turns active"},
-                                    {3, "wire_break", "sensor wire broken (NC reads active, NO never)"},
-                                    {4, "drive_fault", "the drive reports a fault"}};
 
 // ---- module unit ----
 constexpr auto kModuleGlobals = std::to_array<Row>({
