@@ -107,6 +107,7 @@ struct AxisSettings {
   bool soft_limits_enable = false;
   bool shared_limit = false;
   double jog_feedrate_mm_per_min = 0;
+  friend bool operator==(const AxisSettings&, const AxisSettings&) = default;
 };
 
 struct GlobalSettings {
@@ -118,11 +119,13 @@ struct GlobalSettings {
   // Not used by the engine: the runtime bounds the audit log and the homing
   // history with it (oldest rows pruned).
   std::uint32_t history_max_rows = 10000;
+  friend bool operator==(const GlobalSettings&, const GlobalSettings&) = default;
 };
 
 struct Settings {
   std::array<AxisSettings, kAxisCount> axes{};
   GlobalSettings global{};
+  friend bool operator==(const Settings&, const Settings&) = default;
 };
 
 // Identifies one per-axis setting, so a settings fault can name it. The names
