@@ -96,6 +96,24 @@ constexpr EnumValue kAxisBits[] = {{0, "x", "X"}, {1, "y", "Y"}, {2, "z", "Z"},
 constexpr EnumValue kAlarmAxis[] = {{0, "none", "no axis alarm"}, {1, "x", "X"}, {2, "y", "Y"},
                                     {3, "z", "Z"}, {4, "a", "A"},  {5, "b", "B"}, {6, "c", "C"}};
 
+// Named for hmi_maps/enums.csv; a static_assert below proves every row's list is here.
+constexpr ValueList kValueLists[] = {
+    {"mode", kModes},
+    {"direction", kDirections},
+    {"pre_move_mode", kPreMoves},
+    {"slave_of", kSlaveOf},
+    {"slave_mode", kSlaveModes},
+    {"allowed_without_homing", kAllowed},
+    {"axis_mask", kAxisBits},
+    {"state", kStates},
+    {"command_result", kCommandResults},
+    {"interlocks", kInterlocks},
+    {"alarm", kAlarms},
+    {"alarm_axis", kAlarmAxis},
+    {"phase", kPhases},
+    {"sim_fault", kSimFaults},
+};
+
 // ---- module unit ----
 constexpr auto kModuleGlobals = std::to_array<Row>({
     // holding: global settings
@@ -352,16 +370,28 @@ constexpr bool one_row_per_member() {
     }
   return true;
 }
+constexpr bool value_lists_named() {
+  for (const Register& r : kAll) {
+    if (r.values.empty()) continue;
+    bool named = false;
+    for (const ValueList& l : kValueLists) named |= l.values.data() == r.values.data();
+    if (!named) return false;
+  }
+  return true;
+}
 static_assert(addresses_unique_without_overlap(), "two registers share an address in one (unit, table)");
 static_assert(ranges_fit_types(), "a min, max or default does not fit its type or range");
 static_assert(blocks_fit_strides(), "a per-axis row exceeds the stride, or a global reaches the axis blocks");
 static_assert(kinds_consistent(), "table/type/access/persisted/values of a row do not agree");
 static_assert(settings_fit_members(), "a settings row's range, type, axis or slot does not fit the member it fills");
 static_assert(one_row_per_member(), "two rows fill the same setting");
+static_assert(value_lists_named(), "a row's value list is missing from kValueLists");
 
 }  // namespace
 
 std::span<const Register> all_registers() { return kAll; }
+
+std::span<const ValueList> value_lists() { return kValueLists; }
 
 std::span<const Register> registers_of(Unit unit) {
   const auto first = std::find_if(kAll.begin(), kAll.end(), [&](const Register& r) { return r.unit == unit; });

@@ -98,6 +98,12 @@ struct EnumValue {
   std::string_view meaning;
 };
 
+// A value list of the table under the name hmi_maps/enums.csv gives it.
+struct ValueList {
+  std::string_view name;
+  std::span<const EnumValue> values;
+};
+
 // One register, expanded (per-axis rows already carry their axis and address).
 struct Register {
   std::string_view pattern;  // "axis.<a>.mode": <a> becomes the axis letter
@@ -164,6 +170,10 @@ std::string_view table_name(Table t);  // "coil", "discrete_input", ...
 std::string_view type_name(Type t);    // "bool", "u16", ... "enum", "bitmask"
 std::string_view access_name(Access a);
 std::string_view unit_name(Unit u);    // "module", "simulator"
+
+// Every value list the registers use (enum values, bitmask bits), named; each
+// register's `values` is one of them.
+std::span<const ValueList> value_lists();
 
 // Name of an enum value of a register ("" if not listed).
 std::string_view value_name(const Register& reg, std::int64_t raw);
