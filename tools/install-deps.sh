@@ -9,7 +9,7 @@ packages=(
   libmodbus-dev libgpiod-dev libsqlite3-dev sqlite3
   catch2 libcli11-dev libtomlplusplus-dev libspdlog-dev libfmt-dev
   nlohmann-json3-dev libbenchmark-dev
-  mbpoll socat python3-pymodbus python3-serial python3-serial-asyncio
+  mbpoll socat python3-pymodbus python3-serial python3-serial-asyncio python3-yaml
   clang-16 libclang-rt-16-dev
 )
 

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <unistd.h>
+
 #include <chrono>
 #include <iterator>
 #include <thread>
@@ -75,12 +77,30 @@ struct Session {
   }
 
   // Polls until `done(status)` or the timeout; keeps the heartbeat alive.
-  std::expected<StatusView, std::string> wait_for(const std::function<bool(const StatusView&)>& done) {
+  // With `progress`, what the cycle is doing goes to stderr while it runs
+  // (stdout keeps the result line, or the JSON, for scripts): redrawn in
+  // place on a terminal, one line per phase change otherwise.
+  std::expected<StatusView, std::string> wait_for(const std::function<bool(const StatusView&)>& done,
+                                                  bool progress = false) {
     const auto deadline = Clock::now() + std::chrono::duration<double>(o.timeout_s);
+    const bool tty = progress && ::isatty(STDERR_FILENO);
+    std::string shown;
     for (;;) {
       beat();
       StatusView s = read_status(c, settings);
-      if (done(s)) return s;
+      if (progress) {
+        // A terminal redraws the distances; a log gets a line per phase change.
+        const std::string line = progress_line(s, settings, tty);
+        if (line != shown && !line.empty()) {
+          if (tty) fmt::print(stderr, "\r\033[K{}", line);
+          else fmt::print(stderr, "{}\n", line);
+        }
+        shown = line;
+      }
+      if (done(s)) {
+        if (tty && !shown.empty()) fmt::print(stderr, "\n");
+        return s;
+      }
       if (Clock::now() >= deadline)
         return std::unexpected(fmt::format("still {} after {:g} s: gave up waiting (the machine keeps going; "
                                            "`homingctl abort` stops it)",
@@ -117,8 +137,8 @@ struct Session {
     nlohmann::json positions = nlohmann::json::object();
     for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
       if (settings.axes[a].mode == homing::HomingMode::disabled) continue;
-      pos += fmt::format("{}{} {:.3f}{}", pos.empty() ? "" : ", ", homing::kAxisUpper[a], s.axes[a].position,
-                         s.axes[a].homed ? "" : " (not homed)");
+      pos += fmt::format("{}{} = {:.3f} {}{}", pos.empty() ? "" : ", ", homing::kAxisUpper[a], s.axes[a].position,
+                         homing::axis_unit(a), s.axes[a].homed ? "" : " (not homed)");
       positions[std::string(homing::kAxisLetters[a])] = s.axes[a].position;
     }
     res.json["positions"] = positions;
@@ -128,7 +148,9 @@ struct Session {
       res.message = fmt::format("{} failed: {}", what, fmt::join(al, "\n  "));
       res.json["ok"] = false;
     } else {
-      res.message = fmt::format("{}: {} ({})", what, homing::state_name(s.state), pos);
+      // The outcome first: the machine state alone ("not_homed" after a move)
+      // reads like a failure when the command did what it was asked.
+      res.message = fmt::format("{}: done, {}", what, pos);
       for (const auto& a : al) res.message += "\n  " + a;
       res.json["ok"] = true;
     }
@@ -193,13 +215,13 @@ ActionResult home(Connection& c, const std::vector<std::string>& targets, const 
       last = not_waited(what, *r);
       continue;
     }
-    auto st = s.wait_for(at_rest);
+    auto st = s.wait_for(at_rest, true);
     if (!st) return failure(st.error());
     last = s.finished(what, *st);
     if (last.exit_code != 0) return last;
     if (st->state != homing::MachineState::homed && all) {
       last.exit_code = 1;
-      last.message = fmt::format("{} ended {}", what, homing::state_name(st->state));
+      last.message = fmt::format("{}: not done, the machine ended {}", what, homing::state_name(st->state));
       return last;
     }
   }
