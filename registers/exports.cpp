@@ -17,6 +17,8 @@ std::vector<GeneratedFile> generate_hmi_maps() {
       {"kepware_simulator.csv", export_kepware(Unit::simulator)},
       {"ignition_tags.json", export_ignition()},
       {"home_assistant_modbus.yaml", export_home_assistant()},
+      {"alarms.csv", export_alarms_csv()},
+      {"enums.csv", export_enums_csv()},
   };
 }
 

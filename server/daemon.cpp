@@ -20,6 +20,7 @@
 #include "registers/sim_bindings.hpp"
 #include "rtu_server.hpp"
 #include "start_up.hpp"
+#include "systemd_notify.hpp"
 #include "tcp_server.hpp"
 
 namespace server {
@@ -99,8 +100,8 @@ std::expected<Transports, std::string> open_transports(const Options& opt, Modbu
   return t;
 }
 
-// The line tests and scripts wait for: homingd is ready.
-void announce(const Options& opt, const Transports& t, bool has_sim) {
+// The line tests and scripts wait for: homingd is ready. Returns where it listens.
+std::string announce(const Options& opt, const Transports& t, bool has_sim) {
   std::string where;
   if (t.tcp) where += "tcp " + opt.tcp_host + ":" + std::to_string(opt.tcp_port);
   if (t.rtu) where += std::string(where.empty() ? "" : ", ") + "rtu " + opt.rtu_device + " " + std::to_string(opt.baud) +
@@ -109,6 +110,7 @@ void announce(const Options& opt, const Transports& t, bool has_sim) {
   std::printf("homingd: listening on %s (unit %d%s, backend %s, db %s)\n", where.c_str(), opt.unit_id,
               sim_unit.c_str(), opt.backend.c_str(), opt.db_path.c_str());
   std::fflush(stdout);
+  return where;
 }
 
 // Runs the loop, the monitor and the transports until SIGINT or SIGTERM, then
@@ -123,10 +125,12 @@ void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, Modbu
   std::thread tcp_thread, rtu_thread;
   if (t.tcp) tcp_thread = std::thread([&] { t.tcp->run(); });
   if (t.rtu) rtu_thread = std::thread([&] { t.rtu->run(); });
-  announce(opt, t, loop.has_sim());
+  SystemdNotifier systemd([&loop] { return loop.snapshot().periods; });  // Type=notify, WatchdogSec=
+  systemd.ready("listening on " + announce(opt, t, loop.has_sim()));
 
   int sig = 0;
   sigwait(&signals, &sig);
+  systemd.stopping();
   spdlog::info("{} received: stopping motion and shutting down", sig == SIGINT ? "SIGINT" : "SIGTERM");
   if (t.tcp) t.tcp->stop();
   if (t.rtu) t.rtu->stop();

@@ -17,19 +17,18 @@
 #include "registers/sim_bindings.hpp"
 #include "server/control_loop.hpp"
 #include "server/modbus_service.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace {
 
 struct Module {
-  std::filesystem::path dir;
+  test_support::TempDir dir{"runtime-test"};  // removed after the members below are gone
   std::unique_ptr<persistence::SettingsStore> store;
   std::unique_ptr<server::ControlLoop> loop;
   std::unique_ptr<server::ModbusService> service;
   server::ClientInfo client{7, "tcp", "127.0.0.1:50000"};
 
   explicit Module(bool faulty_disk, server::ServiceConfig config = {}) {
-    char tmpl[] = "/tmp/runtime_test_XXXXXX";
-    dir = ::mkdtemp(tmpl);
     std::vector<persistence::SettingDefault> defaults;
     for (const auto& [name, value] : registers::persisted_defaults()) defaults.push_back({name, value});
     persistence::StoreOptions options;
@@ -38,7 +37,7 @@ struct Module {
       options.vfs = fault_vfs::kName;
     }
     persistence::OpenReport report;
-    auto opened = persistence::SettingsStore::open((dir / "settings.db").string(), defaults, report, options);
+    auto opened = persistence::SettingsStore::open(dir.file("settings.db"), defaults, report, options);
     REQUIRE(opened);
     store = std::make_unique<persistence::SettingsStore>(std::move(*opened));
     const auto settings = registers::settings_from_raw(store->load()).settings;
@@ -50,7 +49,6 @@ struct Module {
     service.reset();
     loop.reset();
     store.reset();
-    std::filesystem::remove_all(dir);
   }
 
   std::vector<std::uint8_t> request(std::vector<std::uint8_t> pdu) { return service->handle(1, pdu, client).pdu; }

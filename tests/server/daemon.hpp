@@ -49,10 +49,16 @@ using namespace std::chrono_literals;
 
 inline std::string homingd_path() { return HOMINGD_PATH; }
 
-// This build's homingd, started for one test.
+// A homingd started for one test: this build's unless options.program names another.
 class Daemon : public Homingd {
  public:
-  explicit Daemon(DaemonOptions options = {}) : Homingd(homingd_path(), std::move(options)) {}
+  explicit Daemon(DaemonOptions options = {}) : Homingd(with_program(std::move(options))) {}
+
+ private:
+  static DaemonOptions with_program(DaemonOptions options) {
+    if (options.program.empty()) options.program = homingd_path();
+    return options;
+  }
 };
 
 }  // namespace e2e

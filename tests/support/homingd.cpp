@@ -12,12 +12,12 @@ namespace test_support {
 
 using namespace std::chrono_literals;
 
-Homingd::Homingd(std::string program, DaemonOptions options)
-    : program_(std::move(program)), options_(std::move(options)), dir_(options_.temp_prefix) {
+Homingd::Homingd(DaemonOptions options) : options_(std::move(options)), dir_(options_.temp_prefix) {
+  if (options_.program.empty()) throw std::invalid_argument("Homingd: no program to start");
   if (options_.db.empty()) options_.db = dir_.file("settings.db");
   std::string last_error;
   for (int attempt = 0; attempt < 5; ++attempt) {
-    port_ = options_.tcp ? free_port() : 0;
+    port_ = !options_.tcp ? 0 : options_.port != 0 ? options_.port : free_port();
     if (try_start(last_error)) return;
   }
   throw std::runtime_error("homingd did not start: " + last_error);
@@ -36,7 +36,8 @@ std::optional<int> Homingd::stop(int sig, std::chrono::milliseconds timeout) {
 }
 
 bool Homingd::try_start(std::string& error) {
-  std::vector<std::string> argv{program_};
+  std::vector<std::string> argv = options_.wrapper;
+  argv.push_back(options_.program);
   if (options_.tcp) {
     argv.push_back("--tcp");
     argv.push_back("127.0.0.1:" + std::to_string(port_));

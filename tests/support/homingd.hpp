@@ -15,6 +15,9 @@
 namespace test_support {
 
 struct DaemonOptions {
+  std::string program;               // the homingd to run (the tests' Daemon fills in the build's)
+  std::vector<std::string> wrapper;  // runs homingd through this command (setpriv ...)
+  int port = 0;                      // 0: a free port chosen for each attempt
   std::string db;                    // empty: a fresh database in the daemon's temp dir
   double time_scale = 10;
   std::vector<std::string> extra;    // more options (--rtu ..., --max-clients ...)
@@ -27,7 +30,7 @@ class Homingd {
  public:
   // Throws with homingd's output and log when it does not start (five tries:
   // the free port may be taken by someone else in between).
-  Homingd(std::string program, DaemonOptions options);
+  explicit Homingd(DaemonOptions options);
   ~Homingd();
   Homingd(const Homingd&) = delete;
   Homingd& operator=(const Homingd&) = delete;
@@ -48,7 +51,6 @@ class Homingd {
  private:
   bool try_start(std::string& error);
 
-  std::string program_;
   DaemonOptions options_;
   TempDir dir_;
   int port_ = 0;

@@ -5,8 +5,10 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <iterator>
 #include <thread>
 
+#include "homing/status.hpp"
 #include "settings_io.hpp"
 #include "status_view.hpp"
 #include "values.hpp"
@@ -24,27 +26,9 @@ int axis_index(std::string_view letter) {
 }
 
 std::string command_result_text(int r) {
-  switch (static_cast<CommandResult>(r)) {
-    case CommandResult::none: return "no command result yet";
-    case CommandResult::accepted: return "accepted";
-    case CommandResult::already_running: return "the same command is still running (not restarted)";
-    case CommandResult::refused_alarm: return "an alarm is latched: run `homingctl reset` first";
-    case CommandResult::refused_estop: return "the emergency stop is pressed: release it, then reset";
-    case CommandResult::refused_drive_fault: return "a drive reports a fault: check the drive, then reset";
-    case CommandResult::refused_busy: return "another homing cycle or motion is running (`homingctl abort` stops it)";
-    case CommandResult::refused_not_homed:
-      return "not allowed before the machine is homed (global.allowed_without_homing): home first";
-    case CommandResult::refused_no_permit: return "global.permit_required is on and the homing permit is off";
-    case CommandResult::refused_soft_limit: return "the target is outside the axis's soft limits";
-    case CommandResult::refused_slave_axis: return "this axis is a gantry slave: command its master";
-    case CommandResult::refused_cause_present:
-      return "the cause of the alarm is still present (e-stop, drive fault or watchdog): remove it first";
-    case CommandResult::refused_invalid: return "the command makes no sense here (axis disabled or bad target)";
-    case CommandResult::refused_communication_lost:
-      return "the watchdog expired: host.heartbeat stopped changing; reset first";
-    case CommandResult::refused_settings_fault: return "the configuration check refused the cycle";
-  }
-  return fmt::format("result {}", r);
+  // The engine's own text (homing/status.hpp), the one HMIs show too.
+  const auto& table = homing::kCommandResultInfo;
+  return r >= 0 && r < std::ssize(table) ? std::string(table[r].text) : fmt::format("result {}", r);
 }
 
 namespace {

@@ -35,6 +35,8 @@ struct Context {
   std::string parity = "E";
   bool no_wait = false;
   double timeout_s = 300;
+  std::string daemon_config;  // --daemon-config (local_daemon.hpp)
+  std::string db = "homingd.db";  // the daemon's database file, for history
 
   void finish_options();
   Connection& connection();
@@ -68,7 +70,7 @@ class Commands {
 void add_view_commands(Commands& commands, Context& ctx);      // status, watch
 void add_motion_commands(Commands& commands, Context& ctx);    // home, abort, reset, jog, move
 void add_settings_commands(Commands& commands, Context& ctx);  // get, set, check, export, import
-void add_history_command(Commands& commands);                  // history
+void add_history_command(Commands& commands, Context& ctx);    // history
 void add_trace_command(Commands& commands);                    // trace
 
 }  // namespace homingctl

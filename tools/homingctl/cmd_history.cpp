@@ -9,13 +9,8 @@ namespace homingctl {
 
 namespace {
 
-struct HistoryOptions {
-  std::string db = "homingd.db";
-  HistoryRequest request;
-};
-
-int history(const Context& ctx, const HistoryOptions& o) {
-  auto h = read_history(o.db, o.request);
+int history(const Context& ctx, const HistoryRequest& request) {
+  auto h = read_history(ctx.db, request);
   if (!h) {
     fmt::print(stderr, "homingctl history: {}\n", h.error());
     return kFailed;
@@ -26,15 +21,15 @@ int history(const Context& ctx, const HistoryOptions& o) {
 
 }  // namespace
 
-void add_history_command(Commands& commands) {
-  auto o = std::make_shared<HistoryOptions>();
+void add_history_command(Commands& commands, Context& ctx) {
+  auto o = std::make_shared<HistoryRequest>();
   auto* sub = commands.add("history", "recent homing runs and settings changes (reads the daemon's database "
                                       "file read-only: not served over Modbus)",
-                           [o](Context& ctx) { return history(ctx, *o); });
-  sub->add_option("--db", o->db, "the daemon's --db file")->capture_default_str();
-  sub->add_option("-n,--runs", o->request.runs, "homing runs shown")->capture_default_str();
-  sub->add_option("--changes", o->request.changes, "settings changes shown")->capture_default_str();
-  sub->add_option("--corrections", o->request.corrections,
+                           [o](Context& c) { return history(c, *o); });
+  sub->add_option("--db", ctx.db, "the daemon's --db file")->capture_default_str();
+  sub->add_option("-n,--runs", o->runs, "homing runs shown")->capture_default_str();
+  sub->add_option("--changes", o->changes, "settings changes shown")->capture_default_str();
+  sub->add_option("--corrections", o->corrections,
                   "home correction per axis (mean, spread, stddev) over this many runs (0 = not shown)")
       ->capture_default_str();
 }

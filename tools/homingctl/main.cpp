@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "cli.hpp"
+#include "local_daemon.hpp"
 
 using namespace homingctl;
 
@@ -14,7 +15,11 @@ namespace {
 
 void add_global_options(CLI::App& app, Context& ctx) {
   ConnectionOptions& co = ctx.co;
-  app.add_option("--tcp", co.tcp, "Modbus TCP address HOST:PORT")->capture_default_str();
+  app.add_option("--tcp", co.tcp, "Modbus TCP address HOST:PORT (default: the local homingd's, from --daemon-config, else this)")
+      ->capture_default_str();
+  app.add_option("--daemon-config", ctx.daemon_config,
+                 "homingd config file whose tcp, unit, sim_unit, word_order and db are the defaults here "
+                 "(default: $HOMINGD_CONFIG, else /etc/homingd/homingd.toml when it exists)");
   app.add_option("--rtu", co.rtu, "Modbus RTU serial device (instead of TCP)");
   app.add_option("--baud", co.baud, "RTU baud rate")->capture_default_str();
   app.add_option("--parity", ctx.parity, "RTU parity N|E|O")->check(CLI::IsMember({"N", "E", "O"}))->capture_default_str();
@@ -26,6 +31,25 @@ void add_global_options(CLI::App& app, Context& ctx) {
       ->capture_default_str();
   app.add_option("--timeout-ms", co.timeout_ms, "response timeout per request")->check(CLI::Range(10, 60000))->capture_default_str();
   app.add_flag("--json", ctx.json, "machine-readable output (read commands)");
+}
+
+// The local homingd's config fills what the command line left at its default;
+// false when a config file the user named cannot be used (said on stderr).
+bool apply_daemon_config(CLI::App& app, Context& ctx) {
+  const auto choice = choose_daemon_config(ctx.daemon_config);
+  auto local = read_local_daemon(choice);
+  if (!local) {
+    fmt::print(stderr, "homingctl: {}{}\n", local.error(), choice.named ? "" : " (ignored)");
+    return !choice.named;
+  }
+  if (*local) {
+    const GivenOptions given{app.get_option("--tcp")->count() > 0 || !ctx.co.rtu.empty(),
+                             app.get_option("--unit")->count() > 0, app.get_option("--sim-unit")->count() > 0,
+                             app.get_option("--word-order")->count() > 0,
+                             app.get_subcommand("history")->get_option("--db")->count() > 0};
+    apply_local_daemon(**local, given, ctx.co, ctx.db);
+  }
+  return true;
 }
 
 // Runs the chosen subcommand; what went wrong becomes its exit code and a line on stderr.
@@ -57,7 +81,7 @@ int main(int argc, char** argv) {
   add_view_commands(commands, ctx);
   add_motion_commands(commands, ctx);
   add_settings_commands(commands, ctx);
-  add_history_command(commands);
+  add_history_command(commands, ctx);
   add_trace_command(commands);
 
   try {
@@ -71,6 +95,7 @@ int main(int argc, char** argv) {
     return kUsage;
   }
   ctx.finish_options();
+  if (!apply_daemon_config(app, ctx)) return kUsage;
   const Run* command = commands.chosen();
   return command ? run(*command, ctx) : kOk;
 }

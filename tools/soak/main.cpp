@@ -144,10 +144,11 @@ int main(int argc, char** argv) {
   try {
     if (!o.spawn_path.empty()) {
       test_support::DaemonOptions options;
+      options.program = o.spawn_path;
       options.time_scale = o.time_scale;
       options.extra = {"--log-level", "warn"};
       options.temp_prefix = "homing-soak";
-      daemon.emplace(o.spawn_path, std::move(options));
+      daemon.emplace(std::move(options));
       port = daemon->port();
       pid = daemon->pid();
     } else {
