@@ -83,7 +83,7 @@ struct PhaseRunner {
     return true;
   }
   void fail(AlarmCode code, double value = 0) {
-    e.raise(settings, axis, Alarm{code, run.phase, AxisField::none, value, 0});
+    e.raise(settings, axis_bit(axis), Alarm{code, run.phase, AxisField::none, value, 0});
   }
   void move_to(double target_mm, double v) {
     run.target_mm = target_mm;

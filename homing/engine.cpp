@@ -148,71 +148,77 @@ void Engine::stop_all(const Settings& settings) {
   step_index_ = -1;
 }
 
-void Engine::raise(const Settings& settings, std::size_t axis, Alarm alarm) {
-  AxisRun& run = axes_[axis];
-  if (run.alarm) return;  // the first alarm on an axis wins; it names the cause
-  alarm.phase = run.phase;
-  run.alarm = alarm;
-  if (settings.global.alarm_clears_homed) {
-    for (std::size_t a = 0; a < kAxisCount; ++a) axes_[a].homed = false;
+// The one way an axis alarm is latched. Each axis of `axes` that has none
+// yet takes `alarm`, stamped with the phase it is in: the first alarm on an
+// axis names the cause and later ones change nothing. Once any axis has
+// latched (all of `axes` first, so each keeps the phase it was in), every
+// axis stops and global.alarm_clears_homed applies.
+void Engine::raise(const Settings& settings, AxisMask axes, Alarm alarm) {
+  bool latched = false;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    AxisRun& run = axes_[a];
+    if (!(axes & axis_bit(a)) || run.alarm) continue;
+    run.alarm = alarm;
+    run.alarm.phase = run.phase;
+    latched = true;
   }
-  stop_all(settings);
+  if (latched) halt(settings);
 }
 
+// An alarm not tied to one axis (e-stop, settings lost): latched once, and
+// every period it is raised motion stops as for an axis alarm.
 void Engine::raise_global(const Settings& settings, AlarmCode code) {
   if (global_alarm_ == AlarmCode::none) global_alarm_ = code;
+  halt(settings);
+}
+
+void Engine::halt(const Settings& settings) {
   if (settings.global.alarm_clears_homed) {
     for (AxisRun& run : axes_) run.homed = false;
   }
   stop_all(settings);
 }
 
+void Engine::clear_alarms() {
+  global_alarm_ = AlarmCode::none;
+  for (AxisRun& run : axes_) run.alarm = Alarm{};
+}
+
 void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
   if (inputs.estop && !estop_) {
+    AxisMask busy = 0;
     for (std::size_t a = 0; a < kAxisCount; ++a) {
-      AxisRun& run = axes_[a];
-      const bool busy = run.in_cycle || run.motor.velocity_mm_per_s != 0 || run.phase == Phase::jog ||
-                        run.phase == Phase::move;
-      if (busy && !run.alarm) run.alarm = Alarm{AlarmCode::emergency_stop, run.phase};
+      const AxisRun& run = axes_[a];
+      if (run.in_cycle || run.motor.velocity_mm_per_s != 0 || run.phase == Phase::jog || run.phase == Phase::move)
+        busy |= axis_bit(a);
     }
+    raise(settings, busy, Alarm{AlarmCode::emergency_stop});
     raise_global(settings, AlarmCode::emergency_stop);
   }
   estop_ = inputs.estop;
 
   if (inputs.settings_lost) raise_global(settings, AlarmCode::settings_lost);
 
-  for (std::size_t a = 0; a < kAxisCount; ++a) {
-    if (drive_fault_[a] && axes_[a].alarm.code != AlarmCode::drive_fault && !axes_[a].alarm)
-      raise(settings, a, Alarm{AlarmCode::drive_fault});
-  }
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (drive_fault_[a]) raise(settings, axis_bit(a), Alarm{AlarmCode::drive_fault});
 
   comm_lost_ = inputs.communication_lost;
   if (comm_lost_ && any_motion()) {
-    // Note every moving axis and its phase first: raising the first alarm
-    // already turns the others to "stopping".
-    bool any = false;
+    AxisMask moving = 0;
     for (std::size_t a = 0; a < kAxisCount; ++a) {
-      AxisRun& run = axes_[a];
+      const AxisRun& run = axes_[a];
       const bool homing_phase = run.in_cycle && run.phase != Phase::waiting && run.phase != Phase::done;
-      const bool moving = homing_phase || run.phase == Phase::jog || run.phase == Phase::move ||
-                          run.motor.velocity_mm_per_s != 0;
-      if (moving && !run.alarm) {
-        run.alarm = Alarm{AlarmCode::communication_lost, run.phase};
-        any = true;
-      }
+      if (homing_phase || run.phase == Phase::jog || run.phase == Phase::move || run.motor.velocity_mm_per_s != 0)
+        moving |= axis_bit(a);
     }
-    if (any) {
-      if (settings.global.alarm_clears_homed)
-        for (AxisRun& run : axes_) run.homed = false;
-      stop_all(settings);
-    }
+    raise(settings, moving, Alarm{AlarmCode::communication_lost});
   }
 
   permit_ = inputs.homing_permit;
   if (cycle_active_ && settings.global.permit_required && !permit_) {
     for (std::size_t a = 0; a < kAxisCount; ++a)
       if (axes_[a].in_cycle && axes_[a].phase != Phase::done) {
-        raise(settings, a, Alarm{AlarmCode::permit_withdrawn});
+        raise(settings, axis_bit(a), Alarm{AlarmCode::permit_withdrawn});
         break;
       }
   }
@@ -227,8 +233,7 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
     const double pos = run.motor.position_mm + run.offset_mm;
     if (s.shared_limit && run.sensor_active && !limit_tripped_[a] &&
         sensor_channel(settings, a) == static_cast<int>(a)) {
-      raise(settings, a, Alarm{AlarmCode::hard_limit, Phase::idle, AxisField::shared_limit, 0, 0});
-      axes_[a].alarm.value = pos;
+      raise(settings, axis_bit(a), Alarm{AlarmCode::hard_limit, Phase::idle, AxisField::shared_limit, pos, 0});
       limit_tripped_[a] = true;
       continue;
     }
@@ -236,10 +241,8 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
     // Only moving further out is a fault: an axis left outside tightened
     // limits may still be jogged back in.
     const double v = run.motor.velocity_mm_per_s;
-    if (s.soft_limits_enable && ((pos < s.soft_limit_min_mm - tol && v < 0) || (pos > s.soft_limit_max_mm + tol && v > 0))) {
-      raise(settings, a, Alarm{AlarmCode::soft_limit});
-      axes_[a].alarm.value = pos;
-    }
+    if (s.soft_limits_enable && ((pos < s.soft_limit_min_mm - tol && v < 0) || (pos > s.soft_limit_max_mm + tol && v > 0)))
+      raise(settings, axis_bit(a), Alarm{AlarmCode::soft_limit, Phase::idle, AxisField::none, pos, 0});
   }
 }
 
@@ -297,21 +300,19 @@ void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
     if (estop_ || fault || comm_lost_) {
       last_result_ = CommandResult::refused_cause_present;
     } else {
-      global_alarm_ = AlarmCode::none;
-      for (AxisRun& run : axes_) run.alarm = Alarm{};
+      clear_alarms();
       last_result_ = CommandResult::accepted;
     }
   }
   if (c.abort) {
     ++command_count_;
+    // Abort during homing is an alarm on every axis still homing; abort of
+    // a jog or move just stops it.
     if (cycle_active_) {
-      for (std::size_t a = 0; a < kAxisCount; ++a) {
-        AxisRun& run = axes_[a];
-        if (run.in_cycle && run.phase != Phase::done && !run.alarm)
-          run.alarm = Alarm{AlarmCode::aborted, run.phase};
-      }
-      if (settings.global.alarm_clears_homed)
-        for (AxisRun& run : axes_) run.homed = false;
+      AxisMask homing = 0;
+      for (std::size_t a = 0; a < kAxisCount; ++a)
+        if (axes_[a].in_cycle && axes_[a].phase != Phase::done) homing |= axis_bit(a);
+      raise(settings, homing, Alarm{AlarmCode::aborted});
     }
     stop_all(settings);
     last_result_ = CommandResult::accepted;
@@ -446,9 +447,8 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
                                           axis_bit(static_cast<std::size_t>(std::clamp(master_of(settings.axes[a]), 0, 5))));
     if (!involved && !(all && slave) && !names_involved) continue;
     if (const auto& fault = faults()[a]) {
-      AxisRun& run = axes_[fault->axis];
-      run.alarm = Alarm{fault->code(), Phase::idle, fault->field, fault->value,
-                        static_cast<std::uint8_t>(fault->rule)};
+      raise(settings, axis_bit(fault->axis),
+            Alarm{fault->code(), Phase::idle, fault->field, fault->value, static_cast<std::uint8_t>(fault->rule)});
       last_result_ = CommandResult::refused_settings_fault;
       return;
     }
@@ -504,7 +504,7 @@ void Engine::assign_unsequenced(const Settings& settings, std::size_t a) {
   const AxisSettings& s = settings.axes[a];
   double machine_now = s.home_position_mm;
   if (mode_is_absolute(s.mode)) {
-    if (!absolute_valid_[a]) return raise(settings, a, Alarm{AlarmCode::encoder_fault});
+    if (!absolute_valid_[a]) return raise(settings, axis_bit(a), Alarm{AlarmCode::encoder_fault});
     machine_now = absolute_mm_[a] - s.home_position_mm;
   }
   const double new_offset = machine_now - run.motor.position_mm;
@@ -635,7 +635,7 @@ void Engine::guard_gantries(const Settings& settings) {
       worst = std::max(worst, std::abs(dev));
     }
     if (worst > limit) {
-      raise(settings, sl, Alarm{AlarmCode::misalignment, slave.phase, AxisField::max_misalignment, worst, 0});
+      raise(settings, axis_bit(sl), Alarm{AlarmCode::misalignment, slave.phase, AxisField::max_misalignment, worst, 0});
       follow_masters(settings);  // the slave brakes with the pair, not on its own old command
     }
   }

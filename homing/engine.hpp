@@ -95,8 +95,11 @@ class Engine {
   void start_cycle(const Settings& settings, AxisMask requested, bool all);
   bool start_step(const Settings& settings);
   void finish_cycle(const Settings& settings);
-  void raise(const Settings& settings, std::size_t axis, Alarm alarm);
+  // The alarm path (see engine.cpp): the only code that writes an alarm.
+  void raise(const Settings& settings, AxisMask axes, Alarm alarm);
   void raise_global(const Settings& settings, AlarmCode code);
+  void halt(const Settings& settings);
+  void clear_alarms();
   void stop_all(const Settings& settings);
   CommandResult motion_refusal(const Settings& settings, std::size_t axis) const;
   CommandResult homing_refusal(const Settings& settings) const;
