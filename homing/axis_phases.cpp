@@ -238,14 +238,12 @@ struct PhaseRunner {
   // The index search runs away from the sensor (-dir) from the release edge.
   bool beyond_release(double x_mm) const { return (x_mm - run.release_mm) * -dir > 0; }
 
-  double index_bound() const { return s.index_pitch_mm * 1.1 + stop_distance_mm(latch_v, accel); }
-
   void index() {
-    if (entry()) run.target_mm = run.phase_start_mm - dir * index_bound();
+    if (entry()) run.target_mm = run.phase_start_mm - dir * index_search_mm(s);
     // A pulse in the same period but before the release edge is not the next one.
     if (event().index && beyond_release(event().index_mm)) return reference_found(event().index_mm);
     move_to(run.target_mm, latch_v);
-    if (arrived()) fail(AlarmCode::index_not_found, index_bound());
+    if (arrived()) fail(AlarmCode::index_not_found, index_search_mm(s));
   }
 
   // The reference edge is located. A commutator master holds there (its

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "gantry.hpp"
+#include "sequence.hpp"
 #include "settings_check.hpp"
 
 namespace homing {
@@ -398,52 +399,18 @@ void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
   }
 }
 
-// Builds the steps of a cycle: slaves go with their master whatever their own
-// bit says; homing one axis homes its gantry partner too.
 void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all) {
-  steps_.fill(0);
-  unsequenced_ = 0;
-  auto with_partners = [&](AxisMask mask) {
-    AxisMask out = 0;
-    for (std::size_t a = 0; a < kAxisCount; ++a) {
-      if (!(mask & axis_bit(a))) continue;
-      const int m = master_of(settings.axes[a]);
-      const std::size_t master = m >= 0 ? static_cast<std::size_t>(m) : a;
-      if (m >= 0 && all) continue;  // in a sequence, a slave's own bit is ignored
-      out |= axis_bit(master);
-      const int s = gantry_slave(settings, master);
-      if (s >= 0) out |= axis_bit(static_cast<std::size_t>(s));
-    }
-    return out;
-  };
-  AxisMask covered = 0;
-  if (all) {
-    for (std::size_t i = 0; i < steps_.size(); ++i) {
-      steps_[i] = with_partners(settings.global.sequence_steps[i]) & static_cast<AxisMask>(~covered);
-      covered |= steps_[i];
-    }
-    for (std::size_t a = 0; a < kAxisCount; ++a)
-      if (!(covered & axis_bit(a)) && master_of(settings.axes[a]) < 0 &&
-          settings.axes[a].mode != HomingMode::disabled)
-        unsequenced_ |= axis_bit(a);
-    // A slave is assigned with its master, whatever its own mode.
-    for (std::size_t a = 0; a < kAxisCount; ++a) {
-      const int m = gantry_master(settings, a);
-      if (m >= 0 && (unsequenced_ & axis_bit(static_cast<std::size_t>(m)))) unsequenced_ |= axis_bit(a);
-    }
-  } else {
-    steps_[0] = with_partners(requested);
-    covered = steps_[0];
-  }
-
+  plan_ = plan_cycle(settings, requested, all);
+  const AxisMask covered = plan_.covered();
+  const AxisMask unsequenced = plan_.unsequenced;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     // In a home-all, a slave's own bit is ignored, so a slave whose slave_of
     // names no usable master (itself, another slave) would never be covered
     // and would silently stay unhomed: check every slave's configuration,
     // and the unsequenced axes that get their position at the end.
     const bool slave = master_of(settings.axes[a]) >= 0;
-    const bool involved = (covered | unsequenced_) & axis_bit(a);
-    const bool names_involved = slave && ((covered | unsequenced_) &
+    const bool involved = (covered | unsequenced) & axis_bit(a);
+    const bool names_involved = slave && ((covered | unsequenced) &
                                           axis_bit(static_cast<std::size_t>(std::clamp(master_of(settings.axes[a]), 0, 5))));
     if (!involved && !(all && slave) && !names_involved) continue;
     if (const auto& fault = faults()[a]) {
@@ -486,8 +453,8 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
 }
 
 bool Engine::start_step(const Settings& settings) {
-  while (++step_index_ < static_cast<int>(steps_.size())) {
-    const AxisMask mask = steps_[static_cast<std::size_t>(step_index_)];
+  while (++step_index_ < static_cast<int>(plan_.steps.size())) {
+    const AxisMask mask = plan_.steps[static_cast<std::size_t>(step_index_)];
     if (!mask) continue;
     for (std::size_t a = 0; a < kAxisCount; ++a)
       if (mask & axis_bit(a)) begin_axis(settings, a);
@@ -517,7 +484,7 @@ void Engine::assign_unsequenced(const Settings& settings, std::size_t a) {
 
 void Engine::finish_cycle(const Settings& settings) {
   for (std::size_t a = 0; a < kAxisCount && cycle_active_; ++a)
-    if (unsequenced_ & axis_bit(a)) assign_unsequenced(settings, a);
+    if (plan_.unsequenced & axis_bit(a)) assign_unsequenced(settings, a);
   if (!cycle_active_) return;  // an encoder fault ended the cycle
   for (AxisRun& run : axes_) run.in_cycle = false;
   cycle_active_ = false;
@@ -527,7 +494,7 @@ void Engine::finish_cycle(const Settings& settings) {
 
 void Engine::run_cycle(const Settings& settings) {
   if (!cycle_active_ || step_index_ < 0) return;
-  const AxisMask mask = steps_[static_cast<std::size_t>(step_index_)];
+  const AxisMask mask = plan_.steps[static_cast<std::size_t>(step_index_)];
   for (std::size_t a = 0; a < kAxisCount && cycle_active_; ++a)
     if (mask & axis_bit(a)) run_axis(settings, a);
   if (!cycle_active_) return;

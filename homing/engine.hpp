@@ -9,6 +9,7 @@
 #include "debounce.hpp"
 #include "io.hpp"
 #include "settings.hpp"
+#include "sequence.hpp"
 #include "settings_check.hpp"
 #include "status.hpp"
 
@@ -135,9 +136,8 @@ class Engine {
   bool cycle_active_ = false;
   bool cycle_all_ = false;
   AxisMask cycle_requested_ = 0;
-  std::array<AxisMask, 6> steps_{};
-  int step_index_ = -1;          // index into steps_ of the running step
-  AxisMask unsequenced_ = 0;     // assigned their home position at the end
+  CyclePlan plan_{};
+  int step_index_ = -1;          // index into plan_.steps of the running step
   AlarmCode global_alarm_ = AlarmCode::none;
   bool estop_ = false;
   bool prev_start_button_ = false;
