@@ -10,8 +10,7 @@
 namespace homing {
 
 struct PhaseRunner {
-  using Run = Engine::AxisRun;
-  using Wait = Engine::AxisRun::Wait;
+  using Run = AxisRun;
 
   Engine& e;
   const Settings& settings;
@@ -73,7 +72,7 @@ struct PhaseRunner {
   double dt() const { return e.last_dt_s_; }
 
   void enter(Phase p) {
-    run.phase = p;
+    run.set_phase(p);
     run.entered = false;
     run.phase_start_mm = run.motor.position_mm;
   }
@@ -90,15 +89,14 @@ struct PhaseRunner {
     run.command = move_to_command(run.motor, target_mm, v, accel, dt());
   }
   void wait_for(Wait w, Phase next) {
-    run.wait = w;
-    run.next_phase = next;
     enter(Phase::waiting);
+    run.phase_data<phase_data::Waiting>() = {w, next};
   }
 
   // -- phases --------------------------------------------------------------
 
   void pre_move() {
-    if (run.clearing) return clear_sensors();
+    if (run.phase_data_if<phase_data::Clearing>()) return clear_sensors();
     if (entry()) {
       // A gantry decides for the pair: either side on its sensor counts.
       const bool needed = s.pre_move_mode == PreMove::always ||
@@ -117,9 +115,9 @@ struct PhaseRunner {
   void clear_sensors() {
     if (entry()) run.target_mm = run.motor.position_mm - dir * s.max_backoff_mm;
     if (!active() && !partner_active()) {
-      run.clearing = false;
-      run.cleared = true;
-      return enter(Phase::seek);
+      enter(Phase::seek);
+      run.phase_data<phase_data::Seek>().at_latch = true;
+      return;
     }
     move_to(run.target_mm, latch_v);
     if (arrived()) fail(AlarmCode::not_released, travelled());
@@ -128,29 +126,29 @@ struct PhaseRunner {
   void seek() {
     if (entry()) {
       if (software_pair() && (active() || partner_active())) {
-        run.clearing = true;
-        return enter(Phase::pre_move);
+        enter(Phase::pre_move);
+        run.phase_data<phase_data::Clearing>();
+        return;
       }
       if (active()) {
         // Already on the sensor (MASSO): no seek, no stop; find the edge.
-        run.triggered = true;
-        run.trigger_mm = run.motor.position_mm;
-        run.stopped_after_trigger = true;
+        run.reach(Reached::stopped_on_sensor);
         return after_stop();
       }
       // Bounded by max_seek_travel, braking in time to rest at its end.
       run.target_mm = run.phase_start_mm + dir * s.max_seek_travel_mm;
     }
     if (edge_to(true)) {
-      run.triggered = true;
-      run.trigger_mm = edge_mm();
-      run.trigger_period_s = dt();
-      return enter(Phase::stop);
+      const phase_data::Stop trigger{edge_mm(), dt()};
+      enter(Phase::stop);
+      run.phase_data<phase_data::Stop>() = trigger;
+      return;
     }
     // Just off both sensors, the pair meets them again within the clearing
     // distance: at latch feedrate, so the side that meets its sensor first
     // does not stop much shorter than the other and rack the pair.
-    move_to(run.target_mm, run.cleared ? latch_v : seek_v);
+    const auto* seek = run.phase_data_if<phase_data::Seek>();
+    move_to(run.target_mm, seek && seek->at_latch ? latch_v : seek_v);
     if (arrived()) {
       if (commutator_slave()) return fail(AlarmCode::misalignment, travelled());
       return fail(AlarmCode::sensor_not_found, travelled());
@@ -169,16 +167,17 @@ struct PhaseRunner {
     // One control period of travel is allowed on top: the trigger cannot be
     // seen before the period in which it happened has ended. That is the
     // period the trigger was seen in (possibly a late one), not the current.
-    const double past = std::abs(run.motor.position_mm - run.trigger_mm);
-    if (past > s.max_stop_distance_mm + seek_v * run.trigger_period_s + 1e-9)
+    const phase_data::Stop& trigger = run.phase_data<phase_data::Stop>();
+    const double past = std::abs(run.motor.position_mm - trigger.trigger_mm);
+    if (past > s.max_stop_distance_mm + seek_v * trigger.trigger_period_s + 1e-9)
       return fail(AlarmCode::stop_distance_exceeded, past);
-    run.stopped_after_trigger = true;
+    run.reach(Reached::stopped_on_sensor);
     after_stop();
   }
 
   void after_stop() {
     const Phase next = mode_is_pushing(s.mode) ? Phase::push : Phase::back_off;
-    if (partner >= 0 && software_pair() && !partner_run().stopped_after_trigger)
+    if (partner >= 0 && software_pair() && !partner_run().has_reached(Reached::stopped_on_sensor))
       return wait_for(Wait::partner_stopped, next);
     enter(next);
   }
@@ -196,21 +195,19 @@ struct PhaseRunner {
   }
 
   void back_off() {
-    if (entry()) {
-      run.target_mm = run.phase_start_mm - dir * s.max_backoff_mm;
-      run.index_seen = false;
-    }
+    if (entry()) run.target_mm = run.phase_start_mm - dir * s.max_backoff_mm;
+    phase_data::BackOff& seen = run.phase_data<phase_data::BackOff>();
     if (event().index) {
-      run.index_seen = true;
-      run.index_seen_mm = event().index_mm;
+      seen.index_seen = true;
+      seen.index_seen_mm = event().index_mm;
     }
     if (edge_to(false)) {
-      run.release_mm = edge_mm();
-      run.released = true;
+      const double release_mm = edge_mm();
+      run.reach(Reached::released);
       if (mode_reapproaches(s.mode)) {
         // A gantry turns back toward its sensors together, or one side would
         // run toward its sensor while the other still backs off.
-        if (software_pair() && !partner_run().released) {
+        if (software_pair() && !partner_run().has_reached(Reached::released)) {
           run.command = stop_command(accel);
           return wait_for(Wait::partner_released, Phase::reapproach);
         }
@@ -219,10 +216,12 @@ struct PhaseRunner {
       if (s.mode == HomingMode::switch_index) {
         // The release is accepted only after the debounce time: an index pulse
         // may already have passed beyond the release edge. It is the next one.
-        if (run.index_seen && beyond_release(run.index_seen_mm)) return reference_found(run.index_seen_mm);
-        return enter(Phase::index);
+        if (seen.index_seen && beyond(release_mm, seen.index_seen_mm)) return reference_found(seen.index_seen_mm);
+        enter(Phase::index);
+        run.phase_data<phase_data::Index>().release_mm = release_mm;
+        return;
       }
-      return reference_found(run.release_mm);
+      return reference_found(release_mm);
     }
     move_to(run.target_mm, latch_v);
     if (arrived()) fail(AlarmCode::not_released, travelled());
@@ -236,12 +235,13 @@ struct PhaseRunner {
   }
 
   // The index search runs away from the sensor (-dir) from the release edge.
-  bool beyond_release(double x_mm) const { return (x_mm - run.release_mm) * -dir > 0; }
+  bool beyond(double release_mm, double x_mm) const { return (x_mm - release_mm) * -dir > 0; }
 
   void index() {
     if (entry()) run.target_mm = run.phase_start_mm - dir * index_search_mm(s);
     // A pulse in the same period but before the release edge is not the next one.
-    if (event().index && beyond_release(event().index_mm)) return reference_found(event().index_mm);
+    const double release_mm = run.phase_data<phase_data::Index>().release_mm;
+    if (event().index && beyond(release_mm, event().index_mm)) return reference_found(event().index_mm);
     move_to(run.target_mm, latch_v);
     if (arrived()) fail(AlarmCode::index_not_found, index_search_mm(s));
   }
@@ -250,7 +250,7 @@ struct PhaseRunner {
   // slave aligns on its own edge from this point); everyone else pulls off.
   void reference_found(double reference_mm) {
     run.reference_mm = reference_mm;
-    run.at_reference = true;
+    run.reach(Reached::reference);
     if (commutator_master()) {
       run.command = stop_command(accel);
       return wait_for(Wait::slave_aligned, Phase::pull_off);
@@ -258,7 +258,7 @@ struct PhaseRunner {
     // A software gantry pulls off together: the side that found its edge
     // first holds there, or it would race ahead by a whole pull-off while
     // the other still backs off at latch feedrate.
-    if (software_pair() && !partner_run().at_reference) {
+    if (software_pair() && !partner_run().has_reached(Reached::reference)) {
       run.command = stop_command(accel);
       return wait_for(Wait::partner_at_reference, Phase::pull_off);
     }
@@ -291,7 +291,7 @@ struct PhaseRunner {
   // together; the master assigns both.
   void aligned() {
     run.aligning = false;
-    run.slave_aligned = true;
+    run.reach(Reached::aligned);
     run.follow_master = true;
     run.command = stop_command(accel);
     wait_for(Wait::partner_assigned, Phase::done);
@@ -303,7 +303,7 @@ struct PhaseRunner {
     r.home_correction_mm = new_offset - r.offset_mm;
     r.offset_mm = new_offset;
     r.homed = true;
-    r.assigned = true;
+    r.reach(Reached::assigned);
   }
   void set_home(double reference_motor_mm, double machine_mm_at_rest) {
     set_home(run, reference_motor_mm, machine_mm_at_rest);
@@ -323,7 +323,7 @@ struct PhaseRunner {
   }
 
   void after_assign() {
-    if (partner >= 0 && !is_slave && software_pair() && !partner_run().assigned)
+    if (partner >= 0 && !is_slave && software_pair() && !partner_run().has_reached(Reached::assigned))
       return wait_for(Wait::partner_assigned, Phase::final_move);
     // The final move starts only with the slave locked to this axis, or the
     // slave would miss its first period and end apart from its master.
@@ -333,7 +333,8 @@ struct PhaseRunner {
       // A software-slaved slave rests on its own edge until the master has
       // its own: locking earlier would drag it along the master's back-off
       // and pull-off and undo the squaring.
-      if (software_pair() && !partner_run().assigned) return wait_for(Wait::partner_assigned, Phase::done);
+      if (software_pair() && !partner_run().has_reached(Reached::assigned))
+        return wait_for(Wait::partner_assigned, Phase::done);
       run.follow_master = true;
       return enter(Phase::done);
     }
@@ -351,21 +352,21 @@ struct PhaseRunner {
 
   void waiting() {
     run.entered = true;
-    if (run.wait == Wait::none) return;  // a later sequence step
+    const Wait wait = run.waiting_for();
+    if (wait == Wait::none) return;  // a later sequence step
     const Run& p = partner_run();
     bool ready = false;
-    switch (run.wait) {
-      case Wait::partner_stopped: ready = p.stopped_after_trigger; break;
-      case Wait::partner_assigned: ready = p.assigned; break;
-      case Wait::slave_aligned: ready = p.slave_aligned; break;
+    switch (wait) {
+      case Wait::partner_stopped: ready = p.has_reached(Reached::stopped_on_sensor); break;
+      case Wait::partner_assigned: ready = p.has_reached(Reached::assigned); break;
+      case Wait::slave_aligned: ready = p.has_reached(Reached::aligned); break;
       case Wait::slave_locked: ready = p.follow_master; break;
-      case Wait::partner_released: ready = p.released && at_rest(); break;
-      case Wait::partner_at_reference: ready = p.at_reference && at_rest(); break;
+      case Wait::partner_released: ready = p.has_reached(Reached::released) && at_rest(); break;
+      case Wait::partner_at_reference: ready = p.has_reached(Reached::reference) && at_rest(); break;
       case Wait::master_at_reference:
         // Commutator slave: moves with the master until the master holds,
         // at rest, on its reference edge.
-        ready = p.phase == Phase::waiting && p.wait == Wait::slave_aligned && p.motor.velocity_mm_per_s == 0 &&
-                at_rest();
+        ready = p.waiting_for() == Wait::slave_aligned && p.motor.velocity_mm_per_s == 0 && at_rest();
         if (ready) {
           run.follow_master = false;
           run.aligning = true;
@@ -374,9 +375,9 @@ struct PhaseRunner {
       case Wait::none: break;
     }
     if (ready) {
-      run.wait = Wait::none;
-      if (is_slave && run.next_phase == Phase::done) run.follow_master = true;  // now lock
-      enter(run.next_phase);
+      const Phase next = run.phase_data<phase_data::Waiting>().next;
+      if (is_slave && next == Phase::done) run.follow_master = true;  // now lock
+      enter(next);
     }
   }
 
@@ -389,8 +390,6 @@ struct PhaseRunner {
       run.command = stop_command(accel);
       return;
     }
-    run.triggered = false;
-    run.stopped_after_trigger = false;
     enter(Phase::seek);
   }
 
@@ -404,7 +403,7 @@ struct PhaseRunner {
     switch (s.mode) {
       case HomingMode::disabled:
         run.homed = true;
-        run.phase = Phase::done;
+        run.set_phase(Phase::done);
         return;
       case HomingMode::manual:
         set_home(run.motor.position_mm, s.home_position_mm);

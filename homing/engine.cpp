@@ -138,12 +138,10 @@ void Engine::stop_all(const Settings& settings) {
     // motor is at rest: switching it under a moving motor would hand the
     // pulses to the other motor.
     run.in_cycle = false;
-    run.clearing = false;
     run.aligning = false;
-    run.jog_dir = 0;
     const bool moving = run.motor.velocity_mm_per_s != 0;
-    if (moving) run.phase = Phase::stopping;
-    else if (run.phase != Phase::done) run.phase = Phase::idle;
+    if (moving) run.set_phase(Phase::stopping);
+    else if (run.phase != Phase::done) run.set_phase(Phase::idle);
   }
   cycle_active_ = false;
   step_index_ = -1;
@@ -345,12 +343,9 @@ void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
       continue;
     }
     if (req == 0) {
-      if (run.phase == Phase::jog) {
-        run.phase = Phase::stopping;
-        run.jog_dir = 0;
-      }
+      if (run.phase == Phase::jog) run.set_phase(Phase::stopping);
     } else if (req != prev_jog_request_[a] || (run.phase != Phase::jog && run.phase != Phase::stopping)) {
-      if (run.phase == Phase::jog && run.jog_dir == req) {
+      if (run.phase == Phase::jog && run.jog_dir() == req) {
         // still held
       } else if (req != prev_jog_request_[a]) {
         ++command_count_;
@@ -364,8 +359,8 @@ void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
         if (r == CommandResult::accepted && run.phase == Phase::move) r = CommandResult::refused_busy;
         last_result_ = r;
         if (r == CommandResult::accepted) {
-          run.phase = Phase::jog;
-          run.jog_dir = req;
+          run.set_phase(Phase::jog);
+          run.phase_data<phase_data::Jog>().dir = req;
           run.phase_start_mm = run.motor.position_mm;
         }
       }
@@ -392,7 +387,7 @@ void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
     if (r == CommandResult::accepted && s.jog_feedrate_mm_per_min <= 0) r = CommandResult::refused_invalid;
     last_result_ = r;
     if (r == CommandResult::accepted) {
-      run.phase = Phase::move;
+      run.set_phase(Phase::move);
       run.target_mm = target - run.offset_mm;
       run.phase_start_mm = run.motor.position_mm;
     }
@@ -431,20 +426,11 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
     if (!(covered & axis_bit(a))) continue;
     run.in_cycle = true;
     run.homed = false;
-    run.phase = Phase::waiting;
-    run.wait = AxisRun::Wait::none;
+    run.set_phase(Phase::waiting);  // for its step
     run.entered = false;
-    run.triggered = false;
-    run.stopped_after_trigger = false;
-    run.assigned = false;
-    run.clearing = false;
-    run.cleared = false;
-    run.released = false;
-    run.at_reference = false;
-    run.slave_aligned = false;
+    run.reached = Reached::nothing;
     run.aligning = false;
     run.follow_master = false;
-    run.cycle_start_mm = run.motor.position_mm;
   }
   for (std::size_t sl = 0; sl < kAxisCount; ++sl)
     if (const int m = gantry_master(settings, sl); m >= 0)
@@ -479,7 +465,7 @@ void Engine::assign_unsequenced(const Settings& settings, std::size_t a) {
   run.trigger_position_mm = run.motor.position_mm + run.offset_mm;
   run.offset_mm = new_offset;
   run.homed = true;
-  run.phase = Phase::done;
+  run.set_phase(Phase::done);
 }
 
 void Engine::finish_cycle(const Settings& settings) {
@@ -516,13 +502,13 @@ void Engine::run_motion(const Settings& settings) {
         if (!homed && settings.global.allowed_without_homing != AllowedWithoutHoming::all)
           v = std::min(v, mm_per_min_to_mm_per_s(100.0));
         if (homed && s.soft_limits_enable) {
-          const double limit = (run.jog_dir > 0 ? s.soft_limit_max_mm : s.soft_limit_min_mm) - run.offset_mm;
-          const bool beyond = run.jog_dir > 0 ? run.motor.position_mm >= limit : run.motor.position_mm <= limit;
+          const double limit = (run.jog_dir() > 0 ? s.soft_limit_max_mm : s.soft_limit_min_mm) - run.offset_mm;
+          const bool beyond = run.jog_dir() > 0 ? run.motor.position_mm >= limit : run.motor.position_mm <= limit;
           // At or past the limit in the jog's direction: hold still rather
           // than head back to the limit against the operator's direction.
           run.command = beyond ? stop_command(accel) : move_to_command(run.motor, limit, v, accel, last_dt_s_);
         } else {
-          run.command = velocity_command(run.jog_dir * v, accel);
+          run.command = velocity_command(run.jog_dir() * v, accel);
         }
         break;
       }
@@ -530,7 +516,7 @@ void Engine::run_motion(const Settings& settings) {
         const double v = mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min);
         run.command = move_to_command(run.motor, run.target_mm, v, accel, last_dt_s_);
         if (run.motor.position_mm == run.target_mm && run.motor.velocity_mm_per_s == 0) {
-          run.phase = Phase::idle;
+          run.set_phase(Phase::idle);
           run.command = stop_command(accel);
         }
         break;
@@ -544,7 +530,7 @@ void Engine::run_motion(const Settings& settings) {
           run.command.limit_mm =
               (run.motor.velocity_mm_per_s > 0 ? s.soft_limit_max_mm : s.soft_limit_min_mm) - run.offset_mm;
         }
-        if (run.motor.velocity_mm_per_s == 0) run.phase = Phase::idle;
+        if (run.motor.velocity_mm_per_s == 0) run.set_phase(Phase::idle);
         break;
       case Phase::idle:
       case Phase::done:

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 
+#include "axis_run.hpp"
 #include "debounce.hpp"
 #include "io.hpp"
 #include "settings.hpp"
@@ -27,52 +28,7 @@ class Engine {
   const Outputs& outputs() const { return outputs_; }
   const Status& status() const { return status_; }
 
-  // Per-axis run state, public so that phase functions stay free functions.
-  struct AxisRun {
-    Phase phase = Phase::idle;
-    Alarm alarm{};
-    MotionState motor{};          // motor position now (never jumps: steps counted)
-    MotionState period_start{};   // motor at the start of the period that just ended
-    MotionCommand command{};      // what runs until the next period
-    MotionCommand last_command{}; // what ran during the period that just ended
-    double offset_mm = 0;         // machine position = motor + offset
-    bool homed = false;
-    bool in_cycle = false;
-    bool entered = false;         // the current phase has run its entry action
-    bool sensor_active = false;   // debounced, polarity applied
-    double phase_start_mm = 0;    // motor position at phase entry
-    double cycle_start_mm = 0;
-    double trigger_mm = 0;        // motor position at the seek trigger
-    double trigger_period_s = 0;  // length of the period in which the seek trigger was seen
-    bool triggered = false;
-    double reference_mm = 0;      // motor position at the reference edge
-    double release_mm = 0;
-    bool index_seen = false;      // an index pulse passed during back-off (switch + index)
-    double index_seen_mm = 0;     // motor position of the last one
-    double target_mm = 0;         // of the current move_to
-    bool push_output = false;
-    bool commutator_output = false;
-    bool follow_master = false;   // locked to the master's motion
-    std::int8_t jog_dir = 0;
-    bool slave_aligned = false;   // commutator slave finished its own edge
-    bool stopped_after_trigger = false;  // seek trigger found and the axis came to rest
-    bool assigned = false;        // home position assigned in this cycle
-    bool clearing = false;        // gantry: moving off the sensors together before the seek
-    bool cleared = false;         // ...done: the sensors are near, seek at latch feedrate
-    bool released = false;        // the back-off found the release edge in this cycle
-    bool at_reference = false;    // the reference edge is located in this cycle
-    Phase next_phase = Phase::idle;  // where waiting goes once the partner is ready
-    enum class Wait : std::uint8_t {
-      none, partner_stopped, partner_assigned, slave_aligned, master_at_reference, slave_locked,
-      partner_released, partner_at_reference
-    } wait = Wait::none;
-    bool aligning = false;        // commutator slave running its own edge search
-    double trigger_position_mm = 0;
-    double home_correction_mm = 0;
-  };
-
  private:
-  friend struct EngineAccess;
   struct SensorEvent {
     bool edge = false;
     AcceptedEdge accepted{};
