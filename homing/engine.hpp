@@ -36,35 +36,47 @@ class Engine {
     double index_mm = 0;
   };
 
+  // One period, in this order (engine.cpp).
   void advance_motion(double dt_s);
-  void read_inputs(const Settings& settings, const Inputs& inputs, double dt_s);
-  void check_safety(const Settings& settings, const Inputs& inputs);
+  void read_inputs(const Settings& settings, const Inputs& inputs, double dt_s);  // sensor_inputs.cpp
+  void check_safety(const Settings& settings, const Inputs& inputs);              // safety.cpp
   void handle_commands(const Settings& settings, const Inputs& inputs);
-  void run_cycle(const Settings& settings);
-  void run_motion(const Settings& settings);
-  void follow_masters(const Settings& settings);
+  void run_cycle(const Settings& settings);                                       // cycle.cpp
+  void run_motion(const Settings& settings);                                      // jog_move.cpp
+  void follow_masters(const Settings& settings);                                  // gantry_guard.cpp
   void guard_gantries(const Settings& settings);
   void release_commutators(const Settings& settings);
-  void publish(const Settings& settings, const Inputs& inputs);
-  void assign_unsequenced(const Settings& settings, std::size_t axis);
-  CommandResult jog_refusal(const Settings& settings, std::size_t axis, std::int8_t dir) const;
+  void publish(const Settings& settings, const Inputs& inputs);                   // publish.cpp
+  void route_outputs(const Settings& settings);                                   // output_routing.cpp
 
-  void start_cycle(const Settings& settings, AxisMask requested, bool all);
-  bool start_step(const Settings& settings);
-  void finish_cycle(const Settings& settings);
-  // The alarm path (see engine.cpp): the only code that writes an alarm.
+  // The alarm path (alarm_path.cpp): the only code that writes an alarm.
   void raise(const Settings& settings, AxisMask axes, Alarm alarm);
   void raise_global(const Settings& settings, AlarmCode code);
   void halt(const Settings& settings);
-  void clear_alarms();
   void stop_all(const Settings& settings);
-  CommandResult motion_refusal(const Settings& settings, std::size_t axis) const;
+  void clear_alarms();
+  void reset_command();
+  void abort_command(const Settings& settings);
+
+  // Homing (cycle.cpp; the phases of one axis in axis_phases.cpp).
   CommandResult homing_refusal(const Settings& settings) const;
+  void home_command(const Settings& settings, const Inputs& inputs);
+  void start_cycle(const Settings& settings, AxisMask requested, bool all);
+  bool start_step(const Settings& settings);
+  void assign_unsequenced(const Settings& settings, std::size_t axis);
+  void finish_cycle(const Settings& settings);
   void begin_axis(const Settings& settings, std::size_t axis);
-  void run_axis(const Settings& settings, std::size_t axis);  // axis_phases.cpp
-  int partner_of(const Settings& settings, std::size_t axis) const;
+  void run_axis(const Settings& settings, std::size_t axis);
+
+  // Jog and move (jog_move.cpp).
+  CommandResult motion_refusal(const Settings& settings, std::size_t axis) const;
+  CommandResult jog_refusal(const Settings& settings, std::size_t axis, std::int8_t dir) const;
+  void jog_commands(const Settings& settings, const Commands& commands);
+  void move_commands(const Settings& settings, const Commands& commands);
+
   bool any_alarm() const;
   bool any_motion() const;
+  // Input channels (sensor_inputs.cpp).
   int sensor_channel(const Settings& settings, std::size_t axis) const;
   int channel_owner(const Settings& settings, std::size_t channel) const;
 
