@@ -18,12 +18,12 @@
 #include <span>
 #include <string>
 
+#include "homing/sim/simulator_io.hpp"
 #include "registers/defaults.hpp"
 #include "registers/sim_bindings.hpp"
 #include "server/control_loop.hpp"
 #include "server/modbus_service.hpp"
 #include "server/pdu.hpp"
-#include "server/simulator_io.hpp"
 
 namespace fuzz {
 
@@ -65,24 +65,12 @@ inline bool contains_code(std::span<const std::uint8_t> pdu, std::uint16_t code)
   return false;
 }
 
-// server::SimulatorIo on the default machine, but copied from one built once:
-// seeding the simulator's random sources costs more than a whole request.
-class CopiedSimulatorIo final : public server::MachineIo {
- public:
-  CopiedSimulatorIo() : sim_(prototype()) {}
-  void advance(const homing::Outputs& outputs, double dt_s) override {
-    if (dt_s > 0) sim_.advance(outputs, dt_s);
-  }
-  homing::Inputs read() override { return sim_.inputs(); }
-  homing::sim::Simulator& sim() { return sim_; }
-
- private:
-  static const homing::sim::Simulator& prototype() {
-    static const homing::sim::Simulator sim(registers::default_sim_config());
-    return sim;
-  }
-  homing::sim::Simulator sim_;
-};
+// The default machine, built once: seeding the simulator's random sources
+// costs more than a whole request, so each harness runs a copy of it.
+inline const homing::sim::Simulator& default_machine() {
+  static const homing::sim::Simulator sim(registers::default_sim_config());
+  return sim;
+}
 
 // One service as homingd builds it (simulator backend), store = nullptr.
 struct Harness {
@@ -90,10 +78,9 @@ struct Harness {
 
   explicit Harness(Access a, std::string transport = "tcp") : access(a) {
     client = server::ClientInfo{7, transport, transport == "tcp" ? "127.0.0.1:40000" : "unit 1"};
-    auto io = std::make_unique<CopiedSimulatorIo>();
-    homing::sim::Simulator* sim = &io->sim();
+    auto io = std::make_unique<homing::sim::SimulatorIo>(default_machine());
     const homing::Settings settings = registers::default_settings();
-    loop = std::make_unique<server::ControlLoop>(settings, std::move(io), sim, 1000, 1.0);
+    loop = std::make_unique<server::ControlLoop>(settings, std::move(io), 1000, 1.0);
     server::ServiceConfig config;
     config.unit_id = kModuleUnit;
     config.sim_unit_id = kSimUnit;
@@ -108,7 +95,7 @@ struct Harness {
     const server::Snapshot s = loop->snapshot();
     if (s.status.homing) return true;
     for (std::size_t a = 0; a < homing::kAxisCount; ++a)
-      if (s.status.axes[a].velocity_mm_per_s != 0 || s.sim[a].moving) return true;
+      if (s.status.axes[a].velocity_mm_per_s != 0 || s.sim.axes[a].moving) return true;
     return false;
   }
   void print_motion() const {
@@ -116,8 +103,8 @@ struct Harness {
     std::fprintf(stderr, "  homing %d, state %d\n", s.status.homing, static_cast<int>(s.status.state));
     for (std::size_t a = 0; a < homing::kAxisCount; ++a)
       std::fprintf(stderr, "  axis %zu: velocity %g mm/s, phase %d, sim moving %d, sim position %g\n", a,
-                   s.status.axes[a].velocity_mm_per_s, static_cast<int>(s.status.axes[a].phase), s.sim[a].moving,
-                   s.sim[a].actual_position_mm);
+                   s.status.axes[a].velocity_mm_per_s, static_cast<int>(s.status.axes[a].phase), s.sim.axes[a].moving,
+                   s.sim.axes[a].actual_position_mm);
   }
 
   void step(int periods = 1) {

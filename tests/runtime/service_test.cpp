@@ -10,13 +10,13 @@
 
 #include "fault_vfs.hpp"
 #include "homing/gpiod/config.hpp"
+#include "homing/sim/simulator_io.hpp"
 #include "persistence/settings_store.hpp"
 #include "registers/defaults.hpp"
 #include "registers/lookup.hpp"
 #include "registers/sim_bindings.hpp"
 #include "server/control_loop.hpp"
 #include "server/modbus_service.hpp"
-#include "server/simulator_io.hpp"
 
 namespace {
 
@@ -42,9 +42,8 @@ struct Module {
     REQUIRE(opened);
     store = std::make_unique<persistence::SettingsStore>(std::move(*opened));
     const auto settings = registers::settings_from_raw(store->load()).settings;
-    auto io = std::make_unique<server::SimulatorIo>(registers::default_sim_config());
-    auto* sim = &io->sim();
-    loop = std::make_unique<server::ControlLoop>(settings, std::move(io), sim, 1000, 1.0);
+    auto io = std::make_unique<homing::sim::SimulatorIo>(registers::default_sim_config());
+    loop = std::make_unique<server::ControlLoop>(settings, std::move(io), 1000, 1.0);
     service = std::make_unique<server::ModbusService>(std::move(config), *loop, store.get(), settings);
   }
   ~Module() {

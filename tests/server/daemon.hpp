@@ -163,6 +163,9 @@ inline bool program_exists(const std::string& name) {
 
 // ---------------------------------------------------------------- homingd
 struct DaemonOptions {
+  std::string program;               // empty: the build's homingd
+  std::vector<std::string> wrapper;  // runs homingd through this command (setpriv ...)
+  int port = 0;                      // 0: a free port chosen for each attempt
   std::string db;                    // empty: a fresh database in the daemon's temp dir
   double time_scale = 10;
   std::vector<std::string> extra;    // more options (--rtu ..., --max-clients ...)
@@ -177,7 +180,7 @@ class Daemon {
     std::string last_error;
     // The port was free when chosen; another process may take it first: retry.
     for (int attempt = 0; attempt < 5; ++attempt) {
-      port_ = options_.tcp ? free_port() : 0;
+      port_ = !options_.tcp ? 0 : options_.port != 0 ? options_.port : free_port();
       if (try_start(last_error)) return;
     }
     throw std::runtime_error("homingd did not start: " + last_error);
@@ -207,7 +210,8 @@ class Daemon {
 
  private:
   bool try_start(std::string& error) {
-    std::vector<std::string> argv{homingd_path()};
+    std::vector<std::string> argv = options_.wrapper;
+    argv.push_back(options_.program.empty() ? homingd_path() : options_.program);
     if (options_.tcp) {
       argv.push_back("--tcp");
       argv.push_back("127.0.0.1:" + std::to_string(port_));

@@ -18,6 +18,7 @@
 #include "check.hpp"
 #include "connection.hpp"
 #include "history.hpp"
+#include "local_daemon.hpp"
 #include "registers/lookup.hpp"
 #include "settings_io.hpp"
 #include "status_view.hpp"
@@ -80,7 +81,12 @@ int main(int argc, char** argv) {
   std::string word_order = "high-first";
   std::string parity = "E";
   bool json = false;
-  app.add_option("--tcp", co.tcp, "Modbus TCP address HOST:PORT")->capture_default_str();
+  app.add_option("--tcp", co.tcp, "Modbus TCP address HOST:PORT (default: the local homingd's, from --daemon-config, else this)")
+      ->capture_default_str();
+  std::string daemon_config;
+  app.add_option("--daemon-config", daemon_config,
+                 "homingd config file whose tcp, unit, sim_unit, word_order and db are the defaults here "
+                 "(default: $HOMINGD_CONFIG, else /etc/homingd/homingd.toml when it exists)");
   app.add_option("--rtu", co.rtu, "Modbus RTU serial device (instead of TCP)");
   app.add_option("--baud", co.baud, "RTU baud rate")->capture_default_str();
   app.add_option("--parity", parity, "RTU parity N|E|O")->check(CLI::IsMember({"N", "E", "O"}))->capture_default_str();
@@ -174,6 +180,16 @@ int main(int argc, char** argv) {
   }
   co.parity = parity[0];
   co.word_order = word_order == "low-first" ? registers::WordOrder::low_first : registers::WordOrder::high_first;
+  const auto daemon_choice = choose_daemon_config(daemon_config);
+  if (auto local = read_local_daemon(daemon_choice); !local) {
+    fmt::print(stderr, "homingctl: {}{}\n", local.error(), daemon_choice.named ? "" : " (ignored)");
+    if (daemon_choice.named) return kUsage;
+  } else if (*local) {
+    const GivenOptions given{app.get_option("--tcp")->count() > 0 || !co.rtu.empty(), app.get_option("--unit")->count() > 0,
+                             app.get_option("--sim-unit")->count() > 0, app.get_option("--word-order")->count() > 0,
+                             history->get_option("--db")->count() > 0};
+    apply_local_daemon(**local, given, co, db);
+  }
   ao.wait = !no_wait;
   ao.timeout_s = timeout_s;
   ao.poll_s = co.rtu.empty() ? 0.05 : 0.3;

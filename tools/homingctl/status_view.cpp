@@ -25,7 +25,8 @@ StatusView read_status(Connection& c, const homing::Settings& settings) {
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     for (const char* f : {"homed", "sensor", "busy"}) regs.push_back(&register_named(ax(a, f)));
     if (settings.axes[a].mode == homing::HomingMode::disabled) continue;
-    for (const char* f : {"phase", "alarm", "alarm_phase", "position", "velocity", "phase_distance", "stop_distance"})
+    for (const char* f :
+         {"phase", "alarm", "alarm_phase", "alarm_value", "position", "velocity", "phase_distance", "stop_distance"})
       regs.push_back(&register_named(ax(a, f)));
   }
   const auto v = c.read_many(regs);
@@ -50,6 +51,7 @@ StatusView read_status(Connection& c, const homing::Settings& settings) {
     x.phase = static_cast<homing::Phase>(get(ax(a, "phase")));
     x.alarm = static_cast<homing::AlarmCode>(get(ax(a, "alarm")));
     x.alarm_phase = static_cast<homing::Phase>(get(ax(a, "alarm_phase")));
+    x.alarm_value = mm(ax(a, "alarm_value"));
     x.position = mm(ax(a, "position"));
     x.velocity = mm(ax(a, "velocity"));
     x.phase_distance = mm(ax(a, "phase_distance"));
@@ -63,8 +65,7 @@ std::string alarm_text(std::size_t axis, const AxisView& a, const homing::Settin
   homing::Alarm alarm{};
   alarm.code = a.alarm;
   alarm.phase = a.alarm_phase;
-  // The figure of the alarm is not on the map; use what the status shows.
-  alarm.value = a.position;
+  alarm.value = a.alarm_value;  // the figure the engine quoted when it raised the alarm
   if (a.alarm == homing::AlarmCode::settings_fault || a.alarm == homing::AlarmCode::slave_sensor_missing) {
     if (auto f = homing::check_axis(settings, axis)) {
       alarm.field = f->field;
@@ -148,6 +149,24 @@ std::string render_status(const StatusView& s, const homing::Settings& settings,
   if (s.global_alarm != homing::AlarmCode::none)
     out += fmt::format("alarm: {}: {}\n", homing::alarm_name(s.global_alarm), global_alarm_text(s.global_alarm, settings));
   return out;
+}
+
+std::string progress_line(const StatusView& s, const homing::Settings& settings, bool distances) {
+  std::string axes;
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    const AxisView& x = s.axes[a];
+    const bool moving_phase = x.phase != homing::Phase::idle && x.phase != homing::Phase::waiting &&
+                              x.phase != homing::Phase::done;
+    if (!x.busy || !moving_phase || settings.axes[a].mode == homing::HomingMode::disabled) continue;
+    axes += fmt::format("{}{} {}", axes.empty() ? "" : ", ", homing::kAxisUpper[a], homing::phase_name(x.phase));
+    if (!distances) continue;
+    const double bound = phase_bound_mm(x.phase, settings.axes[a]);
+    const double done = std::abs(x.phase_distance);
+    axes += bound > 0 ? fmt::format(" {:.1f} / {:g} {}", std::min(done, bound), bound, homing::axis_unit(a))
+                      : fmt::format(" {:.1f} {}", done, homing::axis_unit(a));
+  }
+  if (axes.empty()) return "";
+  return s.sequence_step ? fmt::format("step {}: {}", s.sequence_step, axes) : axes;
 }
 
 nlohmann::json status_json(const StatusView& s, const homing::Settings& settings) {
