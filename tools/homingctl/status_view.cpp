@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "homing/gantry.hpp"
 #include "homing/settings_check.hpp"
 
 namespace homingctl {
@@ -102,7 +103,7 @@ double phase_bound_mm(homing::Phase phase, const homing::AxisSettings& s) {
     case Phase::pull_off: return s.pull_off_mm;
     case Phase::pre_move: return s.pre_move_distance_mm;
     case Phase::push: return s.push_distance_mm;
-    case Phase::index: return 1.1 * s.index_pitch_mm;
+    case Phase::index: return homing::index_search_mm(s);
     default: return 0;
   }
 }
@@ -117,6 +118,7 @@ std::string render_status(const StatusView& s, const homing::Settings& settings,
   std::string out;
   out += fmt::format("{:<4} {:<18} {:<11} {:>14} {:<5} {:<6} {}\n", "axis", "mode", "phase", "position", "homed",
                      "sensor", "alarm");
+  const homing::Settings moves = homing::motion_settings(settings);  // a slave's bounds are its master's
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     const AxisView& x = s.axes[a];
     const auto& st = settings.axes[a];
@@ -129,7 +131,7 @@ std::string render_status(const StatusView& s, const homing::Settings& settings,
                        disabled ? "-" : std::string(homing::phase_name(x.phase)), pos, x.homed ? "yes" : "no",
                        disabled ? "-" : (x.sensor ? "on" : "off"), alarm);
     if (progress && !disabled && x.busy) {
-      const double bound = phase_bound_mm(x.phase, st);
+      const double bound = phase_bound_mm(x.phase, moves.axes[a]);
       if (bound > 0)
         out += fmt::format("     {} {} {:.3f} / {:g} {}\n", progress_bar(x.phase_distance, bound, 30),
                            homing::phase_name(x.phase), std::abs(x.phase_distance), bound, homing::axis_unit(a));
