@@ -9,6 +9,7 @@
 #include <concepts>
 #include <cstdint>
 #include <limits>
+#include <string_view>
 #include <type_traits>
 #include <utility>
 
@@ -94,6 +95,13 @@ constexpr SettingAccess::Kind kind() {
   else return SettingAccess::Kind::integer;
 }
 
+// The member's identity: the compiler's text for this instantiation, which
+// spells out the member pointer.
+template <auto Member>
+constexpr std::string_view member_id() {
+  return __PRETTY_FUNCTION__;
+}
+
 template <auto Member>
 constexpr SettingAccess make() {
   using T = typename Element<Member>::type;
@@ -107,6 +115,7 @@ constexpr SettingAccess make() {
       .per_axis = kPerAxis<Member>,
       .elements = static_cast<std::uint8_t>(Element<Member>::count),
       .max_raw = max_raw<T>(),
+      .member = member_id<Member>(),
       .get = [](const homing::Settings& s, const Register& reg) { return raw_of(reg, member_in<Member>(s, reg)); },
       .set = [](homing::Settings& s, const Register& reg,
                 std::int64_t raw) { member_in<Member>(s, reg) = value_of<T>(reg, raw); },

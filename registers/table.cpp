@@ -361,13 +361,17 @@ constexpr bool settings_fit_members() {
   return true;
 }
 constexpr bool one_row_per_member() {
-  for (std::size_t i = 0; i < kAll.size(); ++i)
-    for (std::size_t j = i + 1; j < kAll.size(); ++j) {
-      const Register& a = kAll[i];
-      const Register& b = kAll[j];
-      if (a.setting.bound() && a.setting.get == b.setting.get && a.axis == b.axis && a.slot == b.slot)
+  // Settings rows only, so the pairwise pass stays within the compilers'
+  // constant-evaluation step limits.
+  std::array<const Register*, kAll.size()> rows{};
+  std::size_t n = 0;
+  for (const Register& r : kAll)
+    if (r.setting.bound()) rows[n++] = &r;
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j)
+      if (rows[i]->axis == rows[j]->axis && rows[i]->slot == rows[j]->slot &&
+          rows[i]->setting.member == rows[j]->setting.member)
         return false;
-    }
   return true;
 }
 constexpr bool value_lists_named() {

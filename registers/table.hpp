@@ -86,6 +86,11 @@ struct SettingAccess {
   bool per_axis = false;      // a member of AxisSettings, else of GlobalSettings
   std::uint8_t elements = 0;  // an array member: its size (a row fills element `slot`); else 0
   std::int64_t max_raw = 0;   // integers and enums: the largest value the member can hold
+  // Names the member filled (the compiler's spelling of the member pointer):
+  // two rows fill the same member exactly when these are equal. A text, because
+  // GCC will not compare function or object addresses in constant expressions
+  // under the sanitizers.
+  std::string_view member;
   std::int64_t (*get)(const homing::Settings&, const Register&) = nullptr;
   void (*set)(homing::Settings&, const Register&, std::int64_t raw) = nullptr;
   constexpr bool bound() const { return kind != Kind::none; }

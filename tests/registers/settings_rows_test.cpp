@@ -86,11 +86,11 @@ TEST_CASE("every settings row fills a member, and no two rows fill the same byte
 }
 
 TEST_CASE("every member of AxisSettings and GlobalSettings is filled by exactly one row per axis or slot") {
-  // Rows filling the same member share its getter; an array member is filled
+  // Rows filling the same member share its identity; an array member is filled
   // by one row per element.
-  std::map<std::pair<const void*, int>, std::vector<const Register*>> by_member;
+  std::map<std::pair<std::string_view, int>, std::vector<const Register*>> by_member;
   for (const Register* r : settings_rows())
-    by_member[{reinterpret_cast<const void*>(r->setting.get), r->axis}].push_back(r);
+    by_member[{r->setting.member, r->axis}].push_back(r);
 
   std::size_t axis_members = 0, global_members = 0;
   for (const auto& [key, rows] : by_member) {

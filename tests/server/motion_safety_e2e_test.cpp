@@ -21,14 +21,22 @@ bool settled(Client& c) {
 
 // Polls until the cycle ends (bounded), recording the largest change of the
 // carriages' relative position Y - X seen by the simulator.
+// Y's position relative to X, both taken in one request: two separate reads
+// would see the carriages at different moments and report racking that
+// never happened.
+double y_relative_to_x(Client& c) {
+  const auto p = c.read_together({"sim.x.actual_position", "sim.y.actual_position"});
+  return static_cast<double>(p[1] - p[0]) / 1000.0;
+}
+
 double home_all_watching_rack(Client& c, std::chrono::milliseconds timeout = 30s) {
-  const double rel0 = c.read_mm("sim.y.actual_position") - c.read_mm("sim.x.actual_position");
+  const double rel0 = y_relative_to_x(c);
   REQUIRE(c.write("cmd.home_all", 1) == 0);
   double worst = 0;
   const auto deadline = Clock::now() + timeout;
   int n = 0;
   while (Clock::now() < deadline && n++ < 20000) {
-    const double rel = c.read_mm("sim.y.actual_position") - c.read_mm("sim.x.actual_position");
+    const double rel = y_relative_to_x(c);
     worst = std::max(worst, std::abs(rel - rel0));
     if (settled(c) && c.read("axis.x.velocity") == 0 && c.read("axis.y.velocity") == 0) break;
     std::this_thread::sleep_for(2ms);

@@ -1,5 +1,6 @@
 #include "tests/support/modbus_client.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <span>
 #include <stdexcept>
@@ -94,6 +95,34 @@ std::optional<std::int64_t> Client::try_read(std::string_view name) {
   }
   if (r.table == registers::Table::coil || r.table == registers::Table::discrete_input) return bit;
   return registers::decode_words(r, std::span<const std::uint16_t>(words, r.words()), registers::WordOrder::high_first);
+}
+
+std::vector<std::int64_t> Client::read_together(std::initializer_list<std::string_view> names) {
+  std::vector<const registers::Register*> regs;
+  for (std::string_view n : names) regs.push_back(&reg(n));
+  const registers::Register& first = *regs.front();
+  if (first.table != registers::Table::holding_register && first.table != registers::Table::input_register)
+    throw std::runtime_error("read_together reads registers, not bits: " + std::string(first.name()));
+  int lo = first.address, hi = first.address + first.words();
+  for (const registers::Register* r : regs) {
+    if (r->unit != first.unit || r->table != first.table)
+      throw std::runtime_error("read_together needs one unit and one table: " + std::string(r->name()));
+    lo = std::min(lo, static_cast<int>(r->address));
+    hi = std::max(hi, r->address + r->words());
+  }
+  if (hi - lo > MODBUS_MAX_READ_REGISTERS)
+    throw std::runtime_error("read_together: the registers span more than one request");
+  select(first);
+  auto words = block(first.table == registers::Table::holding_register ? modbus_read_registers
+                                                                      : modbus_read_input_registers,
+                     lo, hi - lo);
+  if (!words) throw std::runtime_error("read_together: " + std::string(modbus_strerror(last_errno_)));
+  std::vector<std::int64_t> out;
+  for (const registers::Register* r : regs)
+    out.push_back(registers::decode_words(
+        *r, std::span<const std::uint16_t>(words->data() + (r->address - lo), r->words()),
+        registers::WordOrder::high_first));
+  return out;
 }
 
 int Client::write(std::string_view name, std::int64_t raw) {

@@ -5,6 +5,7 @@
 #include <modbus/modbus.h>
 
 #include <chrono>
+#include <initializer_list>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -40,6 +41,9 @@ class Client {
   // The same, nullopt on failure (last_errno() says why).
   std::optional<std::int64_t> try_read(std::string_view name);
   double read_mm(std::string_view name) { return static_cast<double>(read(name)) / 1000.0; }
+  // Raw values of several registers of one unit and one register table, taken
+  // in a single request (one snapshot of the module); throws on failure.
+  std::vector<std::int64_t> read_together(std::initializer_list<std::string_view> names);
 
   // Writes a raw value: coils FC 5, holding registers FC 16 (both words of a
   // 32-bit value in one request). Returns 0 or the Modbus exception code
