@@ -88,8 +88,8 @@ class CopiedSimulatorIo final : public server::MachineIo {
 struct Harness {
   enum class Access { open, read_only, locked };
 
-  explicit Harness(Access a, std::string transport = "tcp") : access(a) {
-    client = server::ClientInfo{7, transport, transport == "tcp" ? "127.0.0.1:40000" : "unit 1"};
+  explicit Harness(Access a, server::Transport transport = server::Transport::tcp) : access(a) {
+    client = server::ClientInfo{7, transport, transport == server::Transport::tcp ? "127.0.0.1:40000" : "unit 1"};
     auto io = std::make_unique<CopiedSimulatorIo>();
     homing::sim::Simulator* sim = &io->sim();
     const homing::Settings settings = registers::default_settings();
@@ -142,7 +142,8 @@ struct Harness {
     // Settings change only by an accepted write of holding registers to the module.
     if (settings() != before) {
       // Over TCP, unit ids 0xFF and 0 address the module too.
-      const bool module_unit = unit == kModuleUnit || (client.transport == "tcp" && (unit == 0 || unit == 0xFF));
+      const bool module_unit =
+          unit == kModuleUnit || (client.transport == server::Transport::tcp && (unit == 0 || unit == 0xFF));
       if (!(accepted && module_unit && (fc == 6 || fc == 16 || fc == 23)))
         violated("settings changed by a request that was not an accepted settings write", unit, pdu);
       if (access == Access::locked && !maybe_unlocked && !contains_code(pdu, kUnlockCode))

@@ -5,7 +5,7 @@
 // otherwise the CRC is checked as given. As server/rtu_server.cpp receives
 // them from modbus_receive: a bad CRC, a frame shorter than 4 bytes, or a
 // unit that is neither the module's nor broadcast (0) never reaches the
-// handler; the rest go to ModbusService::handle with transport "rtu".
+// handler; the rest go to ModbusService::handle with transport RTU.
 //
 // Broadcast (unit 0) is applied but never answered: the frame is also played
 // as a unicast to the module on a twin service, and both must end up with the
@@ -25,9 +25,9 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using fuzz::Harness;
-  Harness bus(Harness::Access::open, "rtu");      // gets the frames as they come
-  Harness twin(Harness::Access::open, "rtu");     // broadcasts as unicasts
-  Harness locked(Harness::Access::locked, "rtu");
+  Harness bus(Harness::Access::open, server::Transport::rtu);   // gets the frames as they come
+  Harness twin(Harness::Access::open, server::Transport::rtu);  // broadcasts as unicasts
+  Harness locked(Harness::Access::locked, server::Transport::rtu);
   std::size_t at = 0;
   std::vector<std::uint8_t> frame;
   while (size - at >= 2) {

@@ -135,7 +135,7 @@ void TcpServer::run() {
     const int one = 1;
     ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
     ++active_;
-    ClientInfo info{next_id_++, "tcp", address};
+    ClientInfo info{next_id_++, Transport::tcp, address};
     spdlog::info("tcp: client {} connected ({} active)", address, active_.load());
     std::lock_guard lock(connections_mutex_);
     Connection& c = connections_.emplace_back();
