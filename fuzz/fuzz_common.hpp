@@ -13,11 +13,13 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <map>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
+#include <vector>
 
+#include "registers/codec.hpp"
 #include "registers/defaults.hpp"
 #include "registers/sim_bindings.hpp"
 #include "server/control_loop.hpp"
@@ -85,24 +87,44 @@ class CopiedSimulatorIo final : public server::MachineIo {
 };
 
 // One service as homingd builds it (simulator backend), store = nullptr.
+// Built once per fuzz process and reset() before every input, so that each
+// input starts from the same state: a new service on a new machine at rest.
+// The loop is rebuilt in the same storage (a fresh allocation of its trace
+// buffers each input would cost more than the requests).
 struct Harness {
   enum class Access { open, read_only, locked };
 
   explicit Harness(Access a, server::Transport transport = server::Transport::tcp) : access(a) {
     client = server::ClientInfo{7, transport, transport == server::Transport::tcp ? "127.0.0.1:40000" : "unit 1"};
-    auto io = std::make_unique<CopiedSimulatorIo>();
-    homing::sim::Simulator* sim = &io->sim();
-    const homing::Settings settings = registers::default_settings();
-    loop = std::make_unique<server::ControlLoop>(settings, std::move(io), sim, 1000, 1.0);
-    server::ServiceConfig config;
     config.unit_id = kModuleUnit;
     config.sim_unit_id = kSimUnit;
     if (a == Access::read_only) config.write_allow.push_back(*server::parse_cidr("10.0.0.0/8"));
     if (a == Access::locked) config.unlock_code = kUnlockCode;
-    service = std::make_unique<server::ModbusService>(config, *loop, nullptr, settings);
+    reset();
+  }
+  Harness(const Harness&) = delete;
+  Harness& operator=(const Harness&) = delete;
+
+  void reset() {
+    service.reset();
+    loop.reset();
+    auto io = std::make_unique<CopiedSimulatorIo>();
+    homing::sim::Simulator* sim = &io->sim();
+    loop.emplace(defaults(), std::move(io), sim, 1000, 1.0);
+    service.emplace(config, *loop, nullptr, defaults());
+    motion_allowed = false;
+    maybe_unlocked = false;
   }
 
-  std::map<std::string, std::int64_t> settings() const { return registers::settings_to_raw(service->settings()); }
+  // Every persisted setting as its raw register value, in table order: what
+  // the settings database would hold.
+  std::vector<std::int64_t> settings() const {
+    const homing::Settings s = service->settings();
+    std::vector<std::int64_t> raw;
+    raw.reserve(persisted().size());
+    for (const registers::Register* r : persisted()) raw.push_back(registers::setting_raw(s, *r));
+    return raw;
+  }
 
   bool moving() const {
     const server::Snapshot s = loop->snapshot();
@@ -171,10 +193,26 @@ struct Harness {
 
   Access access;
   server::ClientInfo client;
-  std::unique_ptr<server::ControlLoop> loop;
-  std::unique_ptr<server::ModbusService> service;
+  server::ServiceConfig config;
+  std::optional<server::ControlLoop> loop;
+  std::optional<server::ModbusService> service;
   bool motion_allowed = false;
   bool maybe_unlocked = false;
+
+ private:
+  static const homing::Settings& defaults() {
+    static const homing::Settings s = registers::default_settings();
+    return s;
+  }
+  static const std::vector<const registers::Register*>& persisted() {
+    static const std::vector<const registers::Register*> regs = [] {
+      std::vector<const registers::Register*> out;
+      for (const registers::Register& r : registers::registers_of(registers::Unit::module))
+        if (r.persisted) out.push_back(&r);
+      return out;
+    }();
+    return regs;
+  }
 };
 
 }  // namespace fuzz

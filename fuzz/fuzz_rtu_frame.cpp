@@ -18,16 +18,33 @@
 
 #include "fuzz_common.hpp"
 
+namespace {
+
+struct Services {
+  using Harness = fuzz::Harness;
+  Harness bus{Harness::Access::open, server::Transport::rtu};   // gets the frames as they come
+  Harness twin{Harness::Access::open, server::Transport::rtu};  // broadcasts as unicasts
+  Harness locked{Harness::Access::locked, server::Transport::rtu};
+};
+
+Services& services() {
+  static Services s;
+  return s;
+}
+
+}  // namespace
+
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   fuzz::quiet_logs();
+  (void)services();
   return 0;
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  using fuzz::Harness;
-  Harness bus(Harness::Access::open, server::Transport::rtu);   // gets the frames as they come
-  Harness twin(Harness::Access::open, server::Transport::rtu);  // broadcasts as unicasts
-  Harness locked(Harness::Access::locked, server::Transport::rtu);
+  auto& [bus, twin, locked] = services();
+  bus.reset();
+  twin.reset();
+  locked.reset();
   std::size_t at = 0;
   std::vector<std::uint8_t> frame;
   while (size - at >= 2) {
