@@ -67,15 +67,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (unit != fuzz::kModuleUnit && unit != 0) continue;  // libmodbus: another unit on the bus
     const auto pdu = std::span<const std::uint8_t>(frame).subspan(1, frame.size() - 3);
 
-    const server::Reply reply = unit == 0 ? bus.service->handle(0, pdu, bus.client) : bus.request(unit, pdu);
-    if (unit == 0) {
-      bus.step();
-      if (reply.send) fuzz::violated("a broadcast was answered", unit, pdu);
-    }
+    const server::Reply reply = unit == 0 ? bus.broadcast(pdu) : bus.request(unit, pdu);
+    if (unit == 0 && reply.send) fuzz::violated("a broadcast was answered", unit, pdu);
     const server::Reply unicast = twin.request(fuzz::kModuleUnit, pdu);
     (void)locked.request(fuzz::kModuleUnit, pdu);
     if (unit == 0 && fuzz::accepted_write(pdu.empty() ? 0 : pdu[0], unicast)) bus.motion_allowed = true;
-    if (bus.settings() != twin.settings()) fuzz::violated("a broadcast and a unicast changed different settings", unit, pdu);
+    if (bus.settings_now != twin.settings_now) fuzz::violated("a broadcast and a unicast changed different settings", unit, pdu);
     if (bus.moving() != twin.moving()) fuzz::violated("a broadcast and a unicast moved differently", unit, pdu);
     // The reply as it goes on the line: unit, PDU, CRC that checks.
     if (reply.send) {
