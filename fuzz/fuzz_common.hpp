@@ -20,13 +20,13 @@
 #include <string>
 #include <vector>
 
+#include "homing/sim/simulator_io.hpp"
 #include "registers/codec.hpp"
 #include "registers/defaults.hpp"
 #include "registers/sim_bindings.hpp"
 #include "server/control_loop.hpp"
 #include "server/modbus_service.hpp"
 #include "server/pdu.hpp"
-#include "server/simulator_io.hpp"
 
 namespace fuzz {
 
@@ -80,26 +80,28 @@ inline bool contains_code(std::span<const std::uint8_t> pdu, std::uint16_t code)
   return false;
 }
 
-// server::SimulatorIo on a simulator the harness keeps: the loop is rebuilt
-// for every input, the simulator only copied back to the default machine
-// (seeding its random sources costs more than a whole request, and a new one
-// would be a new 50 KB allocation each time).
-class BorrowedSimulatorIo final : public server::MachineIo {
- public:
-  explicit BorrowedSimulatorIo(homing::sim::Simulator& sim) : sim_(sim) {}
-  void advance(const homing::Outputs& outputs, double dt_s) override {
-    if (dt_s > 0) sim_.advance(outputs, dt_s);
-  }
-  homing::Inputs read() override { return sim_.inputs(); }
-
- private:
-  homing::sim::Simulator& sim_;
-};
-
-inline const homing::sim::Simulator& default_simulator() {
+// The default machine, built once: seeding the simulator's random sources
+// costs more than a whole request.
+inline const homing::sim::Simulator& default_machine() {
   static const homing::sim::Simulator sim(registers::default_sim_config());
   return sim;
 }
+
+// The control loop owns its backend; the harness keeps the simulator backend
+// across inputs (rebuilt in the same storage: a new 50 KB simulator each input
+// would cost page faults), so the loop gets this stand-in that forwards to it.
+class ForwardingIo final : public homing::MachineIo {
+ public:
+  explicit ForwardingIo(homing::MachineIo& io) : io_(io) {}
+  void advance(const homing::Outputs& outputs, double dt_s) override { io_.advance(outputs, dt_s); }
+  homing::Inputs read() override { return io_.read(); }
+  void apply(const homing::Outputs& outputs) override { io_.apply(outputs); }
+  void shutdown() override { io_.shutdown(); }
+  homing::sim::SimulatorControls* simulator_controls() override { return io_.simulator_controls(); }
+
+ private:
+  homing::MachineIo& io_;
+};
 
 // One service as homingd builds it (simulator backend), store = nullptr.
 // Built once per fuzz process and reset() before every input, so that each
@@ -138,7 +140,7 @@ struct Harness {
     const server::Snapshot s = loop->snapshot();
     if (s.status.homing) return true;
     for (std::size_t a = 0; a < homing::kAxisCount; ++a)
-      if (s.status.axes[a].velocity_mm_per_s != 0 || s.sim[a].moving) return true;
+      if (s.status.axes[a].velocity_mm_per_s != 0 || s.sim.axes[a].moving) return true;
     return false;
   }
   void print_motion() const {
@@ -146,8 +148,8 @@ struct Harness {
     std::fprintf(stderr, "  homing %d, state %d\n", s.status.homing, static_cast<int>(s.status.state));
     for (std::size_t a = 0; a < homing::kAxisCount; ++a)
       std::fprintf(stderr, "  axis %zu: velocity %g mm/s, phase %d, sim moving %d, sim position %g\n", a,
-                   s.status.axes[a].velocity_mm_per_s, static_cast<int>(s.status.axes[a].phase), s.sim[a].moving,
-                   s.sim[a].actual_position_mm);
+                   s.status.axes[a].velocity_mm_per_s, static_cast<int>(s.status.axes[a].phase), s.sim.axes[a].moving,
+                   s.sim.axes[a].actual_position_mm);
   }
 
   void step(int periods = 1) {
@@ -209,7 +211,7 @@ struct Harness {
   Access access;
   server::ClientInfo client;
   server::ServiceConfig config;
-  homing::sim::Simulator sim = default_simulator();  // the machine; the loop below drives it
+  std::optional<homing::sim::SimulatorIo> machine;  // the loop below drives it
   std::optional<server::ControlLoop> loop;
   std::optional<server::ModbusService> service;
   bool motion_allowed = false;
@@ -221,8 +223,8 @@ struct Harness {
   void rebuild() {
     service.reset();
     loop.reset();
-    sim = default_simulator();
-    loop.emplace(defaults(), std::make_unique<BorrowedSimulatorIo>(sim), &sim, 1000, 1.0);
+    machine.emplace(default_machine());
+    loop.emplace(defaults(), std::make_unique<ForwardingIo>(*machine), 1000, 1.0);
     service.emplace(config, *loop, nullptr, defaults());
     motion_allowed = false;
     maybe_unlocked = false;

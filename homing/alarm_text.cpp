@@ -1,4 +1,5 @@
-// Alarm texts: what happened, where, and what to check.
+// Alarm texts: what happened, where, with the figures; then what to check,
+// from the alarm table (alarms.hpp), the same words an HMI's alarm list shows.
 #include <fmt/format.h>
 
 #include "alarms.hpp"
@@ -6,8 +7,10 @@
 #include "settings_check.hpp"
 
 namespace homing {
+namespace {
 
-std::string describe_alarm(std::size_t axis, const Alarm& a, const Settings& settings) {
+// What happened, with the axis letter and the figures.
+std::string what_happened(std::size_t axis, const Alarm& a, const Settings& settings) {
   // Figures from the settings the axis moves with (a slave its master's).
   const Settings moves = motion_settings(settings);
   const AxisSettings& s = moves.axes[axis];
@@ -17,68 +20,65 @@ std::string describe_alarm(std::size_t axis, const Alarm& a, const Settings& set
   switch (a.code) {
     case AlarmCode::none: return "";
     case AlarmCode::sensor_not_found:
-      return fmt::format("{}: home sensor not found within {:g} {} of travel; check the sensor "
-                         "wiring, its polarity (sensor_nc) and direction", X, s.max_seek_travel_mm, u);
+      return fmt::format("{}: home sensor not found within {:g} {} of travel", X, s.max_seek_travel_mm, u);
     case AlarmCode::overrun_during_stop:
       return fmt::format("{}: home sensor released while stopping after the trigger; the trigger is "
-                         "shorter than the stop distance ({:.3f} {}): lengthen the trigger cam, "
-                         "lower seek_feedrate or raise acceleration", X, seek_stop_distance_mm(s), u);
+                         "shorter than the stop distance ({:.3f} {})", X, seek_stop_distance_mm(s), u);
     case AlarmCode::stop_distance_exceeded:
       return fmt::format("{}: came to rest {:.3f} {} past the trigger, more than max_stop_distance "
-                         "{:g} {}; lower seek_feedrate or raise acceleration", X, a.value, u,
-                         s.max_stop_distance_mm, u);
+                         "{:g} {}", X, a.value, u, s.max_stop_distance_mm, u);
     case AlarmCode::not_released:
       if (a.phase == Phase::assign)
-        return fmt::format("{}: shared home/limit sensor still active after the pull-off of {:g} {}; raise "
-                           "pull_off so the axis comes to rest off its sensor", X, s.pull_off_mm, u);
-      return fmt::format("{}: home sensor still active after backing off {:g} {} (phase {}); check "
-                         "for a stuck or shorted sensor, sensor_nc, or raise max_backoff", X,
+        return fmt::format("{}: shared home/limit sensor still active after the pull-off of {:g} {}", X,
+                           s.pull_off_mm, u);
+      return fmt::format("{}: home sensor still active after backing off {:g} {} (phase {})", X,
                          s.max_backoff_mm, u, ph);
     case AlarmCode::index_not_found:
-      return fmt::format("{}: no encoder index pulse within {:.3f} {} after the switch edge; check the "
-                         "index wiring and index_pitch", X, a.value, u);
+      return fmt::format("{}: no encoder index pulse within {:.3f} {} after the switch edge", X, a.value, u);
     case AlarmCode::slave_sensor_missing:
-      return fmt::format("{}: software-slaved axis has no home sensor of its own (mode {}); give it a "
-                         "switch mode and wire its sensor", X, mode_name(s.mode));
+      return fmt::format("{}: software-slaved axis has no home sensor of its own (mode {})", X,
+                         mode_name(s.mode));
     case AlarmCode::misalignment:
       return fmt::format("{}: gantry stopped during {} before racking by {:.3f} {}, more than "
-                         "max_misalignment {:g} {}; check both home sensors (a dead or stuck sensor, "
-                         "wiring, switch_compensation) and square the gantry mechanically", X, ph, a.value,
-                         u, s.max_misalignment_mm, u);
+                         "max_misalignment {:g} {}", X, ph, a.value, u, s.max_misalignment_mm, u);
     case AlarmCode::hard_limit:
-      return fmt::format("{}: shared home/limit sensor tripped at {:.3f} {} after homing; jog the axis "
-                         "off the sensor after reset and re-home", X, a.value, u);
+      return fmt::format("{}: shared home/limit sensor tripped at {:.3f} {} after homing", X, a.value, u);
     case AlarmCode::soft_limit:
-      return fmt::format("{}: position {:.3f} {} beyond the soft limits [{:g}, {:g}]; re-home the axis",
-                         X, a.value, u, s.soft_limit_min_mm, s.soft_limit_max_mm);
+      return fmt::format("{}: position {:.3f} {} beyond the soft limits [{:g}, {:g}]", X, a.value, u,
+                         s.soft_limit_min_mm, s.soft_limit_max_mm);
     case AlarmCode::aborted:
-      return fmt::format("{}: homing aborted by command during {}; reset and home again", X, ph);
+      return fmt::format("{}: homing aborted by command during {}", X, ph);
     case AlarmCode::emergency_stop:
-      return fmt::format("{}: emergency stop during {}; release the e-stop, reset and home again", X, ph);
+      return fmt::format("{}: emergency stop during {}", X, ph);
     case AlarmCode::drive_fault:
-      return fmt::format("{}: drive fault during {}; check the drive's alarm display and power, then "
-                         "reset", X, ph);
+      return fmt::format("{}: drive fault during {}", X, ph);
     case AlarmCode::settings_fault: {
       SettingsFault f{axis, a.field, static_cast<CheckRule>(a.rule), a.value};
       return fmt::format("{}: settings fault, homing refused before any motion: {}", X,
                          describe_fault(f, settings));
     }
     case AlarmCode::communication_lost:
-      return fmt::format("{}: communication lost: host.heartbeat did not change for {} ms during {}; "
-                         "check the PLC/HMI link, then reset", X, settings.global.watchdog_ms, ph);
+      return fmt::format("{}: communication lost: host.heartbeat did not change for {} ms during {}", X,
+                         settings.global.watchdog_ms, ph);
     case AlarmCode::settings_lost:
-      return fmt::format("settings lost: the settings database was unreadable and defaults were "
-                         "loaded; check every setting, then reset to allow homing");
+      return "settings lost: the settings database was unreadable and defaults were loaded";
     case AlarmCode::reapproach_not_found:
-      return fmt::format("{}: home sensor not found again within {:g} {} while re-approaching; check "
-                         "the sensor and raise max_backoff", X, s.max_backoff_mm, u);
+      return fmt::format("{}: home sensor not found again within {:g} {} while re-approaching", X,
+                         s.max_backoff_mm, u);
     case AlarmCode::permit_withdrawn:
-      return fmt::format("{}: homing permit went off during {}; close the guard / give the permit, "
-                         "reset and home again", X, ph);
+      return fmt::format("{}: homing permit went off during {}", X, ph);
     case AlarmCode::encoder_fault:
-      return fmt::format("{}: absolute encoder gives no valid position; check the encoder link", X);
+      return fmt::format("{}: absolute encoder gives no valid position", X);
   }
   return "?";
+}
+
+}  // namespace
+
+std::string describe_alarm(std::size_t axis, const Alarm& a, const Settings& settings) {
+  if (a.code == AlarmCode::none) return "";
+  if (!entry_of(a.code)) return "?";  // a number no alarm has
+  return fmt::format("{}; {}", what_happened(axis, a, settings), alarm_what_to_check(a.code));
 }
 
 }  // namespace homing

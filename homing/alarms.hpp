@@ -1,9 +1,12 @@
 #pragma once
 // Latched alarms. Codes are register values (axis.<a>.alarm): never renumber.
 #include <cstdint>
+#include <iterator>
+#include <span>
 #include <string>
 #include <string_view>
 
+#include "enum_info.hpp"
 #include "phases.hpp"
 #include "settings.hpp"
 
@@ -32,6 +35,59 @@ enum class AlarmCode : std::uint8_t {
 };
 inline constexpr std::uint8_t kAlarmCodeCount = 19;
 
+// The alarm table: per code its name, what happened (text) and what a
+// maintenance technician checks (what_to_check). describe_alarm() says what
+// happened with the axis and the figures, then what to check from here;
+// hmi_maps/alarms.csv is this table.
+struct AlarmInfo {
+  AlarmCode value;
+  std::string_view name;
+  std::string_view text;
+  std::string_view what_to_check;
+};
+inline constexpr AlarmInfo kAlarmInfo[] = {
+    {AlarmCode::none, "none", "no alarm", ""},
+    {AlarmCode::sensor_not_found, "sensor_not_found", "seek travelled max_seek_travel without a trigger",
+     "check the home sensor and its wiring, its polarity (sensor_nc), the seek direction and max_seek_travel"},
+    {AlarmCode::overrun_during_stop, "overrun_during_stop", "sensor released while stopping: trigger too short",
+     "lengthen the trigger cam, lower seek_feedrate or raise acceleration"},
+    {AlarmCode::stop_distance_exceeded, "stop_distance_exceeded", "came to rest further than max_stop_distance",
+     "lower seek_feedrate or raise acceleration"},
+    {AlarmCode::not_released, "not_released", "sensor still active after max_backoff",
+     "check for a stuck or shorted sensor and its polarity (sensor_nc), or raise max_backoff; on a shared "
+     "home/limit sensor after the pull-off, raise pull_off so the axis comes to rest off its sensor"},
+    {AlarmCode::index_not_found, "index_not_found", "no index pulse within one index pitch",
+     "check the index wiring and index_pitch"},
+    {AlarmCode::slave_sensor_missing, "slave_sensor_missing", "a slave axis has no home sensor",
+     "give the slave axis a switch mode and wire its own home sensor"},
+    {AlarmCode::misalignment, "misalignment", "gantry misalignment beyond max_misalignment",
+     "check both home sensors (a dead or stuck sensor, wiring, switch_compensation) and square the gantry "
+     "mechanically"},
+    {AlarmCode::hard_limit, "hard_limit", "shared home sensor tripped after homing",
+     "jog the axis off the sensor after reset and re-home"},
+    {AlarmCode::soft_limit, "soft_limit", "soft limit reached",
+     "re-home the axis; if it recurs, check the mechanics and the drive for lost steps"},
+    {AlarmCode::aborted, "aborted", "aborted by command", "reset and home again"},
+    {AlarmCode::emergency_stop, "emergency_stop", "emergency stop", "release the e-stop, reset and home again"},
+    {AlarmCode::drive_fault, "drive_fault", "drive fault", "check the drive's alarm display and power, then reset"},
+    {AlarmCode::settings_fault, "settings_fault", "settings cannot work (see the message)",
+     "correct the setting named (homingctl check lists every fault), then reset"},
+    {AlarmCode::communication_lost, "communication_lost", "host watchdog expired",
+     "check the PLC/HMI link and that the PLC changes host.heartbeat within global.watchdog_ms, then reset"},
+    {AlarmCode::settings_lost, "settings_lost", "stored settings lost",
+     "check every setting, then reset to allow homing; if it recurs, check the storage the settings "
+     "database lives on"},
+    {AlarmCode::reapproach_not_found, "reapproach_not_found", "re-approach travelled max_backoff without a trigger",
+     "check the home sensor (a loose or flickering sensor), or raise max_backoff"},
+    {AlarmCode::permit_withdrawn, "permit_withdrawn", "homing permit went off during a cycle",
+     "close the guard / give the permit, reset and home again"},
+    {AlarmCode::encoder_fault, "encoder_fault", "no valid absolute encoder position",
+     "check the encoder cable, its power and the drive's encoder alarm, then reset and home again"},
+};
+static_assert(lists_every_value(kAlarmInfo, AlarmCode::encoder_fault));
+static_assert(std::size(kAlarmInfo) == kAlarmCodeCount);
+constexpr std::span<const AlarmInfo> enum_table(AlarmCode) { return kAlarmInfo; }
+
 struct Alarm {
   AlarmCode code = AlarmCode::none;
   Phase phase = Phase::idle;        // phase the axis was in when it was raised
@@ -42,6 +98,8 @@ struct Alarm {
 };
 
 std::string_view alarm_name(AlarmCode code);
+// What a technician checks for this alarm ("" for none).
+std::string_view alarm_what_to_check(AlarmCode code);
 
 // A sentence a technician can act on, e.g.
 // "X: home sensor not found within 200 mm of travel; check the sensor wiring and direction".

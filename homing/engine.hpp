@@ -6,9 +6,11 @@
 #include <array>
 #include <cstdint>
 
+#include "axis_run.hpp"
 #include "debounce.hpp"
 #include "io.hpp"
 #include "settings.hpp"
+#include "sequence.hpp"
 #include "settings_check.hpp"
 #include "status.hpp"
 
@@ -26,52 +28,7 @@ class Engine {
   const Outputs& outputs() const { return outputs_; }
   const Status& status() const { return status_; }
 
-  // Per-axis run state, public so that phase functions stay free functions.
-  struct AxisRun {
-    Phase phase = Phase::idle;
-    Alarm alarm{};
-    MotionState motor{};          // motor position now (never jumps: steps counted)
-    MotionState period_start{};   // motor at the start of the period that just ended
-    MotionCommand command{};      // what runs until the next period
-    MotionCommand last_command{}; // what ran during the period that just ended
-    double offset_mm = 0;         // machine position = motor + offset
-    bool homed = false;
-    bool in_cycle = false;
-    bool entered = false;         // the current phase has run its entry action
-    bool sensor_active = false;   // debounced, polarity applied
-    double phase_start_mm = 0;    // motor position at phase entry
-    double cycle_start_mm = 0;
-    double trigger_mm = 0;        // motor position at the seek trigger
-    double trigger_period_s = 0;  // length of the period in which the seek trigger was seen
-    bool triggered = false;
-    double reference_mm = 0;      // motor position at the reference edge
-    double release_mm = 0;
-    bool index_seen = false;      // an index pulse passed during back-off (switch + index)
-    double index_seen_mm = 0;     // motor position of the last one
-    double target_mm = 0;         // of the current move_to
-    bool push_output = false;
-    bool commutator_output = false;
-    bool follow_master = false;   // locked to the master's motion
-    std::int8_t jog_dir = 0;
-    bool slave_aligned = false;   // commutator slave finished its own edge
-    bool stopped_after_trigger = false;  // seek trigger found and the axis came to rest
-    bool assigned = false;        // home position assigned in this cycle
-    bool clearing = false;        // gantry: moving off the sensors together before the seek
-    bool cleared = false;         // ...done: the sensors are near, seek at latch feedrate
-    bool released = false;        // the back-off found the release edge in this cycle
-    bool at_reference = false;    // the reference edge is located in this cycle
-    Phase next_phase = Phase::idle;  // where waiting goes once the partner is ready
-    enum class Wait : std::uint8_t {
-      none, partner_stopped, partner_assigned, slave_aligned, master_at_reference, slave_locked,
-      partner_released, partner_at_reference
-    } wait = Wait::none;
-    bool aligning = false;        // commutator slave running its own edge search
-    double trigger_position_mm = 0;
-    double home_correction_mm = 0;
-  };
-
  private:
-  friend struct EngineAccess;
   struct SensorEvent {
     bool edge = false;
     AcceptedEdge accepted{};
@@ -79,32 +36,47 @@ class Engine {
     double index_mm = 0;
   };
 
+  // One period, in this order (engine.cpp).
   void advance_motion(double dt_s);
-  void read_inputs(const Settings& settings, const Inputs& inputs, double dt_s);
-  void check_safety(const Settings& settings, const Inputs& inputs);
+  void read_inputs(const Settings& settings, const Inputs& inputs, double dt_s);  // sensor_inputs.cpp
+  void check_safety(const Settings& settings, const Inputs& inputs);              // safety.cpp
   void handle_commands(const Settings& settings, const Inputs& inputs);
-  void run_cycle(const Settings& settings);
-  void run_motion(const Settings& settings);
-  void follow_masters(const Settings& settings);
+  void run_cycle(const Settings& settings);                                       // cycle.cpp
+  void run_motion(const Settings& settings);                                      // jog_move.cpp
+  void follow_masters(const Settings& settings);                                  // gantry_guard.cpp
   void guard_gantries(const Settings& settings);
   void release_commutators(const Settings& settings);
-  void publish(const Settings& settings, const Inputs& inputs);
-  void assign_unsequenced(const Settings& settings, std::size_t axis);
-  CommandResult jog_refusal(const Settings& settings, std::size_t axis, std::int8_t dir) const;
+  void publish(const Settings& settings, const Inputs& inputs);                   // publish.cpp
+  void route_outputs(const Settings& settings);                                   // output_routing.cpp
 
+  // The alarm path (alarm_path.cpp): the only code that writes an alarm.
+  void raise(const Settings& settings, AxisMask axes, Alarm alarm);
+  void raise_global(const Settings& settings, AlarmCode code);
+  void halt(const Settings& settings);
+  void stop_all(const Settings& settings);
+  void clear_alarms();
+  void reset_command();
+  void abort_command(const Settings& settings);
+
+  // Homing (cycle.cpp; the phases of one axis in axis_phases.cpp).
+  CommandResult homing_refusal(const Settings& settings) const;
+  void home_command(const Settings& settings, const Inputs& inputs);
   void start_cycle(const Settings& settings, AxisMask requested, bool all);
   bool start_step(const Settings& settings);
+  void assign_unsequenced(const Settings& settings, std::size_t axis);
   void finish_cycle(const Settings& settings);
-  void raise(const Settings& settings, std::size_t axis, Alarm alarm);
-  void raise_global(const Settings& settings, AlarmCode code);
-  void stop_all(const Settings& settings);
-  CommandResult motion_refusal(const Settings& settings, std::size_t axis) const;
-  CommandResult homing_refusal(const Settings& settings) const;
   void begin_axis(const Settings& settings, std::size_t axis);
-  void run_axis(const Settings& settings, std::size_t axis);  // axis_phases.cpp
-  int partner_of(const Settings& settings, std::size_t axis) const;
+  void run_axis(const Settings& settings, std::size_t axis);
+
+  // Jog and move (jog_move.cpp).
+  CommandResult motion_refusal(const Settings& settings, std::size_t axis) const;
+  CommandResult jog_refusal(const Settings& settings, std::size_t axis, std::int8_t dir) const;
+  void jog_commands(const Settings& settings, const Commands& commands);
+  void move_commands(const Settings& settings, const Commands& commands);
+
   bool any_alarm() const;
   bool any_motion() const;
+  // Input channels (sensor_inputs.cpp).
   int sensor_channel(const Settings& settings, std::size_t axis) const;
   int channel_owner(const Settings& settings, std::size_t channel) const;
 
@@ -132,9 +104,8 @@ class Engine {
   bool cycle_active_ = false;
   bool cycle_all_ = false;
   AxisMask cycle_requested_ = 0;
-  std::array<AxisMask, 6> steps_{};
-  int step_index_ = -1;          // index into steps_ of the running step
-  AxisMask unsequenced_ = 0;     // assigned their home position at the end
+  CyclePlan plan_{};
+  int step_index_ = -1;          // index into plan_.steps of the running step
   AlarmCode global_alarm_ = AlarmCode::none;
   bool estop_ = false;
   bool prev_start_button_ = false;

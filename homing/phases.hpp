@@ -1,7 +1,10 @@
 #pragma once
 // What one axis is doing. Values are register values (axis.<a>.phase).
 #include <cstdint>
+#include <span>
 #include <string_view>
+
+#include "enum_info.hpp"
 
 namespace homing {
 
@@ -24,6 +27,28 @@ enum class Phase : std::uint8_t {
   move = 15,
   stopping = 16,      // decelerating after an alarm or abort
 };
+
+inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
+    {Phase::idle, "idle", "at rest, no command running"},
+    {Phase::waiting, "waiting", "waiting for a later sequence step or for its gantry partner"},
+    {Phase::pre_move, "pre_move", "moving pre_move_distance away from the sensor before the seek"},
+    {Phase::seek, "seek", "searching for the home sensor at seek_feedrate"},
+    {Phase::stop, "stop", "decelerating after the trigger"},
+    {Phase::push, "push", "pushing into the mechanical stop"},
+    {Phase::back_off, "back_off", "backing off at latch_feedrate until the sensor releases"},
+    {Phase::reapproach, "reapproach", "approaching the sensor again at latch_feedrate"},
+    {Phase::index, "index", "continuing to the next encoder index pulse"},
+    {Phase::pull_off, "pull_off", "moving pull_off away from the reference edge"},
+    {Phase::assign, "assign", "at rest: home_position is assigned"},
+    {Phase::final_move, "final_move", "moving to final_position"},
+    {Phase::align_slave, "align_slave", "external commutator: the slave finds its own edge"},
+    {Phase::done, "done", "homed; the cycle of this axis is complete"},
+    {Phase::jog, "jog", "jogging"},
+    {Phase::move, "move", "moving to a commanded target"},
+    {Phase::stopping, "stopping", "decelerating after an alarm or abort"},
+};
+static_assert(lists_every_value(kPhaseInfo, Phase::stopping));
+constexpr std::span<const EnumInfo<Phase>> enum_table(Phase) { return kPhaseInfo; }
 
 std::string_view phase_name(Phase phase);
 

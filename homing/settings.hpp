@@ -4,9 +4,12 @@
 // live in the register table, so these structs start neutral.
 #include <array>
 #include <cstdint>
+#include <iterator>
+#include <span>
 #include <string_view>
 
 #include "axes.hpp"
+#include "enum_info.hpp"
 
 namespace homing {
 
@@ -23,11 +26,58 @@ enum class HomingMode : std::uint8_t {
   pushing_reapproach = 8,
 };
 inline constexpr std::uint8_t kHomingModeCount = 9;
+inline constexpr EnumInfo<HomingMode> kHomingModeInfo[] = {
+    {HomingMode::disabled, "disabled", "does not home; counts as homed"},
+    {HomingMode::manual, "manual", "no movement: the current position becomes the home position"},
+    {HomingMode::switch_release, "switch_release", "seek the switch, back off; the release edge is the reference"},
+    {HomingMode::switch_reapproach, "switch_reapproach",
+     "as 2, then approach again at latch feedrate; that edge is the reference"},
+    {HomingMode::switch_index, "switch_index", "release edge, then the next encoder index pulse"},
+    {HomingMode::absolute, "absolute", "position from the absolute encoder, no movement"},
+    {HomingMode::absolute_final, "absolute_final", "absolute, then move to final_position"},
+    {HomingMode::pushing_release, "pushing_release", "seek, push into the mechanical stop, release edge"},
+    {HomingMode::pushing_reapproach, "pushing_reapproach", "seek, push into the mechanical stop, re-approach edge"},
+};
+static_assert(lists_every_value(kHomingModeInfo, HomingMode::pushing_reapproach));
+static_assert(std::size(kHomingModeInfo) == kHomingModeCount);
+constexpr std::span<const EnumInfo<HomingMode>> enum_table(HomingMode) { return kHomingModeInfo; }
 
 enum class Direction : std::uint8_t { negative = 0, positive = 1 };
+inline constexpr EnumInfo<Direction> kDirectionInfo[] = {
+    {Direction::negative, "negative", "seek toward the negative end"},
+    {Direction::positive, "positive", "seek toward the positive end"},
+};
+static_assert(lists_every_value(kDirectionInfo, Direction::positive));
+constexpr std::span<const EnumInfo<Direction>> enum_table(Direction) { return kDirectionInfo; }
+
 enum class PreMove : std::uint8_t { none = 0, if_sensor_active = 1, always = 2 };
+inline constexpr EnumInfo<PreMove> kPreMoveInfo[] = {
+    {PreMove::none, "none", "no pre-move"},
+    {PreMove::if_sensor_active, "if_sensor_active",
+     "move pre_move_distance away first if the sensor is already active"},
+    {PreMove::always, "always", "always move pre_move_distance away before seeking"},
+};
+static_assert(lists_every_value(kPreMoveInfo, PreMove::always));
+constexpr std::span<const EnumInfo<PreMove>> enum_table(PreMove) { return kPreMoveInfo; }
+
 enum class SlaveMode : std::uint8_t { own_output = 0, external_commutator = 1 };
+inline constexpr EnumInfo<SlaveMode> kSlaveModeInfo[] = {
+    {SlaveMode::own_output, "own_output", "own step output, own home sensor (software squaring)"},
+    {SlaveMode::external_commutator, "external_commutator", "external commutator on the master's output"},
+};
+static_assert(lists_every_value(kSlaveModeInfo, SlaveMode::external_commutator));
+constexpr std::span<const EnumInfo<SlaveMode>> enum_table(SlaveMode) { return kSlaveModeInfo; }
+
 enum class AllowedWithoutHoming : std::uint8_t { all = 0, jog_reduced = 1, none = 2 };
+inline constexpr EnumInfo<AllowedWithoutHoming> kAllowedWithoutHomingInfo[] = {
+    {AllowedWithoutHoming::all, "all", "every command is allowed before homing"},
+    {AllowedWithoutHoming::jog_reduced, "jog_reduced", "only jog, at reduced speed (100 mm/min)"},
+    {AllowedWithoutHoming::none, "none", "nothing moves before homing"},
+};
+static_assert(lists_every_value(kAllowedWithoutHomingInfo, AllowedWithoutHoming::none));
+constexpr std::span<const EnumInfo<AllowedWithoutHoming>> enum_table(AllowedWithoutHoming) {
+  return kAllowedWithoutHomingInfo;
+}
 
 struct AxisSettings {
   HomingMode mode = HomingMode::disabled;
@@ -57,6 +107,7 @@ struct AxisSettings {
   bool soft_limits_enable = false;
   bool shared_limit = false;
   double jog_feedrate_mm_per_min = 0;
+  friend bool operator==(const AxisSettings&, const AxisSettings&) = default;
 };
 
 struct GlobalSettings {
@@ -68,11 +119,13 @@ struct GlobalSettings {
   // Not used by the engine: the runtime bounds the audit log and the homing
   // history with it (oldest rows pruned).
   std::uint32_t history_max_rows = 10000;
+  friend bool operator==(const GlobalSettings&, const GlobalSettings&) = default;
 };
 
 struct Settings {
   std::array<AxisSettings, kAxisCount> axes{};
   GlobalSettings global{};
+  friend bool operator==(const Settings&, const Settings&) = default;
 };
 
 // Identifies one per-axis setting, so a settings fault can name it. The names
@@ -107,6 +160,43 @@ enum class AxisField : std::uint8_t {
   shared_limit,
   jog_feedrate,
 };
+// The name of each: the suffix of its register name (axis.<a>.<name>).
+struct AxisFieldInfo {
+  AxisField value;
+  std::string_view name;
+};
+inline constexpr AxisFieldInfo kAxisFieldInfo[] = {
+    {AxisField::none, ""},
+    {AxisField::mode, "mode"},
+    {AxisField::direction, "direction"},
+    {AxisField::seek_feedrate, "seek_feedrate"},
+    {AxisField::latch_feedrate, "latch_feedrate"},
+    {AxisField::acceleration, "acceleration"},
+    {AxisField::max_seek_travel, "max_seek_travel"},
+    {AxisField::max_stop_distance, "max_stop_distance"},
+    {AxisField::max_backoff, "max_backoff"},
+    {AxisField::pull_off, "pull_off"},
+    {AxisField::home_position, "home_position"},
+    {AxisField::final_position, "final_position"},
+    {AxisField::final_move_enable, "final_move_enable"},
+    {AxisField::sensor_nc, "sensor_nc"},
+    {AxisField::debounce_ms, "debounce_ms"},
+    {AxisField::pre_move_mode, "pre_move_mode"},
+    {AxisField::pre_move_distance, "pre_move_distance"},
+    {AxisField::push_distance, "push_distance"},
+    {AxisField::index_pitch, "index_pitch"},
+    {AxisField::slave_of, "slave_of"},
+    {AxisField::slave_mode, "slave_mode"},
+    {AxisField::max_misalignment, "max_misalignment"},
+    {AxisField::switch_compensation, "switch_compensation"},
+    {AxisField::soft_limit_min, "soft_limit_min"},
+    {AxisField::soft_limit_max, "soft_limit_max"},
+    {AxisField::soft_limits_enable, "soft_limits_enable"},
+    {AxisField::shared_limit, "shared_limit"},
+    {AxisField::jog_feedrate, "jog_feedrate"},
+};
+static_assert(lists_every_value(kAxisFieldInfo, AxisField::jog_feedrate));
+constexpr std::span<const AxisFieldInfo> enum_table(AxisField) { return kAxisFieldInfo; }
 
 std::string_view field_name(AxisField field);
 std::string_view mode_name(HomingMode mode);

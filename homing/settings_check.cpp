@@ -138,6 +138,11 @@ bool final_move_wanted(const AxisSettings& s) {
          (s.final_move_enable && s.mode != HomingMode::absolute && s.mode != HomingMode::disabled);
 }
 
+double index_search_mm(const AxisSettings& s) {
+  return s.index_pitch_mm * 1.1 +
+         stop_distance_mm(mm_per_min_to_mm_per_s(s.latch_feedrate_mm_per_min), s.acceleration_mm_per_s2);
+}
+
 std::optional<SettingsFault> check_axis(const Settings& settings, std::size_t axis) {
   return check_axis_in(settings, motion_settings(settings), axis);
 }

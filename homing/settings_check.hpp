@@ -69,6 +69,9 @@ double backoff_needed_mm(const AxisSettings& s);
 double gantry_stop_distance_mm(const AxisSettings& pair_motion);
 // The final move of a cycle is made for this axis.
 bool final_move_wanted(const AxisSettings& s);
+// How far the index phase searches from the release edge before
+// index_not_found: a pitch and a tenth, plus the stop from latch feedrate.
+double index_search_mm(const AxisSettings& s);
 
 std::string describe_fault(const SettingsFault& fault, const Settings& settings);
 

@@ -2,15 +2,27 @@
 // What the engine reports each period. Enum values are register values.
 #include <array>
 #include <cstdint>
+#include <iterator>
+#include <span>
 #include <string_view>
 
 #include "alarms.hpp"
 #include "axes.hpp"
+#include "enum_info.hpp"
 #include "phases.hpp"
 
 namespace homing {
 
 enum class MachineState : std::uint8_t { not_homed = 0, homing = 1, homed = 2, alarm = 3, moving = 4 };
+inline constexpr EnumInfo<MachineState> kMachineStateInfo[] = {
+    {MachineState::not_homed, "not_homed", "not homed"},
+    {MachineState::homing, "homing", "a homing cycle runs"},
+    {MachineState::homed, "homed", "all homing axes are homed"},
+    {MachineState::alarm, "alarm", "an alarm is latched; reset it"},
+    {MachineState::moving, "moving", "a jog or move runs"},
+};
+static_assert(lists_every_value(kMachineStateInfo, MachineState::moving));
+constexpr std::span<const EnumInfo<MachineState>> enum_table(MachineState) { return kMachineStateInfo; }
 
 enum class CommandResult : std::uint8_t {
   none = 0,
@@ -31,6 +43,32 @@ enum class CommandResult : std::uint8_t {
   refused_hard_limit = 15,   // on a tripped shared limit: only a jog away from the sensor is allowed
 };
 inline constexpr std::uint8_t kCommandResultCount = 16;
+inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
+    {CommandResult::none, "none", "no command yet"},
+    {CommandResult::accepted, "accepted", "the last command started"},
+    {CommandResult::already_running, "already_running", "the same command is still running; not restarted"},
+    {CommandResult::refused_alarm, "refused_alarm", "an alarm is latched: reset first"},
+    {CommandResult::refused_estop, "refused_estop", "the emergency stop is pressed: release it, then reset"},
+    {CommandResult::refused_drive_fault, "refused_drive_fault", "a drive reports a fault: check the drive, then reset"},
+    {CommandResult::refused_busy, "refused_busy", "another homing cycle or motion is running (abort stops it)"},
+    {CommandResult::refused_not_homed, "refused_not_homed",
+     "not allowed before homing (global.allowed_without_homing): home first"},
+    {CommandResult::refused_no_permit, "refused_no_permit",
+     "global.permit_required is on and the homing permit (host.homing_permit or the permit input) is off"},
+    {CommandResult::refused_soft_limit, "refused_soft_limit", "target outside the soft limits"},
+    {CommandResult::refused_slave_axis, "refused_slave_axis", "this axis is a gantry slave: command its master"},
+    {CommandResult::refused_cause_present, "refused_cause_present",
+     "reset refused: the cause (e-stop, drive fault or watchdog) is still present; remove it first"},
+    {CommandResult::refused_invalid, "refused_invalid", "the command makes no sense here (axis disabled or bad target)"},
+    {CommandResult::refused_communication_lost, "refused_communication_lost", "the watchdog expired: host.heartbeat stopped changing; reset first"},
+    {CommandResult::refused_settings_fault, "refused_settings_fault",
+     "the configuration check refused the command: see the axis alarm or homingctl check"},
+    {CommandResult::refused_hard_limit, "refused_hard_limit",
+     "on a tripped shared limit: only a jog away from the sensor is allowed until it releases"},
+};
+static_assert(lists_every_value(kCommandResultInfo, CommandResult::refused_hard_limit));
+static_assert(std::size(kCommandResultInfo) == kCommandResultCount);
+constexpr std::span<const EnumInfo<CommandResult>> enum_table(CommandResult) { return kCommandResultInfo; }
 
 // status.interlocks: what blocks homing or motion now; 0 = free to move.
 namespace interlock {
@@ -44,11 +82,36 @@ inline constexpr std::uint16_t not_homed = 1u << 6;       // motion limited unti
 inline constexpr std::uint16_t homing_active = 1u << 7;
 inline constexpr std::uint16_t motion_active = 1u << 8;   // jog or move running
 inline constexpr int kCount = 9;
+
+// Per bit: its name (register bit name) and text (what homingctl and HMIs show).
+struct BitInfo {
+  int bit;
+  std::uint16_t mask;
+  std::string_view name;
+  std::string_view text;
+};
+inline constexpr BitInfo kInfo[] = {
+    {0, estop, "estop", "emergency stop pressed"},
+    {1, drive_fault, "drive_fault", "drive fault"},
+    {2, alarm_latched, "alarm_latched", "alarm latched (reset required)"},
+    {3, settings_lost, "settings_lost", "settings lost (reset required)"},
+    {4, communication_lost, "communication_lost", "communication lost (watchdog expired)"},
+    {5, permit_missing, "permit_missing", "homing permit off"},
+    {6, not_homed, "not_homed", "not homed (motion limited)"},
+    {7, homing_active, "homing_active", "homing cycle running"},
+    {8, motion_active, "motion_active", "jog or move running"},
+};
+constexpr bool bits_in_order() {
+  for (int i = 0; i < kCount; ++i)
+    if (kInfo[i].bit != i || kInfo[i].mask != 1u << i) return false;
+  return std::size(kInfo) == static_cast<std::size_t>(kCount);
+}
+static_assert(bits_in_order());
 }  // namespace interlock
 
 std::string_view state_name(MachineState s);
 std::string_view command_result_name(CommandResult r);
-std::string_view interlock_name(int bit);
+std::string_view interlock_name(int bit);  // the bit's text ("emergency stop pressed")
 
 struct AxisStatus {
   Phase phase = Phase::idle;

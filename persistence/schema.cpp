@@ -1,6 +1,10 @@
 #include "persistence/schema.hpp"
 
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
 #include "persistence/settings_store.hpp"
+#include "persistence/sqlite_handle.hpp"
 
 namespace persistence::schema {
 
@@ -79,6 +83,22 @@ const std::vector<Step>& steps() {
   };
   static_assert(kSchemaVersion == 3, "append a migration step when raising kSchemaVersion");
   return all;
+}
+
+Status migrate(sql::Db& db, int from, spdlog::logger& log) {
+  const auto& all = steps();
+  for (int v = from; v < kSchemaVersion; ++v) {
+    const auto& step = all.at(static_cast<std::size_t>(v));
+    auto txn = sql::Transaction::begin(db, "starting a schema migration");
+    if (!txn) return std::unexpected(txn.error());
+    if (auto s = db.exec(step.sql, fmt::format("schema migration to v{} ({})", step.to_version, step.description)); !s)
+      return s;
+    if (auto s = db.exec(fmt::format("PRAGMA user_version = {}", step.to_version), "setting the schema version"); !s)
+      return s;
+    if (auto s = txn->commit("committing a schema migration"); !s) return s;
+    if (from > 0) log.info("settings database {}: schema migrated to v{} ({})", db.path(), step.to_version, step.description);
+  }
+  return {};
 }
 
 }  // namespace persistence::schema

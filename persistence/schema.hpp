@@ -5,6 +5,16 @@
 #include <string_view>
 #include <vector>
 
+#include "persistence/error.hpp"
+
+namespace spdlog {
+class logger;
+}
+
+namespace persistence::sql {
+class Db;
+}
+
 namespace persistence::schema {
 
 struct Step {
@@ -14,5 +24,9 @@ struct Step {
 };
 
 const std::vector<Step>& steps();  // steps()[k] takes version k to k+1
+
+// Runs the steps from version `from` to kSchemaVersion, each in its own
+// transaction with the version it reaches (an upgrade cut short resumes).
+Status migrate(sql::Db& db, int from, spdlog::logger& log);
 
 }  // namespace persistence::schema

@@ -6,9 +6,11 @@
 
 #include <cerrno>
 #include <cstring>
-#include <ctime>
 #include <optional>
 #include <toml++/toml.h>
+
+#include "persistence/durable_files.hpp"
+#include "persistence/time_text.hpp"
 
 namespace persistence {
 namespace {
@@ -24,22 +26,6 @@ std::string quote_key(std::string_view k) {
   }
   out += '"';
   return out;
-}
-
-std::string utc_text(std::int64_t ms) {
-  std::time_t t = static_cast<std::time_t>(ms / 1000);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
-Error file_error(const std::string& file, std::string_view what, int err) {
-  ErrorKind kind = ErrorKind::io;
-  if (err == EROFS || err == EACCES || err == EPERM) kind = ErrorKind::read_only;
-  if (err == ENOSPC || err == EDQUOT || err == EFBIG) kind = ErrorKind::disk_full;
-  return Error{kind, fmt::format("{}: {} failed: {}", file, what, std::strerror(err))};
 }
 
 std::string_view type_name(toml::node_type t) {
@@ -83,7 +69,7 @@ std::string settings_file_text(const std::map<std::string, std::int64_t>& values
                                std::int64_t now_ms) {
   std::string text;
   text += "# Homing module settings: raw register values by register name.\n";
-  text += fmt::format("# Exported {} from {}.\n", utc_text(now_ms), source);
+  text += fmt::format("# Exported {} from {}.\n", time_text(now_ms, TimeZone::utc), source);
   text += "# Import checks every value exactly like a Modbus write; a bad file changes nothing.\n";
   text += fmt::format("format = \"{}\"\nformat_version = {}\n\n[settings]\n", kFormat, kFormatVersion);
   for (const auto& [name, value] : values) text += fmt::format("{} = {}\n", quote_key(name), value);
@@ -124,7 +110,7 @@ Result<SettingsFileEntries> read_settings_file(const std::string& file) {
 Status write_file_atomically(const std::string& file, const std::string& text) {
   const std::string tmp = file + ".tmp";
   int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return std::unexpected(file_error(tmp, "creating the file", errno));
+  if (fd < 0) return std::unexpected(os_error(tmp, "creating the file", errno));
   std::size_t done = 0;
   while (done < text.size()) {
     ssize_t n = ::write(fd, text.data() + done, text.size() - done);
@@ -133,7 +119,7 @@ Status write_file_atomically(const std::string& file, const std::string& text) {
       int err = errno;
       ::close(fd);
       ::unlink(tmp.c_str());
-      return std::unexpected(file_error(tmp, "writing the file", err));
+      return std::unexpected(os_error(tmp, "writing the file", err));
     }
     done += static_cast<std::size_t>(n);
   }
@@ -141,13 +127,13 @@ Status write_file_atomically(const std::string& file, const std::string& text) {
     int err = errno;
     ::close(fd);
     ::unlink(tmp.c_str());
-    return std::unexpected(file_error(tmp, "fsync", err));
+    return std::unexpected(os_error(tmp, "fsync", err));
   }
   ::close(fd);
   if (::rename(tmp.c_str(), file.c_str()) != 0) {
     int err = errno;
     ::unlink(tmp.c_str());
-    return std::unexpected(file_error(file, "renaming the file into place", err));
+    return std::unexpected(os_error(file, "renaming the file into place", err));
   }
   return {};
 }

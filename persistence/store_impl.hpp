@@ -1,7 +1,13 @@
 #pragma once
-// Internal: SettingsStore's state, shared by settings_store.cpp and transfer.cpp.
+// Internal: SettingsStore's state and the steps its parts share
+// (settings_store.cpp, store_open.cpp, store_recover.cpp, store_backup.cpp,
+// store_history.cpp, transfer.cpp).
+#include <spdlog/spdlog.h>
+
 #include <chrono>
 #include <mutex>
+#include <optional>
+#include <string_view>
 
 #include "persistence/settings_store.hpp"
 #include "persistence/sqlite_handle.hpp"
@@ -28,5 +34,35 @@ struct SettingsStore::Impl {
   Status backup_locked();
   Status backup_if_due_locked();
 };
+
+// The meta row that latches "settings lost" until a client acknowledges it.
+inline constexpr std::string_view kLostKey = "settings_lost";
+
+// What open() says happened: logged, and kept in the report.
+struct OpenNotes {
+  spdlog::logger& log;
+  OpenReport& report;
+  void operator()(spdlog::level::level_enum level, std::string message) const {
+    log.log(level, "{}", message);
+    report.messages.push_back(std::move(message));
+  }
+};
+
+// A backup is good if it opens read-only, passes the integrity check and has
+// a schema this firmware can migrate: nullopt, else why not (store_backup.cpp).
+std::optional<std::string> backup_problem(const std::string& file, const char* vfs);
+
+// The database a writable open goes on with (store_recover.cpp).
+struct FoundDatabase {
+  sql::Db db;
+  int version = 0;     // schema version as found (0: new)
+  bool fresh = false;  // created empty: nothing existed, or nothing could be restored
+};
+
+// Opens the database at `path` in WAL mode, proven intact; a missing or
+// damaged one is restored from the newest good backup, or created empty with
+// "settings lost" (report.outcome and the notes say which).
+Result<FoundDatabase> open_or_recover(const std::string& path, const char* vfs, std::int64_t now_ms,
+                                      OpenReport& report, const OpenNotes& note);
 
 }  // namespace persistence

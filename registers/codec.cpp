@@ -1,6 +1,7 @@
 // Raw <-> engineering conversion and the binding of every row to the engine's
-// structs. One case per Key; a row whose key has no binding is a table bug and
-// throws (the tests touch every row, so it cannot ship).
+// structs. Settings rows carry the member they fill; every other row has one
+// case per Key. A row without a binding is a table bug and throws (the tests
+// touch every row, so it cannot ship).
 #include "registers/codec.hpp"
 
 #include <fmt/format.h>
@@ -14,7 +15,6 @@
 namespace registers {
 namespace {
 
-using homing::AxisSettings;
 using homing::Settings;
 
 [[noreturn]] void unbound(const Register& reg, std::string_view what) {
@@ -24,43 +24,6 @@ using homing::Settings;
 // Exact divisor of the scale: dividing by 1000 (not multiplying by 0.001)
 // gives the double nearest to the decimal value, so 100 µm prints as 0.1.
 double divisor(const Register& reg) { return reg.scale() == 1.0 ? 1.0 : std::round(1.0 / reg.scale()); }
-
-// The double-valued members of AxisSettings, by key (const-correct for get and set).
-template <class A>
-auto double_field(A& a, Key k) -> decltype(&a.pull_off_mm) {
-  switch (k) {
-    case Key::axis_seek_feedrate: return &a.seek_feedrate_mm_per_min;
-    case Key::axis_latch_feedrate: return &a.latch_feedrate_mm_per_min;
-    case Key::axis_acceleration: return &a.acceleration_mm_per_s2;
-    case Key::axis_max_seek_travel: return &a.max_seek_travel_mm;
-    case Key::axis_max_stop_distance: return &a.max_stop_distance_mm;
-    case Key::axis_max_backoff: return &a.max_backoff_mm;
-    case Key::axis_pull_off: return &a.pull_off_mm;
-    case Key::axis_home_position: return &a.home_position_mm;
-    case Key::axis_final_position: return &a.final_position_mm;
-    case Key::axis_debounce_ms: return &a.debounce_ms;
-    case Key::axis_pre_move_distance: return &a.pre_move_distance_mm;
-    case Key::axis_push_distance: return &a.push_distance_mm;
-    case Key::axis_index_pitch: return &a.index_pitch_mm;
-    case Key::axis_max_misalignment: return &a.max_misalignment_mm;
-    case Key::axis_switch_compensation: return &a.switch_compensation_mm;
-    case Key::axis_soft_limit_min: return &a.soft_limit_min_mm;
-    case Key::axis_soft_limit_max: return &a.soft_limit_max_mm;
-    case Key::axis_jog_feedrate: return &a.jog_feedrate_mm_per_min;
-    default: return nullptr;
-  }
-}
-
-template <class A>
-auto bool_field(A& a, Key k) -> decltype(&a.sensor_nc) {
-  switch (k) {
-    case Key::axis_final_move_enable: return &a.final_move_enable;
-    case Key::axis_sensor_nc: return &a.sensor_nc;
-    case Key::axis_soft_limits_enable: return &a.soft_limits_enable;
-    case Key::axis_shared_limit: return &a.shared_limit;
-    default: return nullptr;
-  }
-}
 
 template <class E>
 std::int64_t raw_of(E e) { return static_cast<std::int64_t>(e); }
@@ -126,64 +89,15 @@ std::optional<CommandRequest> command_of(const Register& coil, bool value) {
 }
 
 // ---- settings ----
+// Each settings row carries the member it fills (registers/fills.hpp).
 std::int64_t setting_raw(const Settings& settings, const Register& reg) {
-  if (reg.per_axis()) {
-    const AxisSettings& a = settings.axes[axis_index(reg)];
-    if (const double* d = double_field(a, reg.key)) return to_raw(reg, *d);
-    if (const bool* b = bool_field(a, reg.key)) return *b ? 1 : 0;
-    switch (reg.key) {
-      case Key::axis_mode: return raw_of(a.mode);
-      case Key::axis_direction: return raw_of(a.direction);
-      case Key::axis_pre_move_mode: return raw_of(a.pre_move_mode);
-      case Key::axis_slave_of: return a.slave_of;
-      case Key::axis_slave_mode: return raw_of(a.slave_mode);
-      default: unbound(reg, "settings");
-    }
-  }
-  const homing::GlobalSettings& g = settings.global;
-  switch (reg.key) {
-    case Key::sequence_step: return g.sequence_steps.at(reg.slot);
-    case Key::global_allowed_without_homing: return raw_of(g.allowed_without_homing);
-    case Key::global_alarm_clears_homed: return g.alarm_clears_homed ? 1 : 0;
-    case Key::global_watchdog_ms: return g.watchdog_ms;
-    case Key::global_permit_required: return g.permit_required ? 1 : 0;
-    case Key::global_history_max_rows: return g.history_max_rows;
-    default: unbound(reg, "settings");
-  }
+  if (!reg.setting.bound()) unbound(reg, "settings");
+  return reg.setting.get(settings, reg);
 }
 
 void set_setting_raw(Settings& settings, const Register& reg, std::int64_t raw) {
-  if (reg.per_axis()) {
-    AxisSettings& a = settings.axes[axis_index(reg)];
-    if (double* d = double_field(a, reg.key)) {
-      *d = to_engineering(reg, raw);
-      return;
-    }
-    if (bool* b = bool_field(a, reg.key)) {
-      *b = raw != 0;
-      return;
-    }
-    switch (reg.key) {
-      case Key::axis_mode: a.mode = static_cast<homing::HomingMode>(raw); return;
-      case Key::axis_direction: a.direction = static_cast<homing::Direction>(raw); return;
-      case Key::axis_pre_move_mode: a.pre_move_mode = static_cast<homing::PreMove>(raw); return;
-      case Key::axis_slave_of: a.slave_of = static_cast<std::uint8_t>(raw); return;
-      case Key::axis_slave_mode: a.slave_mode = static_cast<homing::SlaveMode>(raw); return;
-      default: unbound(reg, "settings");
-    }
-  }
-  homing::GlobalSettings& g = settings.global;
-  switch (reg.key) {
-    case Key::sequence_step: g.sequence_steps.at(reg.slot) = static_cast<homing::AxisMask>(raw); return;
-    case Key::global_allowed_without_homing:
-      g.allowed_without_homing = static_cast<homing::AllowedWithoutHoming>(raw);
-      return;
-    case Key::global_alarm_clears_homed: g.alarm_clears_homed = raw != 0; return;
-    case Key::global_watchdog_ms: g.watchdog_ms = static_cast<std::uint32_t>(raw); return;
-    case Key::global_permit_required: g.permit_required = raw != 0; return;
-    case Key::global_history_max_rows: g.history_max_rows = static_cast<std::uint32_t>(raw); return;
-    default: unbound(reg, "settings");
-  }
+  if (!reg.setting.bound()) unbound(reg, "settings");
+  reg.setting.set(settings, reg, raw);
 }
 
 // ---- host values ----

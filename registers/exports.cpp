@@ -17,6 +17,8 @@ std::vector<GeneratedFile> generate_hmi_maps() {
       {"kepware_simulator.csv", export_kepware(Unit::simulator)},
       {"ignition_tags.json", export_ignition()},
       {"home_assistant_modbus.yaml", export_home_assistant()},
+      {"alarms.csv", export_alarms_csv()},
+      {"enums.csv", export_enums_csv()},
   };
 }
 
@@ -50,6 +52,28 @@ std::string description(const Register& reg) {
   if (const auto at = d.find("<a>"); at != std::string::npos && reg.axis >= 0)
     d.replace(at, 3, homing::kAxisLetters[static_cast<std::size_t>(reg.axis)]);
   return d;
+}
+
+std::string ascii_text(std::string_view utf8) {
+  // The non-ASCII characters the table's units and descriptions use; a new
+  // one fails the export test rather than slipping through.
+  static constexpr std::pair<std::string_view, std::string_view> kSpelling[] = {
+      {"\u00b5", "u"}, {"\u00b2", "^2"}, {"\u00b0", "deg"}, {"\u00b1", "+/-"}, {"\u00d7", "x"},
+      {"\u2013", "-"}, {"\u2014", "-"}, {"\u2192", "->"}, {"\u2026", "..."}, {"\u2264", "<="},
+      {"\u2265", ">="}, {"\u2260", "!="}, {"\u2018", "'"}, {"\u2019", "'"}, {"\u201c", "\""}, {"\u201d", "\""}};
+  std::string out;
+  for (std::size_t i = 0; i < utf8.size();) {
+    bool replaced = false;
+    for (const auto& [from, to] : kSpelling)
+      if (utf8.substr(i, from.size()) == from) {
+        out += to;
+        i += from.size();
+        replaced = true;
+        break;
+      }
+    if (!replaced) out += utf8[i++];
+  }
+  return out;
 }
 
 std::uint8_t default_unit_id(Unit unit) {

@@ -42,12 +42,12 @@ std::string axis_defaults(std::span<const Register> rows, const Register& first)
   std::string all;
   bool same = true;
   for (const Register& r : rows)
-    if (r.key == first.key && r.table == first.table && r.offset == first.offset && r.per_axis()) {
+    if (r.pattern == first.pattern && r.table == first.table && r.per_axis()) {
       if (r.default_raw != first.default_raw) same = false;
     }
   if (same) return value_cell(first, first.default_raw);
   for (const Register& r : rows)
-    if (r.key == first.key && r.table == first.table && r.offset == first.offset && r.per_axis())
+    if (r.pattern == first.pattern && r.table == first.table && r.per_axis())
       all += fmt::format("{}{}: {}", all.empty() ? "" : ", ", homing::kAxisUpper[static_cast<std::size_t>(r.axis)],
                          r.default_raw);
   return all;

@@ -7,6 +7,13 @@
 #include <algorithm>
 #include <string>
 
+#include "homing/alarms.hpp"
+#include "homing/phases.hpp"
+#include "homing/settings.hpp"
+#include "homing/sim/config.hpp"
+#include "homing/status.hpp"
+#include "registers/fills.hpp"
+
 namespace registers {
 namespace {
 
@@ -31,8 +38,8 @@ struct Row {
   std::int64_t min = 0;
   std::int64_t max = 0;
   Def def{0};
-  bool persisted = true;
-  Key key = Key::axis_mode;
+  SettingAccess fills{};  // settings rows: the member they fill (fills<&Member>); persisted
+  Key key = Key::none;    // every other row
   std::uint8_t slot = 0;
   std::span<const EnumValue> values{};
   std::string_view description;
@@ -48,236 +55,193 @@ constexpr Table IR = Table::input_register;
 constexpr Table CO = Table::coil;
 constexpr Table DI = Table::discrete_input;
 constexpr Quantity LEN = Quantity::length_um;
+using A = homing::AxisSettings;
+using G = homing::GlobalSettings;
 
-// ---- enum values (numbers are the engine's enum values; tests compare names) ----
-constexpr EnumValue kModes[] = {
-    {0, "disabled", "does not home; counts as homed"},
-    {1, "manual", "no movement: the current position becomes the home position"},
-    {2, "switch_release", "seek the switch, back off; the release edge is the reference"},
-    {3, "switch_reapproach", "as 2, then approach again at latch feedrate; that edge is the reference"},
-    {4, "switch_index", "release edge, then the next encoder index pulse"},
-    {5, "absolute", "position from the absolute encoder, no movement"},
-    {6, "absolute_final", "absolute, then move to final_position"},
-    {7, "pushing_release", "seek, push into the mechanical stop, release edge"},
-    {8, "pushing_reapproach", "seek, push into the mechanical stop, re-approach edge"},
-};
-constexpr EnumValue kDirections[] = {{0, "negative", "seek toward the negative end"},
-                                     {1, "positive", "seek toward the positive end"}};
-constexpr EnumValue kPreMoves[] = {
-    {0, "none", "no pre-move"},
-    {1, "if_sensor_active", "move pre_move_distance away first if the sensor is already active"},
-    {2, "always", "always move pre_move_distance away before seeking"}};
+// ---- enum values ----
+// The engine's enums: names and texts come from their tables in homing/
+// (enum_info.hpp), so a register's value list is the engine's own.
+template <class Entry, std::size_t N>
+constexpr std::array<EnumValue, N> values_of(const Entry (&table)[N]) {
+  std::array<EnumValue, N> out{};
+  for (std::size_t i = 0; i < N; ++i)
+    out[i] = {static_cast<std::int64_t>(table[i].value), table[i].name, table[i].text};
+  return out;
+}
+// Bitmask registers: the value of a bit is its number.
+template <std::size_t N>
+constexpr std::array<EnumValue, N> bits_of(const homing::interlock::BitInfo (&table)[N]) {
+  std::array<EnumValue, N> out{};
+  for (std::size_t i = 0; i < N; ++i) out[i] = {table[i].bit, table[i].name, table[i].text};
+  return out;
+}
+constexpr auto kModes = values_of(homing::kHomingModeInfo);
+constexpr auto kDirections = values_of(homing::kDirectionInfo);
+constexpr auto kPreMoves = values_of(homing::kPreMoveInfo);
+constexpr auto kSlaveModes = values_of(homing::kSlaveModeInfo);
+constexpr auto kAllowed = values_of(homing::kAllowedWithoutHomingInfo);
+constexpr auto kStates = values_of(homing::kMachineStateInfo);
+constexpr auto kCommandResults = values_of(homing::kCommandResultInfo);
+constexpr auto kInterlocks = bits_of(homing::interlock::kInfo);
+constexpr auto kAlarms = values_of(homing::kAlarmInfo);
+constexpr auto kPhases = values_of(homing::kPhaseInfo);
+constexpr auto kSimFaults = values_of(homing::sim::kFaultInfo);
+// Register encodings of axes (not engine enums).
 constexpr EnumValue kSlaveOf[] = {{0, "none", "not a slave"},  {1, "x", "slave of X"},
                                   {2, "y", "slave of Y"},      {3, "z", "slave of Z"},
                                   {4, "a", "slave of A"},      {5, "b", "slave of B"},
                                   {6, "c", "slave of C"}};
-constexpr EnumValue kSlaveModes[] = {
-    {0, "own_output", "own step output, own home sensor (software squaring)"},
-    {1, "external_commutator", "external commutator on the master's output"}};
-constexpr EnumValue kAllowed[] = {{0, "all", "every command is allowed before homing"},
-                                  {1, "jog_reduced", "only jog, at reduced speed (100 mm/min)"},
-                                  {2, "none", "nothing moves before homing"}};
 constexpr EnumValue kAxisBits[] = {{0, "x", "X"}, {1, "y", "Y"}, {2, "z", "Z"},
                                    {3, "a", "A"}, {4, "b", "B"}, {5, "c", "C"}};
-constexpr EnumValue kStates[] = {{0, "not_homed", "not homed"},
-                                 {1, "homing", "a homing cycle runs"},
-                                 {2, "homed", "all homing axes are homed"},
-                                 {3, "alarm", "an alarm is latched; reset it"},
-                                 {4, "moving", "a jog or move runs"}};
-constexpr EnumValue kCommandResults[] = {
-    {0, "none", "no command yet"},
-    {1, "accepted", "the last command started"},
-    {2, "already_running", "the same command still runs; not restarted"},
-    {3, "refused_alarm", "an alarm is latched: reset first"},
-    {4, "refused_estop", "emergency stop is active"},
-    {5, "refused_drive_fault", "a drive reports a fault"},
-    {6, "refused_busy", "another homing cycle or motion runs"},
-    {7, "refused_not_homed", "not allowed before homing (global.allowed_without_homing)"},
-    {8, "refused_no_permit", "global.permit_required and host.homing_permit is off"},
-    {9, "refused_soft_limit", "target outside the soft limits"},
-    {10, "refused_slave_axis", "a slave axis is commanded through its master"},
-    {11, "refused_cause_present", "reset refused: e-stop, drive fault or watchdog still active"},
-    {12, "refused_invalid", "the command makes no sense (bad axis, bad target)"},
-    {13, "refused_communication_lost", "the host watchdog expired"},
-    {14, "refused_settings_fault", "the configuration check refused the command: see the axis alarm or homingctl check"},
-    {15, "refused_hard_limit", "on a tripped shared limit: only a jog away from the sensor is allowed until it releases"}};
-constexpr EnumValue kInterlocks[] = {  // meanings = homing::interlock_name
-    {0, "estop", "emergency stop pressed"},
-    {1, "drive_fault", "drive fault"},
-    {2, "alarm_latched", "alarm latched (reset required)"},
-    {3, "settings_lost", "settings lost (reset required)"},
-    {4, "communication_lost", "communication lost (watchdog expired)"},
-    {5, "permit_missing", "homing permit off"},
-    {6, "not_homed", "not homed (motion limited)"},
-    {7, "homing_active", "homing cycle running"},
-    {8, "motion_active", "jog or move running"}};
-constexpr EnumValue kAlarms[] = {
-    {0, "none", "no alarm"},
-    {1, "sensor_not_found", "seek travelled max_seek_travel without a trigger"},
-    {2, "overrun_during_stop", "sensor released while stopping: trigger too short"},
-    {3, "stop_distance_exceeded", "came to rest further than max_stop_distance"},
-    {4, "not_released", "sensor still active after max_backoff"},
-    {5, "index_not_found", "no index pulse within one index pitch"},
-    {6, "slave_sensor_missing", "a slave axis has no home sensor"},
-    {7, "misalignment", "gantry misalignment beyond max_misalignment"},
-    {8, "hard_limit", "shared home sensor tripped after homing"},
-    {9, "soft_limit", "soft limit reached"},
-    {10, "aborted", "aborted by command"},
-    {11, "emergency_stop", "emergency stop"},
-    {12, "drive_fault", "drive fault"},
-    {13, "settings_fault", "settings cannot work (see the message)"},
-    {14, "communication_lost", "host watchdog expired"},
-    {15, "settings_lost", "stored settings lost"},
-    {16, "reapproach_not_found", "re-approach travelled max_backoff without a trigger"},
-    {17, "permit_withdrawn", "homing permit went off during a cycle"},
-    {18, "encoder_fault", "no valid absolute encoder position"}};
-constexpr EnumValue kPhases[] = {
-    {0, "idle", ""},           {1, "waiting", "later sequence step or gantry partner"},
-    {2, "pre_move", ""},       {3, "seek", ""},
-    {4, "stop", "decelerating after the trigger"},
-    {5, "push", "pushing into the mechanical stop"},
-    {6, "back_off", ""},       {7, "reapproach", ""},
-    {8, "index", ""},          {9, "pull_off", ""},
-    {10, "assign", ""},        {11, "final_move", ""},
-    {12, "align_slave", "external commutator: the slave finds its own edge"},
-    {13, "done", ""},          {14, "jog", ""},
-    {15, "move", ""},          {16, "stopping", "decelerating after an alarm or abort"}};
 constexpr EnumValue kAlarmAxis[] = {{0, "none", "no axis alarm"}, {1, "x", "X"}, {2, "y", "Y"},
                                     {3, "z", "Z"}, {4, "a", "A"},  {5, "b", "B"}, {6, "c", "C"}};
-constexpr EnumValue kSimFaults[] = {{0, "none", "no fault"},
-                                    {1, "sensor_stuck_active", "sensor reads active everywhere"},
-                                    {2, "sensor_stuck_inactive", "sensor never turns active"},
-                                    {3, "wire_break", "sensor wire broken (NC reads active, NO never)"},
-                                    {4, "drive_fault", "the drive reports a fault"}};
+
+// Named for hmi_maps/enums.csv; a static_assert below proves every row's list is here.
+constexpr ValueList kValueLists[] = {
+    {"mode", kModes},
+    {"direction", kDirections},
+    {"pre_move_mode", kPreMoves},
+    {"slave_of", kSlaveOf},
+    {"slave_mode", kSlaveModes},
+    {"allowed_without_homing", kAllowed},
+    {"axis_mask", kAxisBits},
+    {"state", kStates},
+    {"command_result", kCommandResults},
+    {"interlocks", kInterlocks},
+    {"alarm", kAlarms},
+    {"alarm_axis", kAlarmAxis},
+    {"phase", kPhases},
+    {"sim_fault", kSimFaults},
+};
 
 // ---- module unit ----
 constexpr auto kModuleGlobals = std::to_array<Row>({
     // holding: global settings
-    {.pattern = "sequence.step1", .type = Type::bitmask, .max = 63, .def = 4, .key = Key::sequence_step, .slot = 0, .values = kAxisBits, .description = "axes homing together in sequence step 1 (bit 0 = X ... bit 5 = C)"},
-    {.pattern = "sequence.step2", .offset = 1, .type = Type::bitmask, .max = 63, .def = 3, .key = Key::sequence_step, .slot = 1, .values = kAxisBits, .description = "axes homing together in sequence step 2"},
-    {.pattern = "sequence.step3", .offset = 2, .type = Type::bitmask, .max = 63, .key = Key::sequence_step, .slot = 2, .values = kAxisBits, .description = "axes homing together in sequence step 3"},
-    {.pattern = "sequence.step4", .offset = 3, .type = Type::bitmask, .max = 63, .key = Key::sequence_step, .slot = 3, .values = kAxisBits, .description = "axes homing together in sequence step 4"},
-    {.pattern = "sequence.step5", .offset = 4, .type = Type::bitmask, .max = 63, .key = Key::sequence_step, .slot = 4, .values = kAxisBits, .description = "axes homing together in sequence step 5"},
-    {.pattern = "sequence.step6", .offset = 5, .type = Type::bitmask, .max = 63, .key = Key::sequence_step, .slot = 5, .values = kAxisBits, .description = "axes homing together in sequence step 6"},
-    {.pattern = "global.allowed_without_homing", .offset = 10, .type = Type::enumeration, .max = 2, .key = Key::global_allowed_without_homing, .values = kAllowed, .description = "what may move before the machine is homed"},
-    {.pattern = "global.alarm_clears_homed", .offset = 11, .max = 1, .def = 1, .key = Key::global_alarm_clears_homed, .description = "flag (0/1): an alarm clears the homed state of every axis"},
-    {.pattern = "global.watchdog_ms", .offset = 12, .quantity = Quantity::time_ms, .max = 60'000, .key = Key::global_watchdog_ms, .description = "host watchdog: stop motion started over Modbus when host.heartbeat does not change for this long; 0 = off"},
-    {.pattern = "global.history_max_rows", .offset = 14, .type = Type::u32, .min = 100, .max = 1'000'000, .def = 10'000, .key = Key::global_history_max_rows, .description = "rows kept in the audit log and in the homing history each (oldest pruned)"},
-    {.pattern = "global.permit_required", .offset = 13, .max = 1, .key = Key::global_permit_required, .description = "flag (0/1): homing needs host.homing_permit (or the permit input) on"},
-    {.pattern = "security.unlock", .offset = 30, .max = 65535, .persisted = false, .key = Key::security_unlock, .description = "write the unlock code (homingd --unlock-code) to allow settings writes; reads 0"},
-    {.pattern = "host.heartbeat", .offset = 20, .max = 65535, .persisted = false, .key = Key::host_heartbeat, .description = "the master changes this at least once per watchdog period (not persisted)"},
+    {.pattern = "sequence.step1", .type = Type::bitmask, .max = 63, .def = 4, .fills = fills<&G::sequence_steps>, .slot = 0, .values = kAxisBits, .description = "axes homing together in sequence step 1 (bit 0 = X ... bit 5 = C)"},
+    {.pattern = "sequence.step2", .offset = 1, .type = Type::bitmask, .max = 63, .def = 3, .fills = fills<&G::sequence_steps>, .slot = 1, .values = kAxisBits, .description = "axes homing together in sequence step 2"},
+    {.pattern = "sequence.step3", .offset = 2, .type = Type::bitmask, .max = 63, .fills = fills<&G::sequence_steps>, .slot = 2, .values = kAxisBits, .description = "axes homing together in sequence step 3"},
+    {.pattern = "sequence.step4", .offset = 3, .type = Type::bitmask, .max = 63, .fills = fills<&G::sequence_steps>, .slot = 3, .values = kAxisBits, .description = "axes homing together in sequence step 4"},
+    {.pattern = "sequence.step5", .offset = 4, .type = Type::bitmask, .max = 63, .fills = fills<&G::sequence_steps>, .slot = 4, .values = kAxisBits, .description = "axes homing together in sequence step 5"},
+    {.pattern = "sequence.step6", .offset = 5, .type = Type::bitmask, .max = 63, .fills = fills<&G::sequence_steps>, .slot = 5, .values = kAxisBits, .description = "axes homing together in sequence step 6"},
+    {.pattern = "global.allowed_without_homing", .offset = 10, .type = Type::enumeration, .max = 2, .fills = fills<&G::allowed_without_homing>, .values = kAllowed, .description = "what may move before the machine is homed"},
+    {.pattern = "global.alarm_clears_homed", .offset = 11, .max = 1, .def = 1, .fills = fills<&G::alarm_clears_homed>, .description = "flag (0/1): an alarm clears the homed state of every axis"},
+    {.pattern = "global.watchdog_ms", .offset = 12, .quantity = Quantity::time_ms, .max = 60'000, .fills = fills<&G::watchdog_ms>, .description = "host watchdog: stop motion started over Modbus when host.heartbeat does not change for this long; 0 = off"},
+    {.pattern = "global.history_max_rows", .offset = 14, .type = Type::u32, .min = 100, .max = 1'000'000, .def = 10'000, .fills = fills<&G::history_max_rows>, .description = "rows kept in the audit log and in the homing history each (oldest pruned)"},
+    {.pattern = "global.permit_required", .offset = 13, .max = 1, .fills = fills<&G::permit_required>, .description = "flag (0/1): homing needs host.homing_permit (or the permit input) on"},
+    {.pattern = "security.unlock", .offset = 30, .max = 65535, .key = Key::security_unlock, .description = "write the unlock code (homingd --unlock-code) to allow settings writes; reads 0"},
+    {.pattern = "host.heartbeat", .offset = 20, .max = 65535, .key = Key::host_heartbeat, .description = "the master changes this at least once per watchdog period (not persisted)"},
     // input registers: status
-    {.pattern = "status.map_version", .table = IR, .access = Access::r, .max = 65535, .def = kMapVersion, .persisted = false, .key = Key::status_map_version, .description = "version of this register map"},
-    {.pattern = "status.state", .table = IR, .offset = 1, .type = Type::enumeration, .access = Access::r, .max = 4, .persisted = false, .key = Key::status_state, .values = kStates, .description = "machine state"},
-    {.pattern = "status.sequence_step", .table = IR, .offset = 2, .access = Access::r, .max = 6, .persisted = false, .key = Key::status_sequence_step, .description = "running sequence step 1..6, 0 when not homing"},
-    {.pattern = "status.homing_cycles", .table = IR, .offset = 3, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::status_homing_cycles, .description = "homing cycles completed successfully since start"},
-    {.pattern = "status.heartbeat", .table = IR, .offset = 5, .access = Access::r, .max = 65535, .persisted = false, .key = Key::status_heartbeat, .description = "increments every control period (wraps at 65535)"},
-    {.pattern = "status.last_command_result", .table = IR, .offset = 6, .type = Type::enumeration, .access = Access::r, .max = 15, .persisted = false, .key = Key::status_last_command_result, .values = kCommandResults, .description = "result of the last command coil written"},
-    {.pattern = "status.interlocks", .table = IR, .offset = 7, .type = Type::bitmask, .access = Access::r, .max = 511, .persisted = false, .key = Key::status_interlocks, .values = kInterlocks, .description = "what now blocks homing or motion; 0 = free to move"},
-    {.pattern = "status.global_alarm", .table = IR, .offset = 8, .type = Type::enumeration, .access = Access::r, .max = 18, .persisted = false, .key = Key::status_global_alarm, .values = kAlarms, .description = "alarm not tied to one axis (e-stop at rest, settings lost)"},
-    {.pattern = "status.alarm_axis", .table = IR, .offset = 9, .type = Type::enumeration, .access = Access::r, .max = 6, .persisted = false, .key = Key::status_alarm_axis, .values = kAlarmAxis, .description = "first axis with a latched alarm (1 = X ... 6 = C), 0 none"},
-    {.pattern = "status.command_count", .table = IR, .offset = 11, .access = Access::r, .max = 65535, .persisted = false, .key = Key::status_command_count, .description = "commands judged so far (wraps): status.last_command_result is the result of the command that moved it"},
-    {.pattern = "status.settings_locked", .table = IR, .offset = 10, .access = Access::r, .max = 1, .persisted = false, .key = Key::status_settings_locked, .description = "1 while settings writes are locked (write the unlock code to security.unlock)"},
+    {.pattern = "status.map_version", .table = IR, .access = Access::r, .max = 65535, .def = kMapVersion, .key = Key::status_map_version, .description = "version of this register map"},
+    {.pattern = "status.state", .table = IR, .offset = 1, .type = Type::enumeration, .access = Access::r, .max = 4, .key = Key::status_state, .values = kStates, .description = "machine state"},
+    {.pattern = "status.sequence_step", .table = IR, .offset = 2, .access = Access::r, .max = 6, .key = Key::status_sequence_step, .description = "running sequence step 1..6, 0 when not homing"},
+    {.pattern = "status.homing_cycles", .table = IR, .offset = 3, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .key = Key::status_homing_cycles, .description = "homing cycles completed successfully since start"},
+    {.pattern = "status.heartbeat", .table = IR, .offset = 5, .access = Access::r, .max = 65535, .key = Key::status_heartbeat, .description = "increments every control period (wraps at 65535)"},
+    {.pattern = "status.last_command_result", .table = IR, .offset = 6, .type = Type::enumeration, .access = Access::r, .max = 15, .key = Key::status_last_command_result, .values = kCommandResults, .description = "result of the last command coil written"},
+    {.pattern = "status.interlocks", .table = IR, .offset = 7, .type = Type::bitmask, .access = Access::r, .max = 511, .key = Key::status_interlocks, .values = kInterlocks, .description = "what now blocks homing or motion; 0 = free to move"},
+    {.pattern = "status.global_alarm", .table = IR, .offset = 8, .type = Type::enumeration, .access = Access::r, .max = 18, .key = Key::status_global_alarm, .values = kAlarms, .description = "alarm not tied to one axis (e-stop at rest, settings lost)"},
+    {.pattern = "status.alarm_axis", .table = IR, .offset = 9, .type = Type::enumeration, .access = Access::r, .max = 6, .key = Key::status_alarm_axis, .values = kAlarmAxis, .description = "first axis with a latched alarm (1 = X ... 6 = C), 0 none"},
+    {.pattern = "status.command_count", .table = IR, .offset = 11, .access = Access::r, .max = 65535, .key = Key::status_command_count, .description = "commands judged so far (wraps): status.last_command_result is the result of the command that moved it"},
+    {.pattern = "status.settings_locked", .table = IR, .offset = 10, .access = Access::r, .max = 1, .key = Key::status_settings_locked, .description = "1 while settings writes are locked (write the unlock code to security.unlock)"},
     // input registers: diagnostics of the running daemon
-    {.pattern = "diag.loop_periods", .table = IR, .offset = 20, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::diag_loop_periods, .description = "control periods run since start"},
-    {.pattern = "diag.loop_late_p50_us", .table = IR, .offset = 22, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::diag_late_p50_us, .description = "median lateness of a control period's start behind its deadline, µs"},
-    {.pattern = "diag.loop_late_p99_us", .table = IR, .offset = 24, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::diag_late_p99_us, .description = "99th percentile of control-period lateness, µs"},
-    {.pattern = "diag.loop_late_p999_us", .table = IR, .offset = 26, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::diag_late_p999_us, .description = "99.9th percentile of control-period lateness, µs"},
-    {.pattern = "diag.loop_late_max_us", .table = IR, .offset = 28, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::diag_late_max_us, .description = "largest control-period lateness, µs"},
-    {.pattern = "diag.engine_step_ns", .table = IR, .offset = 30, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::diag_engine_step_ns, .description = "mean time of one engine step, ns"},
-    {.pattern = "diag.rss_kb", .table = IR, .offset = 32, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .persisted = false, .key = Key::diag_rss_kb, .description = "resident memory of the daemon, KiB"},
-    {.pattern = "diag.tcp_clients", .table = IR, .offset = 34, .access = Access::r, .max = 65535, .persisted = false, .key = Key::diag_tcp_clients, .description = "TCP clients connected now"},
+    {.pattern = "diag.loop_periods", .table = IR, .offset = 20, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .key = Key::diag_loop_periods, .description = "control periods run since start"},
+    {.pattern = "diag.loop_late_p50_us", .table = IR, .offset = 22, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .key = Key::diag_late_p50_us, .description = "median lateness of a control period's start behind its deadline, µs"},
+    {.pattern = "diag.loop_late_p99_us", .table = IR, .offset = 24, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .key = Key::diag_late_p99_us, .description = "99th percentile of control-period lateness, µs"},
+    {.pattern = "diag.loop_late_p999_us", .table = IR, .offset = 26, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .key = Key::diag_late_p999_us, .description = "99.9th percentile of control-period lateness, µs"},
+    {.pattern = "diag.loop_late_max_us", .table = IR, .offset = 28, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .key = Key::diag_late_max_us, .description = "largest control-period lateness, µs"},
+    {.pattern = "diag.engine_step_ns", .table = IR, .offset = 30, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .key = Key::diag_engine_step_ns, .description = "mean time of one engine step, ns"},
+    {.pattern = "diag.rss_kb", .table = IR, .offset = 32, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .key = Key::diag_rss_kb, .description = "resident memory of the daemon, KiB"},
+    {.pattern = "diag.tcp_clients", .table = IR, .offset = 34, .access = Access::r, .max = 65535, .key = Key::diag_tcp_clients, .description = "TCP clients connected now"},
     // discrete inputs
-    {.pattern = "status.alarm", .table = DI, .type = Type::boolean, .access = Access::r, .max = 1, .persisted = false, .key = Key::status_alarm, .description = "an alarm is latched"},
-    {.pattern = "status.homing", .table = DI, .offset = 1, .type = Type::boolean, .access = Access::r, .max = 1, .persisted = false, .key = Key::status_homing, .description = "a homing cycle runs"},
-    {.pattern = "status.estop", .table = DI, .offset = 2, .type = Type::boolean, .access = Access::r, .max = 1, .persisted = false, .key = Key::status_estop, .description = "emergency stop is active"},
+    {.pattern = "status.alarm", .table = DI, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::status_alarm, .description = "an alarm is latched"},
+    {.pattern = "status.homing", .table = DI, .offset = 1, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::status_homing, .description = "a homing cycle runs"},
+    {.pattern = "status.estop", .table = DI, .offset = 2, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::status_estop, .description = "emergency stop is active"},
     // coils
-    {.pattern = "cmd.home_all", .table = CO, .type = Type::boolean, .access = Access::w, .max = 1, .persisted = false, .key = Key::cmd_home_all, .description = "write 1: home all axes in sequence (reads back 0)"},
-    {.pattern = "cmd.abort", .table = CO, .offset = 1, .type = Type::boolean, .access = Access::w, .max = 1, .persisted = false, .key = Key::cmd_abort, .description = "write 1: stop every motion within its deceleration distance"},
-    {.pattern = "cmd.reset_alarm", .table = CO, .offset = 2, .type = Type::boolean, .access = Access::w, .max = 1, .persisted = false, .key = Key::cmd_reset_alarm, .description = "write 1: clear latched alarms once their cause is gone"},
-    {.pattern = "cmd.lock_settings", .table = CO, .offset = 4, .type = Type::boolean, .access = Access::w, .max = 1, .persisted = false, .key = Key::cmd_lock_settings, .description = "write 1: lock settings writes again (when homingd has an unlock code)"},
-    {.pattern = "host.homing_permit", .table = CO, .offset = 3, .type = Type::boolean, .access = Access::rw, .max = 1, .persisted = false, .key = Key::host_homing_permit, .description = "held by the PLC: homing permitted (used when global.permit_required = 1)"},
+    {.pattern = "cmd.home_all", .table = CO, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_home_all, .description = "write 1: home all axes in sequence (reads back 0)"},
+    {.pattern = "cmd.abort", .table = CO, .offset = 1, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_abort, .description = "write 1: stop every motion within its deceleration distance"},
+    {.pattern = "cmd.reset_alarm", .table = CO, .offset = 2, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_reset_alarm, .description = "write 1: clear latched alarms once their cause is gone"},
+    {.pattern = "cmd.lock_settings", .table = CO, .offset = 4, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_lock_settings, .description = "write 1: lock settings writes again (when homingd has an unlock code)"},
+    {.pattern = "host.homing_permit", .table = CO, .offset = 3, .type = Type::boolean, .access = Access::rw, .max = 1, .key = Key::host_homing_permit, .description = "held by the PLC: homing permitted (used when global.permit_required = 1)"},
 });
 
 constexpr auto kModuleAxisRows = std::to_array<Row>({
     // holding: per-axis settings
-    {.pattern = "axis.<a>.mode", .type = Type::enumeration, .max = 8, .def = Def{{2, 2, 2, 0, 0, 0}}, .key = Key::axis_mode, .values = kModes, .description = "homing mode"},
-    {.pattern = "axis.<a>.direction", .offset = 1, .type = Type::enumeration, .max = 1, .key = Key::axis_direction, .values = kDirections, .description = "seek direction"},
-    {.pattern = "axis.<a>.seek_feedrate", .offset = 2, .quantity = Quantity::feedrate_per_min, .min = 1, .max = kFeedMax, .def = 1000, .key = Key::axis_seek_feedrate, .description = "speed while searching for the sensor"},
-    {.pattern = "axis.<a>.latch_feedrate", .offset = 3, .quantity = Quantity::feedrate_per_min, .min = 1, .max = kFeedMax, .def = 100, .key = Key::axis_latch_feedrate, .description = "slow speed for locating the edge; must be below seek_feedrate"},
-    {.pattern = "axis.<a>.acceleration", .offset = 4, .quantity = Quantity::acceleration_per_s2, .min = 1, .max = kAccelMax, .def = 500, .key = Key::axis_acceleration, .description = "acceleration of every homing move; stop distance = v²/2a"},
-    {.pattern = "axis.<a>.debounce_ms", .offset = 5, .quantity = Quantity::time_ms, .max = 1000, .key = Key::axis_debounce_ms, .description = "time a sensor change must persist to count"},
-    {.pattern = "axis.<a>.final_move_enable", .offset = 6, .max = 1, .key = Key::axis_final_move_enable, .description = "flag (0/1): move to final_position after homing"},
-    {.pattern = "axis.<a>.sensor_nc", .offset = 7, .max = 1, .key = Key::axis_sensor_nc, .description = "flag (0/1): home sensor is normally closed"},
-    {.pattern = "axis.<a>.pre_move_mode", .offset = 8, .type = Type::enumeration, .max = 2, .key = Key::axis_pre_move_mode, .values = kPreMoves, .description = "move away from the sensor before seeking"},
-    {.pattern = "axis.<a>.slave_of", .offset = 9, .type = Type::enumeration, .max = 6, .key = Key::axis_slave_of, .values = kSlaveOf, .description = "this axis is the slaved second motor of another axis (1 = X ... 6 = C)"},
-    {.pattern = "axis.<a>.slave_mode", .offset = 10, .type = Type::enumeration, .max = 1, .key = Key::axis_slave_mode, .values = kSlaveModes, .description = "how a slave axis is driven"},
-    {.pattern = "axis.<a>.soft_limits_enable", .offset = 11, .max = 1, .key = Key::axis_soft_limits_enable, .description = "flag (0/1): enforce soft_limit_min/max once homed"},
-    {.pattern = "axis.<a>.shared_limit", .offset = 12, .max = 1, .key = Key::axis_shared_limit, .description = "flag (0/1): after homing the home sensor acts as a hard limit"},
-    {.pattern = "axis.<a>.jog_feedrate", .offset = 13, .quantity = Quantity::feedrate_per_min, .min = 1, .max = kFeedMax, .def = 1000, .key = Key::axis_jog_feedrate, .description = "speed of jog and move commands"},
-    {.pattern = "axis.<a>.max_seek_travel", .offset = 20, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 500'000, .key = Key::axis_max_seek_travel, .description = "sensor not found within this travel: alarm"},
-    {.pattern = "axis.<a>.max_stop_distance", .offset = 22, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 10'000, .key = Key::axis_max_stop_distance, .description = "the axis must stop within this distance after the trigger"},
-    {.pattern = "axis.<a>.max_backoff", .offset = 24, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 10'000, .key = Key::axis_max_backoff, .description = "the sensor must release within this back-off travel"},
-    {.pattern = "axis.<a>.pull_off", .offset = 26, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 1'000, .key = Key::axis_pull_off, .description = "move away from the reference edge after locating it"},
-    {.pattern = "axis.<a>.home_position", .offset = 28, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::axis_home_position, .description = "machine coordinate assigned to the resting point after pull-off"},
-    {.pattern = "axis.<a>.final_position", .offset = 30, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::axis_final_position, .description = "absolute move target after homing (final_move_enable or mode 6)"},
-    {.pattern = "axis.<a>.pre_move_distance", .offset = 32, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 5'000, .key = Key::axis_pre_move_distance, .description = "distance of the pre-move"},
-    {.pattern = "axis.<a>.push_distance", .offset = 34, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 2'000, .key = Key::axis_push_distance, .description = "pushing modes: distance pushed into the mechanical stop"},
-    {.pattern = "axis.<a>.index_pitch", .offset = 36, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 5'000, .key = Key::axis_index_pitch, .description = "travel per encoder index pulse; bounds the index phase"},
-    {.pattern = "axis.<a>.max_misalignment", .offset = 38, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 2'000, .key = Key::axis_max_misalignment, .description = "gantry: largest master/slave difference accepted"},
-    {.pattern = "axis.<a>.switch_compensation", .offset = 40, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::axis_switch_compensation, .description = "gantry: fine correction added to the slave's edge"},
-    {.pattern = "axis.<a>.soft_limit_min", .offset = 42, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = -1'000'000, .key = Key::axis_soft_limit_min, .description = "lowest position allowed once homed"},
-    {.pattern = "axis.<a>.soft_limit_max", .offset = 44, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = 1'000'000, .key = Key::axis_soft_limit_max, .description = "highest position allowed once homed"},
-    {.pattern = "axis.<a>.target", .offset = 60, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .persisted = false, .key = Key::host_target, .description = "target of cmd.move.<a> (not persisted)"},
+    {.pattern = "axis.<a>.mode", .type = Type::enumeration, .max = 8, .def = Def{{2, 2, 2, 0, 0, 0}}, .fills = fills<&A::mode>, .values = kModes, .description = "homing mode"},
+    {.pattern = "axis.<a>.direction", .offset = 1, .type = Type::enumeration, .max = 1, .fills = fills<&A::direction>, .values = kDirections, .description = "seek direction"},
+    {.pattern = "axis.<a>.seek_feedrate", .offset = 2, .quantity = Quantity::feedrate_per_min, .min = 1, .max = kFeedMax, .def = 1000, .fills = fills<&A::seek_feedrate_mm_per_min>, .description = "speed while searching for the sensor"},
+    {.pattern = "axis.<a>.latch_feedrate", .offset = 3, .quantity = Quantity::feedrate_per_min, .min = 1, .max = kFeedMax, .def = 100, .fills = fills<&A::latch_feedrate_mm_per_min>, .description = "slow speed for locating the edge; must be below seek_feedrate"},
+    {.pattern = "axis.<a>.acceleration", .offset = 4, .quantity = Quantity::acceleration_per_s2, .min = 1, .max = kAccelMax, .def = 500, .fills = fills<&A::acceleration_mm_per_s2>, .description = "acceleration of every homing move; stop distance = v²/2a"},
+    {.pattern = "axis.<a>.debounce_ms", .offset = 5, .quantity = Quantity::time_ms, .max = 1000, .fills = fills<&A::debounce_ms>, .description = "time a sensor change must persist to count"},
+    {.pattern = "axis.<a>.final_move_enable", .offset = 6, .max = 1, .fills = fills<&A::final_move_enable>, .description = "flag (0/1): move to final_position after homing"},
+    {.pattern = "axis.<a>.sensor_nc", .offset = 7, .max = 1, .fills = fills<&A::sensor_nc>, .description = "flag (0/1): home sensor is normally closed"},
+    {.pattern = "axis.<a>.pre_move_mode", .offset = 8, .type = Type::enumeration, .max = 2, .fills = fills<&A::pre_move_mode>, .values = kPreMoves, .description = "move away from the sensor before seeking"},
+    {.pattern = "axis.<a>.slave_of", .offset = 9, .type = Type::enumeration, .max = 6, .fills = fills<&A::slave_of>, .values = kSlaveOf, .description = "this axis is the slaved second motor of another axis (1 = X ... 6 = C)"},
+    {.pattern = "axis.<a>.slave_mode", .offset = 10, .type = Type::enumeration, .max = 1, .fills = fills<&A::slave_mode>, .values = kSlaveModes, .description = "how a slave axis is driven"},
+    {.pattern = "axis.<a>.soft_limits_enable", .offset = 11, .max = 1, .fills = fills<&A::soft_limits_enable>, .description = "flag (0/1): enforce soft_limit_min/max once homed"},
+    {.pattern = "axis.<a>.shared_limit", .offset = 12, .max = 1, .fills = fills<&A::shared_limit>, .description = "flag (0/1): after homing the home sensor acts as a hard limit"},
+    {.pattern = "axis.<a>.jog_feedrate", .offset = 13, .quantity = Quantity::feedrate_per_min, .min = 1, .max = kFeedMax, .def = 1000, .fills = fills<&A::jog_feedrate_mm_per_min>, .description = "speed of jog and move commands"},
+    {.pattern = "axis.<a>.max_seek_travel", .offset = 20, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 500'000, .fills = fills<&A::max_seek_travel_mm>, .description = "sensor not found within this travel: alarm"},
+    {.pattern = "axis.<a>.max_stop_distance", .offset = 22, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 10'000, .fills = fills<&A::max_stop_distance_mm>, .description = "the axis must stop within this distance after the trigger"},
+    {.pattern = "axis.<a>.max_backoff", .offset = 24, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 10'000, .fills = fills<&A::max_backoff_mm>, .description = "the sensor must release within this back-off travel"},
+    {.pattern = "axis.<a>.pull_off", .offset = 26, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 1'000, .fills = fills<&A::pull_off_mm>, .description = "move away from the reference edge after locating it"},
+    {.pattern = "axis.<a>.home_position", .offset = 28, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .fills = fills<&A::home_position_mm>, .description = "machine coordinate assigned to the resting point after pull-off"},
+    {.pattern = "axis.<a>.final_position", .offset = 30, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .fills = fills<&A::final_position_mm>, .description = "absolute move target after homing (final_move_enable or mode 6)"},
+    {.pattern = "axis.<a>.pre_move_distance", .offset = 32, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 5'000, .fills = fills<&A::pre_move_distance_mm>, .description = "distance of the pre-move"},
+    {.pattern = "axis.<a>.push_distance", .offset = 34, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 2'000, .fills = fills<&A::push_distance_mm>, .description = "pushing modes: distance pushed into the mechanical stop"},
+    {.pattern = "axis.<a>.index_pitch", .offset = 36, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 5'000, .fills = fills<&A::index_pitch_mm>, .description = "travel per encoder index pulse; bounds the index phase"},
+    {.pattern = "axis.<a>.max_misalignment", .offset = 38, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 2'000, .fills = fills<&A::max_misalignment_mm>, .description = "gantry: largest master/slave difference accepted"},
+    {.pattern = "axis.<a>.switch_compensation", .offset = 40, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .fills = fills<&A::switch_compensation_mm>, .description = "gantry: fine correction added to the slave's edge"},
+    {.pattern = "axis.<a>.soft_limit_min", .offset = 42, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = -1'000'000, .fills = fills<&A::soft_limit_min_mm>, .description = "lowest position allowed once homed"},
+    {.pattern = "axis.<a>.soft_limit_max", .offset = 44, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = 1'000'000, .fills = fills<&A::soft_limit_max_mm>, .description = "highest position allowed once homed"},
+    {.pattern = "axis.<a>.target", .offset = 60, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::host_target, .description = "target of cmd.move.<a> (not persisted)"},
     // input registers: per-axis status
-    {.pattern = "axis.<a>.phase", .table = IR, .type = Type::enumeration, .access = Access::r, .max = 16, .persisted = false, .key = Key::axis_phase, .values = kPhases, .description = "what the axis is doing"},
-    {.pattern = "axis.<a>.alarm", .table = IR, .offset = 1, .type = Type::enumeration, .access = Access::r, .max = 18, .persisted = false, .key = Key::axis_alarm, .values = kAlarms, .description = "latched alarm code, 0 none"},
-    {.pattern = "axis.<a>.alarm_phase", .table = IR, .offset = 2, .type = Type::enumeration, .access = Access::r, .max = 16, .persisted = false, .key = Key::axis_alarm_phase, .values = kPhases, .description = "phase in which the alarm was raised"},
-    {.pattern = "axis.<a>.position", .table = IR, .offset = 4, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .persisted = false, .key = Key::axis_position, .description = "position in machine coordinates"},
-    {.pattern = "axis.<a>.velocity", .table = IR, .offset = 6, .type = Type::i32, .access = Access::r, .quantity = Quantity::velocity_um_per_s, .min = type_min(Type::i32), .max = type_max(Type::i32), .persisted = false, .key = Key::axis_velocity, .description = "velocity now"},
-    {.pattern = "axis.<a>.home_correction", .table = IR, .offset = 8, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .persisted = false, .key = Key::axis_home_correction, .description = "assigned minus believed position at the reference edge, last homing"},
-    {.pattern = "axis.<a>.stop_distance", .table = IR, .offset = 10, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .persisted = false, .key = Key::axis_stop_distance, .description = "v²/2a of the seek (plus travel during debounce)"},
-    {.pattern = "axis.<a>.trigger_position", .table = IR, .offset = 12, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .persisted = false, .key = Key::axis_trigger_position, .description = "where the reference edge was found, in the coordinates believed before assign"},
-    {.pattern = "axis.<a>.phase_distance", .table = IR, .offset = 14, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .persisted = false, .key = Key::axis_phase_distance, .description = "travelled in the current phase"},
-    {.pattern = "axis.<a>.correction_mean", .table = IR, .offset = 16, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .persisted = false, .key = Key::axis_correction_mean, .description = "mean home correction over the recorded history"},
-    {.pattern = "axis.<a>.alarm_value", .table = IR, .offset = 20, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .persisted = false, .key = Key::axis_alarm_value, .description = "the figure the alarm text quotes (distance travelled, misalignment, position), 0 without alarm"},
-    {.pattern = "axis.<a>.correction_spread", .table = IR, .offset = 18, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .persisted = false, .key = Key::axis_correction_spread, .description = "spread (max - min) of the last 10 home corrections"},
+    {.pattern = "axis.<a>.phase", .table = IR, .type = Type::enumeration, .access = Access::r, .max = 16, .key = Key::axis_phase, .values = kPhases, .description = "what the axis is doing"},
+    {.pattern = "axis.<a>.alarm", .table = IR, .offset = 1, .type = Type::enumeration, .access = Access::r, .max = 18, .key = Key::axis_alarm, .values = kAlarms, .description = "latched alarm code, 0 none"},
+    {.pattern = "axis.<a>.alarm_phase", .table = IR, .offset = 2, .type = Type::enumeration, .access = Access::r, .max = 16, .key = Key::axis_alarm_phase, .values = kPhases, .description = "phase in which the alarm was raised"},
+    {.pattern = "axis.<a>.position", .table = IR, .offset = 4, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_position, .description = "position in machine coordinates"},
+    {.pattern = "axis.<a>.velocity", .table = IR, .offset = 6, .type = Type::i32, .access = Access::r, .quantity = Quantity::velocity_um_per_s, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_velocity, .description = "velocity now"},
+    {.pattern = "axis.<a>.home_correction", .table = IR, .offset = 8, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_home_correction, .description = "assigned minus believed position at the reference edge, last homing"},
+    {.pattern = "axis.<a>.stop_distance", .table = IR, .offset = 10, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_stop_distance, .description = "v²/2a of the seek (plus travel during debounce)"},
+    {.pattern = "axis.<a>.trigger_position", .table = IR, .offset = 12, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_trigger_position, .description = "where the reference edge was found, in the coordinates believed before assign"},
+    {.pattern = "axis.<a>.phase_distance", .table = IR, .offset = 14, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_phase_distance, .description = "travelled in the current phase"},
+    {.pattern = "axis.<a>.correction_mean", .table = IR, .offset = 16, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_correction_mean, .description = "mean home correction over the recorded history"},
+    {.pattern = "axis.<a>.alarm_value", .table = IR, .offset = 20, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_alarm_value, .description = "the figure the alarm text quotes (distance travelled, misalignment, position), 0 without alarm"},
+    {.pattern = "axis.<a>.correction_spread", .table = IR, .offset = 18, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_correction_spread, .description = "spread (max - min) of the last 10 home corrections"},
     // discrete inputs
-    {.pattern = "axis.<a>.homed", .table = DI, .type = Type::boolean, .access = Access::r, .max = 1, .persisted = false, .key = Key::axis_homed, .description = "the axis is homed"},
-    {.pattern = "axis.<a>.sensor", .table = DI, .offset = 1, .type = Type::boolean, .access = Access::r, .max = 1, .persisted = false, .key = Key::axis_sensor, .description = "home sensor active (debounced, polarity applied)"},
-    {.pattern = "axis.<a>.busy", .table = DI, .offset = 2, .type = Type::boolean, .access = Access::r, .max = 1, .persisted = false, .key = Key::axis_busy, .description = "the axis is moving or homing"},
+    {.pattern = "axis.<a>.homed", .table = DI, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::axis_homed, .description = "the axis is homed"},
+    {.pattern = "axis.<a>.sensor", .table = DI, .offset = 1, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::axis_sensor, .description = "home sensor active (debounced, polarity applied)"},
+    {.pattern = "axis.<a>.busy", .table = DI, .offset = 2, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::axis_busy, .description = "the axis is moving or homing"},
     // coils
-    {.pattern = "cmd.home.<a>", .table = CO, .type = Type::boolean, .access = Access::w, .max = 1, .persisted = false, .key = Key::cmd_home, .description = "write 1: home this axis alone (reads back 0)"},
-    {.pattern = "cmd.jog_plus.<a>", .table = CO, .offset = 1, .type = Type::boolean, .access = Access::rw, .max = 1, .persisted = false, .key = Key::cmd_jog_plus, .description = "jog positive while 1; 0 stops (reads back the held state)"},
-    {.pattern = "cmd.jog_minus.<a>", .table = CO, .offset = 2, .type = Type::boolean, .access = Access::rw, .max = 1, .persisted = false, .key = Key::cmd_jog_minus, .description = "jog negative while 1; 0 stops (reads back the held state)"},
-    {.pattern = "cmd.move.<a>", .table = CO, .offset = 3, .type = Type::boolean, .access = Access::w, .max = 1, .persisted = false, .key = Key::cmd_move, .description = "write 1: move to axis.<a>.target at jog_feedrate (reads back 0)"},
+    {.pattern = "cmd.home.<a>", .table = CO, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_home, .description = "write 1: home this axis alone (reads back 0)"},
+    {.pattern = "cmd.jog_plus.<a>", .table = CO, .offset = 1, .type = Type::boolean, .access = Access::rw, .max = 1, .key = Key::cmd_jog_plus, .description = "jog positive while 1; 0 stops (reads back the held state)"},
+    {.pattern = "cmd.jog_minus.<a>", .table = CO, .offset = 2, .type = Type::boolean, .access = Access::rw, .max = 1, .key = Key::cmd_jog_minus, .description = "jog negative while 1; 0 stops (reads back the held state)"},
+    {.pattern = "cmd.move.<a>", .table = CO, .offset = 3, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_move, .description = "write 1: move to axis.<a>.target at jog_feedrate (reads back 0)"},
 });
 
 // ---- simulator unit (never persisted: the simulated machine starts from these) ----
 constexpr auto kSimGlobals = std::to_array<Row>({
-    {.pattern = "sim.seed", .type = Type::u32, .max = 4294967295LL, .def = 1, .persisted = false, .key = Key::sim_seed, .description = "seed of the noise generator; writing it restarts the sequence"},
-    {.pattern = "sim.estop", .table = CO, .type = Type::boolean, .max = 1, .persisted = false, .key = Key::sim_estop, .description = "1 = emergency stop pressed"},
-    {.pattern = "sim.start_button", .table = CO, .offset = 1, .type = Type::boolean, .max = 1, .persisted = false, .key = Key::sim_start_button, .description = "the physical start button (1 = pressed)"},
+    {.pattern = "sim.seed", .type = Type::u32, .max = 4294967295LL, .def = 1, .key = Key::sim_seed, .description = "seed of the noise generator; writing it restarts the sequence"},
+    {.pattern = "sim.estop", .table = CO, .type = Type::boolean, .max = 1, .key = Key::sim_estop, .description = "1 = emergency stop pressed"},
+    {.pattern = "sim.start_button", .table = CO, .offset = 1, .type = Type::boolean, .max = 1, .key = Key::sim_start_button, .description = "the physical start button (1 = pressed)"},
 });
 
 constexpr auto kSimAxisRows = std::to_array<Row>({
-    {.pattern = "sim.<a>.actual_position", .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = 100'000, .persisted = false, .key = Key::sim_actual_position, .description = "where the carriage really is; writing places it (exception 06 while the axis moves)"},
-    {.pattern = "sim.<a>.sensor_min", .offset = 2, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = -1'000'000, .persisted = false, .key = Key::sim_sensor_min, .description = "the cam holding the home sensor active starts here"},
-    {.pattern = "sim.<a>.sensor_max", .offset = 4, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = 0, .persisted = false, .key = Key::sim_sensor_max, .description = "the cam holding the home sensor active ends here"},
-    {.pattern = "sim.<a>.hysteresis", .offset = 6, .quantity = LEN, .max = 65535, .def = 50, .persisted = false, .key = Key::sim_hysteresis, .description = "the sensor turns inactive this far outside the cam"},
-    {.pattern = "sim.<a>.noise", .offset = 7, .quantity = LEN, .max = 65535, .def = 2, .persisted = false, .key = Key::sim_noise, .description = "standard deviation of each edge's position"},
-    {.pattern = "sim.<a>.bounce_ms", .offset = 8, .quantity = Quantity::time_ms, .max = 1000, .persisted = false, .key = Key::sim_bounce_ms, .description = "contact bounce after each edge"},
-    {.pattern = "sim.<a>.sensor_nc", .offset = 9, .max = 1, .persisted = false, .key = Key::sim_sensor_nc, .description = "flag (0/1): the simulated switch is wired normally closed"},
-    {.pattern = "sim.<a>.hard_stop_min", .offset = 10, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = -5'000, .persisted = false, .key = Key::sim_hard_stop_min, .description = "lower mechanical stop; a motor pushed against it loses steps"},
-    {.pattern = "sim.<a>.hard_stop_max", .offset = 12, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = 1'000'000, .persisted = false, .key = Key::sim_hard_stop_max, .description = "upper mechanical stop"},
-    {.pattern = "sim.<a>.index_pitch", .offset = 14, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 0, .persisted = false, .key = Key::sim_index_pitch, .description = "travel between encoder index pulses; 0 = no index"},
-    {.pattern = "sim.<a>.index_offset", .offset = 16, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .persisted = false, .key = Key::sim_index_offset, .description = "position of one index pulse"},
-    {.pattern = "sim.<a>.absolute_offset", .offset = 18, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .persisted = false, .key = Key::sim_absolute_offset, .description = "the absolute encoder reads actual_position + this"},
-    {.pattern = "sim.<a>.fault", .offset = 20, .type = Type::enumeration, .max = 4, .persisted = false, .key = Key::sim_fault, .values = kSimFaults, .description = "injected fault"},
-    {.pattern = "sim.<a>.lose_steps", .offset = 22, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .persisted = false, .key = Key::sim_lose_steps, .description = "writing N shifts the carriage by N without the controller knowing; reads back 0"},
-    {.pattern = "sim.<a>.sensor", .table = DI, .type = Type::boolean, .access = Access::r, .max = 1, .persisted = false, .key = Key::sim_sensor, .description = "the simulated switch is active (raw, before polarity and debounce)"},
-    {.pattern = "sim.<a>.at_hard_stop", .table = DI, .offset = 1, .type = Type::boolean, .access = Access::r, .max = 1, .persisted = false, .key = Key::sim_at_hard_stop, .description = "the carriage rests against a mechanical stop"},
-    {.pattern = "sim.<a>.driven_by", .table = IR, .access = Access::r, .max = 6, .persisted = false, .key = Key::sim_driven_by, .description = "the step output that moves this carriage: 0 its own; 1..6 that of master X..C, through an external commutator (from axis.<a>.slave_of and slave_mode)"},
+    {.pattern = "sim.<a>.actual_position", .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = 100'000, .key = Key::sim_actual_position, .description = "where the carriage really is; writing places it (exception 06 while the axis moves)"},
+    {.pattern = "sim.<a>.sensor_min", .offset = 2, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = -1'000'000, .key = Key::sim_sensor_min, .description = "the cam holding the home sensor active starts here"},
+    {.pattern = "sim.<a>.sensor_max", .offset = 4, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = 0, .key = Key::sim_sensor_max, .description = "the cam holding the home sensor active ends here"},
+    {.pattern = "sim.<a>.hysteresis", .offset = 6, .quantity = LEN, .max = 65535, .def = 50, .key = Key::sim_hysteresis, .description = "the sensor turns inactive this far outside the cam"},
+    {.pattern = "sim.<a>.noise", .offset = 7, .quantity = LEN, .max = 65535, .def = 2, .key = Key::sim_noise, .description = "standard deviation of each edge's position"},
+    {.pattern = "sim.<a>.bounce_ms", .offset = 8, .quantity = Quantity::time_ms, .max = 1000, .key = Key::sim_bounce_ms, .description = "contact bounce after each edge"},
+    {.pattern = "sim.<a>.sensor_nc", .offset = 9, .max = 1, .key = Key::sim_sensor_nc, .description = "flag (0/1): the simulated switch is wired normally closed"},
+    {.pattern = "sim.<a>.hard_stop_min", .offset = 10, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = -5'000, .key = Key::sim_hard_stop_min, .description = "lower mechanical stop; a motor pushed against it loses steps"},
+    {.pattern = "sim.<a>.hard_stop_max", .offset = 12, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = 1'000'000, .key = Key::sim_hard_stop_max, .description = "upper mechanical stop"},
+    {.pattern = "sim.<a>.index_pitch", .offset = 14, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 0, .key = Key::sim_index_pitch, .description = "travel between encoder index pulses; 0 = no index"},
+    {.pattern = "sim.<a>.index_offset", .offset = 16, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::sim_index_offset, .description = "position of one index pulse"},
+    {.pattern = "sim.<a>.absolute_offset", .offset = 18, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::sim_absolute_offset, .description = "the absolute encoder reads actual_position + this"},
+    {.pattern = "sim.<a>.fault", .offset = 20, .type = Type::enumeration, .max = 4, .key = Key::sim_fault, .values = kSimFaults, .description = "injected fault"},
+    {.pattern = "sim.<a>.lose_steps", .offset = 22, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::sim_lose_steps, .description = "writing N shifts the carriage by N without the controller knowing; reads back 0"},
+    {.pattern = "sim.<a>.sensor", .table = DI, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::sim_sensor, .description = "the simulated switch is active (raw, before polarity and debounce)"},
+    {.pattern = "sim.<a>.at_hard_stop", .table = DI, .offset = 1, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::sim_at_hard_stop, .description = "the carriage rests against a mechanical stop"},
+    {.pattern = "sim.<a>.driven_by", .table = IR, .access = Access::r, .max = 6, .key = Key::sim_driven_by, .description = "the step output that moves this carriage: 0 its own; 1..6 that of master X..C, through an external commutator (from axis.<a>.slave_of and slave_mode)"},
 });
 
 // ---- expansion ----
@@ -291,7 +255,8 @@ constexpr Register expand_row(Unit unit, const Row& r, int axis) {
   g.quantity = r.quantity;
   g.min = r.min;
   g.max = r.max;
-  g.persisted = r.persisted;
+  g.persisted = r.fills.bound();
+  g.setting = r.fills;
   g.key = r.key;
   g.slot = r.slot;
   g.values = r.values;
@@ -379,14 +344,54 @@ constexpr bool kinds_consistent() {
   }
   return true;
 }
+// A settings row fits the member it fills, and no two rows fill the same
+// member (the same getter on the same axis and slot).
+constexpr bool settings_fit_members() {
+  using K = SettingAccess::Kind;
+  for (const Register& r : kAll) {
+    const SettingAccess& f = r.setting;
+    if (!f.bound()) continue;
+    if (f.per_axis != r.per_axis()) return false;
+    if (f.elements == 0 ? r.slot != 0 : r.slot >= f.elements) return false;
+    if (f.kind == K::flag && (r.min != 0 || r.max != 1)) return false;
+    if (f.kind == K::integer && (r.min < 0 || r.max > f.max_raw)) return false;
+    if (f.kind == K::enumeration && (r.type != Type::enumeration || r.min != 0 || r.max != f.max_raw))
+      return false;
+  }
+  return true;
+}
+constexpr bool one_row_per_member() {
+  for (std::size_t i = 0; i < kAll.size(); ++i)
+    for (std::size_t j = i + 1; j < kAll.size(); ++j) {
+      const Register& a = kAll[i];
+      const Register& b = kAll[j];
+      if (a.setting.bound() && a.setting.get == b.setting.get && a.axis == b.axis && a.slot == b.slot)
+        return false;
+    }
+  return true;
+}
+constexpr bool value_lists_named() {
+  for (const Register& r : kAll) {
+    if (r.values.empty()) continue;
+    bool named = false;
+    for (const ValueList& l : kValueLists) named |= l.values.data() == r.values.data();
+    if (!named) return false;
+  }
+  return true;
+}
 static_assert(addresses_unique_without_overlap(), "two registers share an address in one (unit, table)");
 static_assert(ranges_fit_types(), "a min, max or default does not fit its type or range");
 static_assert(blocks_fit_strides(), "a per-axis row exceeds the stride, or a global reaches the axis blocks");
 static_assert(kinds_consistent(), "table/type/access/persisted/values of a row do not agree");
+static_assert(settings_fit_members(), "a settings row's range, type, axis or slot does not fit the member it fills");
+static_assert(one_row_per_member(), "two rows fill the same setting");
+static_assert(value_lists_named(), "a row's value list is missing from kValueLists");
 
 }  // namespace
 
 std::span<const Register> all_registers() { return kAll; }
+
+std::span<const ValueList> value_lists() { return kValueLists; }
 
 std::span<const Register> registers_of(Unit unit) {
   const auto first = std::find_if(kAll.begin(), kAll.end(), [&](const Register& r) { return r.unit == unit; });

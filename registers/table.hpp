@@ -12,6 +12,7 @@
 #include <string_view>
 
 #include "homing/axes.hpp"
+#include "homing/settings.hpp"
 
 namespace registers {
 
@@ -40,20 +41,14 @@ enum class Quantity : std::uint8_t {
   time_ms,           // raw milliseconds, scale 1
 };
 
-// What a register is bound to. The codec has one case per key; the axis (or
-// sequence step) comes from the row, so one key serves six rows.
+// What a register that is not a setting is bound to (status, host values,
+// commands, the simulator unit): the codec has one case per key; the axis (or
+// sequence step) comes from the row, so one key serves six rows. Settings rows
+// have no key: they carry the member they fill (SettingAccess).
 enum class Key : std::uint8_t {
-  // holding, module: per-axis settings (suffix = homing::field_name)
-  axis_mode, axis_direction, axis_seek_feedrate, axis_latch_feedrate, axis_acceleration,
-  axis_max_seek_travel, axis_max_stop_distance, axis_max_backoff, axis_pull_off,
-  axis_home_position, axis_final_position, axis_final_move_enable, axis_sensor_nc,
-  axis_debounce_ms, axis_pre_move_mode, axis_pre_move_distance, axis_push_distance,
-  axis_index_pitch, axis_slave_of, axis_slave_mode, axis_max_misalignment,
-  axis_switch_compensation, axis_soft_limit_min, axis_soft_limit_max, axis_soft_limits_enable,
-  axis_shared_limit, axis_jog_feedrate,
-  // holding, module: global settings and host values
-  sequence_step, global_allowed_without_homing, global_alarm_clears_homed, global_watchdog_ms,
-  global_permit_required, global_history_max_rows, host_heartbeat, host_target,
+  none,  // a settings row (see SettingAccess)
+  // holding, module: host values
+  host_heartbeat, host_target,
   // input registers, module
   status_map_version, status_state, status_sequence_step, status_homing_cycles, status_heartbeat,
   status_last_command_result, status_interlocks, status_global_alarm, status_alarm_axis,
@@ -75,11 +70,38 @@ enum class Key : std::uint8_t {
   sim_sensor, sim_at_hard_stop, sim_driven_by,
 };
 
+struct Register;
+
+// What a settings row fills: one member of homing::AxisSettings (per-axis rows;
+// the row's axis picks the element of Settings::axes) or of
+// homing::GlobalSettings (of an array member, the row's slot picks the
+// element). Made from a pointer to the member by fills<&Member>
+// (registers/fills.hpp): the getter and setter convert between the member and
+// the raw register value with the row's scale, so no code anywhere names a
+// setting one by one. A row that fills a setting is persisted; its SQLite key
+// is its register name.
+struct SettingAccess {
+  enum class Kind : std::uint8_t { none, real, flag, integer, enumeration };
+  Kind kind = Kind::none;
+  bool per_axis = false;      // a member of AxisSettings, else of GlobalSettings
+  std::uint8_t elements = 0;  // an array member: its size (a row fills element `slot`); else 0
+  std::int64_t max_raw = 0;   // integers and enums: the largest value the member can hold
+  std::int64_t (*get)(const homing::Settings&, const Register&) = nullptr;
+  void (*set)(homing::Settings&, const Register&, std::int64_t raw) = nullptr;
+  constexpr bool bound() const { return kind != Kind::none; }
+};
+
 // One value of an enum register, or one bit of a bitmask register (value = bit number).
 struct EnumValue {
   std::int64_t value = 0;
   std::string_view name;
   std::string_view meaning;
+};
+
+// A value list of the table under the name hmi_maps/enums.csv gives it.
+struct ValueList {
+  std::string_view name;
+  std::span<const EnumValue> values;
 };
 
 // One register, expanded (per-axis rows already carry their axis and address).
@@ -94,8 +116,9 @@ struct Register {
   std::int64_t min = 0;  // raw
   std::int64_t max = 0;  // raw
   std::int64_t default_raw = 0;
-  bool persisted = false;
-  Key key = Key::axis_mode;
+  bool persisted = false;   // a setting: it fills a member of homing::Settings
+  SettingAccess setting{};  // bound when persisted
+  Key key = Key::none;
   std::int8_t axis = -1;    // 0..5 for per-axis rows, -1 otherwise
   std::uint8_t slot = 0;    // sequence.step<slot+1>
   std::uint8_t offset = 0;  // offset inside the per-axis block (per-axis rows)
@@ -147,6 +170,10 @@ std::string_view table_name(Table t);  // "coil", "discrete_input", ...
 std::string_view type_name(Type t);    // "bool", "u16", ... "enum", "bitmask"
 std::string_view access_name(Access a);
 std::string_view unit_name(Unit u);    // "module", "simulator"
+
+// Every value list the registers use (enum values, bitmask bits), named; each
+// register's `values` is one of them.
+std::span<const ValueList> value_lists();
 
 // Name of an enum value of a register ("" if not listed).
 std::string_view value_name(const Register& reg, std::int64_t raw);

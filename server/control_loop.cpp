@@ -18,12 +18,12 @@ std::int64_t monotonic_ns() {
   return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
 }
 
-ControlLoop::ControlLoop(const homing::Settings& settings, std::unique_ptr<MachineIo> io,
-                         homing::sim::Simulator* sim, int period_us, double time_scale)
-    : settings_(settings), io_(std::move(io)), sim_(sim), period_us_(std::max(period_us, 50)),
+ControlLoop::ControlLoop(const homing::Settings& settings, std::unique_ptr<homing::MachineIo> io, int period_us,
+                         double time_scale)
+    : settings_(settings), io_(std::move(io)), period_us_(std::max(period_us, 50)),
       time_scale_(time_scale > 0 ? time_scale : 1.0) {
   heartbeat_changed_ns_ = monotonic_ns();
-  wire_commutators();
+  simulator_follows_settings();
   // A first period with no elapsed time: the engine learns the inputs' levels.
   run_period(0);
 }
@@ -105,11 +105,12 @@ void ControlLoop::heartbeat_written(std::uint16_t value) {
 }
 
 bool ControlLoop::edit_sim(const SimEdit& edit, std::chrono::milliseconds timeout) {
-  if (!sim_) return false;
+  homing::sim::SimulatorControls* sim = io_->simulator_controls();
+  if (!sim) return false;
   if (!running_) {
     // Stepped by hand: the caller is the only one running the loop.
     std::lock_guard mail(mailbox_mutex_);
-    edit(*sim_, outputs_);
+    edit(*sim, outputs_);
     std::lock_guard lock(snapshot_mutex_);
     publish_sim(snapshot_);
     return true;
@@ -141,21 +142,8 @@ bool ControlLoop::edit_sim(const SimEdit& edit, std::chrono::milliseconds timeou
   return true;
 }
 
-void ControlLoop::wire_commutators() {
-  if (!sim_) return;
-  std::array<int, homing::kAxisCount> slave_of_master;
-  slave_of_master.fill(-1);
-  for (std::size_t s = 0; s < homing::kAxisCount; ++s) {
-    const homing::AxisSettings& a = settings_.axes[s];
-    const int m = homing::master_of(a);
-    if (a.slave_mode != homing::SlaveMode::external_commutator || m < 0 || m >= static_cast<int>(homing::kAxisCount) ||
-        m == static_cast<int>(s))
-      continue;
-    auto& slot = slave_of_master[static_cast<std::size_t>(m)];
-    if (slot < 0) slot = static_cast<int>(s);  // two slaves on one output: the first is wired
-  }
-  for (std::size_t m = 0; m < homing::kAxisCount; ++m)
-    if (sim_->config().commutator_slave[m] != slave_of_master[m]) sim_->set_commutator_slave(m, slave_of_master[m]);
+void ControlLoop::simulator_follows_settings() {
+  if (homing::sim::SimulatorControls* sim = io_->simulator_controls()) sim->follow_settings(settings_);
 }
 
 double LoopStats::lateness_percentile_us(double q) const {
@@ -200,11 +188,11 @@ void ControlLoop::take_mailbox(Mailbox& out) {
   if (settings_pending_) {
     settings_ = new_settings_;
     settings_pending_ = false;
-    wire_commutators();
+    simulator_follows_settings();
   }
-  if (sim_) {
+  if (homing::sim::SimulatorControls* sim = io_->simulator_controls()) {
     for (const PendingEdit& e : sim_edits_) {
-      (*e.edit)(*sim_, outputs_);
+      (*e.edit)(*sim, outputs_);
       edits_applied_ = e.seq;
     }
   }
@@ -276,22 +264,11 @@ void ControlLoop::run_period(double wall_dt_s) {
 }
 
 void ControlLoop::publish_sim(Snapshot& s) const {
-  if (!sim_) return;
+  const homing::sim::SimulatorControls* sim = io_->simulator_controls();
+  if (!sim) return;
   s.has_sim = true;
-  s.machine_time_s = sim_->time_s();
-  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-    SimAxisView& v = s.sim[a];
-    v.actual_position_mm = sim_->actual_position_mm(a);
-    v.sensor = sim_->sensor_active(a);
-    v.at_hard_stop = sim_->at_hard_stop(a);
-    v.moving = sim_->moving(a);
-    const std::size_t o = sim_->driving_output(a);
-    v.driven_by = o == a ? 0 : static_cast<std::uint8_t>(o + 1);
-    v.config = sim_->axis_config(a);
-  }
-  s.sim_seed = sim_->config().seed;
-  s.sim_estop = sim_->inputs().estop;
-  s.sim_start_button = sim_->inputs().start_button;
+  s.sim = sim->view();
+  s.machine_time_s = s.sim.time_s;
 }
 
 void ControlLoop::record_trace(const homing::Status& status) {

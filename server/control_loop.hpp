@@ -15,31 +15,19 @@
 #include <vector>
 
 #include "homing/engine.hpp"
-#include "homing/sim/simulator.hpp"
-#include "machine_io.hpp"
+#include "homing/machine_io.hpp"
+#include "homing/sim/simulator_controls.hpp"
 #include "trace.hpp"
 
 namespace server {
-
-struct SimAxisView {
-  double actual_position_mm = 0;
-  bool sensor = false;
-  bool at_hard_stop = false;
-  bool moving = false;
-  std::uint8_t driven_by = 0;  // 0 its own output, m + 1: master m's (external commutator)
-  homing::sim::AxisConfig config{};
-};
 
 // Everything a Modbus read may need, copied whole under one lock: a 32-bit
 // position is never half old, half new.
 struct Snapshot {
   homing::Status status{};
   homing::Outputs outputs{};
-  bool has_sim = false;
-  std::array<SimAxisView, homing::kAxisCount> sim{};
-  std::uint64_t sim_seed = 0;
-  bool sim_estop = false;
-  bool sim_start_button = false;
+  bool has_sim = false;             // the machine is the simulator: sim is what it shows
+  homing::sim::SimulatorView sim{};
   std::uint64_t sim_edits_applied = 0;  // sequence number of the last simulator edit shown here
   double machine_time_s = 0;
   std::uint64_t periods = 0;
@@ -60,13 +48,13 @@ struct LoopStats {
 
 class ControlLoop {
  public:
-  // An edit of the live simulator, run inside the loop before the machine
-  // advances; next = the outputs that period is about to run (to tell which
-  // carriages move: Simulator::in_motion).
-  using SimEdit = std::function<void(homing::sim::Simulator& sim, const homing::Outputs& next)>;
+  // An edit of the live simulator through its backend's controls, run inside
+  // the loop before the machine advances; next = the outputs that period is
+  // about to run (to tell which carriages move: SimulatorControls::in_motion).
+  using SimEdit = std::function<void(homing::sim::SimulatorControls& sim, const homing::Outputs& next)>;
 
-  ControlLoop(const homing::Settings& settings, std::unique_ptr<MachineIo> io,
-              homing::sim::Simulator* sim, int period_us, double time_scale);
+  ControlLoop(const homing::Settings& settings, std::unique_ptr<homing::MachineIo> io, int period_us,
+              double time_scale);
   ~ControlLoop();
   ControlLoop(const ControlLoop&) = delete;
   ControlLoop& operator=(const ControlLoop&) = delete;
@@ -98,7 +86,8 @@ class ControlLoop {
   // The trace of the last finished homing cycle of one axis.
   AxisTrace trace(std::size_t axis) const;
   LoopStats stats() const;
-  bool has_sim() const { return sim_ != nullptr; }
+  // The machine is the simulator (its backend has simulator controls).
+  bool has_sim() const { return io_->simulator_controls() != nullptr; }
 
   // Runs one period by hand (tests step the loop without a thread).
   void run_period(double wall_dt_s);
@@ -112,13 +101,12 @@ class ControlLoop {
   void take_mailbox(Mailbox& out);
   bool watchdog_expired() const;
   void record_trace(const homing::Status& status);
-  // MachineConfig::commutator_slave from settings_ (slave_of + external_commutator).
-  void wire_commutators();
+  // A simulated machine is wired as settings_ say (external commutators).
+  void simulator_follows_settings();
   void publish_sim(Snapshot& s) const;
 
   homing::Settings settings_;
-  std::unique_ptr<MachineIo> io_;
-  homing::sim::Simulator* sim_;  // owned by io_ when the backend is the simulator
+  std::unique_ptr<homing::MachineIo> io_;
   int period_us_;
   double time_scale_;
   homing::Engine engine_;

@@ -145,29 +145,25 @@ Reply ModbusService::apply(Target target, const Request& request, const ClientIn
 
 namespace {
 
-registers::SimReadback readback_of(const Snapshot& snap) {
+registers::SimReadback readback_of(const homing::sim::SimulatorView& sim) {
   registers::SimReadback r;
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-    r.actual_position_mm[a] = snap.sim[a].actual_position_mm;
-    r.sensor[a] = snap.sim[a].sensor;
-    r.at_hard_stop[a] = snap.sim[a].at_hard_stop;
-    r.driven_by[a] = snap.sim[a].driven_by;
+    r.actual_position_mm[a] = sim.axes[a].actual_position_mm;
+    r.sensor[a] = sim.axes[a].sensor;
+    r.at_hard_stop[a] = sim.axes[a].at_hard_stop;
+    r.driven_by[a] = sim.axes[a].driven_by;
   }
   return r;
 }
 
-homing::sim::MachineConfig config_of(const Snapshot& snap) {
-  homing::sim::MachineConfig c;
-  for (std::size_t a = 0; a < homing::kAxisCount; ++a) c.axes[a] = snap.sim[a].config;
-  c.seed = snap.sim_seed;
-  return c;
+registers::SimSwitches switches_of(const homing::sim::SimulatorView& sim) {
+  return registers::SimSwitches{sim.estop, sim.start_button};
 }
 
 }  // namespace
 
 std::int64_t ModbusService::sim_raw(const registers::Register& reg, const Snapshot& snap) const {
-  return registers::sim_raw(reg, config_of(snap), registers::SimSwitches{snap.sim_estop, snap.sim_start_button},
-                            readback_of(snap));
+  return registers::sim_raw(reg, snap.sim.config, switches_of(snap.sim), readback_of(snap.sim));
 }
 
 Reply ModbusService::read(Target target, std::uint8_t fc, const ReadRequest& r) {
@@ -326,16 +322,10 @@ std::optional<Reply> ModbusService::write_sim(std::uint8_t fc, Table table, std:
   std::optional<registers::Refusal> refused;
   int busy_axis = -1;
   std::vector<registers::Change> changes;
-  const ControlLoop::SimEdit edit = [&](homing::sim::Simulator& sim, const homing::Outputs& next) {
-    registers::SimReadback readback;
-    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-      readback.actual_position_mm[a] = sim.actual_position_mm(a);
-      readback.sensor[a] = sim.sensor_active(a);
-      readback.at_hard_stop[a] = sim.at_hard_stop(a);
-    }
-    auto accepted = registers::validate_sim_write(
-        table, start, values, config_.word_order, sim.config(),
-        registers::SimSwitches{sim.inputs().estop, sim.inputs().start_button}, readback);
+  const ControlLoop::SimEdit edit = [&](homing::sim::SimulatorControls& sim, const homing::Outputs& next) {
+    const homing::sim::SimulatorView now = sim.view();
+    auto accepted = registers::validate_sim_write(table, start, values, config_.word_order, now.config,
+                                                  switches_of(now), readback_of(now));
     if (!accepted) {
       refused = accepted.error();
       return;

@@ -6,11 +6,13 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config
-  libmodbus-dev libgpiod-dev libsqlite3-dev sqlite3
+  libmodbus-dev libgpiod-dev libsqlite3-dev sqlite3 libsystemd-dev
   catch2 libcli11-dev libtomlplusplus-dev libspdlog-dev libfmt-dev
   nlohmann-json3-dev libbenchmark-dev
-  mbpoll socat python3-pymodbus python3-serial python3-serial-asyncio
+  mbpoll socat python3-pymodbus python3-serial python3-serial-asyncio python3-yaml
   clang-16 libclang-rt-16-dev
+  # the .deb and its tests: dpkg-shlibdeps (cpack), systemd-analyze, file
+  dpkg-dev systemd file
 )
 
 missing=()

@@ -14,10 +14,10 @@
 
 #include "config.hpp"
 #include "event_clock.hpp"
+#include "homing/machine_io.hpp"
 #include "inputs.hpp"
 #include "line_api.hpp"
 #include "pulse_thread.hpp"
-#include "server/machine_io.hpp"
 #include "step_generator.hpp"
 
 namespace homing::gpiod {
@@ -34,7 +34,7 @@ struct RunOptions {
   std::function<void(const std::string&)> warn = [](const std::string&) {};
 };
 
-class GpiodIo final : public server::MachineIo {
+class GpiodIo final : public MachineIo {
  public:
   // Requests every configured line; the first failure is returned and the
   // lines already taken are released.

@@ -3,8 +3,10 @@
 // units (mm, or deg on rotary axes).
 #include <array>
 #include <cstdint>
+#include <span>
 
 #include "homing/axes.hpp"
+#include "homing/enum_info.hpp"
 
 namespace homing::sim {
 
@@ -16,6 +18,15 @@ enum class Fault : std::uint8_t {
   wire_break = 3,
   drive_fault = 4,
 };
+inline constexpr EnumInfo<Fault> kFaultInfo[] = {
+    {Fault::none, "none", "no fault"},
+    {Fault::sensor_stuck_active, "sensor_stuck_active", "sensor reads active everywhere"},
+    {Fault::sensor_stuck_inactive, "sensor_stuck_inactive", "sensor never turns active"},
+    {Fault::wire_break, "wire_break", "sensor wire broken (NC reads active, NO never)"},
+    {Fault::drive_fault, "drive_fault", "the drive reports a fault"},
+};
+static_assert(lists_every_value(kFaultInfo, Fault::drive_fault));
+constexpr std::span<const EnumInfo<Fault>> enum_table(Fault) { return kFaultInfo; }
 
 struct AxisConfig {
   double actual_position_mm = 0;  // where the carriage starts / is placed

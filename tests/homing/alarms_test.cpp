@@ -424,3 +424,71 @@ SCENARIO("global.alarm_clears_homed decides whether an alarm clears the homed st
     }
   }
 }
+
+SCENARIO("the first alarm on an axis wins, and an alarm on one axis stops every axis", "[alarms][stop]") {
+  Rig r;
+  r.add_axis(1, 1);  // X and Y seek together
+  run_to_full_seek(r);
+  REQUIRE(r.axis(1).phase == Phase::seek);
+  WHEN("Y's drive faults, then the e-stop is pressed while both still brake") {
+    auto c = r.sim().axis_config(1);
+    c.fault = sim::Fault::drive_fault;
+    r.sim().set_axis_config(1, c);
+    r.step();  // the period in which the drive faulted
+    r.step();  // the engine sees it
+    REQUIRE(r.axis(1).alarm.code == AlarmCode::drive_fault);
+    THEN("Y's alarm names the drive fault in the seek, and X brakes without an alarm of its own") {
+      CHECK(r.axis(1).alarm.phase == Phase::seek);
+      CHECK(r.axis(0).alarm.code == AlarmCode::none);
+      CHECK(r.axis(0).phase == Phase::stopping);
+      CHECK_FALSE(r.status().homing);
+    }
+    REQUIRE(r.any_moving());
+    r.sim().set_estop(true);
+    r.step();
+    THEN("the e-stop latches only on X, which had no alarm yet; Y keeps its first one") {
+      CHECK(r.axis(0).alarm.code == AlarmCode::emergency_stop);
+      CHECK(r.axis(0).alarm.phase == Phase::stopping);
+      CHECK(r.axis(1).alarm.code == AlarmCode::drive_fault);
+      CHECK(r.axis(1).alarm.phase == Phase::seek);
+      CHECK(r.status().global_alarm == AlarmCode::emergency_stop);
+    }
+    THEN("both come to rest and stay there") {
+      r.run_until([&] { return !r.any_moving(); }, 5);
+      REQUIRE_FALSE(r.any_moving());
+      r.clear_trace();
+      r.run_for(0.3);
+      CHECK(r.trace[0].path_mm == 0);
+      CHECK(r.trace[1].path_mm == 0);
+    }
+  }
+}
+
+SCENARIO("an axis alarm clears every axis's homed state exactly when global.alarm_clears_homed is set",
+         "[alarms]") {
+  for (bool clears : {true, false}) {
+    DYNAMIC_SECTION("alarm_clears_homed = " << clears) {
+      Rig r;
+      r.add_axis(1, 2);
+      r.settings.global.alarm_clears_homed = clears;
+      REQUIRE(r.home_all());
+      REQUIRE(r.axis(0).homed);
+      REQUIRE(r.axis(1).homed);
+      auto c = r.sim().axis_config(1);
+      c.fault = sim::Fault::drive_fault;
+      r.sim().set_axis_config(1, c);
+      r.step();
+      r.step();
+      REQUIRE(r.axis(1).alarm.code == AlarmCode::drive_fault);
+      CHECK(r.status().global_alarm == AlarmCode::none);
+      CHECK(r.axis(0).homed == !clears);  // the other axis too
+      CHECK(r.axis(1).homed == !clears);
+      c.fault = sim::Fault::none;
+      r.sim().set_axis_config(1, c);
+      r.step();
+      r.reset_alarm();
+      CHECK(r.status().last_command_result == CommandResult::accepted);
+      CHECK(r.status().state == (clears ? MachineState::not_homed : MachineState::homed));
+    }
+  }
+}

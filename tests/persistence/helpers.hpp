@@ -1,10 +1,10 @@
 #pragma once
-// Shared test helpers: temporary directories, loggers, register defaults.
+// Persistence test helpers: loggers, register defaults, direct SQL; temporary
+// directories and files from the shared test support (tests/support).
 #include <spdlog/sinks/null_sink.h>
 #include <spdlog/sinks/ringbuffer_sink.h>
 #include <spdlog/spdlog.h>
 #include <sqlite3.h>
-#include <stdlib.h>
 
 #include <filesystem>
 #include <fstream>
@@ -13,28 +13,12 @@
 #include <vector>
 
 #include "persistence/settings_store.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace test {
 
-class TempDir {
- public:
-  TempDir() {
-    std::string tmpl = "/tmp/persistence-test-XXXXXX";
-    if (!mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp failed");
-    path_ = tmpl;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  std::string file(const std::string& name) const { return path_ + "/" + name; }
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-};
+using test_support::TempDir;
+using test_support::write_text;
 
 inline std::shared_ptr<spdlog::logger> quiet_logger() {
   static auto l = std::make_shared<spdlog::logger>("persistence-test", std::make_shared<spdlog::sinks::null_sink_mt>());
@@ -106,11 +90,6 @@ inline long long sql_int(const std::string& path, const std::string& sql) {
   sqlite3_finalize(st);
   sqlite3_close(db);
   return v;
-}
-
-inline void write_text(const std::string& path, const std::string& text) {
-  std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  f << text;
 }
 
 // Overwrites `n` bytes at `offset` with garbage.

@@ -3,9 +3,7 @@
 // line only after commit() returned, as the server answers Modbus only then.
 // Loops: 20 by default; PERSISTENCE_KILL_LOOPS=500 for a long run.
 #include <catch2/catch.hpp>
-#include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -19,8 +17,7 @@
 #include <thread>
 
 #include "helpers.hpp"
-
-extern char** environ;
+#include "tests/support/process.hpp"
 
 using namespace persistence;
 
@@ -41,27 +38,19 @@ struct RunResult {
 
 // Starts the writer, waits until it is ready, lets it write for `run_for`, then SIGKILLs it.
 RunResult run_and_kill(const std::string& db, int backup_interval_ms, unsigned seed, std::chrono::milliseconds run_for) {
-  int fds[2];
-  REQUIRE(::pipe2(fds, O_CLOEXEC) == 0);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
-  std::string exe = SETTINGS_STORM_WRITER;
-  std::string interval = std::to_string(backup_interval_ms);
-  std::string seed_text = std::to_string(seed);
-  std::vector<char*> argv{exe.data(), const_cast<char*>(db.c_str()), interval.data(), seed_text.data(), nullptr};
-  pid_t pid = -1;
-  int rc = posix_spawn(&pid, exe.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  ::close(fds[1]);
-  REQUIRE(rc == 0);
+  test_support::Spawned writer;
+  REQUIRE_NOTHROW(writer = test_support::spawn({SETTINGS_STORM_WRITER, db, std::to_string(backup_interval_ms),
+                                                std::to_string(seed)},
+                                               test_support::Output::pipe(), test_support::Output::inherit()));
+  const int out_fd = writer.stdout_fd;
+  const pid_t pid = writer.pid;
 
   std::mutex mu;
   std::string out;
   std::thread reader([&] {
     char buf[4096];
     for (;;) {
-      ssize_t n = ::read(fds[0], buf, sizeof buf);
+      ssize_t n = ::read(out_fd, buf, sizeof buf);
       if (n < 0 && errno == EINTR) continue;
       if (n <= 0) break;
       std::lock_guard lock(mu);
@@ -82,7 +71,7 @@ RunResult run_and_kill(const std::string& db, int backup_interval_ms, unsigned s
   RunResult r;
   ::waitpid(pid, &r.status, 0);
   reader.join();
-  ::close(fds[0]);
+  ::close(out_fd);
   r.output = std::move(out);
   return r;
 }

@@ -5,15 +5,12 @@
 
 #include "registers/codec.hpp"
 #include "registers/lookup.hpp"
+#include "tests/support/named_registers.hpp"
 
 using namespace registers;
 
 namespace {
-const Register& reg(const char* name) {
-  const Register* r = find_register(name);
-  REQUIRE(r != nullptr);
-  return *r;
-}
+using test_support::reg;  // throws, naming the register, when the table has none
 
 std::int64_t round_trip(const Register& r, std::int64_t raw, WordOrder order) {
   std::array<std::uint16_t, 2> w{};

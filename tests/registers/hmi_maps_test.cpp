@@ -1,10 +1,16 @@
 // The committed hmi_maps/ must be what the table generates today.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <fstream>
+#include <set>
 #include <sstream>
+#include <string>
+#include <vector>
 
+#include "homing/alarms.hpp"
 #include "registers/exports.hpp"
+#include "registers/table.hpp"
 
 namespace {
 
@@ -42,5 +48,55 @@ TEST_CASE("registers.csv has exactly the columns of the contract") {
     REQUIRE(it != files.end());
     CHECK(it->content.substr(0, it->content.find('\n')) ==
           "name,table,address,words,type,access,unit,scale,min,max,default,persisted,description");
+  }
+}
+
+namespace {
+
+std::string generated(const std::string& name) {
+  for (const auto& f : registers::generate_hmi_maps())
+    if (f.name == name) return f.content;
+  FAIL("hmi_maps/" << name << " is not generated");
+  return "";
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) out.push_back(line);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("alarms.csv lists every alarm code of the engine with its name, text and what to check") {
+  const auto lines = lines_of(generated("alarms.csv"));
+  REQUIRE(lines.size() == homing::kAlarmCodeCount);  // the header, then codes 1..n-1
+  CHECK(lines[0] == "code,name,text,what_to_check");
+  for (std::uint8_t c = 1; c < homing::kAlarmCodeCount; ++c) {
+    const auto code = static_cast<homing::AlarmCode>(c);
+    INFO(lines[c]);
+    CHECK(lines[c].rfind(std::to_string(c) + "," + std::string(homing::alarm_name(code)) + ",", 0) == 0);
+    CHECK(lines[c].find(homing::alarm_what_to_check(code)) != std::string::npos);
+  }
+}
+
+TEST_CASE("enums.csv holds every value of every enum and bitmask register") {
+  const auto lines = lines_of(generated("enums.csv"));
+  REQUIRE(!lines.empty());
+  CHECK(lines[0] == "enum,value,name,text");
+  const std::set<std::string> rows(lines.begin() + 1, lines.end());
+  for (const registers::Register& r : registers::all_registers()) {
+    if (r.values.empty()) continue;
+    const auto list = std::find_if(registers::value_lists().begin(), registers::value_lists().end(),
+                                   [&](const auto& l) { return l.values.data() == r.values.data(); });
+    REQUIRE(list != registers::value_lists().end());
+    for (const auto& v : r.values) {
+      INFO(r.name() << " value " << v.value);
+      const bool listed = std::any_of(rows.begin(), rows.end(), [&](const std::string& row) {
+        return row.rfind(std::string(list->name) + "," + std::to_string(v.value) + "," + std::string(v.name), 0) == 0;
+      });
+      CHECK(listed);
+    }
   }
 }

@@ -9,16 +9,11 @@
 #include "registers/defaults.hpp"
 #include "registers/lookup.hpp"
 #include "registers/sim_bindings.hpp"
+#include "tests/support/named_registers.hpp"
 
 using namespace registers;
 
-namespace {
-const Register& reg(const char* name) {
-  const Register* r = find_register(name);
-  REQUIRE(r != nullptr);
-  return *r;
-}
-}  // namespace
+using test_support::reg;  // throws, naming the register, when the table has none
 
 TEST_CASE("simulator defaults come from the table") {
   const auto c = default_sim_config();

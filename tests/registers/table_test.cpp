@@ -160,8 +160,8 @@ TEST_CASE("per-axis setting names are the engine's field names") {
     if (!r.persisted || !r.per_axis()) continue;
     const std::string suffix = r.name().substr(std::string("axis.x.").size());
     bool found = false;
-    for (int f = 1; f <= static_cast<int>(homing::AxisField::jog_feedrate); ++f)
-      found |= homing::field_name(static_cast<homing::AxisField>(f)) == suffix;
+    for (const auto& f : homing::kAxisFieldInfo)
+      found |= f.value != homing::AxisField::none && homing::field_name(f.value) == suffix;
     INFO(r.name());
     CHECK(found);
   }

@@ -8,15 +8,12 @@
 #include "registers/defaults.hpp"
 #include "registers/lookup.hpp"
 #include "registers/validate.hpp"
+#include "tests/support/named_registers.hpp"
 
 using namespace registers;
 
 namespace {
-const Register& reg(const char* name) {
-  const Register* r = find_register(name);
-  REQUIRE(r != nullptr);
-  return *r;
-}
+using test_support::reg;  // throws, naming the register, when the table has none
 
 std::vector<std::uint16_t> words_of(const Register& r, std::int64_t raw, WordOrder order = WordOrder::high_first) {
   std::vector<std::uint16_t> w(r.words());

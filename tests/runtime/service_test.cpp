@@ -10,26 +10,25 @@
 
 #include "fault_vfs.hpp"
 #include "homing/gpiod/config.hpp"
+#include "homing/sim/simulator_io.hpp"
 #include "persistence/settings_store.hpp"
 #include "registers/defaults.hpp"
 #include "registers/lookup.hpp"
 #include "registers/sim_bindings.hpp"
 #include "server/control_loop.hpp"
 #include "server/modbus_service.hpp"
-#include "server/simulator_io.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace {
 
 struct Module {
-  std::filesystem::path dir;
+  test_support::TempDir dir{"runtime-test"};  // removed after the members below are gone
   std::unique_ptr<persistence::SettingsStore> store;
   std::unique_ptr<server::ControlLoop> loop;
   std::unique_ptr<server::ModbusService> service;
   server::ClientInfo client{7, server::Transport::tcp, "127.0.0.1:50000"};
 
   explicit Module(bool faulty_disk, server::ServiceConfig config = {}) {
-    char tmpl[] = "/tmp/runtime_test_XXXXXX";
-    dir = ::mkdtemp(tmpl);
     std::vector<persistence::SettingDefault> defaults;
     for (const auto& [name, value] : registers::persisted_defaults()) defaults.push_back({name, value});
     persistence::StoreOptions options;
@@ -38,20 +37,18 @@ struct Module {
       options.vfs = fault_vfs::kName;
     }
     persistence::OpenReport report;
-    auto opened = persistence::SettingsStore::open((dir / "settings.db").string(), defaults, report, options);
+    auto opened = persistence::SettingsStore::open(dir.file("settings.db"), defaults, report, options);
     REQUIRE(opened);
     store = std::make_unique<persistence::SettingsStore>(std::move(*opened));
     const auto settings = registers::settings_from_raw(store->load()).settings;
-    auto io = std::make_unique<server::SimulatorIo>(registers::default_sim_config());
-    auto* sim = &io->sim();
-    loop = std::make_unique<server::ControlLoop>(settings, std::move(io), sim, 1000, 1.0);
+    auto io = std::make_unique<homing::sim::SimulatorIo>(registers::default_sim_config());
+    loop = std::make_unique<server::ControlLoop>(settings, std::move(io), 1000, 1.0);
     service = std::make_unique<server::ModbusService>(std::move(config), *loop, store.get(), settings);
   }
   ~Module() {
     service.reset();
     loop.reset();
     store.reset();
-    std::filesystem::remove_all(dir);
   }
 
   std::vector<std::uint8_t> request(std::vector<std::uint8_t> pdu) { return service->handle(1, pdu, client).pdu; }

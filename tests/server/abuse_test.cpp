@@ -7,7 +7,11 @@
 // cleanly. Resident memory (diag.rss_kb and VmRSS) is printed at the start and
 // the end of each run. Every scenario is bounded in count and time and ends
 // only the processes it started.
+#include <arpa/inet.h>
 #include <catch2/catch.hpp>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
 
 #include <algorithm>
 #include <atomic>

@@ -1,6 +1,9 @@
 // homingctl against a real homingd (simulator backend, --time-scale 10): every
 // command, text and --json, a refused write, a failing homing, exit codes.
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
+
+#include <cmath>
 
 #include "tools_helpers.hpp"
 
@@ -155,7 +158,10 @@ TEST_CASE("homingctl home waits for the result, a failing homing exits 1 with th
   {
     SHOW(r);
     REQUIRE(r.code() == 0);
-    CHECK(r.out.find("home all: homed") != std::string::npos);
+    CHECK(r.out.find("home all: done, X = -5.000 mm") != std::string::npos);
+    // Progress while it waited, on stderr (stdout keeps the result line).
+    CHECK(r.err.find("step 2: X seek") != std::string::npos);
+    CHECK(r.out.find("step 2: X seek") == std::string::npos);
   }
   CHECK(c.read("axis.x.position") == -5000);
   CHECK(c.read_mm("sim.x.actual_position") == Approx(0.05 + 2.0).margin(0.02));
@@ -242,7 +248,7 @@ TEST_CASE("homingctl abort, reset, jog and move") {
   {
     SHOW(r);
     CHECK(r.code() == 0);
-    CHECK(r.out.find("move X to 12.5 mm") != std::string::npos);
+    CHECK(r.out.find("move X to 12.5 mm: done, X = 12.500 mm") != std::string::npos);
   }
   CHECK(c.read("axis.x.position") == 12500);
   // Outside the soft limits: refused in words.
@@ -336,4 +342,42 @@ TEST_CASE("homingctl history reads the daemon's database read-only while it runs
   r = run_program({HOMINGCTL_PATH, "history", "--db", d.db() + ".missing"}, 30s);
   CHECK(r.code() == 1);
   CHECK(r.err.find("no such database") != std::string::npos);
+}
+
+TEST_CASE("homingctl status quotes the figure the alarm was raised with, not the axis position") {
+  Daemon d;
+  Client c = Client::tcp(d.port());
+  // A gantry (Y slaved to X) whose slave sensor is dead: the racking guard
+  // stops it and quotes the misalignment it saw.
+  REQUIRE(ctl(d, {"set", "axis.z.mode=disabled", "sequence.step1=3", "sequence.step2=0", "axis.y.slave_of=1"}).code() == 0);
+  REQUIRE(ctl(d, {"set", "sim.y.fault=sensor_stuck_inactive"}).code() == 0);
+  auto r = ctl(d, {"home"});
+  {
+    SHOW(r);
+    REQUIRE(r.code() == 1);
+  }
+  REQUIRE(c.read("axis.y.alarm") == static_cast<int>(homing::AlarmCode::misalignment));
+  const double figure = c.read_mm("axis.y.alarm_value");
+  const double position = c.read_mm("axis.y.position");
+  REQUIRE(std::abs(figure - position) > 0.001);  // the two would read differently
+  r = ctl(d, {"status"});
+  SHOW(r);
+  CHECK(r.out.find(fmt::format("racking by {:.3f} mm", figure)) != std::string::npos);
+  CHECK(r.out.find(fmt::format("racking by {:.3f} mm", position)) == std::string::npos);
+}
+
+TEST_CASE("homingctl exits 3 when no device answers at its unit id (exception 0B), for reads and writes") {
+  Daemon d;
+  for (std::vector<std::string> args : {std::vector<std::string>{"--unit", "9", "status"},
+                                        std::vector<std::string>{"--unit", "9", "get", "axis.x.pull_off"},
+                                        std::vector<std::string>{"--unit", "9", "set", "axis.x.pull_off=2"},
+                                        std::vector<std::string>{"--unit", "9", "abort"}}) {
+    auto r = ctl(d, args);
+    SHOW(r);
+    CHECK(r.code() == 3);
+    CHECK(r.err.find("exception 0B: no device answers at this unit id") != std::string::npos);
+  }
+  // Nothing was written through another unit id by mistake.
+  Client c = Client::tcp(d.port());
+  CHECK(c.read_mm("axis.x.pull_off") != Approx(2.0));
 }

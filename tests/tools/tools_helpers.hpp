@@ -1,5 +1,5 @@
 #pragma once
-// Running homingctl against a Daemon (tests/server/daemon.hpp).
+// Running homingctl against a Daemon (tests/server/daemon.hpp, tests/support).
 #include <nlohmann/json.hpp>
 
 #include "daemon.hpp"

@@ -1,6 +1,8 @@
 // homingctl trace: the FC 20 file of a real homing cycle as SVG, CSV and JSON,
 // over TCP and RTU; the parser on malformed files.
 #include <catch2/catch.hpp>
+#include <fcntl.h>
+#include <poll.h>
 
 #include <atomic>
 #include <regex>

@@ -2,9 +2,13 @@
 
 #include <fmt/format.h>
 
+#include <unistd.h>
+
 #include <chrono>
+#include <iterator>
 #include <thread>
 
+#include "homing/status.hpp"
 #include "settings_io.hpp"
 #include "status_view.hpp"
 #include "values.hpp"
@@ -22,27 +26,9 @@ int axis_index(std::string_view letter) {
 }
 
 std::string command_result_text(int r) {
-  switch (static_cast<CommandResult>(r)) {
-    case CommandResult::none: return "no command result yet";
-    case CommandResult::accepted: return "accepted";
-    case CommandResult::already_running: return "the same command is still running (not restarted)";
-    case CommandResult::refused_alarm: return "an alarm is latched: run `homingctl reset` first";
-    case CommandResult::refused_estop: return "the emergency stop is pressed: release it, then reset";
-    case CommandResult::refused_drive_fault: return "a drive reports a fault: check the drive, then reset";
-    case CommandResult::refused_busy: return "another homing cycle or motion is running (`homingctl abort` stops it)";
-    case CommandResult::refused_not_homed:
-      return "not allowed before the machine is homed (global.allowed_without_homing): home first";
-    case CommandResult::refused_no_permit: return "global.permit_required is on and the homing permit is off";
-    case CommandResult::refused_soft_limit: return "the target is outside the axis's soft limits";
-    case CommandResult::refused_slave_axis: return "this axis is a gantry slave: command its master";
-    case CommandResult::refused_cause_present:
-      return "the cause of the alarm is still present (e-stop, drive fault or watchdog): remove it first";
-    case CommandResult::refused_invalid: return "the command makes no sense here (axis disabled or bad target)";
-    case CommandResult::refused_communication_lost:
-      return "the watchdog expired: host.heartbeat stopped changing; reset first";
-    case CommandResult::refused_settings_fault: return "the configuration check refused the cycle";
-  }
-  return fmt::format("result {}", r);
+  // The engine's own text (homing/status.hpp), the one HMIs show too.
+  const auto& table = homing::kCommandResultInfo;
+  return r >= 0 && r < std::ssize(table) ? std::string(table[r].text) : fmt::format("result {}", r);
 }
 
 namespace {
@@ -91,12 +77,30 @@ struct Session {
   }
 
   // Polls until `done(status)` or the timeout; keeps the heartbeat alive.
-  std::expected<StatusView, std::string> wait_for(const std::function<bool(const StatusView&)>& done) {
+  // With `progress`, what the cycle is doing goes to stderr while it runs
+  // (stdout keeps the result line, or the JSON, for scripts): redrawn in
+  // place on a terminal, one line per phase change otherwise.
+  std::expected<StatusView, std::string> wait_for(const std::function<bool(const StatusView&)>& done,
+                                                  bool progress = false) {
     const auto deadline = Clock::now() + std::chrono::duration<double>(o.timeout_s);
+    const bool tty = progress && ::isatty(STDERR_FILENO);
+    std::string shown;
     for (;;) {
       beat();
       StatusView s = read_status(c, settings);
-      if (done(s)) return s;
+      if (progress) {
+        // A terminal redraws the distances; a log gets a line per phase change.
+        const std::string line = progress_line(s, settings, tty);
+        if (line != shown && !line.empty()) {
+          if (tty) fmt::print(stderr, "\r\033[K{}", line);
+          else fmt::print(stderr, "{}\n", line);
+        }
+        shown = line;
+      }
+      if (done(s)) {
+        if (tty && !shown.empty()) fmt::print(stderr, "\n");
+        return s;
+      }
       if (Clock::now() >= deadline)
         return std::unexpected(fmt::format("still {} after {:g} s: gave up waiting (the machine keeps going; "
                                            "`homingctl abort` stops it)",
@@ -133,8 +137,8 @@ struct Session {
     nlohmann::json positions = nlohmann::json::object();
     for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
       if (settings.axes[a].mode == homing::HomingMode::disabled) continue;
-      pos += fmt::format("{}{} {:.3f}{}", pos.empty() ? "" : ", ", homing::kAxisUpper[a], s.axes[a].position,
-                         s.axes[a].homed ? "" : " (not homed)");
+      pos += fmt::format("{}{} = {:.3f} {}{}", pos.empty() ? "" : ", ", homing::kAxisUpper[a], s.axes[a].position,
+                         homing::axis_unit(a), s.axes[a].homed ? "" : " (not homed)");
       positions[std::string(homing::kAxisLetters[a])] = s.axes[a].position;
     }
     res.json["positions"] = positions;
@@ -144,7 +148,9 @@ struct Session {
       res.message = fmt::format("{} failed: {}", what, fmt::join(al, "\n  "));
       res.json["ok"] = false;
     } else {
-      res.message = fmt::format("{}: {} ({})", what, homing::state_name(s.state), pos);
+      // The outcome first: the machine state alone ("not_homed" after a move)
+      // reads like a failure when the command did what it was asked.
+      res.message = fmt::format("{}: done, {}", what, pos);
       for (const auto& a : al) res.message += "\n  " + a;
       res.json["ok"] = true;
     }
@@ -209,13 +215,13 @@ ActionResult home(Connection& c, const std::vector<std::string>& targets, const 
       last = not_waited(what, *r);
       continue;
     }
-    auto st = s.wait_for(at_rest);
+    auto st = s.wait_for(at_rest, true);
     if (!st) return failure(st.error());
     last = s.finished(what, *st);
     if (last.exit_code != 0) return last;
     if (st->state != homing::MachineState::homed && all) {
       last.exit_code = 1;
-      last.message = fmt::format("{} ended {}", what, homing::state_name(st->state));
+      last.message = fmt::format("{}: not done, the machine ended {}", what, homing::state_name(st->state));
       return last;
     }
   }

@@ -7,6 +7,8 @@
 
 #include "homing/phases.hpp"
 #include "homing/gantry.hpp"
+#include "homing/motion.hpp"
+#include "homing/sequence.hpp"
 #include "homing/settings_check.hpp"
 
 namespace homingctl {
@@ -50,8 +52,9 @@ CheckReport check_settings(const homing::Settings& settings,
     }
     if (const auto& f = faults[i]) c.fault = homing::describe_fault(*f, settings);
     const double a = s.acceleration_mm_per_s2;
-    const double seek_v = s.seek_feedrate_mm_per_min / 60.0, latch_v = s.latch_feedrate_mm_per_min / 60.0;
-    const double latch_stop = a > 0 ? latch_v * latch_v / (2 * a) : 0;
+    const double seek_v = homing::mm_per_min_to_mm_per_s(s.seek_feedrate_mm_per_min);
+    const double latch_v = homing::mm_per_min_to_mm_per_s(s.latch_feedrate_mm_per_min);
+    const double latch_stop = a > 0 ? homing::stop_distance_mm(latch_v, a) : 0;
     auto phase = [&](homing::Phase p, double t) {
       if (t > 0) c.phases.emplace_back(std::string(homing::phase_name(p)), t);
     };
@@ -64,7 +67,7 @@ CheckReport check_settings(const homing::Settings& settings,
       if (homing::mode_is_pushing(s.mode)) phase(homing::Phase::push, move_time(s.push_distance_mm, latch_v, a));
       phase(homing::Phase::back_off, move_time(c.stop_distance_mm + latch_stop, latch_v, a) + s.debounce_ms / 1000.0);
       if (homing::mode_reapproaches(s.mode)) phase(homing::Phase::reapproach, move_time(2 * latch_stop + 0.1, latch_v, a));
-      if (s.mode == HomingMode::switch_index) phase(homing::Phase::index, move_time(1.1 * s.index_pitch_mm, latch_v, a));
+      if (s.mode == HomingMode::switch_index) phase(homing::Phase::index, move_time(homing::index_search_mm(s), latch_v, a));
       phase(homing::Phase::pull_off, move_time(s.pull_off_mm + latch_stop, seek_v, a));
     }
     if (final_move) phase(homing::Phase::final_move, move_time(s.final_position_mm - s.home_position_mm, seek_v, a));
@@ -114,22 +117,18 @@ CheckReport check_settings(const homing::Settings& settings,
     r.axes.push_back(c);
   }
 
-  // The sequence: steps one after the other, axes of a step together; slaves with their master.
-  homing::AxisMask in_steps = 0;
-  for (std::size_t step = 0; step < settings.global.sequence_steps.size(); ++step) {
-    const auto mask = settings.global.sequence_steps[step];
-    in_steps |= mask;
+  // The sequence as the engine plans it: steps one after the other, axes of a
+  // step together, slaves with their master.
+  const homing::CyclePlan plan = homing::plan_cycle(settings, homing::kAllAxes, true);
+  for (const homing::AxisMask mask : plan.steps) {
     double worst = 0;
-    for (std::size_t i = 0; i < homing::kAxisCount; ++i) {
-      const bool member = (mask & homing::axis_bit(i)) ||
-                          (homing::master_of(settings.axes[i]) >= 0 &&
-                           (mask & homing::axis_bit(static_cast<std::size_t>(homing::master_of(settings.axes[i])))));
-      if (member && r.axes[i].enabled) worst = std::max(worst, r.axes[i].seek_worst_s + r.axes[i].after_trigger_s);
-    }
+    for (std::size_t i = 0; i < homing::kAxisCount; ++i)
+      if ((mask & homing::axis_bit(i)) && r.axes[i].enabled)
+        worst = std::max(worst, r.axes[i].seek_worst_s + r.axes[i].after_trigger_s);
     r.cycle_worst_s += worst;
   }
   for (std::size_t i = 0; i < homing::kAxisCount; ++i)
-    if (r.axes[i].enabled && !(in_steps & homing::axis_bit(i)) && homing::master_of(settings.axes[i]) < 0 &&
+    if (r.axes[i].enabled && (plan.unsequenced & homing::axis_bit(i)) && homing::master_of(settings.axes[i]) < 0 &&
         homing::mode_uses_switch(settings.axes[i].mode))
       r.warnings.push_back(fmt::format("{} is in no sequence step: home-all assigns its home position without moving it",
                                        homing::kAxisUpper[i]));

@@ -42,6 +42,13 @@ int exception_of(int err) {
   return 0;
 }
 
+// Exception 0B (gateway target failed to respond) means no device answered at
+// that unit id: for the user that is "no answer", exit 3, like a dead link.
+int no_answer_at_unit(const std::string& what, int ex) {
+  if (ex == 11) throw LinkError(fmt::format("{}: {}", what, exception_sentence(ex)));
+  return ex;
+}
+
 std::pair<std::string, int> split_host_port(const std::string& s) {
   const auto colon = s.rfind(':');
   if (colon == std::string::npos) return {s, 502};
@@ -101,7 +108,10 @@ void Connection::select(Unit unit) {
 }
 
 void Connection::fail(const std::string& what, int err) {
-  if (const int ex = exception_of(err)) throw ModbusException(ex, fmt::format("{}: {}", what, exception_sentence(ex)));
+  if (const int ex = exception_of(err)) {
+    no_answer_at_unit(what, ex);
+    throw ModbusException(ex, fmt::format("{}: {}", what, exception_sentence(ex)));
+  }
   if (is_rtu()) modbus_flush(ctx_);
   throw LinkError(fmt::format("{}: no valid answer from {}: {}", what, describe(), modbus_strerror(err)));
 }
@@ -180,7 +190,7 @@ int Connection::write_words(Unit unit, int start, std::span<const std::uint16_t>
   const int rc = modbus_write_registers(ctx_, start, static_cast<int>(words.size()), words.data());
   if (rc >= 0) return 0;
   const int err = errno;
-  if (const int ex = exception_of(err)) return ex;
+  if (const int ex = exception_of(err)) return no_answer_at_unit(fmt::format("writing holding registers {}", start), ex);
   if (is_rtu()) modbus_flush(ctx_);
   throw LinkError(fmt::format("writing holding registers {}..{}: no valid answer from {}: {}", start,
                               start + static_cast<int>(words.size()) - 1, describe(), modbus_strerror(err)));
@@ -191,7 +201,7 @@ int Connection::write_bit(Unit unit, int address, bool on) {
   const int rc = modbus_write_bit(ctx_, address, on ? 1 : 0);
   if (rc >= 0) return 0;
   const int err = errno;
-  if (const int ex = exception_of(err)) return ex;
+  if (const int ex = exception_of(err)) return no_answer_at_unit(fmt::format("writing coil {}", address), ex);
   if (is_rtu()) modbus_flush(ctx_);
   throw LinkError(fmt::format("writing coil {}: no valid answer from {}: {}", address, describe(), modbus_strerror(err)));
 }
@@ -263,7 +273,7 @@ std::vector<std::uint16_t> Connection::read_file_record(int file, int record, in
   }
   const std::uint8_t* pdu = got.data() + pdu_at;
   if (pdu_len >= 2 && pdu[0] == (20 | 0x80)) {
-    const int ex = pdu[1];
+    const int ex = no_answer_at_unit(what, pdu[1]);
     throw ModbusException(ex, fmt::format("{}: exception {:02X}{}", what, ex,
                                           ex == 2 ? " (no such records: the trace is shorter)" : ""));
   }

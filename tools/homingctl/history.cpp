@@ -4,11 +4,10 @@
 #include <spdlog/spdlog.h>
 #include <sys/stat.h>
 
-#include <ctime>
-
 #include "homing/alarms.hpp"
 #include "homing/axes.hpp"
 #include "persistence/settings_store.hpp"
+#include "persistence/time_text.hpp"
 #include "registers/lookup.hpp"
 #include "values.hpp"
 
@@ -16,43 +15,17 @@ namespace homingctl {
 
 namespace {
 
-std::string local_time(std::int64_t ms) {
-  std::time_t t = static_cast<std::time_t>(ms / 1000);
-  std::tm tm{};
-  localtime_r(&t, &tm);
-  char buf[40];
-  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%S", &tm);
-  return buf;
-}
+std::string local_time(std::int64_t ms) { return persistence::time_text(ms, persistence::TimeZone::local); }
 
 std::string shown(const std::string& name, std::int64_t raw) {
   const registers::Register* r = registers::find_register(name);
   return r ? value_text(*r, raw) : std::to_string(raw);
 }
 
-}  // namespace
-
-std::expected<HistoryReport, std::string> read_history(const std::string& db, std::size_t n_runs, std::size_t n_changes) {
-  struct stat st{};
-  if (::stat(db.c_str(), &st) != 0)
-    return std::unexpected(fmt::format("{}: no such database (give the daemon's --db file with --db)", db));
-  auto logger = spdlog::default_logger();
-  logger->set_level(spdlog::level::warn);
-  persistence::OpenReport report;
-  persistence::StoreOptions options;
-  options.read_only = true;
-  auto store = persistence::SettingsStore::open(db, {}, report, options);
-  if (!store) return std::unexpected(fmt::format("{}: {}", db, store.error().message));
-  auto runs = store->recent_runs(n_runs);
-  if (!runs) return std::unexpected(runs.error().message);
-  auto changes = store->recent_changes(n_changes);
-  if (!changes) return std::unexpected(changes.error().message);
-
-  HistoryReport out;
+void add_runs(HistoryReport& out, const std::vector<persistence::HomingRun>& runs) {
   out.json["runs"] = nlohmann::json::array();
-  out.json["changes"] = nlohmann::json::array();
-  out.text += fmt::format("homing runs (newest first, {} shown):\n", runs->size());
-  for (const auto& r : *runs) {
+  out.text += fmt::format("homing runs (newest first, {} shown):\n", runs.size());
+  for (const auto& r : runs) {
     std::string axes;
     for (std::size_t a = 0; a < homing::kAxisCount; ++a)
       if (r.axes & (1u << a)) axes += homing::kAxisUpper[a];
@@ -75,13 +48,62 @@ std::expected<HistoryReport, std::string> read_history(const std::string& db, st
     out.json["runs"].push_back({{"id", r.id}, {"start_ms", r.start_ms}, {"end_ms", r.end_ms}, {"result", result},
                                 {"alarm_code", r.result}, {"axes", jaxes}});
   }
-  out.text += fmt::format("settings changes (newest first, {} shown):\n", changes->size());
-  for (const auto& c : *changes) {
+}
+
+void add_changes(HistoryReport& out, const std::vector<persistence::AuditEntry>& changes) {
+  out.json["changes"] = nlohmann::json::array();
+  out.text += fmt::format("settings changes (newest first, {} shown):\n", changes.size());
+  for (const auto& c : changes) {
     out.text += fmt::format("  {}  {:<6} {:<22} {:<32} {} -> {}\n", local_time(c.time_ms), c.transport, c.client, c.name,
                             shown(c.name, c.old_value), shown(c.name, c.new_value));
     out.json["changes"].push_back({{"time_ms", c.time_ms}, {"transport", c.transport}, {"client", c.client},
                                    {"name", c.name}, {"old", c.old_value}, {"new", c.new_value}});
   }
+}
+
+// Mean, spread and standard deviation of each axis's home correction over
+// its last n runs: how repeatable the reference edge is.
+std::expected<void, std::string> add_corrections(HistoryReport& out, const persistence::SettingsStore& store,
+                                                 std::size_t n) {
+  out.json["corrections"] = nlohmann::json::array();
+  out.text += fmt::format("home corrections per axis (last {} runs):\n", n);
+  out.text += "  axis  runs   mean        spread      stddev\n";
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    auto s = store.correction_summary(a, n);
+    if (!s) return std::unexpected(s.error().message);
+    if (s->count == 0) continue;
+    out.text += fmt::format("  {:<5} {:<6} {:+.4f}    {:.4f}      {:.4f}\n", homing::kAxisUpper[a], s->count, s->mean,
+                            s->spread, s->stddev);
+    out.json["corrections"].push_back({{"axis", homing::kAxisLetters[a]}, {"runs", s->count}, {"mean", s->mean},
+                                       {"spread", s->spread}, {"stddev", s->stddev}, {"min", s->min},
+                                       {"max", s->max}});
+  }
+  return {};
+}
+
+}  // namespace
+
+std::expected<HistoryReport, std::string> read_history(const std::string& db, const HistoryRequest& request) {
+  struct stat st{};
+  if (::stat(db.c_str(), &st) != 0)
+    return std::unexpected(fmt::format("{}: no such database (give the daemon's --db file with --db)", db));
+  auto logger = spdlog::default_logger();
+  logger->set_level(spdlog::level::warn);
+  persistence::OpenReport report;
+  persistence::StoreOptions options;
+  options.read_only = true;
+  auto store = persistence::SettingsStore::open(db, {}, report, options);
+  if (!store) return std::unexpected(fmt::format("{}: {}", db, store.error().message));
+  auto runs = store->recent_runs(request.runs);
+  if (!runs) return std::unexpected(runs.error().message);
+  auto changes = store->recent_changes(request.changes);
+  if (!changes) return std::unexpected(changes.error().message);
+
+  HistoryReport out;
+  add_runs(out, *runs);
+  add_changes(out, *changes);
+  if (request.corrections > 0)
+    if (auto c = add_corrections(out, *store, request.corrections); !c) return std::unexpected(c.error());
   return out;
 }
 

@@ -59,21 +59,26 @@ void apply_raw(homing::Settings& s, registers::HostRegisters& h, const Register&
     registers::set_host_raw(h, r, raw);
 }
 
-}  // namespace
+// What the module holds before the write: its settings and host registers.
+struct ModuleState {
+  homing::Settings settings;
+  registers::HostRegisters host;
+};
 
-std::expected<WritePlan, std::string> plan_write(const RawMap& current, const RawMap& wanted,
-                                                 registers::WordOrder order, bool check) {
-  WritePlan plan;
-  homing::Settings settings = settings_of(current);
-  registers::HostRegisters host = registers::default_host_registers();
+ModuleState state_of(const RawMap& current) {
+  ModuleState s{settings_of(current), registers::default_host_registers()};
   for (const auto& [name, raw] : current) {
     const Register* r = registers::find_register(name);
     if (r && r->unit == Unit::module && r->table == Table::holding_register && !r->persisted)
-      registers::set_host_raw(host, *r, raw);
+      registers::set_host_raw(s.host, *r, raw);
   }
-  const homing::Settings before = settings;
-  homing::Settings after = settings;
-  registers::HostRegisters host_after = host;
+  return s;
+}
+
+// The values that change, each a setting in its range; `after` gets them.
+std::expected<std::vector<PlannedChange>, std::string> changes_of(const RawMap& current, const RawMap& wanted,
+                                                                  bool check, ModuleState& after) {
+  std::vector<PlannedChange> changes;
   for (const auto& [name, raw] : wanted) {
     const Register* r = registers::find_register(name);
     if (!r || r->unit != Unit::module || r->table != Table::holding_register)
@@ -84,18 +89,17 @@ std::expected<WritePlan, std::string> plan_write(const RawMap& current, const Ra
     const auto it = current.find(name);
     if (it == current.end()) return std::unexpected(fmt::format("internal: current value of {} not read", name));
     if (it->second == raw) continue;
-    plan.changes.push_back({r, it->second, raw});
-    apply_raw(after, host_after, *r, raw);
+    changes.push_back({r, it->second, raw});
+    apply_raw(after.settings, after.host, *r, raw);
   }
-  if (plan.changes.empty()) return plan;
+  return changes;
+}
 
-  // The final settings must pass the engine's rule set, as the daemon runs it.
-  if (check)
-    if (auto f = homing::new_fault(before, after))
-      return std::unexpected(fmt::format("{}; nothing was written", homing::describe_fault(*f, after)));
-
-  // One block per run touched, from the first to the last changed word,
-  // the words in between at their current values.
+// One block per run touched, from the first to the last changed word, the
+// words in between at their current values; at most 123 registers a request.
+std::expected<std::vector<Block>, std::string> blocks_of(const std::vector<PlannedChange>& changes,
+                                                         const RawMap& current, const RawMap& wanted,
+                                                         registers::WordOrder order) {
   auto word_of = [&](std::uint16_t address, bool new_value) -> std::uint16_t {
     const Register* r = registers::find_register(Unit::module, Table::holding_register, address);
     if (!r) return 0;
@@ -109,7 +113,7 @@ std::expected<WritePlan, std::string> plan_write(const RawMap& current, const Ra
   std::vector<Block> blocks;
   for (const Run& run : holding_runs()) {
     std::uint32_t lo = UINT32_MAX, hi = 0;
-    for (const auto& c : plan.changes)
+    for (const auto& c : changes)
       if (c.reg->address >= run.start && c.reg->end() <= run.end) {
         lo = std::min<std::uint32_t>(lo, c.reg->address);
         hi = std::max(hi, c.reg->end());
@@ -126,7 +130,6 @@ std::expected<WritePlan, std::string> plan_write(const RawMap& current, const Ra
       b.words.push_back(word_of(static_cast<std::uint16_t>(a), true));
       b.old_words.push_back(word_of(static_cast<std::uint16_t>(a), false));
     }
-    // Requests carry at most 123 registers.
     while (b.words.size() > 123) {
       Block head{b.start, {b.words.begin(), b.words.begin() + 120}, {b.old_words.begin(), b.old_words.begin() + 120}};
       blocks.push_back(head);
@@ -136,25 +139,27 @@ std::expected<WritePlan, std::string> plan_write(const RawMap& current, const Ra
     }
     blocks.push_back(b);
   }
+  return blocks;
+}
 
-  // The daemon checks each request on its own: find an order in which every
-  // intermediate state passes too.
-  if (!check) {
-    for (auto& b : blocks) plan.blocks.push_back(std::move(b));
-    return plan;
-  }
+// The daemon checks each request on its own: an order of the blocks in which
+// every intermediate state passes too.
+std::expected<std::vector<Block>, std::string> passing_order(std::vector<Block> blocks, registers::WordOrder order,
+                                                             ModuleState state) {
+  std::vector<Block> ordered;
   std::string first_refusal;
   while (!blocks.empty()) {
     bool placed = false;
     for (std::size_t i = 0; i < blocks.size(); ++i) {
-      auto ok = registers::validate_write(Table::holding_register, blocks[i].start, blocks[i].words, order, settings, host);
+      auto ok = registers::validate_write(Table::holding_register, blocks[i].start, blocks[i].words, order,
+                                          state.settings, state.host);
       if (!ok) {
         if (first_refusal.empty()) first_refusal = ok.error().message;
         continue;
       }
-      settings = ok->settings;
-      host = ok->host;
-      plan.blocks.push_back(std::move(blocks[i]));
+      state.settings = ok->settings;
+      state.host = ok->host;
+      ordered.push_back(std::move(blocks[i]));
       blocks.erase(blocks.begin() + static_cast<long>(i));
       placed = true;
       break;
@@ -163,8 +168,37 @@ std::expected<WritePlan, std::string> plan_write(const RawMap& current, const Ra
       return std::unexpected(fmt::format(
           "the values are valid together, but the module checks each write request on its own and no order of "
           "the {} requests passes: {}. Change fewer settings at a time (or use import, which does the same)",
-          plan.blocks.size() + blocks.size(), first_refusal));
+          ordered.size() + blocks.size(), first_refusal));
   }
+  return ordered;
+}
+
+}  // namespace
+
+std::expected<WritePlan, std::string> plan_write(const RawMap& current, const RawMap& wanted,
+                                                 registers::WordOrder order, bool check) {
+  const ModuleState before = state_of(current);
+  ModuleState after = before;
+  auto changes = changes_of(current, wanted, check, after);
+  if (!changes) return std::unexpected(changes.error());
+  WritePlan plan;
+  plan.changes = std::move(*changes);
+  if (plan.changes.empty()) return plan;
+
+  // The final settings must pass the engine's rule set, as the daemon runs it.
+  if (check)
+    if (auto f = homing::new_fault(before.settings, after.settings))
+      return std::unexpected(fmt::format("{}; nothing was written", homing::describe_fault(*f, after.settings)));
+
+  auto blocks = blocks_of(plan.changes, current, wanted, order);
+  if (!blocks) return std::unexpected(blocks.error());
+  if (!check) {
+    plan.blocks = std::move(*blocks);
+    return plan;
+  }
+  auto ordered = passing_order(std::move(*blocks), order, before);
+  if (!ordered) return std::unexpected(ordered.error());
+  plan.blocks = std::move(*ordered);
   return plan;
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "homing/gantry.hpp"
 #include "homing/settings_check.hpp"
 
 namespace homingctl {
@@ -24,7 +25,8 @@ StatusView read_status(Connection& c, const homing::Settings& settings) {
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     for (const char* f : {"homed", "sensor", "busy"}) regs.push_back(&register_named(ax(a, f)));
     if (settings.axes[a].mode == homing::HomingMode::disabled) continue;
-    for (const char* f : {"phase", "alarm", "alarm_phase", "position", "velocity", "phase_distance", "stop_distance"})
+    for (const char* f :
+         {"phase", "alarm", "alarm_phase", "alarm_value", "position", "velocity", "phase_distance", "stop_distance"})
       regs.push_back(&register_named(ax(a, f)));
   }
   const auto v = c.read_many(regs);
@@ -49,6 +51,7 @@ StatusView read_status(Connection& c, const homing::Settings& settings) {
     x.phase = static_cast<homing::Phase>(get(ax(a, "phase")));
     x.alarm = static_cast<homing::AlarmCode>(get(ax(a, "alarm")));
     x.alarm_phase = static_cast<homing::Phase>(get(ax(a, "alarm_phase")));
+    x.alarm_value = mm(ax(a, "alarm_value"));
     x.position = mm(ax(a, "position"));
     x.velocity = mm(ax(a, "velocity"));
     x.phase_distance = mm(ax(a, "phase_distance"));
@@ -62,8 +65,7 @@ std::string alarm_text(std::size_t axis, const AxisView& a, const homing::Settin
   homing::Alarm alarm{};
   alarm.code = a.alarm;
   alarm.phase = a.alarm_phase;
-  // The figure of the alarm is not on the map; use what the status shows.
-  alarm.value = a.position;
+  alarm.value = a.alarm_value;  // the figure the engine quoted when it raised the alarm
   if (a.alarm == homing::AlarmCode::settings_fault || a.alarm == homing::AlarmCode::slave_sensor_missing) {
     if (auto f = homing::check_axis(settings, axis)) {
       alarm.field = f->field;
@@ -101,7 +103,7 @@ double phase_bound_mm(homing::Phase phase, const homing::AxisSettings& s) {
     case Phase::pull_off: return s.pull_off_mm;
     case Phase::pre_move: return s.pre_move_distance_mm;
     case Phase::push: return s.push_distance_mm;
-    case Phase::index: return 1.1 * s.index_pitch_mm;
+    case Phase::index: return homing::index_search_mm(s);
     default: return 0;
   }
 }
@@ -116,6 +118,7 @@ std::string render_status(const StatusView& s, const homing::Settings& settings,
   std::string out;
   out += fmt::format("{:<4} {:<18} {:<11} {:>14} {:<5} {:<6} {}\n", "axis", "mode", "phase", "position", "homed",
                      "sensor", "alarm");
+  const homing::Settings moves = homing::motion_settings(settings);  // a slave's bounds are its master's
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     const AxisView& x = s.axes[a];
     const auto& st = settings.axes[a];
@@ -128,7 +131,7 @@ std::string render_status(const StatusView& s, const homing::Settings& settings,
                        disabled ? "-" : std::string(homing::phase_name(x.phase)), pos, x.homed ? "yes" : "no",
                        disabled ? "-" : (x.sensor ? "on" : "off"), alarm);
     if (progress && !disabled && x.busy) {
-      const double bound = phase_bound_mm(x.phase, st);
+      const double bound = phase_bound_mm(x.phase, moves.axes[a]);
       if (bound > 0)
         out += fmt::format("     {} {} {:.3f} / {:g} {}\n", progress_bar(x.phase_distance, bound, 30),
                            homing::phase_name(x.phase), std::abs(x.phase_distance), bound, homing::axis_unit(a));
@@ -146,6 +149,24 @@ std::string render_status(const StatusView& s, const homing::Settings& settings,
   if (s.global_alarm != homing::AlarmCode::none)
     out += fmt::format("alarm: {}: {}\n", homing::alarm_name(s.global_alarm), global_alarm_text(s.global_alarm, settings));
   return out;
+}
+
+std::string progress_line(const StatusView& s, const homing::Settings& settings, bool distances) {
+  std::string axes;
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    const AxisView& x = s.axes[a];
+    const bool moving_phase = x.phase != homing::Phase::idle && x.phase != homing::Phase::waiting &&
+                              x.phase != homing::Phase::done;
+    if (!x.busy || !moving_phase || settings.axes[a].mode == homing::HomingMode::disabled) continue;
+    axes += fmt::format("{}{} {}", axes.empty() ? "" : ", ", homing::kAxisUpper[a], homing::phase_name(x.phase));
+    if (!distances) continue;
+    const double bound = phase_bound_mm(x.phase, settings.axes[a]);
+    const double done = std::abs(x.phase_distance);
+    axes += bound > 0 ? fmt::format(" {:.1f} / {:g} {}", std::min(done, bound), bound, homing::axis_unit(a))
+                      : fmt::format(" {:.1f} {}", done, homing::axis_unit(a));
+  }
+  if (axes.empty()) return "";
+  return s.sequence_step ? fmt::format("step {}: {}", s.sequence_step, axes) : axes;
 }
 
 nlohmann::json status_json(const StatusView& s, const homing::Settings& settings) {

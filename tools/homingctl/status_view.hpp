@@ -16,6 +16,7 @@ struct AxisView {
   homing::Phase phase = homing::Phase::idle;
   homing::AlarmCode alarm = homing::AlarmCode::none;
   homing::Phase alarm_phase = homing::Phase::idle;
+  double alarm_value = 0;  // axis.<a>.alarm_value: distance travelled, misalignment, ...
   double position = 0, velocity = 0, phase_distance = 0, stop_distance = 0;
   bool homed = false, sensor = false, busy = false;
 };
@@ -42,6 +43,9 @@ std::string global_alarm_text(homing::AlarmCode code, const homing::Settings& se
 std::string interlocks_text(std::uint16_t bits);
 
 std::string render_status(const StatusView& s, const homing::Settings& settings, bool progress);
+// One line of what a running cycle does now ("step 1: X seek 12.3 / 250 mm, Y seek ..."),
+// without the distances when `distances` is false; empty when nothing moves.
+std::string progress_line(const StatusView& s, const homing::Settings& settings, bool distances);
 nlohmann::json status_json(const StatusView& s, const homing::Settings& settings);
 
 // Bound of the phase an axis is in (for a progress bar), 0 if none.

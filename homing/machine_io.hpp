@@ -1,28 +1,37 @@
 #pragma once
-// The machine the control loop drives: the simulator by default, GPIO on a
-// real cabinet. Each control period:
+// The engine's contract with a machine: what the runtime asks of a backend
+// every control period. Implemented by the simulator (homing/sim/simulator_io.hpp)
+// and by GPIO on a real cabinet (homing/gpiod/gpiod_io.hpp), neither of which
+// knows the runtime that drives it. Each control period:
 //   io.advance(outputs, dt);   // the elapsed period ran these outputs
 //   inputs = io.read();        // what happened in it
 //   outputs = engine.step(settings, inputs, dt).outputs;
 //   io.apply(outputs);         // at once: these run from now on
-#include "homing/io.hpp"
+#include "io.hpp"
 
-namespace server {
+namespace homing {
+
+namespace sim {
+class SimulatorControls;
+}
 
 class MachineIo {
  public:
   virtual ~MachineIo() = default;
   // The elapsed period of dt_s ran `outputs` (those given to the last apply()).
-  virtual void advance(const homing::Outputs& outputs, double dt_s) = 0;
-  virtual homing::Inputs read() = 0;
+  virtual void advance(const Outputs& outputs, double dt_s) = 0;
+  virtual Inputs read() = 0;
   // Called right after the engine's step with the outputs it just computed:
   // outputs.axes[i].motor is the motor state at the start of the period now
   // beginning and .motion what to run from then on. Real hardware starts
   // them here (a backend that runs the outputs in advance(), like the
   // simulator, ignores it).
-  virtual void apply(const homing::Outputs& outputs) { (void)outputs; }
+  virtual void apply(const Outputs& outputs) { (void)outputs; }
   // Called once at exit after motion has stopped: outputs to a safe state.
   virtual void shutdown() {}
+  // What only a simulated machine allows (the simulator unit: place a
+  // carriage, inject a fault, press its e-stop); nullptr for a real one.
+  virtual sim::SimulatorControls* simulator_controls() { return nullptr; }
 };
 
-}  // namespace server
+}  // namespace homing

@@ -1,0 +1,122 @@
+#pragma once
+// The engine's state of one axis between periods. What only one phase needs
+// lives in that phase's data and goes with the phase; what a homing cycle
+// establishes for the gantry partner to wait on is one milestone.
+#include <cstdint>
+#include <variant>
+
+#include "alarms.hpp"
+#include "motion.hpp"
+#include "phases.hpp"
+
+namespace homing {
+
+// What a waiting axis waits for from its gantry partner.
+enum class Wait : std::uint8_t {
+  none,                  // a later sequence step
+  partner_stopped,
+  partner_assigned,
+  slave_aligned,
+  master_at_reference,
+  slave_locked,
+  partner_released,
+  partner_at_reference,
+};
+
+// Data of one phase, born when the phase is entered.
+namespace phase_data {
+struct Clearing {};        // pre_move: a gantry moves off both sensors before its seek
+struct Seek {
+  bool at_latch = false;   // just off both sensors: the pair meets them again slowly
+};
+struct Stop {
+  double trigger_mm = 0;        // motor position at the seek trigger
+  double trigger_period_s = 0;  // length of the period in which it was seen
+};
+struct BackOff {
+  bool index_seen = false;      // switch + index: a pulse passed during the back-off
+  double index_seen_mm = 0;     // motor position of the last one
+};
+struct Index {
+  double release_mm = 0;        // the search runs from the release edge, away from the sensor
+};
+struct Waiting {
+  Wait wait = Wait::none;
+  Phase next = Phase::idle;     // where waiting goes once the partner is ready
+};
+struct Jog {
+  std::int8_t dir = 0;
+};
+}  // namespace phase_data
+
+using PhaseData = std::variant<std::monostate, phase_data::Clearing, phase_data::Seek, phase_data::Stop,
+                               phase_data::BackOff, phase_data::Index, phase_data::Waiting, phase_data::Jog>;
+
+// How far this axis has come in the running homing cycle, in order. The
+// gantry partner waits on it.
+enum class Reached : std::uint8_t {
+  nothing,
+  stopped_on_sensor,   // the seek trigger was found and the axis came to rest
+  released,            // the back-off found the release edge
+  reference,           // the reference edge is located (reference_mm)
+  aligned,             // commutator slave: on its own edge, locked to its master again
+  assigned,            // home position assigned
+};
+
+struct AxisRun {
+  Phase phase = Phase::idle;
+  PhaseData data{};             // of the current phase
+  bool entered = false;         // the current phase has run its entry action
+  double phase_start_mm = 0;    // motor position at phase entry
+  double target_mm = 0;         // of the current move_to
+
+  Alarm alarm{};
+  MotionState motor{};          // motor position now (never jumps: steps counted)
+  MotionState period_start{};   // motor at the start of the period that just ended
+  MotionCommand command{};      // what runs until the next period
+  MotionCommand last_command{}; // what ran during the period that just ended
+  double offset_mm = 0;         // machine position = motor + offset
+  bool homed = false;
+  bool sensor_active = false;   // debounced, polarity applied
+  bool push_output = false;
+  bool commutator_output = false;
+
+  // The homing cycle.
+  bool in_cycle = false;
+  Reached reached = Reached::nothing;
+  double reference_mm = 0;      // motor position at the reference edge
+  bool follow_master = false;   // slave: locked to the master's motion
+  bool aligning = false;        // commutator slave: running its own edge search
+  double trigger_position_mm = 0;  // reported: reference edge in the coordinates believed before
+  double home_correction_mm = 0;   // reported: assigned - believed at the reference edge
+
+  // A new phase starts with no data.
+  void set_phase(Phase p) {
+    phase = p;
+    data = std::monostate{};
+  }
+  // The current phase's data, made on first use in the phase.
+  template <class T>
+  T& phase_data() {
+    if (!std::holds_alternative<T>(data)) data.emplace<T>();
+    return std::get<T>(data);
+  }
+  template <class T>
+  const T* phase_data_if() const {
+    return std::get_if<T>(&data);
+  }
+  void reach(Reached r) {
+    if (r > reached) reached = r;
+  }
+  bool has_reached(Reached r) const { return reached >= r; }
+  Wait waiting_for() const {
+    const auto* w = phase_data_if<phase_data::Waiting>();
+    return phase == Phase::waiting && w ? w->wait : Wait::none;
+  }
+  std::int8_t jog_dir() const {
+    const auto* j = phase_data_if<phase_data::Jog>();
+    return phase == Phase::jog && j ? j->dir : 0;
+  }
+};
+
+}  // namespace homing

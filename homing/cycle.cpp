@@ -1,0 +1,139 @@
+// The homing cycle: refused or started, then run step by step along its
+// plan (sequence.hpp), each axis through its phases (axis_phases.cpp), and
+// finished by assigning the unsequenced axes.
+#include <algorithm>
+
+#include "engine.hpp"
+#include "gantry.hpp"
+
+namespace homing {
+
+CommandResult Engine::homing_refusal(const Settings& settings) const {
+  if (estop_) return CommandResult::refused_estop;
+  if (std::any_of(drive_fault_.begin(), drive_fault_.end(), [](bool f) { return f; }))
+    return CommandResult::refused_drive_fault;
+  if (any_alarm()) return CommandResult::refused_alarm;
+  if (comm_lost_) return CommandResult::refused_communication_lost;
+  if (settings.global.permit_required && !permit_) return CommandResult::refused_no_permit;
+  if (any_motion()) return CommandResult::refused_busy;
+  return CommandResult::accepted;
+}
+
+void Engine::home_command(const Settings& settings, const Inputs& inputs) {
+  const Commands& c = inputs.commands;
+  // A physical input acts on a press seen after start-up, never on a level
+  // held at power-up.
+  const bool start_edge = !first_step_ && inputs.start_button && !prev_start_button_;
+  prev_start_button_ = inputs.start_button;
+  const bool home_all = c.home_all || start_edge;
+  const AxisMask home_axes = c.home_axes & kAllAxes;
+  if (home_all || home_axes) {
+    ++command_count_;
+    if (cycle_active_) {
+      const bool same = home_all ? cycle_all_ : (!cycle_all_ && home_axes == cycle_requested_);
+      last_result_ = same ? CommandResult::already_running : CommandResult::refused_busy;
+    } else if (const CommandResult r = homing_refusal(settings); r != CommandResult::accepted) {
+      last_result_ = r;
+    } else {
+      start_cycle(settings, home_all ? kAllAxes : home_axes, home_all);
+    }
+  }
+}
+
+void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all) {
+  plan_ = plan_cycle(settings, requested, all);
+  const AxisMask covered = plan_.covered();
+  const AxisMask unsequenced = plan_.unsequenced;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    // In a home-all, a slave's own bit is ignored, so a slave whose slave_of
+    // names no usable master (itself, another slave) would never be covered
+    // and would silently stay unhomed: check every slave's configuration,
+    // and the unsequenced axes that get their position at the end.
+    const bool slave = master_of(settings.axes[a]) >= 0;
+    const bool involved = (covered | unsequenced) & axis_bit(a);
+    const bool names_involved = slave && ((covered | unsequenced) &
+                                          axis_bit(static_cast<std::size_t>(std::clamp(master_of(settings.axes[a]), 0, 5))));
+    if (!involved && !(all && slave) && !names_involved) continue;
+    if (const auto& fault = faults()[a]) {
+      raise(settings, axis_bit(fault->axis),
+            Alarm{fault->code(), Phase::idle, fault->field, fault->value, static_cast<std::uint8_t>(fault->rule)});
+      last_result_ = CommandResult::refused_settings_fault;
+      return;
+    }
+  }
+
+  cycle_active_ = true;
+  cycle_all_ = all;
+  cycle_requested_ = requested;
+  step_index_ = -1;
+  last_result_ = CommandResult::accepted;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    AxisRun& run = axes_[a];
+    if (!(covered & axis_bit(a))) continue;
+    run.in_cycle = true;
+    run.homed = false;
+    run.set_phase(Phase::waiting);  // for its step
+    run.entered = false;
+    run.reached = Reached::nothing;
+    run.aligning = false;
+    run.follow_master = false;
+  }
+  for (std::size_t sl = 0; sl < kAxisCount; ++sl)
+    if (const int m = gantry_master(settings, sl); m >= 0)
+      pair_rel0_[sl] = axes_[sl].motor.position_mm - axes_[static_cast<std::size_t>(m)].motor.position_mm;
+  start_step(settings);
+}
+
+bool Engine::start_step(const Settings& settings) {
+  while (++step_index_ < static_cast<int>(plan_.steps.size())) {
+    const AxisMask mask = plan_.steps[static_cast<std::size_t>(step_index_)];
+    if (!mask) continue;
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if (mask & axis_bit(a)) begin_axis(settings, a);
+    return true;
+  }
+  finish_cycle(settings);
+  return false;
+}
+
+void Engine::run_cycle(const Settings& settings) {
+  if (!cycle_active_ || step_index_ < 0) return;
+  const AxisMask mask = plan_.steps[static_cast<std::size_t>(step_index_)];
+  for (std::size_t a = 0; a < kAxisCount && cycle_active_; ++a)
+    if (mask & axis_bit(a)) run_axis(settings, a);
+  if (!cycle_active_) return;
+  bool all_done = true;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if ((mask & axis_bit(a)) && axes_[a].phase != Phase::done) all_done = false;
+  if (all_done) start_step(settings);
+}
+
+// An axis in no sequence step is given its coordinate where it stands (MASSO);
+// an absolute axis always takes it from its encoder.
+void Engine::assign_unsequenced(const Settings& settings, std::size_t a) {
+  AxisRun& run = axes_[a];
+  const AxisSettings& s = settings.axes[a];
+  double machine_now = s.home_position_mm;
+  if (mode_is_absolute(s.mode)) {
+    if (!absolute_valid_[a]) return raise(settings, axis_bit(a), Alarm{AlarmCode::encoder_fault});
+    machine_now = absolute_mm_[a] - s.home_position_mm;
+  }
+  const double new_offset = machine_now - run.motor.position_mm;
+  run.home_correction_mm = new_offset - run.offset_mm;
+  run.trigger_position_mm = run.motor.position_mm + run.offset_mm;
+  run.offset_mm = new_offset;
+  run.homed = true;
+  run.set_phase(Phase::done);
+}
+
+void Engine::finish_cycle(const Settings& settings) {
+  for (std::size_t a = 0; a < kAxisCount && cycle_active_; ++a)
+    if (plan_.unsequenced & axis_bit(a)) assign_unsequenced(settings, a);
+  if (!cycle_active_) return;  // an encoder fault ended the cycle
+  for (AxisRun& run : axes_) run.in_cycle = false;
+  cycle_active_ = false;
+  step_index_ = -1;
+  ++homing_cycles_;
+}
+
+}  // namespace homing

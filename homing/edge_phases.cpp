@@ -1,0 +1,76 @@
+// Locating the reference edge: the back-off to the release edge, the
+// re-approach to the trigger edge, or the search for the next index pulse.
+#include "phase_runner.hpp"
+#include "settings_check.hpp"
+
+namespace homing {
+
+void PhaseRunner::back_off() {
+  if (entry()) run.target_mm = run.phase_start_mm - dir * s.max_backoff_mm;
+  phase_data::BackOff& seen = run.phase_data<phase_data::BackOff>();
+  if (event().index) {
+    seen.index_seen = true;
+    seen.index_seen_mm = event().index_mm;
+  }
+  if (edge_to(false)) {
+    const double release_mm = edge_mm();
+    run.reach(Reached::released);
+    if (mode_reapproaches(s.mode)) {
+      // A gantry turns back toward its sensors together, or one side would
+      // run toward its sensor while the other still backs off.
+      if (software_pair() && !partner_run().has_reached(Reached::released)) {
+        run.command = stop_command(accel);
+        return wait_for(Wait::partner_released, Phase::reapproach);
+      }
+      return enter(Phase::reapproach);
+    }
+    if (s.mode == HomingMode::switch_index) {
+      // The release is accepted only after the debounce time: an index pulse
+      // may already have passed beyond the release edge. It is the next one.
+      if (seen.index_seen && beyond(release_mm, seen.index_seen_mm)) return reference_found(seen.index_seen_mm);
+      enter(Phase::index);
+      run.phase_data<phase_data::Index>().release_mm = release_mm;
+      return;
+    }
+    return reference_found(release_mm);
+  }
+  move_to(run.target_mm, latch_v);
+  if (arrived()) fail(AlarmCode::not_released, travelled());
+}
+
+void PhaseRunner::reapproach() {
+  if (entry()) run.target_mm = run.phase_start_mm + dir * s.max_backoff_mm;
+  if (edge_to(true)) return reference_found(edge_mm());
+  move_to(run.target_mm, latch_v);
+  if (arrived()) fail(AlarmCode::reapproach_not_found, s.max_backoff_mm);
+}
+
+void PhaseRunner::index() {
+  if (entry()) run.target_mm = run.phase_start_mm - dir * index_search_mm(s);
+  // A pulse in the same period but before the release edge is not the next one.
+  const double release_mm = run.phase_data<phase_data::Index>().release_mm;
+  if (event().index && beyond(release_mm, event().index_mm)) return reference_found(event().index_mm);
+  move_to(run.target_mm, latch_v);
+  if (arrived()) fail(AlarmCode::index_not_found, index_search_mm(s));
+}
+
+// The reference edge is located. A commutator master holds there (its
+// slave aligns on its own edge from this point); everyone else pulls off.
+void PhaseRunner::reference_found(double reference_mm) {
+  run.reference_mm = reference_mm;
+  run.reach(Reached::reference);
+  if (commutator_master()) {
+    run.command = stop_command(accel);
+    return wait_for(Wait::slave_aligned, Phase::pull_off);
+  }
+  // A software gantry pulls off together: the side that found its edge
+  // first holds there, or it would race ahead by a whole pull-off while
+  // the other still backs off at latch feedrate.
+  if (software_pair() && !partner_run().has_reached(Reached::reference)) {
+    run.command = stop_command(accel);
+    return wait_for(Wait::partner_at_reference, Phase::pull_off);
+  }
+  enter(Phase::pull_off);
+}
+
+}  // namespace homing

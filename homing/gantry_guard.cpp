@@ -1,0 +1,80 @@
+// Gantry pairs while they move: the slave follows its master, the pair
+// never racks beyond max_misalignment, and the commutator output goes back
+// to the master once the slave motor rests.
+#include <algorithm>
+#include <cmath>
+
+#include "engine.hpp"
+#include "gantry.hpp"
+
+namespace homing {
+
+// A slave is locked to its master except while it homes on its own sensor.
+void Engine::follow_masters(const Settings& settings) {
+  for (std::size_t s = 0; s < kAxisCount; ++s) {
+    const int m = gantry_master(settings, s);  // a refused pair is no pair: nothing follows
+    if (m < 0) continue;
+    AxisRun& slave = axes_[s];
+    const AxisRun& master = axes_[static_cast<std::size_t>(m)];
+    const bool independent = slave.in_cycle && !slave.follow_master;
+    if (independent) continue;
+    MotionCommand cmd = master.command;
+    const double delta = slave.motor.position_mm - master.motor.position_mm;
+    if (cmd.has_limit) cmd.limit_mm += delta;
+    slave.command = cmd;
+  }
+}
+
+// A gantry never racks beyond its slave's max_misalignment, stopping distance
+// included, whatever the phase or the cause (a side on its sensor, a dead or
+// stuck sensor, a squaring beyond the limit): each period, where both sides
+// would come to rest if braked now, or after running this period's commands
+// for up to two periods, is compared with their relative position at the
+// start of the cycle. Before that could pass the limit, the pair is stopped
+// with a misalignment alarm.
+void Engine::guard_gantries(const Settings& settings) {
+  for (std::size_t sl = 0; sl < kAxisCount; ++sl) {
+    const int mi = gantry_master(settings, sl);
+    if (mi < 0) continue;
+    const std::size_t m = static_cast<std::size_t>(mi);
+    AxisRun& slave = axes_[sl];
+    const AxisRun& master = axes_[m];
+    if (!slave.in_cycle && !master.in_cycle) continue;  // locked together outside a cycle
+    const double limit = settings.axes[sl].max_misalignment_mm;
+    auto rest = [&](const AxisRun& run, std::size_t axis, double h) {
+      const MotionState at = integrate(run.motor, run.command, h);
+      const double v = at.velocity_mm_per_s;
+      const double d = stop_distance_mm(std::abs(v), settings.axes[axis].acceleration_mm_per_s2);
+      return at.position_mm + (v > 0 ? d : (v < 0 ? -d : 0.0));
+    };
+    const double horizon = 2 * last_dt_s_;
+    double worst = 0;
+    for (int k = 0; k <= 4; ++k) {
+      const double h = horizon * k / 4;
+      const double dev = (rest(slave, sl, h) - rest(master, m, h)) - pair_rel0_[sl];
+      worst = std::max(worst, std::abs(dev));
+    }
+    if (worst > limit) {
+      raise(settings, axis_bit(sl), Alarm{AlarmCode::misalignment, slave.phase, AxisField::max_misalignment, worst, 0});
+      follow_masters(settings);  // the slave brakes with the pair, not on its own old command
+    }
+  }
+}
+
+// The commutator output goes back to the master once the slave motor it was
+// driving is at rest and no longer aligning.
+void Engine::release_commutators(const Settings& settings) {
+  for (std::size_t m = 0; m < kAxisCount; ++m) {
+    AxisRun& master = axes_[m];
+    if (!master.commutator_output) continue;
+    const int sl = gantry_slave(settings, m);
+    const AxisRun* slave = sl >= 0 ? &axes_[static_cast<std::size_t>(sl)] : nullptr;
+    const bool busy = slave && slave->aligning && slave->in_cycle;
+    const bool moving = slave && slave->motor.velocity_mm_per_s != 0;
+    if (busy || moving) continue;
+    master.commutator_output = false;
+    filter_reset_[m] = true;
+  }
+}
+
+}  // namespace homing

@@ -1,0 +1,164 @@
+// Jog and move: when they are refused, how they start, and how each runs
+// and stops within the soft limits. An axis on a tripped shared limit may
+// still be jogged away from its sensor (hard-limit recovery).
+#include <algorithm>
+#include <cmath>
+
+#include "engine.hpp"
+#include "gantry.hpp"
+
+namespace homing {
+
+CommandResult Engine::motion_refusal(const Settings& settings, std::size_t axis) const {
+  if (estop_) return CommandResult::refused_estop;
+  if (any_alarm()) return CommandResult::refused_alarm;
+  if (drive_fault_[axis]) return CommandResult::refused_drive_fault;
+  if (comm_lost_) return CommandResult::refused_communication_lost;
+  if (cycle_active_) return CommandResult::refused_busy;
+  if (master_of(settings.axes[axis]) >= 0) return CommandResult::refused_slave_axis;
+  // The same rule set as homing: an axis (or its gantry partner) whose
+  // configuration is refused does not move at all.
+  // Every axis linked to this one by slave_of, directly or through others.
+  AxisMask group = axis_bit(axis);
+  for (std::size_t pass = 0; pass < kAxisCount; ++pass)
+    for (std::size_t s = 0; s < kAxisCount; ++s) {
+      const int m = master_of(settings.axes[s]);
+      if (m < 0 || m >= static_cast<int>(kAxisCount)) continue;
+      if (group & (axis_bit(s) | axis_bit(static_cast<std::size_t>(m))))
+        group |= axis_bit(s) | axis_bit(static_cast<std::size_t>(m));
+    }
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if ((group & axis_bit(a)) && faults()[a]) return CommandResult::refused_settings_fault;
+  const int partner = gantry_partner(settings, axis);
+  if (limit_tripped_[axis] || (partner >= 0 && limit_tripped_[static_cast<std::size_t>(partner)]))
+    return CommandResult::refused_hard_limit;
+  return CommandResult::accepted;
+}
+
+// A jog is a motion command, except that an axis on a tripped shared limit
+// may always jog away from its sensor (only away) until it releases.
+CommandResult Engine::jog_refusal(const Settings& settings, std::size_t axis, std::int8_t dir) const {
+  const CommandResult r = motion_refusal(settings, axis);
+  if (r != CommandResult::refused_hard_limit) return r;
+  const double toward = settings.axes[axis].direction == Direction::positive ? 1.0 : -1.0;
+  return dir * toward < 0 ? CommandResult::accepted : CommandResult::refused_hard_limit;
+}
+
+// A jog is a level: it starts on a press (a change of the request), runs
+// while held and stops on release. On a tripped shared limit it may only
+// run away from the sensor, whether homed or not (hard-limit recovery).
+void Engine::jog_commands(const Settings& settings, const Commands& c) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const std::int8_t req = c.jog[a] > 0 ? 1 : (c.jog[a] < 0 ? -1 : 0);
+    AxisRun& run = axes_[a];
+    if (first_step_) {  // a jog held at power-up waits for its release and a new press
+      prev_jog_request_[a] = req;
+      continue;
+    }
+    if (req == 0) {
+      if (run.phase == Phase::jog) run.set_phase(Phase::stopping);
+    } else if (req != prev_jog_request_[a] || (run.phase != Phase::jog && run.phase != Phase::stopping)) {
+      if (run.phase == Phase::jog && run.jog_dir() == req) {
+        // still held
+      } else if (req != prev_jog_request_[a]) {
+        ++command_count_;
+        CommandResult r = jog_refusal(settings, a, req);
+        const bool homed = run.homed || settings.axes[a].mode == HomingMode::disabled;
+        const int p = gantry_partner(settings, a);
+        const bool recovering = limit_tripped_[a] || (p >= 0 && limit_tripped_[static_cast<std::size_t>(p)]);
+        if (r == CommandResult::accepted && !homed && !recovering &&
+            settings.global.allowed_without_homing == AllowedWithoutHoming::none)
+          r = CommandResult::refused_not_homed;
+        if (r == CommandResult::accepted && run.phase == Phase::move) r = CommandResult::refused_busy;
+        last_result_ = r;
+        if (r == CommandResult::accepted) {
+          run.set_phase(Phase::jog);
+          run.phase_data<phase_data::Jog>().dir = req;
+          run.phase_start_mm = run.motor.position_mm;
+        }
+      }
+    }
+    prev_jog_request_[a] = req;
+  }
+}
+
+void Engine::move_commands(const Settings& settings, const Commands& c) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (!(c.move_axes & axis_bit(a))) continue;
+    ++command_count_;
+    AxisRun& run = axes_[a];
+    const AxisSettings& s = settings.axes[a];
+    const double target = c.move_target_mm[a];
+    CommandResult r = motion_refusal(settings, a);
+    const bool homed = run.homed || s.mode == HomingMode::disabled;
+    if (r == CommandResult::accepted && !std::isfinite(target)) r = CommandResult::refused_invalid;
+    if (r == CommandResult::accepted && !homed &&
+        settings.global.allowed_without_homing != AllowedWithoutHoming::all)
+      r = CommandResult::refused_not_homed;
+    if (r == CommandResult::accepted && homed && s.soft_limits_enable &&
+        (target < s.soft_limit_min_mm || target > s.soft_limit_max_mm))
+      r = CommandResult::refused_soft_limit;
+    if (r == CommandResult::accepted && run.phase == Phase::jog) r = CommandResult::refused_busy;
+    if (r == CommandResult::accepted && s.jog_feedrate_mm_per_min <= 0) r = CommandResult::refused_invalid;
+    last_result_ = r;
+    if (r == CommandResult::accepted) {
+      run.set_phase(Phase::move);
+      run.target_mm = target - run.offset_mm;
+      run.phase_start_mm = run.motor.position_mm;
+    }
+  }
+}
+
+void Engine::run_motion(const Settings& settings) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    AxisRun& run = axes_[a];
+    const AxisSettings& s = settings.axes[a];
+    const double accel = s.acceleration_mm_per_s2;
+    const bool homed = run.homed || s.mode == HomingMode::disabled;
+    switch (run.phase) {
+      case Phase::jog: {
+        double v = mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min);
+        if (!homed && settings.global.allowed_without_homing != AllowedWithoutHoming::all)
+          v = std::min(v, mm_per_min_to_mm_per_s(100.0));
+        if (homed && s.soft_limits_enable) {
+          const double limit = (run.jog_dir() > 0 ? s.soft_limit_max_mm : s.soft_limit_min_mm) - run.offset_mm;
+          const bool beyond = run.jog_dir() > 0 ? run.motor.position_mm >= limit : run.motor.position_mm <= limit;
+          // At or past the limit in the jog's direction: hold still rather
+          // than head back to the limit against the operator's direction.
+          run.command = beyond ? stop_command(accel) : move_to_command(run.motor, limit, v, accel, last_dt_s_);
+        } else {
+          run.command = velocity_command(run.jog_dir() * v, accel);
+        }
+        break;
+      }
+      case Phase::move: {
+        const double v = mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min);
+        run.command = move_to_command(run.motor, run.target_mm, v, accel, last_dt_s_);
+        if (run.motor.position_mm == run.target_mm && run.motor.velocity_mm_per_s == 0) {
+          run.set_phase(Phase::idle);
+          run.command = stop_command(accel);
+        }
+        break;
+      }
+      case Phase::stopping:
+        run.command = stop_command(accel);
+        // A jog released while braking onto a soft limit: a late period can leave the
+        // motor faster than the jog's braking planned, so keep the limit on the stop.
+        if (homed && s.soft_limits_enable && run.motor.velocity_mm_per_s != 0) {
+          run.command.has_limit = true;
+          run.command.limit_mm =
+              (run.motor.velocity_mm_per_s > 0 ? s.soft_limit_max_mm : s.soft_limit_min_mm) - run.offset_mm;
+        }
+        if (run.motor.velocity_mm_per_s == 0) run.set_phase(Phase::idle);
+        break;
+      case Phase::idle:
+      case Phase::done:
+        if (!run.in_cycle) run.command = stop_command(accel);
+        break;
+      default:
+        break;
+    }
+  }
+}
+
+}  // namespace homing

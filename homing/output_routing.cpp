@@ -1,0 +1,35 @@
+// Each axis's output channel: the motion of the motor it drives now (a
+// commutator master's channel drives its slave's motor while it aligns),
+// the enable, push and commutator outputs.
+#include "engine.hpp"
+#include "gantry.hpp"
+
+namespace homing {
+
+// An output channel's position is continuous: when the commutator hands the
+// master's output to the slave motor (and back), the channel goes on from
+// where it was, so a pulse generator never sees a jump.
+void Engine::route_outputs(const Settings& settings) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const AxisRun& run = axes_[a];
+    AxisOutputs& out = outputs_.axes[a];
+    std::size_t source = a;
+    if (run.commutator_output)
+      if (const int sl = gantry_slave(settings, a); sl >= 0) source = static_cast<std::size_t>(sl);
+    if (source != channel_source_[a]) {
+      const double channel_mm = axes_[channel_source_[a]].motor.position_mm + channel_offset_[a];
+      channel_offset_[a] = channel_mm - axes_[source].motor.position_mm;
+      channel_source_[a] = source;
+    }
+    const AxisRun& src = axes_[source];
+    out.motion = src.command;
+    if (out.motion.has_limit) out.motion.limit_mm += channel_offset_[a];
+    out.motor = src.motor;
+    out.motor.position_mm += channel_offset_[a];
+    out.enable = !estop_;
+    out.push_output = run.push_output;
+    out.commutator_output = run.commutator_output;
+  }
+}
+
+}  // namespace homing

@@ -1,0 +1,61 @@
+// A gantry homes as a pair: one side waits for the other, and a commutator
+// slave finds its own edge alone on its master's output.
+#include "phase_runner.hpp"
+
+namespace homing {
+
+// Commutator slave: on its own edge (plus compensation). The output goes
+// back to the master (once this motor is at rest) and the pair pulls off
+// together; the master assigns both.
+void PhaseRunner::aligned() {
+  run.aligning = false;
+  run.reach(Reached::aligned);
+  run.follow_master = true;
+  run.command = stop_command(accel);
+  wait_for(Wait::partner_assigned, Phase::done);
+}
+
+void PhaseRunner::waiting() {
+  run.entered = true;
+  const Wait wait = run.waiting_for();
+  if (wait == Wait::none) return;  // a later sequence step
+  const Run& p = partner_run();
+  bool ready = false;
+  switch (wait) {
+    case Wait::partner_stopped: ready = p.has_reached(Reached::stopped_on_sensor); break;
+    case Wait::partner_assigned: ready = p.has_reached(Reached::assigned); break;
+    case Wait::slave_aligned: ready = p.has_reached(Reached::aligned); break;
+    case Wait::slave_locked: ready = p.follow_master; break;
+    case Wait::partner_released: ready = p.has_reached(Reached::released) && at_rest(); break;
+    case Wait::partner_at_reference: ready = p.has_reached(Reached::reference) && at_rest(); break;
+    case Wait::master_at_reference:
+      // Commutator slave: moves with the master until the master holds,
+      // at rest, on its reference edge.
+      ready = p.waiting_for() == Wait::slave_aligned && p.motor.velocity_mm_per_s == 0 && at_rest();
+      if (ready) {
+        run.follow_master = false;
+        run.aligning = true;
+      }
+      break;
+    case Wait::none: break;
+  }
+  if (ready) {
+    const Phase next = run.phase_data<phase_data::Waiting>().next;
+    if (is_slave && next == Phase::done) run.follow_master = true;  // now lock
+    enter(next);
+  }
+}
+
+void PhaseRunner::align_slave() {
+  // The master's output now drives only this motor, and this slave's
+  // sensor is on the master's input: let the input settle for one period.
+  if (entry()) {
+    partner_run().commutator_output = true;
+    e.filter_reset_[static_cast<std::size_t>(channel)] = true;
+    run.command = stop_command(accel);
+    return;
+  }
+  enter(Phase::seek);
+}
+
+}  // namespace homing

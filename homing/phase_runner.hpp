@@ -1,0 +1,102 @@
+#pragma once
+// Runs one axis's homing phases for one period: one small function per
+// phase, an entry action on each phase change. Distances are motor
+// positions (mm) unless named otherwise. Internal to the engine.
+#include <cmath>
+
+#include "engine.hpp"
+#include "gantry.hpp"
+
+namespace homing {
+
+struct PhaseRunner {
+  using Run = AxisRun;
+
+  Engine& e;
+  const Settings& settings;
+  std::size_t axis;
+  Run& run;
+  AxisSettings s;             // the settings this axis homes with (a slave inherits its master's: gantry.hpp)
+  int channel;                // input carrying this axis's home sensor
+  int partner;                // gantry partner, -1 if none
+  bool is_slave;
+  double dir;                 // +1 / -1: toward the sensor
+  double seek_v, latch_v, accel;
+
+  PhaseRunner(Engine& engine, const Settings& st, std::size_t a);  // axis_phases.cpp
+
+  bool commutator_slave() const {
+    return is_slave && settings.axes[axis].slave_mode == SlaveMode::external_commutator;
+  }
+  bool commutator_master() const {
+    return partner >= 0 && !is_slave && is_commutator_slave(settings, static_cast<std::size_t>(partner));
+  }
+  bool software_pair() const {
+    if (partner < 0) return false;
+    const std::size_t slave = is_slave ? axis : static_cast<std::size_t>(partner);
+    return settings.axes[slave].slave_mode == SlaveMode::own_output;
+  }
+  // The partner's home sensor (software-slaved pairs decide on both sensors).
+  bool partner_active() const {
+    return software_pair() && e.axes_[static_cast<std::size_t>(e.sensor_channel(settings, static_cast<std::size_t>(partner)))].sensor_active;
+  }
+  Run& partner_run() const { return e.axes_[static_cast<std::size_t>(partner)]; }
+  const Engine::SensorEvent& event() const { return e.events_[static_cast<std::size_t>(channel)]; }
+  bool active() const { return e.axes_[static_cast<std::size_t>(channel)].sensor_active; }
+  bool edge_to(bool to_active) const { return event().edge && event().accepted.to_level == to_active; }
+  double edge_mm() const { return event().accepted.position_mm; }
+  double travelled() const { return std::abs(run.motor.position_mm - run.phase_start_mm); }
+  bool at_rest() const { return run.motor.velocity_mm_per_s == 0; }
+  bool arrived() const { return at_rest() && std::abs(run.motor.position_mm - run.target_mm) <= 1e-9; }
+  double dt() const { return e.last_dt_s_; }
+
+  void enter(Phase p) {
+    run.set_phase(p);
+    run.entered = false;
+    run.phase_start_mm = run.motor.position_mm;
+  }
+  bool entry() {
+    if (run.entered) return false;
+    run.entered = true;
+    return true;
+  }
+  void fail(AlarmCode code, double value = 0) {
+    e.raise(settings, axis_bit(axis), Alarm{code, run.phase, AxisField::none, value, 0});
+  }
+  void move_to(double target_mm, double v) {
+    run.target_mm = target_mm;
+    run.command = move_to_command(run.motor, target_mm, v, accel, dt());
+  }
+  void wait_for(Wait w, Phase next) {
+    enter(Phase::waiting);
+    run.phase_data<phase_data::Waiting>() = {w, next};
+  }
+
+  // -- phases (search_phases, edge_phases, home_phases, pair_phases.cpp) ----
+  void pre_move();
+  void clear_sensors();
+  void seek();
+  void stop();
+  void after_stop();
+  void push();
+  void back_off();
+  void reapproach();
+  // The index search runs away from the sensor (-dir) from the release edge.
+  bool beyond(double release_mm, double x_mm) const { return (x_mm - release_mm) * -dir > 0; }
+  void index();
+  void reference_found(double reference_mm);
+  double rest_offset_mm() const;
+  void pull_off();
+  void aligned();
+  void set_home(Run& r, double reference_motor_mm, double machine_mm_at_rest);
+  void set_home(double reference_motor_mm, double machine_mm_at_rest);
+  void assign();
+  void after_assign();
+  void final_move();
+  void waiting();
+  void align_slave();
+  void begin();
+  void dispatch();
+};
+
+}  // namespace homing

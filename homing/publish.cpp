@@ -1,0 +1,65 @@
+// The status of the period: per axis and for the machine, the state, the
+// interlocks and the homing-done lamp.
+#include <algorithm>
+#include <cmath>
+
+#include "engine.hpp"
+
+namespace homing {
+
+void Engine::publish(const Settings& settings, const Inputs& inputs) {
+  Status& st = status_;
+  bool all_homed = true;
+  bool moving = false;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const AxisRun& run = axes_[a];
+    const AxisSettings& s = settings.axes[a];
+    AxisStatus& as = st.axes[a];
+    as.phase = run.phase;
+    as.alarm = run.alarm;
+    as.position_mm = run.motor.position_mm + run.offset_mm;
+    as.velocity_mm_per_s = run.motor.velocity_mm_per_s;
+    as.homed = run.homed || s.mode == HomingMode::disabled;
+    as.sensor = run.sensor_active;
+    as.busy = run.in_cycle || run.phase == Phase::jog || run.phase == Phase::move ||
+              run.phase == Phase::stopping || run.motor.velocity_mm_per_s != 0;
+    as.trigger_position_mm = run.trigger_position_mm;
+    as.home_correction_mm = run.home_correction_mm;
+    as.stop_distance_mm =
+        stop_distance_mm(mm_per_min_to_mm_per_s(s.seek_feedrate_mm_per_min), s.acceleration_mm_per_s2);
+    if (!std::isfinite(as.stop_distance_mm)) as.stop_distance_mm = 0;
+    as.phase_distance_mm = std::abs(run.motor.position_mm - run.phase_start_mm);
+    all_homed = all_homed && as.homed;
+    moving = moving || (!run.in_cycle && as.busy);
+  }
+  const bool alarm = any_alarm();
+  st.alarm = alarm;
+  st.homing = cycle_active_;
+  st.estop = inputs.estop;
+  st.global_alarm = global_alarm_;
+  st.sequence_step = cycle_active_ && step_index_ >= 0 ? static_cast<std::uint8_t>(step_index_ + 1) : 0;
+  st.homing_cycles = homing_cycles_;
+  st.heartbeat = heartbeat_;
+  st.last_command_result = last_result_;
+  st.command_count = command_count_;
+  if (alarm) st.state = MachineState::alarm;
+  else if (cycle_active_) st.state = MachineState::homing;
+  else if (moving) st.state = MachineState::moving;
+  else if (all_homed) st.state = MachineState::homed;
+  else st.state = MachineState::not_homed;
+
+  std::uint16_t il = 0;
+  if (estop_) il |= interlock::estop;
+  if (std::any_of(drive_fault_.begin(), drive_fault_.end(), [](bool f) { return f; })) il |= interlock::drive_fault;
+  if (alarm) il |= interlock::alarm_latched;
+  if (global_alarm_ == AlarmCode::settings_lost) il |= interlock::settings_lost;
+  if (comm_lost_) il |= interlock::communication_lost;
+  if (settings.global.permit_required && !permit_) il |= interlock::permit_missing;
+  if (!all_homed && settings.global.allowed_without_homing != AllowedWithoutHoming::all) il |= interlock::not_homed;
+  if (cycle_active_) il |= interlock::homing_active;
+  if (moving) il |= interlock::motion_active;
+  st.interlocks = il;
+  outputs_.homing_done_lamp = all_homed && !alarm;
+}
+
+}  // namespace homing

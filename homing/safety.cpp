@@ -1,0 +1,70 @@
+// What raises an alarm from the inputs each period: e-stop, lost settings,
+// drive faults, the watchdog, the homing permit, and the hard and soft limits
+// of a homed axis.
+#include "engine.hpp"
+
+namespace homing {
+
+void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
+  if (inputs.estop && !estop_) {
+    AxisMask busy = 0;
+    for (std::size_t a = 0; a < kAxisCount; ++a) {
+      const AxisRun& run = axes_[a];
+      if (run.in_cycle || run.motor.velocity_mm_per_s != 0 || run.phase == Phase::jog || run.phase == Phase::move)
+        busy |= axis_bit(a);
+    }
+    raise(settings, busy, Alarm{AlarmCode::emergency_stop});
+    raise_global(settings, AlarmCode::emergency_stop);
+  }
+  estop_ = inputs.estop;
+
+  if (inputs.settings_lost) raise_global(settings, AlarmCode::settings_lost);
+
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (drive_fault_[a]) raise(settings, axis_bit(a), Alarm{AlarmCode::drive_fault});
+
+  comm_lost_ = inputs.communication_lost;
+  if (comm_lost_ && any_motion()) {
+    AxisMask moving = 0;
+    for (std::size_t a = 0; a < kAxisCount; ++a) {
+      const AxisRun& run = axes_[a];
+      const bool homing_phase = run.in_cycle && run.phase != Phase::waiting && run.phase != Phase::done;
+      if (homing_phase || run.phase == Phase::jog || run.phase == Phase::move || run.motor.velocity_mm_per_s != 0)
+        moving |= axis_bit(a);
+    }
+    raise(settings, moving, Alarm{AlarmCode::communication_lost});
+  }
+
+  permit_ = inputs.homing_permit;
+  if (cycle_active_ && settings.global.permit_required && !permit_) {
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if (axes_[a].in_cycle && axes_[a].phase != Phase::done) {
+        raise(settings, axis_bit(a), Alarm{AlarmCode::permit_withdrawn});
+        break;
+      }
+  }
+
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    AxisRun& run = axes_[a];
+    const AxisSettings& s = settings.axes[a];
+    // A tripped shared limit stays "tripped" until its sensor releases: the
+    // reset is taken and the jog away from it allowed without re-latching.
+    if (limit_tripped_[a] && !run.sensor_active) limit_tripped_[a] = false;
+    if (run.alarm || run.in_cycle || !run.homed) continue;
+    const double pos = run.motor.position_mm + run.offset_mm;
+    if (s.shared_limit && run.sensor_active && !limit_tripped_[a] &&
+        sensor_channel(settings, a) == static_cast<int>(a)) {
+      raise(settings, axis_bit(a), Alarm{AlarmCode::hard_limit, Phase::idle, AxisField::shared_limit, pos, 0});
+      limit_tripped_[a] = true;
+      continue;
+    }
+    const double tol = 1e-6;
+    // Only moving further out is a fault: an axis left outside tightened
+    // limits may still be jogged back in.
+    const double v = run.motor.velocity_mm_per_s;
+    if (s.soft_limits_enable && ((pos < s.soft_limit_min_mm - tol && v < 0) || (pos > s.soft_limit_max_mm + tol && v > 0)))
+      raise(settings, axis_bit(a), Alarm{AlarmCode::soft_limit, Phase::idle, AxisField::none, pos, 0});
+  }
+}
+
+}  // namespace homing

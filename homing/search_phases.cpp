@@ -1,0 +1,109 @@
+// Finding the sensor: the pre-move (or, for a gantry on its sensors, moving
+// off them together), the seek, the stop after the trigger and the push
+// into the mechanical stop.
+#include <cmath>
+
+#include "phase_runner.hpp"
+
+namespace homing {
+
+void PhaseRunner::pre_move() {
+  if (run.phase_data_if<phase_data::Clearing>()) return clear_sensors();
+  if (entry()) {
+    // A gantry decides for the pair: either side on its sensor counts.
+    const bool needed = s.pre_move_mode == PreMove::always ||
+                        (s.pre_move_mode == PreMove::if_sensor_active && (active() || partner_active()));
+    if (!needed) return enter(Phase::seek);
+    run.target_mm = run.motor.position_mm - dir * s.pre_move_distance_mm;
+  }
+  move_to(run.target_mm, seek_v);
+  if (arrived()) enter(Phase::seek);
+}
+
+// A gantry with either side on its sensor at the start of the seek first
+// moves off both sensors together (latch feedrate, bounded by max_backoff),
+// then seeks: both sides meet their sensors within their skew, so the pair
+// cannot rack while one side seeks alone.
+void PhaseRunner::clear_sensors() {
+  if (entry()) run.target_mm = run.motor.position_mm - dir * s.max_backoff_mm;
+  if (!active() && !partner_active()) {
+    enter(Phase::seek);
+    run.phase_data<phase_data::Seek>().at_latch = true;
+    return;
+  }
+  move_to(run.target_mm, latch_v);
+  if (arrived()) fail(AlarmCode::not_released, travelled());
+}
+
+void PhaseRunner::seek() {
+  if (entry()) {
+    if (software_pair() && (active() || partner_active())) {
+      enter(Phase::pre_move);
+      run.phase_data<phase_data::Clearing>();
+      return;
+    }
+    if (active()) {
+      // Already on the sensor (MASSO): no seek, no stop; find the edge.
+      run.reach(Reached::stopped_on_sensor);
+      return after_stop();
+    }
+    // Bounded by max_seek_travel, braking in time to rest at its end.
+    run.target_mm = run.phase_start_mm + dir * s.max_seek_travel_mm;
+  }
+  if (edge_to(true)) {
+    const phase_data::Stop trigger{edge_mm(), dt()};
+    enter(Phase::stop);
+    run.phase_data<phase_data::Stop>() = trigger;
+    return;
+  }
+  // Just off both sensors, the pair meets them again within the clearing
+  // distance: at latch feedrate, so the side that meets its sensor first
+  // does not stop much shorter than the other and rack the pair.
+  const auto* seek = run.phase_data_if<phase_data::Seek>();
+  move_to(run.target_mm, seek && seek->at_latch ? latch_v : seek_v);
+  if (arrived()) {
+    if (commutator_slave()) return fail(AlarmCode::misalignment, travelled());
+    return fail(AlarmCode::sensor_not_found, travelled());
+  }
+}
+
+void PhaseRunner::stop() {
+  if (entry()) run.command = stop_command(accel);
+  if (edge_to(false)) return fail(AlarmCode::overrun_during_stop);
+  if (!at_rest()) return;
+  // A release during the stop may still be in its debounce time when the
+  // axis comes to rest: wait for the verdict, or back-off would take that
+  // release (inside the stop) for its reference edge.
+  const Debouncer& filter = e.sensor_filter_[static_cast<std::size_t>(channel)];
+  if (filter.raw() != filter.stable()) return;
+  // One control period of travel is allowed on top: the trigger cannot be
+  // seen before the period in which it happened has ended. That is the
+  // period the trigger was seen in (possibly a late one), not the current.
+  const phase_data::Stop& trigger = run.phase_data<phase_data::Stop>();
+  const double past = std::abs(run.motor.position_mm - trigger.trigger_mm);
+  if (past > s.max_stop_distance_mm + seek_v * trigger.trigger_period_s + 1e-9)
+    return fail(AlarmCode::stop_distance_exceeded, past);
+  run.reach(Reached::stopped_on_sensor);
+  after_stop();
+}
+
+void PhaseRunner::after_stop() {
+  const Phase next = mode_is_pushing(s.mode) ? Phase::push : Phase::back_off;
+  if (partner >= 0 && software_pair() && !partner_run().has_reached(Reached::stopped_on_sensor))
+    return wait_for(Wait::partner_stopped, next);
+  enter(next);
+}
+
+void PhaseRunner::push() {
+  if (entry()) {
+    run.push_output = true;
+    run.target_mm = run.motor.position_mm + dir * s.push_distance_mm;
+  }
+  move_to(run.target_mm, latch_v);
+  if (arrived()) {
+    run.push_output = false;
+    enter(Phase::back_off);
+  }
+}
+
+}  // namespace homing

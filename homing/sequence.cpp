@@ -1,0 +1,48 @@
+#include "sequence.hpp"
+
+#include "gantry.hpp"
+
+namespace homing {
+
+AxisMask CyclePlan::covered() const {
+  AxisMask out = 0;
+  for (AxisMask m : steps) out |= m;
+  return out;
+}
+
+CyclePlan plan_cycle(const Settings& settings, AxisMask requested, bool all) {
+  CyclePlan plan;
+  auto with_partners = [&](AxisMask mask) {
+    AxisMask out = 0;
+    for (std::size_t a = 0; a < kAxisCount; ++a) {
+      if (!(mask & axis_bit(a))) continue;
+      const int m = master_of(settings.axes[a]);
+      const std::size_t master = m >= 0 ? static_cast<std::size_t>(m) : a;
+      if (m >= 0 && all) continue;  // in a sequence, a slave's own bit is ignored
+      out |= axis_bit(master);
+      const int s = gantry_slave(settings, master);
+      if (s >= 0) out |= axis_bit(static_cast<std::size_t>(s));
+    }
+    return out;
+  };
+  if (!all) {
+    plan.steps[0] = with_partners(requested);
+    return plan;
+  }
+  AxisMask covered = 0;
+  for (std::size_t i = 0; i < plan.steps.size(); ++i) {
+    plan.steps[i] = with_partners(settings.global.sequence_steps[i]) & static_cast<AxisMask>(~covered);
+    covered |= plan.steps[i];
+  }
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (!(covered & axis_bit(a)) && master_of(settings.axes[a]) < 0 && settings.axes[a].mode != HomingMode::disabled)
+      plan.unsequenced |= axis_bit(a);
+  // A slave is assigned with its master, whatever its own mode.
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const int m = gantry_master(settings, a);
+    if (m >= 0 && (plan.unsequenced & axis_bit(static_cast<std::size_t>(m)))) plan.unsequenced |= axis_bit(a);
+  }
+  return plan;
+}
+
+}  // namespace homing

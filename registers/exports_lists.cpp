@@ -1,0 +1,31 @@
+// alarms.csv and enums.csv: lists for HMI alarm and text-list imports. The
+// alarm list is the engine's own alarm table (homing/alarms.hpp); the enum
+// lists are the table's value lists, which come from the engine's enum tables.
+#include <fmt/format.h>
+
+#include "homing/alarms.hpp"
+#include "registers/exports.hpp"
+
+namespace registers {
+
+std::string export_alarms_csv() {
+  using exports_detail::csv_field;
+  std::string out = "code,name,text,what_to_check\n";
+  for (const homing::AlarmInfo& a : homing::kAlarmInfo) {
+    if (a.value == homing::AlarmCode::none) continue;  // "no alarm" is not an alarm to import
+    out += fmt::format("{},{},{},{}\n", static_cast<int>(a.value), csv_field(a.name), csv_field(a.text),
+                       csv_field(a.what_to_check));
+  }
+  return out;
+}
+
+std::string export_enums_csv() {
+  using exports_detail::csv_field;
+  std::string out = "enum,value,name,text\n";
+  for (const ValueList& list : value_lists())
+    for (const EnumValue& v : list.values)
+      out += fmt::format("{},{},{},{}\n", csv_field(list.name), v.value, csv_field(v.name), csv_field(v.meaning));
+  return out;
+}
+
+}  // namespace registers

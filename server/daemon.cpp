@@ -1,0 +1,167 @@
+#include "daemon.hpp"
+
+#include <pthread.h>
+#include <signal.h>
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <expected>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "control_loop.hpp"
+#include "homing/gpiod/gpiod_io.hpp"
+#include "homing/gpiod/gpiod_lines.hpp"
+#include "homing/sim/simulator_io.hpp"
+#include "modbus_service.hpp"
+#include "monitor.hpp"
+#include "registers/defaults.hpp"
+#include "registers/sim_bindings.hpp"
+#include "rtu_server.hpp"
+#include "start_up.hpp"
+#include "systemd_notify.hpp"
+#include "tcp_server.hpp"
+
+namespace server {
+namespace {
+
+using Wiring = std::optional<homing::gpiod::BackendConfig>;
+
+// Signals are taken by the main thread only, with sigwait: every thread
+// started after this inherits the mask.
+sigset_t take_signals() {
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  signal(SIGPIPE, SIG_IGN);
+  return signals;
+}
+
+// The stored settings; values the table refuses are logged and replaced by
+// defaults. Lines without an axis's step/dir are accepted in the wiring; the
+// settings must not ask such an axis to move (checked again on every write).
+std::expected<homing::Settings, std::string> load_settings(persistence::SettingsStore& store, const Options& opt,
+                                                           const Wiring& wiring) {
+  auto from_raw = registers::settings_from_raw(store.load());
+  for (const auto& r : from_raw.rejected) spdlog::warn("settings: {}", r);
+  if (wiring) {
+    if (auto problem = homing::gpiod::check_wiring(*wiring, from_raw.settings))
+      return std::unexpected("--backend gpiod: " + opt.config_path + ": the settings in " + opt.db_path +
+                             " do not fit the wiring: " + *problem);
+  }
+  const auto rows = from_raw.settings.global.history_max_rows;
+  if (auto r = store.set_limits(rows, rows); !r) spdlog::warn("settings: history limit not applied: {}", r.error().message);
+  return from_raw.settings;
+}
+
+// The GPIO lines requested, or the simulated machine with the table's defaults.
+std::expected<std::unique_ptr<homing::MachineIo>, std::string> open_machine(const Options& opt, const Wiring& wiring) {
+  if (!wiring) return std::make_unique<homing::sim::SimulatorIo>(registers::default_sim_config());
+  homing::gpiod::RunOptions run;
+  run.control_period_us = opt.period_us;
+  run.warn = [](const std::string& m) { spdlog::warn("{}", m); };
+  auto io = homing::gpiod::GpiodIo::open(*wiring, std::make_unique<homing::gpiod::GpiodLines>(), run);
+  if (!io) return std::unexpected("--backend gpiod: " + io.error());
+  return std::move(*io);
+}
+
+ServiceConfig service_config(const Options& opt, const ControlLoop& loop, const Wiring& wiring) {
+  ServiceConfig config;
+  config.unit_id = static_cast<std::uint8_t>(opt.unit_id);
+  config.sim_unit_id = static_cast<std::uint8_t>(opt.sim_unit_id);
+  if (!loop.has_sim()) config.sim_unit_id = std::nullopt;  // no simulator behind real GPIO
+  config.word_order = opt.word_order;
+  for (const auto& entry : opt.write_allow) config.write_allow.push_back(*parse_cidr(entry));
+  config.unlock_code = static_cast<std::uint16_t>(opt.unlock_code);
+  if (wiring) config.machine_check = [w = *wiring](const homing::Settings& s) { return homing::gpiod::check_wiring(w, s); };
+  return config;
+}
+
+struct Transports {
+  std::unique_ptr<TcpServer> tcp;
+  std::unique_ptr<RtuServer> rtu;
+};
+
+// Bound and opened, not yet serving; the error names the address or device.
+std::expected<Transports, std::string> open_transports(const Options& opt, ModbusService& service) {
+  Transports t;
+  if (opt.tcp_enabled) {
+    t.tcp = std::make_unique<TcpServer>(opt.tcp_host, opt.tcp_port, opt.max_clients, opt.idle_timeout_s, service);
+    if (auto r = t.tcp->listen(); !r) return std::unexpected(r.error());
+  }
+  if (!opt.rtu_device.empty()) {
+    t.rtu = std::make_unique<RtuServer>(RtuConfig{opt.rtu_device, opt.baud, opt.parity, opt.stop_bits, opt.unit_id},
+                                        service);
+    if (auto r = t.rtu->open(); !r) return std::unexpected(r.error());
+  }
+  return t;
+}
+
+// The line tests and scripts wait for: homingd is ready. Returns where it listens.
+std::string announce(const Options& opt, const Transports& t, bool has_sim) {
+  std::string where;
+  if (t.tcp) where += "tcp " + opt.tcp_host + ":" + std::to_string(opt.tcp_port);
+  if (t.rtu) where += std::string(where.empty() ? "" : ", ") + "rtu " + opt.rtu_device + " " + std::to_string(opt.baud) +
+                      " 8" + opt.parity + std::to_string(opt.stop_bits);
+  const std::string sim_unit = has_sim ? ", simulator unit " + std::to_string(opt.sim_unit_id) : std::string();
+  std::printf("homingd: listening on %s (unit %d%s, backend %s, db %s)\n", where.c_str(), opt.unit_id,
+              sim_unit.c_str(), opt.backend.c_str(), opt.db_path.c_str());
+  std::fflush(stdout);
+  return where;
+}
+
+// Runs the loop, the monitor and the transports until SIGINT or SIGTERM, then
+// stops them: the transports first (no new commands), motion last.
+void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, ModbusService& service,
+           persistence::SettingsStore& store, Transports& t) {
+  loop.start(opt.rt_priority);
+  Monitor monitor(loop, service, &store, [&t]() -> std::uint32_t {
+    return t.tcp ? static_cast<std::uint32_t>(t.tcp->active_clients()) : 0;
+  });
+  monitor.start();
+  std::thread tcp_thread, rtu_thread;
+  if (t.tcp) tcp_thread = std::thread([&] { t.tcp->run(); });
+  if (t.rtu) rtu_thread = std::thread([&] { t.rtu->run(); });
+  SystemdNotifier systemd([&loop] { return loop.snapshot().periods; });  // Type=notify, WatchdogSec=
+  systemd.ready("listening on " + announce(opt, t, loop.has_sim()));
+
+  int sig = 0;
+  sigwait(&signals, &sig);
+  systemd.stopping();
+  spdlog::info("{} received: stopping motion and shutting down", sig == SIGINT ? "SIGINT" : "SIGTERM");
+  if (t.tcp) t.tcp->stop();
+  if (t.rtu) t.rtu->stop();
+  if (tcp_thread.joinable()) tcp_thread.join();
+  if (rtu_thread.joinable()) rtu_thread.join();
+  loop.stop();
+  monitor.stop();
+  t.tcp.reset();
+}
+
+}  // namespace
+
+int run_daemon(const Options& opt, const Wiring& wiring) {
+  const sigset_t signals = take_signals();
+  auto store = open_settings(opt);
+  if (!store) return fail_start(store.error());
+  auto settings = load_settings(*store, opt, wiring);
+  if (!settings) return fail_start(settings.error());
+  auto machine = open_machine(opt, wiring);
+  if (!machine) return fail_start(machine.error());
+
+  ControlLoop loop(*settings, std::move(*machine), opt.period_us, opt.time_scale);
+  if (store->settings_lost()) loop.raise_settings_lost();
+  ModbusService service(service_config(opt, loop, wiring), loop, &*store, *settings);
+  auto transports = open_transports(opt, service);
+  if (!transports) return fail_start(transports.error());
+
+  serve(opt, signals, loop, service, *store, *transports);
+  store->close();
+  spdlog::info("stopped cleanly");
+  return 0;
+}
+
+}  // namespace server

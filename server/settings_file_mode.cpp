@@ -1,0 +1,46 @@
+#include "settings_file_mode.hpp"
+
+#include <cstdio>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "registers/validate.hpp"
+#include "start_up.hpp"
+
+namespace server {
+namespace {
+
+int export_settings(const persistence::SettingsStore& store, const Options& opt) {
+  if (auto r = store.export_file(opt.export_settings); !r) return fail_start("--export-settings: " + r.error().message);
+  std::printf("homingd: settings of %s written to %s\n", opt.db_path.c_str(), opt.export_settings.c_str());
+  return 0;
+}
+
+// Validated exactly like Modbus writes: a file the module would refuse changes nothing.
+int import_settings(persistence::SettingsStore& store, const Options& opt) {
+  auto validate = [](const std::map<std::string, std::int64_t>& all) -> std::optional<persistence::Rejection> {
+    if (auto refusal = registers::validate_settings_map(all)) return persistence::Rejection{"", refusal->message};
+    return std::nullopt;
+  };
+  auto r = store.import_file(opt.import_settings, validate);
+  if (!r) return fail_start("--import-settings " + opt.import_settings + ": " + r.error().message + "; nothing changed");
+  std::printf("homingd: %zu settings changed from %s\n", r->changes.size(), opt.import_settings.c_str());
+  for (const auto& c : r->changes)
+    std::printf("  %s: %lld -> %lld\n", c.name.c_str(), static_cast<long long>(c.old_value),
+                static_cast<long long>(c.new_value));
+  return 0;
+}
+
+}  // namespace
+
+bool is_settings_file_mode(const Options& opt) { return !opt.export_settings.empty() || !opt.import_settings.empty(); }
+
+int run_settings_file_mode(const Options& opt) {
+  auto store = open_settings(opt);
+  if (!store) return fail_start(store.error());
+  if (!opt.export_settings.empty()) return export_settings(*store, opt);
+  return import_settings(*store, opt);
+}
+
+}  // namespace server

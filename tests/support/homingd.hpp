@@ -1,0 +1,62 @@
+#pragma once
+// A homingd this process starts: on a free loopback port with a database in
+// its own temporary directory, ready once it printed its `listening` line,
+// stopped by PID (SIGKILL at the latest when the object goes).
+#include <signal.h>
+#include <sys/types.h>
+
+#include <chrono>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tests/support/temp_dir.hpp"
+
+namespace test_support {
+
+struct DaemonOptions {
+  std::string program;               // the homingd to run (the tests' Daemon fills in the build's)
+  std::vector<std::string> wrapper;  // runs homingd through this command (setpriv ...)
+  int port = 0;                      // 0: a free port chosen for each attempt
+  std::string db;                    // empty: a fresh database in the daemon's temp dir
+  double time_scale = 10;
+  std::vector<std::string> extra;    // more options (--rtu ..., --max-clients ...)
+  bool tcp = true;
+  std::chrono::milliseconds start_timeout = std::chrono::seconds(10);
+  std::string temp_prefix = "homingd";  // name of its temporary directory
+};
+
+class Homingd {
+ public:
+  // Throws with homingd's output and log when it does not start (five tries:
+  // the free port may be taken by someone else in between).
+  explicit Homingd(DaemonOptions options);
+  ~Homingd();
+  Homingd(const Homingd&) = delete;
+  Homingd& operator=(const Homingd&) = delete;
+
+  int port() const { return port_; }
+  pid_t pid() const { return pid_; }
+  const std::string& db() const { return options_.db; }
+  const std::string& listening_line() const { return line_; }
+  std::string log() const { return read_file(log_path()); }
+  std::string log_path() const { return dir_.file("homingd.log"); }
+  bool running() const { return pid_ > 0; }
+  // Leaves the temporary directory (database, log) in place for a post-mortem.
+  void keep_files() { dir_.keep(); }
+
+  // Stops it by PID; the waitpid status, or nullopt if it had to be killed.
+  std::optional<int> stop(int sig = SIGTERM, std::chrono::milliseconds timeout = std::chrono::seconds(15));
+
+ private:
+  bool try_start(std::string& error);
+
+  DaemonOptions options_;
+  TempDir dir_;
+  int port_ = 0;
+  pid_t pid_ = -1;
+  int out_fd_ = -1;  // kept open: homingd's stdout never sees a closed pipe
+  std::string line_;
+};
+
+}  // namespace test_support

@@ -1,0 +1,257 @@
+// get, set, check, export, import: the module's registers and settings by name.
+#include <fmt/format.h>
+#include <fnmatch.h>
+
+#include <array>
+#include <chrono>
+#include <optional>
+#include <variant>
+
+#include "check.hpp"
+#include "cli.hpp"
+#include "registers/lookup.hpp"
+#include "settings_io.hpp"
+#include "values.hpp"
+
+namespace homingctl {
+
+using registers::Register;
+using registers::Table;
+using registers::Unit;
+
+namespace {
+
+std::int64_t now_ms() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+// Names or glob patterns ("axis.x.*") -> registers.
+std::vector<const Register*> resolve(const std::vector<std::string>& names) {
+  std::vector<const Register*> out;
+  for (const auto& n : names) {
+    if (n.find_first_of("*?[") == std::string::npos) {
+      const Register* r = registers::find_register(n);
+      if (!r) throw Usage(fmt::format("no register named '{}' (see hmi_maps/registers.md; patterns like 'axis.x.*' work)", n));
+      out.push_back(r);
+      continue;
+    }
+    std::size_t matched = 0;
+    for (const Register& r : registers::all_registers()) {
+      if (r.table == Table::coil && r.access == registers::Access::w) continue;  // commands read 0
+      if (fnmatch(n.c_str(), r.name().c_str(), 0) == 0) {
+        out.push_back(&r);
+        ++matched;
+      }
+    }
+    if (!matched) throw Usage(fmt::format("no register matches '{}'", n));
+  }
+  return out;
+}
+
+void print_changes(const Context& ctx, const WritePlan& plan) {
+  for (const auto& ch : plan.changes)
+    if (!ctx.json) fmt::print("{}: {} -> {}\n", ch.reg->name(), value_text(*ch.reg, ch.old_raw), value_text(*ch.reg, ch.new_raw));
+}
+
+int get(Context& ctx, const std::vector<std::string>& names) {
+  const auto regs = resolve(names);
+  Connection& c = ctx.connection();
+  const auto values = c.read_many(regs);
+  nlohmann::json j = nlohmann::json::object();
+  for (const Register* r : regs) {
+    const auto raw = values.at(r->name());
+    if (ctx.json) j[r->name()] = value_json(*r, raw);
+    else fmt::print("{} = {}\n", r->name(), value_text(*r, raw));
+  }
+  if (ctx.json) print_json(j);
+  return kOk;
+}
+
+struct SetOptions {
+  std::vector<std::string> assignments;
+  bool no_check = false, dry_run = false;
+};
+
+// NAME=VALUE assignments as raw values: module settings (one planned write)
+// and simulator values (written one by one).
+struct Assignments {
+  RawMap module;
+  std::vector<std::pair<const Register*, std::int64_t>> simulator;
+};
+
+// The assignments, or the exit code of a refusal already printed.
+std::variant<Assignments, int> parse_assignments(const std::vector<std::string>& texts) {
+  Assignments out;
+  for (const auto& a : texts) {
+    auto kv = split_assignment(a);
+    if (!kv) throw Usage(kv.error());
+    const Register* r = registers::find_register(kv->first);
+    if (!r) throw Usage(fmt::format("no register named '{}' (see hmi_maps/registers.md)", kv->first));
+    if (!r->writable()) {
+      fmt::print(stderr, "{} is read-only (status): it cannot be set\n", r->name());
+      return kFailed;
+    }
+    if (r->unit == Unit::module && r->table == Table::coil)
+      throw Usage(fmt::format("{} is a command: use homingctl home/abort/reset/jog/move", r->name()));
+    auto raw = parse_value(*r, kv->second);
+    if (!raw) {
+      fmt::print(stderr, "refused: {}; nothing was written\n", raw.error());
+      return kFailed;
+    }
+    if (r->unit == Unit::simulator) out.simulator.emplace_back(r, *raw);
+    else out.module[r->name()] = *raw;
+  }
+  return out;
+}
+
+int set_module_settings(Context& ctx, const RawMap& wanted, const SetOptions& o) {
+  Connection& c = ctx.connection();
+  std::vector<const Register*> regs = persisted_registers();
+  for (const auto& [name, raw] : wanted) regs.push_back(&register_named(name));
+  // Fillers of a block may be non-persisted registers of the same run.
+  const RawMap current = c.read_many(regs);
+  auto plan = plan_write(current, wanted, ctx.co.word_order, !o.no_check);
+  if (!plan) {
+    fmt::print(stderr, "refused: {}\n", plan.error());
+    return kFailed;
+  }
+  print_changes(ctx, *plan);
+  if (plan->changes.empty() && !ctx.json) fmt::print("nothing to change\n");
+  if (!o.dry_run) {
+    if (auto done = execute_plan(c, *plan); !done) {
+      fmt::print(stderr, "refused: {}\n", done.error());
+      return kFailed;
+    }
+  }
+  return kOk;
+}
+
+int set_simulator_values(Context& ctx, const std::vector<std::pair<const Register*, std::int64_t>>& writes,
+                         const SetOptions& o) {
+  Connection& c = ctx.connection();
+  for (const auto& [r, raw] : writes) {
+    if (o.dry_run) continue;
+    if (const int ex = c.write(*r, raw)) {
+      fmt::print(stderr, "refused: {} = {}: {}\n", r->name(), value_text(*r, raw),
+                 ex == 6 ? "exception 06: the simulated carriage cannot be placed while it moves"
+                         : exception_sentence(ex));
+      return kFailed;
+    }
+    if (!ctx.json) fmt::print("{} = {}\n", r->name(), value_text(*r, raw));
+  }
+  return kOk;
+}
+
+int set(Context& ctx, const SetOptions& o) {
+  const auto parsed = parse_assignments(o.assignments);
+  if (const int* refused = std::get_if<int>(&parsed)) return *refused;
+  const Assignments& a = std::get<Assignments>(parsed);
+  if (!a.module.empty())
+    if (const int rc = set_module_settings(ctx, a.module, o); rc != kOk) return rc;
+  if (const int rc = set_simulator_values(ctx, a.simulator, o); rc != kOk) return rc;
+  if (ctx.json) print_json({{"ok", true}, {"dry_run", o.dry_run}});
+  return kOk;
+}
+
+// The simulated trigger cams, when there is a simulator unit (none on a real machine).
+std::array<std::optional<TriggerCam>, homing::kAxisCount> simulated_cams(Context& ctx) {
+  std::array<std::optional<TriggerCam>, homing::kAxisCount> cams;
+  if (!ctx.co.rtu.empty() || ctx.co.sim_unit <= 0) return cams;
+  Connection& c = ctx.connection();
+  try {
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+      const auto l = homing::kAxisLetters[a];
+      auto v = c.read_many({&register_named(fmt::format("sim.{}.sensor_min", l)),
+                            &register_named(fmt::format("sim.{}.sensor_max", l)),
+                            &register_named(fmt::format("sim.{}.hysteresis", l))});
+      cams[a] = TriggerCam{v.at(fmt::format("sim.{}.sensor_min", l)) / 1000.0,
+                           v.at(fmt::format("sim.{}.sensor_max", l)) / 1000.0,
+                           v.at(fmt::format("sim.{}.hysteresis", l)) / 1000.0};
+    }
+  } catch (const ModbusException&) {
+    cams.fill(std::nullopt);  // no simulator unit (real machine)
+  }
+  return cams;
+}
+
+int check(Context& ctx) {
+  const auto settings = read_settings(ctx.connection());
+  const auto r = check_settings(settings, simulated_cams(ctx));
+  if (ctx.json) print_json(check_json(r)); else fmt::print("{}", render_check(r));
+  return r.ok() ? kOk : kFailed;
+}
+
+int export_settings(Context& ctx, const std::string& file) {
+  Connection& c = ctx.connection();
+  const auto values = read_settings_raw(c);
+  const std::string text = settings_file_text(values, fmt::format("homingctl over {}", c.describe()), now_ms());
+  if (auto w = write_file_atomically(file, text); !w) {
+    fmt::print(stderr, "homingctl export: {}\n", w.error());
+    return kFailed;
+  }
+  if (ctx.json) print_json({{"ok", true}, {"file", file}, {"settings", values.size()}});
+  else fmt::print("exported {} settings to {}\n", values.size(), file);
+  return kOk;
+}
+
+int import_settings(Context& ctx, const std::string& file, bool dry_run) {
+  auto wanted = read_settings_file(file);
+  if (!wanted) {
+    fmt::print(stderr, "refused: {}\n", wanted.error());
+    return kFailed;
+  }
+  Connection& c = ctx.connection();
+  const auto current = read_settings_raw(c);
+  auto plan = plan_write(current, *wanted, ctx.co.word_order);
+  if (!plan) {
+    fmt::print(stderr, "refused: {}: {}\n", file, plan.error());
+    return kFailed;
+  }
+  print_changes(ctx, *plan);
+  if (!dry_run)
+    if (auto done = execute_plan(c, *plan); !done) {
+      fmt::print(stderr, "refused: {}\n", done.error());
+      return kFailed;
+    }
+  const std::size_t not_in_file = current.size() - wanted->size();
+  if (ctx.json)
+    print_json({{"ok", true}, {"dry_run", dry_run}, {"changed", plan->changes.size()}, {"not_in_file", not_in_file}});
+  else
+    fmt::print("{} {} settings from {} ({} requests); {} not in the file (kept)\n", dry_run ? "would change" : "changed",
+               plan->changes.size(), file, plan->blocks.size(), not_in_file);
+  return kOk;
+}
+
+}  // namespace
+
+void add_settings_commands(Commands& commands, Context&) {
+  auto names = std::make_shared<std::vector<std::string>>();
+  commands.add("get", "read registers by name in engineering units (patterns: 'axis.x.*')",
+               [names](Context& c) { return get(c, *names); })
+      ->add_option("names", *names, "register names or patterns")
+      ->required();
+
+  auto set_options = std::make_shared<SetOptions>();
+  auto* set_cmd = commands.add("set", "write settings NAME=VALUE (mm, mm/min, enum names) in one all-or-nothing write",
+                               [set_options](Context& c) { return set(c, *set_options); });
+  set_cmd->add_option("assignments", set_options->assignments,
+                      "e.g. axis.x.seek_feedrate=1200 axis.x.mode=switch_reapproach")
+      ->required();
+  set_cmd->add_flag("--no-check", set_options->no_check, "skip the local check (the module still checks)");
+  set_cmd->add_flag("--dry-run", set_options->dry_run, "show what would change, write nothing");
+
+  commands.add("check", "what the settings imply per axis before anything moves", check);
+
+  auto file = std::make_shared<std::string>();
+  commands.add("export", "write all settings to a TOML file (the daemon's export format)",
+               [file](Context& c) { return export_settings(c, *file); })
+      ->add_option("file", *file, "output file")
+      ->required();
+  auto dry_run = std::make_shared<bool>(false);
+  auto* import_cmd = commands.add("import", "write the settings of a TOML file (checked first; all or nothing)",
+                                  [file, dry_run](Context& c) { return import_settings(c, *file, *dry_run); });
+  import_cmd->add_option("file", *file, "settings file")->required();
+  import_cmd->add_flag("--dry-run", *dry_run, "show what would change, write nothing");
+}
+
+}  // namespace homingctl

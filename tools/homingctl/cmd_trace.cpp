@@ -1,0 +1,99 @@
+// trace: the last homing cycle of an axis (FC 20) as a summary, SVG, CSV or JSON.
+#include <fmt/format.h>
+
+#include "actions.hpp"
+#include "cli.hpp"
+#include "settings_io.hpp"
+#include "status_view.hpp"
+#include "trace_svg.hpp"
+
+namespace homingctl {
+
+namespace {
+
+struct TraceOptions {
+  std::string axis, svg_file, csv_file;
+};
+
+// read_trace(), with why it cannot work when the link is RTU.
+Trace read_trace_or_explain(Connection& c, std::size_t axis) {
+  try {
+    return read_trace(c, axis);
+  } catch (const LinkError& e) {
+    if (!c.is_rtu()) throw;
+    throw LinkError(fmt::format("{}\n(homingd serves the traces (function 20) over Modbus TCP only: its RTU "
+                                "transport frames requests with libmodbus, which cannot receive function 20; "
+                                "use --tcp)", e.what()));
+  }
+}
+
+// The alarm that ended the traced cycle, in words ("" when none).
+std::string trace_alarm(Connection& c, std::size_t axis, const Trace& t) {
+  if (t.alarm == homing::AlarmCode::none) return {};
+  AxisView v;
+  v.alarm = t.alarm;
+  v.alarm_phase = t.alarm_phase;
+  return alarm_text(axis, v, read_settings(c));
+}
+
+// The SVG and CSV files asked for; false when one could not be written (said on stderr).
+bool write_trace_files(const TraceOptions& o, const Trace& t, const std::string& alarm) {
+  if (!o.svg_file.empty())
+    if (auto w = write_file_atomically(o.svg_file, trace_svg(t, alarm)); !w) {
+      fmt::print(stderr, "homingctl trace: {}\n", w.error());
+      return false;
+    }
+  if (!o.csv_file.empty()) {
+    if (o.csv_file == "-") fmt::print("{}", trace_csv(t));
+    else if (auto w = write_file_atomically(o.csv_file, trace_csv(t)); !w) {
+      fmt::print(stderr, "homingctl trace: {}\n", w.error());
+      return false;
+    }
+  }
+  return true;
+}
+
+void print_summary(std::size_t axis, const Trace& t, const std::string& alarm, const TraceOptions& o) {
+  fmt::print("{}: {} samples every {:g} ms over {:.3f} s", homing::kAxisUpper[axis], t.samples.size(), t.interval_ms,
+             t.duration_ms / 1000.0);
+  if (t.edge_time_ms) fmt::print(", reference edge at {} ms ({:.3f} {})", *t.edge_time_ms, t.edge_position_mm,
+                                 homing::axis_unit(axis));
+  fmt::print("{}\n", alarm.empty() ? "" : "\n  alarm: " + alarm);
+  if (!o.svg_file.empty()) fmt::print("drawn to {}\n", o.svg_file);
+}
+
+int trace(Context& ctx, const TraceOptions& o) {
+  const int index = axis_index(o.axis);
+  if (index < 0) throw Usage(fmt::format("trace: '{}' is not an axis (x, y, z, a, b, c)", o.axis));
+  const auto axis = static_cast<std::size_t>(index);
+  Connection& c = ctx.connection();
+  const Trace t = read_trace_or_explain(c, axis);
+  if (t.samples.empty()) {
+    fmt::print(stderr, "no trace for {}: the axis has not taken part in a homing cycle since homingd started\n",
+               homing::kAxisUpper[axis]);
+    return kFailed;
+  }
+  const std::string alarm = trace_alarm(c, axis, t);
+  if (!write_trace_files(o, t, alarm)) return kFailed;
+  if (ctx.json) {
+    auto j = trace_json(t);
+    if (!alarm.empty()) j["alarm"]["text"] = alarm;
+    print_json(j);
+  } else if (o.csv_file != "-") {
+    print_summary(axis, t, alarm, o);
+  }
+  return kOk;
+}
+
+}  // namespace
+
+void add_trace_command(Commands& commands) {
+  auto o = std::make_shared<TraceOptions>();
+  auto* sub = commands.add("trace", "the last homing cycle of an axis (FC 20): summary, --svg FILE, --csv FILE|-",
+                           [o](Context& ctx) { return trace(ctx, *o); });
+  sub->add_option("axis", o->axis, "x y z a b c")->required();
+  sub->add_option("--svg", o->svg_file, "draw position, velocity and sensor against time");
+  sub->add_option("--csv", o->csv_file, "the samples as CSV ('-' = stdout)");
+}
+
+}  // namespace homingctl
