@@ -5,6 +5,7 @@
 // request must keep. A violated invariant aborts with a message (libFuzzer
 // then saves the input as a crash).
 #include <signal.h>
+#include <unistd.h>
 #include <spdlog/spdlog.h>
 
 #include <cerrno>
@@ -13,12 +14,14 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <map>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "homing/sim/simulator_io.hpp"
+#include "registers/codec.hpp"
 #include "registers/defaults.hpp"
 #include "registers/sim_bindings.hpp"
 #include "server/control_loop.hpp"
@@ -36,12 +39,24 @@ namespace fuzz {
 
 inline void quiet_logs() { spdlog::set_level(spdlog::level::off); }
 
+// Where the targets that need files keep them: tmpfs (/dev/shm) when there is
+// one, so that writing an input, and the database's fsyncs, cost no disk I/O.
+inline const std::filesystem::path& scratch_dir() {
+  static const std::filesystem::path dir = [] {
+    std::error_code ec;
+    const std::filesystem::path shm = "/dev/shm";
+    if (std::filesystem::is_directory(shm, ec) && ::access(shm.c_str(), W_OK) == 0) return shm;
+    return std::filesystem::temp_directory_path();
+  }();
+  return dir;
+}
+
 // Temporary files are named <prefix><pid>...; libFuzzer ends a timed run with
 // _Exit (no atexit), so files of processes that no longer exist are removed
 // here at start.
 inline void remove_stale_temp_files(const std::string& prefix) {
   std::error_code ec;
-  for (const auto& e : std::filesystem::directory_iterator(std::filesystem::temp_directory_path(), ec)) {
+  for (const auto& e : std::filesystem::directory_iterator(scratch_dir(), ec)) {
     const std::string name = e.path().filename().string();
     if (name.rfind(prefix, 0) != 0) continue;
     const long pid = std::strtol(name.c_str() + prefix.size(), nullptr, 10);
@@ -66,30 +81,60 @@ inline bool contains_code(std::span<const std::uint8_t> pdu, std::uint16_t code)
 }
 
 // The default machine, built once: seeding the simulator's random sources
-// costs more than a whole request, so each harness runs a copy of it.
+// costs more than a whole request.
 inline const homing::sim::Simulator& default_machine() {
   static const homing::sim::Simulator sim(registers::default_sim_config());
   return sim;
 }
 
+// The control loop owns its backend; the harness keeps the simulator backend
+// across inputs (rebuilt in the same storage: a new 50 KB simulator each input
+// would cost page faults), so the loop gets this stand-in that forwards to it.
+class ForwardingIo final : public homing::MachineIo {
+ public:
+  explicit ForwardingIo(homing::MachineIo& io) : io_(io) {}
+  void advance(const homing::Outputs& outputs, double dt_s) override { io_.advance(outputs, dt_s); }
+  homing::Inputs read() override { return io_.read(); }
+  void apply(const homing::Outputs& outputs) override { io_.apply(outputs); }
+  void shutdown() override { io_.shutdown(); }
+  homing::sim::SimulatorControls* simulator_controls() override { return io_.simulator_controls(); }
+
+ private:
+  homing::MachineIo& io_;
+};
+
 // One service as homingd builds it (simulator backend), store = nullptr.
+// Built once per fuzz process and reset() before every input, so that each
+// input starts from the same state: a new service on a new machine at rest.
+// The loop is rebuilt in the same storage (a fresh allocation of its trace
+// buffers each input would cost more than the requests), and only when a
+// request reached the service since the last rebuild: a harness no request
+// reached is still as new. For such a harness finish() has nothing to do: what
+// it would see then is the same for every input (the engine, the simulator and
+// its seeded noise are deterministic), and it is checked once, at start.
 struct Harness {
   enum class Access { open, read_only, locked };
 
-  explicit Harness(Access a, std::string transport = "tcp") : access(a) {
-    client = server::ClientInfo{7, transport, transport == "tcp" ? "127.0.0.1:40000" : "unit 1"};
-    auto io = std::make_unique<homing::sim::SimulatorIo>(default_machine());
-    const homing::Settings settings = registers::default_settings();
-    loop = std::make_unique<server::ControlLoop>(settings, std::move(io), 1000, 1.0);
-    server::ServiceConfig config;
+  explicit Harness(Access a, server::Transport transport = server::Transport::tcp) : access(a) {
+    client = server::ClientInfo{7, transport, transport == server::Transport::tcp ? "127.0.0.1:40000" : "unit 1"};
     config.unit_id = kModuleUnit;
     config.sim_unit_id = kSimUnit;
     if (a == Access::read_only) config.write_allow.push_back(*server::parse_cidr("10.0.0.0/8"));
     if (a == Access::locked) config.unlock_code = kUnlockCode;
-    service = std::make_unique<server::ModbusService>(config, *loop, nullptr, settings);
+    rebuild();
+    finish_now();  // the input that sends no request
+    rebuild();
+  }
+  Harness(const Harness&) = delete;
+  Harness& operator=(const Harness&) = delete;
+
+  void reset() {
+    if (!untouched) rebuild();
   }
 
-  std::map<std::string, std::int64_t> settings() const { return registers::settings_to_raw(service->settings()); }
+  // Every persisted setting as its raw register value, in table order: what
+  // the settings database would hold.
+  std::vector<std::int64_t> settings() const { return raw_of(service->settings()); }
 
   bool moving() const {
     const server::Snapshot s = loop->snapshot();
@@ -114,9 +159,11 @@ struct Harness {
   // One request through ModbusService::handle, then one control period; aborts
   // when an invariant breaks. Returns the reply.
   server::Reply request(std::uint8_t unit, std::span<const std::uint8_t> pdu) {
-    const auto before = settings();
+    untouched = false;
+    const auto before = std::move(settings_now);  // as the last request (or reset) left them
     const server::Reply reply = service->handle(unit, pdu, client);
     step();
+    settings_now = settings();
     const std::uint8_t fc = pdu.empty() ? 0 : pdu[0];
     // The reply itself: a PDU that fits a frame, for the function asked.
     if (reply.send) {
@@ -127,9 +174,10 @@ struct Harness {
     const bool accepted = accepted_write(fc, reply);
     if (access == Access::read_only && accepted) violated("a client outside --write-allow got a write accepted", unit, pdu);
     // Settings change only by an accepted write of holding registers to the module.
-    if (settings() != before) {
+    if (settings_now != before) {
       // Over TCP, unit ids 0xFF and 0 address the module too.
-      const bool module_unit = unit == kModuleUnit || (client.transport == "tcp" && (unit == 0 || unit == 0xFF));
+      const bool module_unit =
+          unit == kModuleUnit || (client.transport == server::Transport::tcp && (unit == 0 || unit == 0xFF));
       if (!(accepted && module_unit && (fc == 6 || fc == 16 || fc == 23)))
         violated("settings changed by a request that was not an accepted settings write", unit, pdu);
       if (access == Access::locked && !maybe_unlocked && !contains_code(pdu, kUnlockCode))
@@ -145,8 +193,46 @@ struct Harness {
     return reply;
   }
 
+  // An RTU broadcast (unit 0) as the bus delivers it, then one control
+  // period; returns the reply (the caller checks that there is none).
+  server::Reply broadcast(std::span<const std::uint8_t> pdu) {
+    untouched = false;
+    const server::Reply reply = service->handle(0, pdu, client);
+    step();
+    settings_now = settings();
+    return reply;
+  }
+
   // The client goes away (TCP connection closed), a few periods pass.
   void finish() {
+    if (!untouched) finish_now();
+  }
+
+  Access access;
+  server::ClientInfo client;
+  server::ServiceConfig config;
+  std::optional<homing::sim::SimulatorIo> machine;  // the loop below drives it
+  std::optional<server::ControlLoop> loop;
+  std::optional<server::ModbusService> service;
+  bool motion_allowed = false;
+  bool maybe_unlocked = false;
+  bool untouched = false;                  // no request since the last rebuild
+  std::vector<std::int64_t> settings_now;  // settings() after the last request, broadcast or rebuild
+
+ private:
+  void rebuild() {
+    service.reset();
+    loop.reset();
+    machine.emplace(default_machine());
+    loop.emplace(defaults(), std::make_unique<ForwardingIo>(*machine), 1000, 1.0);
+    service.emplace(config, *loop, nullptr, defaults());
+    motion_allowed = false;
+    maybe_unlocked = false;
+    untouched = true;
+    settings_now = default_raw();
+  }
+
+  void finish_now() {
     service->disconnected(client);
     step(5);
     if (!motion_allowed && moving()) {
@@ -155,12 +241,29 @@ struct Harness {
     }
   }
 
-  Access access;
-  server::ClientInfo client;
-  std::unique_ptr<server::ControlLoop> loop;
-  std::unique_ptr<server::ModbusService> service;
-  bool motion_allowed = false;
-  bool maybe_unlocked = false;
+  static const homing::Settings& defaults() {
+    static const homing::Settings s = registers::default_settings();
+    return s;
+  }
+  static const std::vector<std::int64_t>& default_raw() {
+    static const std::vector<std::int64_t> raw = raw_of(defaults());
+    return raw;
+  }
+  static std::vector<std::int64_t> raw_of(const homing::Settings& s) {
+    std::vector<std::int64_t> raw;
+    raw.reserve(persisted().size());
+    for (const registers::Register* r : persisted()) raw.push_back(registers::setting_raw(s, *r));
+    return raw;
+  }
+  static const std::vector<const registers::Register*>& persisted() {
+    static const std::vector<const registers::Register*> regs = [] {
+      std::vector<const registers::Register*> out;
+      for (const registers::Register& r : registers::registers_of(registers::Unit::module))
+        if (r.persisted) out.push_back(&r);
+      return out;
+    }();
+    return regs;
+  }
 };
 
 }  // namespace fuzz

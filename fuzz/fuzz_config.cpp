@@ -1,7 +1,9 @@
 // libFuzzer target: homingd's config file. The input is written to a
-// temporary TOML file and parsed exactly as `homingd --config FILE` does
-// (server::parse_options: toml++ for the key check, CLI11 for the values),
-// then its [gpiod] table as `--backend gpiod` would read it. Besides "no
+// temporary TOML file (on tmpfs when there is one) and parsed as
+// `homingd --config FILE` does, by server::OptionParser (toml++ for the key
+// check, CLI11 for the values): one parser for all inputs, as it is built to
+// parse any number of command lines, each from the defaults. Then its [gpiod]
+// table is read as `--backend gpiod` would read it. Besides "no
 // crash" (no uncaught exception either): the result is an error message or
 // options inside the documented ranges, never both nor neither.
 #include <unistd.h>
@@ -23,7 +25,7 @@ namespace {
 
 std::string config_path() {
   static const std::string path =
-      (std::filesystem::temp_directory_path() / ("homing-fuzz-config-" + std::to_string(::getpid()) + ".toml"))
+      (fuzz::scratch_dir() / ("homing-fuzz-config-" + std::to_string(::getpid()) + ".toml"))
           .string();
   return path;
 }
@@ -52,7 +54,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
-  const auto parsed = server::parse_options(static_cast<int>(args.size()), argv.data());
+  static server::OptionParser parser;
+  const auto parsed = parser.parse(static_cast<int>(args.size()), argv.data());
   if (!parsed) {
     check(!parsed.error().empty(), "an error without a message");
   } else {

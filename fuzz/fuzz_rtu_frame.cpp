@@ -5,7 +5,7 @@
 // otherwise the CRC is checked as given. As server/rtu_server.cpp receives
 // them from modbus_receive: a bad CRC, a frame shorter than 4 bytes, or a
 // unit that is neither the module's nor broadcast (0) never reaches the
-// handler; the rest go to ModbusService::handle with transport "rtu".
+// handler; the rest go to ModbusService::handle with transport RTU.
 //
 // Broadcast (unit 0) is applied but never answered: the frame is also played
 // as a unicast to the module on a twin service, and both must end up with the
@@ -18,16 +18,33 @@
 
 #include "fuzz_common.hpp"
 
+namespace {
+
+struct Services {
+  using Harness = fuzz::Harness;
+  Harness bus{Harness::Access::open, server::Transport::rtu};   // gets the frames as they come
+  Harness twin{Harness::Access::open, server::Transport::rtu};  // broadcasts as unicasts
+  Harness locked{Harness::Access::locked, server::Transport::rtu};
+};
+
+Services& services() {
+  static Services s;
+  return s;
+}
+
+}  // namespace
+
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   fuzz::quiet_logs();
+  (void)services();
   return 0;
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  using fuzz::Harness;
-  Harness bus(Harness::Access::open, "rtu");      // gets the frames as they come
-  Harness twin(Harness::Access::open, "rtu");     // broadcasts as unicasts
-  Harness locked(Harness::Access::locked, "rtu");
+  auto& [bus, twin, locked] = services();
+  bus.reset();
+  twin.reset();
+  locked.reset();
   std::size_t at = 0;
   std::vector<std::uint8_t> frame;
   while (size - at >= 2) {
@@ -50,15 +67,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (unit != fuzz::kModuleUnit && unit != 0) continue;  // libmodbus: another unit on the bus
     const auto pdu = std::span<const std::uint8_t>(frame).subspan(1, frame.size() - 3);
 
-    const server::Reply reply = unit == 0 ? bus.service->handle(0, pdu, bus.client) : bus.request(unit, pdu);
-    if (unit == 0) {
-      bus.step();
-      if (reply.send) fuzz::violated("a broadcast was answered", unit, pdu);
-    }
+    const server::Reply reply = unit == 0 ? bus.broadcast(pdu) : bus.request(unit, pdu);
+    if (unit == 0 && reply.send) fuzz::violated("a broadcast was answered", unit, pdu);
     const server::Reply unicast = twin.request(fuzz::kModuleUnit, pdu);
     (void)locked.request(fuzz::kModuleUnit, pdu);
     if (unit == 0 && fuzz::accepted_write(pdu.empty() ? 0 : pdu[0], unicast)) bus.motion_allowed = true;
-    if (bus.settings() != twin.settings()) fuzz::violated("a broadcast and a unicast changed different settings", unit, pdu);
+    if (bus.settings_now != twin.settings_now) fuzz::violated("a broadcast and a unicast changed different settings", unit, pdu);
     if (bus.moving() != twin.moving()) fuzz::violated("a broadcast and a unicast moved differently", unit, pdu);
     // The reply as it goes on the line: unit, PDU, CRC that checks.
     if (reply.send) {

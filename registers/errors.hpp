@@ -13,6 +13,7 @@ enum class ExceptionCode : std::uint8_t {
   illegal_data_value = 0x03,
   server_device_failure = 0x04,
   server_device_busy = 0x06,
+  gateway_target_failed = 0x0B,  // Modbus TCP: a unit id nothing answers to
 };
 
 constexpr std::string_view exception_name(ExceptionCode c) {
@@ -22,6 +23,7 @@ constexpr std::string_view exception_name(ExceptionCode c) {
     case ExceptionCode::illegal_data_value: return "illegal data value";
     case ExceptionCode::server_device_failure: return "server device failure";
     case ExceptionCode::server_device_busy: return "server device busy";
+    case ExceptionCode::gateway_target_failed: return "gateway target device failed to respond";
   }
   return "?";
 }

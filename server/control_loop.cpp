@@ -242,7 +242,7 @@ void ControlLoop::run_period(double wall_dt_s) {
   if (trace_pending_) {
     std::unique_lock trace_lock(trace_mutex_, std::try_to_lock);
     if (trace_lock.owns_lock()) {
-      *published_trace_ = recorder_.traces();
+      published_trace_ = recorder_.traces();
       trace_pending_ = false;
     }
   }
@@ -285,7 +285,7 @@ void ControlLoop::record_trace(const homing::Status& status) {
 
 AxisTrace ControlLoop::trace(std::size_t axis) const {
   std::lock_guard lock(trace_mutex_);
-  return (*published_trace_)[axis];
+  return published_trace_[axis];
 }
 
 void ControlLoop::thread_main() {

@@ -140,8 +140,7 @@ class ControlLoop {
   double machine_time_s_ = 0;
   bool trace_pending_ = false;
   mutable std::mutex trace_mutex_;
-  std::unique_ptr<std::array<AxisTrace, homing::kAxisCount>> published_trace_ =
-      std::make_unique<std::array<AxisTrace, homing::kAxisCount>>();
+  std::array<AxisTrace, homing::kAxisCount> published_trace_;  // default-initialised: see TraceSample
 
   std::uint64_t edits_applied_ = 0;  // loop-private: last simulator edit run
 

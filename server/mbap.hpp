@@ -1,7 +1,6 @@
 #pragma once
-// The MBAP header of a Modbus/TCP frame and the check the TCP server applies
-// to it before reading the rest of the frame. Shared with fuzz/fuzz_tcp_request
-// so the fuzzer frames a byte stream exactly as the server does.
+// The MBAP header of a Modbus/TCP frame and the check the framing loop
+// (server/mbap_stream.hpp) applies to it before reading the rest of the frame.
 #include <cstddef>
 #include <cstdint>
 #include <span>

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "device_identification.hpp"
+#include "file_record.hpp"
 #include "registers/lookup.hpp"
 #include "registers/sim_bindings.hpp"
 
@@ -14,16 +16,17 @@ namespace {
 using registers::ExceptionCode;
 using registers::Table;
 
-constexpr std::uint8_t kReadCoils = 1, kReadDiscrete = 2, kReadHolding = 3, kReadInput = 4, kWriteCoil = 5,
-                       kWriteRegister = 6, kWriteCoils = 15, kWriteRegisters = 16, kReadWrite = 23,
-                       kReadFileRecord = 20, kEncapsulated = 43;
-
 Reply fail(std::uint8_t fc, ExceptionCode code) { return exception_reply(fc, static_cast<std::uint8_t>(code)); }
 
 Reply refusal_reply(std::uint8_t fc, const registers::Refusal& r, const ClientInfo& client) {
   spdlog::debug("{} {}: FC{} refused with exception {:02X} ({}): {}", client.transport, client.address, fc,
                 static_cast<int>(r.code), registers::exception_name(r.code), r.message);
   return fail(fc, r.code);
+}
+
+// Who changed a setting, for the audit log.
+persistence::ChangeSource source_of(const ClientInfo& client) {
+  return persistence::ChangeSource{std::string(transport_name(client.transport)), client.address};
 }
 
 std::string_view command_name(registers::Command c) {
@@ -62,7 +65,7 @@ ModbusService::ModbusService(ServiceConfig config, ControlLoop& loop, persistenc
 
 // RTU clients stand at the cabinet's serial line: the allow-list is for the network.
 bool ModbusService::may_write(const ClientInfo& client) const {
-  if (client.transport != "tcp" || config_.write_allow.empty()) return true;
+  if (client.transport != Transport::tcp || config_.write_allow.empty()) return true;
   return std::any_of(config_.write_allow.begin(), config_.write_allow.end(),
                      [&](const Cidr& c) { return c.contains(client.address); });
 }
@@ -86,111 +89,58 @@ void ModbusService::disconnected(const ClientInfo& client) {
 
 Reply ModbusService::handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) {
   if (pdu.empty()) return Reply{};
-  if (unit == config_.unit_id) return dispatch(Target::module, pdu, client, false);
+  const bool tcp = client.transport == Transport::tcp;
+  if (unit == config_.unit_id) return dispatch(Target::module, pdu, client);
   // The Modbus TCP implementation guide: a device addressed by its IP address
   // answers unit id 0xFF, and 0 is accepted for direct addressing too (many
   // clients and SCADA drivers send one of them by default).
-  if (client.transport == "tcp" && (unit == 0xFF || unit == 0)) return dispatch(Target::module, pdu, client, false);
-  if (config_.sim_unit_id && unit == *config_.sim_unit_id) return dispatch(Target::simulator, pdu, client, false);
-  if (unit == 0 && client.transport == "rtu") {
-    dispatch(Target::module, pdu, client, true);  // applied, never answered
+  if (tcp && (unit == 0xFF || unit == 0)) return dispatch(Target::module, pdu, client);
+  if (config_.sim_unit_id && unit == *config_.sim_unit_id) return dispatch(Target::simulator, pdu, client);
+  if (unit == 0 && !tcp) {
+    // An RTU broadcast: a write is applied to the module, nothing is answered.
+    if (auto request = decode_request(pdu); request && is_write(request->function))
+      (void)apply(Target::module, *request, client);
     return Reply{};
   }
   // A unit id that does not exist here: over TCP the gateway answer "target
   // device failed to respond" (0x0B); over RTU silence, as on a shared bus.
-  if (client.transport == "tcp") return exception_reply(pdu[0], 0x0B);
+  if (tcp) return fail(pdu[0], ExceptionCode::gateway_target_failed);
   return Reply{};
 }
 
-Reply ModbusService::dispatch(Target target, std::span<const std::uint8_t> pdu, const ClientInfo& client,
-                              bool broadcast) {
+Reply ModbusService::dispatch(Target target, std::span<const std::uint8_t> pdu, const ClientInfo& client) {
   const std::uint8_t fc = pdu[0];
-  auto bad_value = [&] { return fail(fc, ExceptionCode::illegal_data_value); };
-  switch (fc) {
-    case kReadCoils:
-    case kReadDiscrete:
-    case kReadHolding:
-    case kReadInput: {
-      if (broadcast) return Reply{};
-      if (pdu.size() != 5) return bad_value();
-      const std::uint16_t start = be16(pdu, 1), count = be16(pdu, 3);
-      if (fc == kReadCoils || fc == kReadDiscrete) {
-        if (count < 1 || count > 2000) return bad_value();
-        return read_bits(target, fc, fc == kReadCoils ? Table::coil : Table::discrete_input, start, count);
-      }
-      if (count < 1 || count > 125) return bad_value();
-      return read_registers(target, fc, fc == kReadHolding ? Table::holding_register : Table::input_register,
-                            start, count);
-    }
-    case kWriteCoil: {
-      if (pdu.size() != 5) return bad_value();
-      const std::uint16_t start = be16(pdu, 1), value = be16(pdu, 3);
-      if (value != 0xFF00 && value != 0x0000) return bad_value();
-      const std::uint16_t bit = value == 0xFF00 ? 1 : 0;
-      if (auto r = write(target, fc, Table::coil, start, std::span(&bit, 1), client)) return *r;
-      return Reply{true, std::vector<std::uint8_t>(pdu.begin(), pdu.end())};
-    }
-    case kWriteRegister: {
-      if (pdu.size() != 5) return bad_value();
-      const std::uint16_t start = be16(pdu, 1), value = be16(pdu, 3);
-      if (auto r = write(target, fc, Table::holding_register, start, std::span(&value, 1), client)) return *r;
-      return Reply{true, std::vector<std::uint8_t>(pdu.begin(), pdu.end())};
-    }
-    case kWriteCoils: {
-      if (pdu.size() < 6) return bad_value();
-      const std::uint16_t start = be16(pdu, 1), count = be16(pdu, 3);
-      const std::uint8_t bytes = pdu[5];
-      if (count < 1 || count > 1968 || bytes != (count + 7) / 8 || pdu.size() != 6u + bytes) return bad_value();
-      std::vector<std::uint16_t> bits(count);
-      for (std::uint16_t i = 0; i < count; ++i) bits[i] = (pdu[6 + i / 8] >> (i % 8)) & 1;
-      if (auto r = write(target, fc, Table::coil, start, bits, client)) return *r;
-      Reply ok{true, {fc}};
-      put16(ok.pdu, start);
-      put16(ok.pdu, count);
-      return ok;
-    }
-    case kWriteRegisters: {
-      if (pdu.size() < 6) return bad_value();
-      const std::uint16_t start = be16(pdu, 1), count = be16(pdu, 3);
-      const std::uint8_t bytes = pdu[5];
-      if (count < 1 || count > 123 || bytes != count * 2 || pdu.size() != 6u + bytes) return bad_value();
-      std::vector<std::uint16_t> words(count);
-      for (std::uint16_t i = 0; i < count; ++i) words[i] = be16(pdu, 6 + 2 * i);
-      if (auto r = write(target, fc, Table::holding_register, start, words, client)) return *r;
-      Reply ok{true, {fc}};
-      put16(ok.pdu, start);
-      put16(ok.pdu, count);
-      return ok;
-    }
-    case kReadWrite: {
-      if (pdu.size() < 10) return bad_value();
-      const std::uint16_t read_start = be16(pdu, 1), read_count = be16(pdu, 3);
-      const std::uint16_t write_start = be16(pdu, 5), write_count = be16(pdu, 7);
-      const std::uint8_t bytes = pdu[9];
-      if (read_count < 1 || read_count > 125 || write_count < 1 || write_count > 121 || bytes != write_count * 2 ||
-          pdu.size() != 10u + bytes)
-        return bad_value();
-      // The read range must be valid too before anything is written.
-      if (Reply probe = read_registers(target, fc, Table::holding_register, read_start, read_count);
-          probe.pdu.size() == 2 && (probe.pdu[0] & 0x80))
-        return probe;
-      std::vector<std::uint16_t> words(write_count);
-      for (std::uint16_t i = 0; i < write_count; ++i) words[i] = be16(pdu, 10 + 2 * i);
-      if (auto r = write(target, fc, Table::holding_register, write_start, words, client)) return *r;
-      if (broadcast) return Reply{};
-      return read_registers(target, fc, Table::holding_register, read_start, read_count);
-    }
-    case kEncapsulated:
-      if (broadcast) return Reply{};
-      return device_identification(pdu);
-    case kReadFileRecord:
-      if (broadcast || target != Target::module) return broadcast ? Reply{} : fail(fc, ExceptionCode::illegal_function);
-      return read_file_record(pdu);
-    default:
+  // The traces are the module's: the simulator unit has no files.
+  if (fc == static_cast<std::uint8_t>(FunctionCode::read_file_record) && target != Target::module)
+    return fail(fc, ExceptionCode::illegal_function);
+  const auto request = decode_request(pdu);
+  if (!request) {
+    if (request.error() == ExceptionCode::illegal_function)
       spdlog::debug("{} {}: function code {} not supported: exception 01", client.transport, client.address, fc);
-      if (broadcast) return Reply{};
-      return fail(fc, ExceptionCode::illegal_function);
+    return fail(fc, request.error());
   }
+  return apply(target, *request, client);
+}
+
+Reply ModbusService::apply(Target target, const Request& request, const ClientInfo& client) {
+  const auto fc = static_cast<std::uint8_t>(request.function);
+  if (const auto* r = std::get_if<ReadRequest>(&request.body)) return read(target, fc, *r);
+  if (const auto* w = std::get_if<WriteRequest>(&request.body)) {
+    if (auto refused = write(target, fc, *w, client)) return *refused;
+    if (request.function == FunctionCode::write_single_coil)
+      return echo_reply(fc, w->start, w->values[0] ? 0xFF00 : 0x0000);
+    if (request.function == FunctionCode::write_single_register) return echo_reply(fc, w->start, w->values[0]);
+    return quantity_reply(fc, w->start, static_cast<std::uint16_t>(w->values.size()));
+  }
+  if (const auto* rw = std::get_if<ReadWriteRequest>(&request.body)) {
+    // The read range must be valid too before anything is written.
+    if (Reply probe = read(target, fc, rw->read); probe.pdu.size() == 2 && (probe.pdu[0] & 0x80)) return probe;
+    if (auto refused = write(target, fc, rw->write, client)) return *refused;
+    return read(target, fc, rw->read);
+  }
+  if (const auto* f = std::get_if<FileRecordRequest>(&request.body))
+    return read_trace_records(*f, [this](std::size_t axis) { return trace_file(loop_.trace(axis)); });
+  return device_identification(std::get<DeviceIdRequest>(request.body));
 }
 
 namespace {
@@ -216,57 +166,36 @@ std::int64_t ModbusService::sim_raw(const registers::Register& reg, const Snapsh
   return registers::sim_raw(reg, snap.sim.config, switches_of(snap.sim), readback_of(snap.sim));
 }
 
-Reply ModbusService::read_registers(Target target, std::uint8_t fc, Table table, std::uint16_t start,
-                                    std::uint16_t count) {
-  std::vector<std::uint16_t> words(count);
+Reply ModbusService::read(Target target, std::uint8_t fc, const ReadRequest& r) {
   const Snapshot snap = loop_.snapshot();
+  const bool bits = r.table == Table::coil || r.table == Table::discrete_input;
+  std::vector<std::uint16_t> words(bits ? 0 : r.count);
+  std::vector<std::uint8_t> flags(bits ? r.count : 0);
   std::optional<registers::Refusal> refused;
   if (target == Target::module) {
     std::lock_guard lock(mutex_);
     const registers::ModuleView view{settings_, host_, snap.status, extras_};
-    refused = registers::read_module_words(table, start, words, config_.word_order, view);
+    refused = bits ? registers::read_module_bits(r.table, r.start, flags, view)
+                   : registers::read_module_words(r.table, r.start, words, config_.word_order, view);
   } else {
-    refused = registers::read_words(registers::Unit::simulator, table, start, words, config_.word_order,
-                                    [&](const registers::Register& r) { return sim_raw(r, snap); });
+    const auto raw_of = [&](const registers::Register& reg) { return sim_raw(reg, snap); };
+    refused = bits ? registers::read_bits(registers::Unit::simulator, r.table, r.start, flags, raw_of)
+                   : registers::read_words(registers::Unit::simulator, r.table, r.start, words, config_.word_order,
+                                           raw_of);
   }
   if (refused) return fail(fc, refused->code);
-  Reply reply{true, {fc, static_cast<std::uint8_t>(count * 2)}};
-  reply.pdu.reserve(2 + count * 2u);
-  for (std::uint16_t w : words) put16(reply.pdu, w);
-  return reply;
+  return bits ? bits_reply(fc, flags) : registers_reply(fc, words);
 }
 
-Reply ModbusService::read_bits(Target target, std::uint8_t fc, Table table, std::uint16_t start,
-                               std::uint16_t count) {
-  std::vector<std::uint8_t> bits(count);
-  const Snapshot snap = loop_.snapshot();
-  std::optional<registers::Refusal> refused;
-  if (target == Target::module) {
-    std::lock_guard lock(mutex_);
-    const registers::ModuleView view{settings_, host_, snap.status, extras_};
-    refused = registers::read_module_bits(table, start, bits, view);
-  } else {
-    refused = registers::read_bits(registers::Unit::simulator, table, start, bits,
-                                   [&](const registers::Register& r) { return sim_raw(r, snap); });
-  }
-  if (refused) return fail(fc, refused->code);
-  const std::size_t nbytes = (count + 7u) / 8u;
-  Reply reply{true, {fc, static_cast<std::uint8_t>(nbytes)}};
-  reply.pdu.resize(2 + nbytes, 0);
-  for (std::size_t i = 0; i < count; ++i)
-    if (bits[i]) reply.pdu[2 + i / 8] |= static_cast<std::uint8_t>(1u << (i % 8));
-  return reply;
-}
-
-std::optional<Reply> ModbusService::write(Target target, std::uint8_t fc, Table table, std::uint16_t start,
-                                          std::span<const std::uint16_t> values, const ClientInfo& client) {
+std::optional<Reply> ModbusService::write(Target target, std::uint8_t fc, const WriteRequest& w,
+                                          const ClientInfo& client) {
   if (!may_write(client)) {
     spdlog::warn("{} {}: write refused, the address is not in --write-allow (exception 01)", client.transport,
                  client.address);
     return fail(fc, ExceptionCode::illegal_function);
   }
-  if (target == Target::module) return write_module(fc, table, start, values, client);
-  return write_sim(fc, table, start, values, client);
+  if (target == Target::module) return write_module(fc, w.table, w.start, w.values, client);
+  return write_sim(fc, w.table, w.start, w.values, client);
 }
 
 std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, std::uint16_t start,
@@ -310,7 +239,7 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
       for (const auto& c : accepted->changes)
         if (c.reg->persisted) writes.push_back({c.reg->name(), c.new_raw});
       if (store_) {
-        auto committed = store_->commit(writes, persistence::ChangeSource{client.transport, client.address});
+        auto committed = store_->commit(writes, source_of(client));
         if (!committed) {
           spdlog::error("{} {}: settings not stored, answered exception 04: {}", client.transport, client.address,
                         committed.error().message);
@@ -352,7 +281,7 @@ void ModbusService::run_commands(const std::vector<registers::CommandRequest>& c
         any = true;
         if (store_ && store_->settings_lost()) {
           std::lock_guard lock(mutex_);
-          (void)store_->acknowledge_settings_lost(persistence::ChangeSource{client.transport, client.address});
+          (void)store_->acknowledge_settings_lost(source_of(client));
         }
         break;
       case Command::jog_plus: loop_.set_jog(a, r.on ? 1 : 0, client.id); break;
@@ -434,62 +363,6 @@ std::optional<Reply> ModbusService::write_sim(std::uint8_t fc, Table table, std:
   if (!changes.empty())
     spdlog::info("simulator changed by {} {}: {}", client.transport, client.address, describe_changes(changes));
   return std::nullopt;
-}
-
-// FC 20: the homing traces, one file per axis (see server/trace.hpp).
-Reply ModbusService::read_file_record(std::span<const std::uint8_t> pdu) {
-  constexpr std::uint8_t fc = kReadFileRecord;
-  if (pdu.size() < 2) return fail(fc, ExceptionCode::illegal_data_value);
-  const std::uint8_t bytes = pdu[1];
-  if (bytes < 7 || bytes > 0xF5 || bytes % 7 != 0 || pdu.size() != 2u + bytes)
-    return fail(fc, ExceptionCode::illegal_data_value);
-  Reply reply{true, {fc, 0}};
-  std::array<std::optional<std::vector<std::uint16_t>>, homing::kAxisCount> files;
-  for (std::size_t at = 2; at < pdu.size(); at += 7) {
-    const std::uint8_t type = pdu[at];
-    const std::uint16_t file = be16(pdu, at + 1), record = be16(pdu, at + 3), length = be16(pdu, at + 5);
-    if (type != 6 || file < 1 || file > homing::kAxisCount || record > 9999 || length < 1)
-      return fail(fc, ExceptionCode::illegal_data_address);
-    auto& words = files[file - 1u];
-    if (!words) words = trace_file(loop_.trace(file - 1u));
-    if (std::size_t{record} + length > words->size()) return fail(fc, ExceptionCode::illegal_data_address);
-    if (reply.pdu.size() + 2u + 2u * length > kMaxPdu) return fail(fc, ExceptionCode::illegal_data_value);
-    reply.pdu.push_back(static_cast<std::uint8_t>(1 + 2 * length));
-    reply.pdu.push_back(6);
-    for (std::uint16_t i = 0; i < length; ++i) put16(reply.pdu, (*words)[record + i]);
-  }
-  reply.pdu[1] = static_cast<std::uint8_t>(reply.pdu.size() - 2);
-  return reply;
-}
-
-// FC 43 / MEI 14: libmodbus 3.1.6 has none, so it is answered here.
-Reply ModbusService::device_identification(std::span<const std::uint8_t> pdu) {
-  constexpr std::uint8_t fc = kEncapsulated;
-  if (pdu.size() != 4 || pdu[1] != 0x0E) return fail(fc, ExceptionCode::illegal_function);
-  const std::uint8_t code = pdu[2];
-  std::uint8_t object = pdu[3];
-  static constexpr std::array<std::string_view, 7> kObjects{
-      "Homing Module Works", "HM-6", "0.1.0", "https://example.invalid/homing-module", "Homing module",
-      "HM-6 Modbus homing controller", "homingd"};
-  if (code < 1 || code > 4) return fail(fc, ExceptionCode::illegal_data_value);
-  const std::uint8_t last = code == 1 ? 2 : 6;  // basic: 0..2; regular: 0..6 (no extended objects)
-  if (code == 4) {
-    if (object > 6) return fail(fc, ExceptionCode::illegal_data_address);
-  } else if (object > last) {
-    object = 0;  // stream access from an unknown object restarts at 0
-  }
-  Reply reply{true, {fc, 0x0E, code, 0x82 /* regular, stream and individual */, 0x00, 0x00, 0x00}};
-  std::uint8_t count = 0;
-  const std::uint8_t first = object, stop = code == 4 ? object : last;
-  for (std::uint8_t id = first; id <= stop; ++id) {
-    const auto text = kObjects[id];
-    reply.pdu.push_back(id);
-    reply.pdu.push_back(static_cast<std::uint8_t>(text.size()));
-    reply.pdu.insert(reply.pdu.end(), text.begin(), text.end());
-    ++count;
-  }
-  reply.pdu[6] = count;
-  return reply;
 }
 
 }  // namespace server

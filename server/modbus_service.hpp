@@ -1,7 +1,8 @@
 #pragma once
-// The meaning of Modbus requests: function codes, quantities, units, the
-// register table, durable settings writes, commands and the simulator unit.
-// Transports (TCP, RTU) call handle() with a PDU; fuzzers can too.
+// The policy that applies a decoded Modbus request (server/request_decoder.hpp):
+// which unit ids exist, who may write (--write-allow), locked settings, the
+// busy rule, the durable commit of a settings write, commands and the
+// simulator unit. Transports (TCP, RTU) call handle() with a PDU; fuzzers can too.
 #include <cstdint>
 #include <functional>
 #include <mutex>
@@ -14,6 +15,7 @@
 #include "persistence/settings_store.hpp"
 #include "registers/codec.hpp"
 #include "registers/validate.hpp"
+#include "request_decoder.hpp"
 #include "request_handler.hpp"
 
 namespace server {
@@ -43,20 +45,16 @@ class ModbusService final : public RequestHandler {
 
  private:
   enum class Target { module, simulator };
-  Reply dispatch(Target target, std::span<const std::uint8_t> pdu, const ClientInfo& client, bool broadcast);
-  Reply read_registers(Target target, std::uint8_t fc, registers::Table table, std::uint16_t start,
-                       std::uint16_t count);
-  Reply read_bits(Target target, std::uint8_t fc, registers::Table table, std::uint16_t start, std::uint16_t count);
+  Reply dispatch(Target target, std::span<const std::uint8_t> pdu, const ClientInfo& client);
+  Reply apply(Target target, const Request& request, const ClientInfo& client);
+  Reply read(Target target, std::uint8_t fc, const ReadRequest& request);
   // Validates and applies a write; nullopt when accepted.
-  std::optional<Reply> write(Target target, std::uint8_t fc, registers::Table table, std::uint16_t start,
-                             std::span<const std::uint16_t> values, const ClientInfo& client);
+  std::optional<Reply> write(Target target, std::uint8_t fc, const WriteRequest& request, const ClientInfo& client);
   std::optional<Reply> write_module(std::uint8_t fc, registers::Table table, std::uint16_t start,
                                     std::span<const std::uint16_t> values, const ClientInfo& client);
   std::optional<Reply> write_sim(std::uint8_t fc, registers::Table table, std::uint16_t start,
                                  std::span<const std::uint16_t> values, const ClientInfo& client);
   void run_commands(const std::vector<registers::CommandRequest>& commands, const ClientInfo& client);
-  Reply device_identification(std::span<const std::uint8_t> pdu);
-  Reply read_file_record(std::span<const std::uint8_t> pdu);
   std::int64_t sim_raw(const registers::Register& reg, const Snapshot& snap) const;
 
   ServiceConfig config_;

@@ -86,20 +86,34 @@ bool Cidr::contains(const std::string& address) const {
   return (ntohl(addr.s_addr) & mask) == network;
 }
 
-std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv) {
-  ParseOutcome out;
-  Options& o = out.options;
+// The CLI11 option table, bound to the values one parse fills in.
+struct OptionParser::Table {
   CLI::App app{"homingd: Modbus TCP/RTU homing module (simulator or GPIO backend)", "homingd"};
-  app.set_version_flag("--version", "homingd 0.1.0");
+  Options o;
   std::string tcp = "127.0.0.1:1502";
   std::string parity = "E";
   std::string word_order = "high-first";
-  app.set_config("--config", "", "TOML config file; every option below can be a key in it")
-      ->check(CLI::ExistingFile);
-  app.add_option("--tcp", tcp, "Modbus TCP listen address HOST:PORT")->capture_default_str();
   // A bool flag: CLI11 2.1's integer flag callback throws std::invalid_argument
   // (uncaught: abort) on a value like `--no-tcp=yess` or `no-tcp = "on?"`.
   bool no_tcp = false;
+
+  Table();
+  // Back to the defaults, nothing parsed.
+  void reset() {
+    o = Options{};
+    tcp = "127.0.0.1:1502";
+    parity = "E";
+    word_order = "high-first";
+    no_tcp = false;
+    app.clear();
+  }
+};
+
+OptionParser::Table::Table() {
+  app.set_version_flag("--version", "homingd 0.1.0");
+  app.set_config("--config", "", "TOML config file; every option below can be a key in it")
+      ->check(CLI::ExistingFile);
+  app.add_option("--tcp", tcp, "Modbus TCP listen address HOST:PORT")->capture_default_str();
   app.add_flag("--no-tcp,--no_tcp", no_tcp, "Serve RTU only");
   app.add_option("--rtu", o.rtu_device, "Serial device for Modbus RTU (e.g. /dev/ttyUSB0)");
   app.add_option("--baud", o.baud, "RTU baud rate")
@@ -149,6 +163,16 @@ std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv) {
   app.add_option("--import-settings,--import_settings", o.import_settings,
                  "Validate this TOML file like Modbus writes, apply it to --db in one transaction and exit")
       ->check(CLI::ExistingFile);
+}
+
+OptionParser::OptionParser() : table_(std::make_unique<Table>()) {}
+OptionParser::~OptionParser() = default;
+
+std::expected<ParseOutcome, std::string> OptionParser::parse(int argc, char** argv) {
+  Table& t = *table_;
+  t.reset();
+  CLI::App& app = t.app;
+  ParseOutcome out;
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -165,16 +189,18 @@ std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv) {
       what += " (config file " + cfg->as<std::string>() + ")";
     return std::unexpected(what);
   }
-  if (no_tcp) o.tcp_enabled = false;
+  out.options = t.o;
+  Options& o = out.options;
+  if (t.no_tcp) o.tcp_enabled = false;
   if (auto cfg = app.get_option("--config"); cfg->count() > 0) {
     o.config_path = cfg->as<std::string>();
     if (auto r = check_config_file(o.config_path, app); !r) return std::unexpected(r.error());
   }
   if (o.tcp_enabled) {
-    if (auto r = split_host_port(tcp, o); !r) return std::unexpected(r.error());
+    if (auto r = split_host_port(t.tcp, o); !r) return std::unexpected(r.error());
   }
-  o.parity = parity.empty() ? 'E' : parity[0];
-  o.word_order = word_order == "low-first" ? registers::WordOrder::low_first : registers::WordOrder::high_first;
+  o.parity = t.parity.empty() ? 'E' : t.parity[0];
+  o.word_order = t.word_order == "low-first" ? registers::WordOrder::low_first : registers::WordOrder::high_first;
   for (const auto& entry : o.write_allow)
     if (!parse_cidr(entry)) return std::unexpected("--write-allow: '" + entry + "' is not an IPv4 address or CIDR (e.g. 10.0.0.0/24)");
   if (!o.tcp_enabled && o.rtu_device.empty())
@@ -183,6 +209,10 @@ std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv) {
     return std::unexpected("--sim-unit " + std::to_string(o.sim_unit_id) + " must differ from --unit " +
                            std::to_string(o.unit_id));
   return out;
+}
+
+std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv) {
+  return OptionParser().parse(argc, argv);
 }
 
 }  // namespace server

@@ -3,6 +3,7 @@
 // the command line winning. Fixed by the spec so any tool can start it.
 #include <cstdint>
 #include <expected>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -54,7 +55,26 @@ struct ParseOutcome {
   int exit_code = 0;
 };
 
-// Errors name the option and the accepted values.
+// The parser of the command line and the config file. Its option table is the
+// costly part to build (CLI11), so one parser can parse any number of command
+// lines, each from the defaults: homingd parses one, the config fuzzer
+// (fuzz/fuzz_config.cpp) one per input.
+class OptionParser {
+ public:
+  OptionParser();
+  ~OptionParser();
+  OptionParser(const OptionParser&) = delete;
+  OptionParser& operator=(const OptionParser&) = delete;
+
+  // Errors name the option and the accepted values.
+  std::expected<ParseOutcome, std::string> parse(int argc, char** argv);
+
+ private:
+  struct Table;
+  std::unique_ptr<Table> table_;
+};
+
+// One command line with a parser of its own.
 std::expected<ParseOutcome, std::string> parse_options(int argc, char** argv);
 
 }  // namespace server

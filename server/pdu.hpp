@@ -18,6 +18,13 @@ struct Reply {
 
 Reply exception_reply(std::uint8_t function, std::uint8_t code);
 
+// Normal replies: FC 3, 4, 23 (registers read), FC 1, 2 (bits read, one 0/1
+// per byte of `bits`), FC 5, 6 (the request echoed), FC 15, 16 (start, quantity).
+Reply registers_reply(std::uint8_t function, std::span<const std::uint16_t> words);
+Reply bits_reply(std::uint8_t function, std::span<const std::uint8_t> bits);
+Reply echo_reply(std::uint8_t function, std::uint16_t address, std::uint16_t value);
+Reply quantity_reply(std::uint8_t function, std::uint16_t start, std::uint16_t count);
+
 inline std::uint16_t be16(std::span<const std::uint8_t> b, std::size_t at) {
   return static_cast<std::uint16_t>((b[at] << 8) | b[at + 1]);
 }

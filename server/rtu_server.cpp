@@ -32,8 +32,8 @@ std::expected<void, std::string> RtuServer::open() {
 
 void RtuServer::run() {
   std::array<std::uint8_t, MODBUS_RTU_MAX_ADU_LENGTH> req{};
-  const ClientInfo broadcast_info{0, "rtu", "broadcast"};
-  const ClientInfo unit_info{0, "rtu", "unit " + std::to_string(config_.unit_id)};
+  const ClientInfo broadcast_info{0, Transport::rtu, "broadcast"};
+  const ClientInfo unit_info{0, Transport::rtu, "unit " + std::to_string(config_.unit_id)};
   while (!stop_) {
     const int rc = modbus_receive(ctx_, req.data());
     if (rc == 0) continue;  // a frame for another unit on the bus

@@ -14,7 +14,7 @@
 #include <chrono>
 #include <cstring>
 
-#include "mbap.hpp"
+#include "mbap_stream.hpp"
 
 namespace server {
 namespace {
@@ -73,7 +73,7 @@ class Reader {
   std::size_t begin_ = 0, end_ = 0;
 };
 
-bool send_all(int fd, const std::vector<std::uint8_t>& bytes) {
+bool send_all(int fd, std::span<const std::uint8_t> bytes) {
   std::size_t sent = 0;
   while (sent < bytes.size()) {
     const ssize_t r = ::send(fd, bytes.data() + sent, bytes.size() - sent, MSG_NOSIGNAL);
@@ -87,6 +87,41 @@ bool send_all(int fd, const std::vector<std::uint8_t>& bytes) {
 }
 
 constexpr int kFrameTimeoutMs = 1000;  // the rest of a frame must follow its first byte within this
+
+// A connection's socket as the framing loop reads it: the next frame must
+// begin within the idle timeout, and the whole frame, not each of its pieces,
+// must arrive within the frame timeout.
+class SocketStream final : public MbapStream {
+ public:
+  SocketStream(int fd, int idle_timeout_ms, const std::atomic<bool>& stop)
+      : fd_(fd), idle_timeout_ms_(idle_timeout_ms), stop_(stop), reader_(fd) {}
+  bool next_frame() override {
+    if (reader_.empty() && !wait_readable(fd_, idle_timeout_ms_, stop_)) return false;
+    frame_deadline_ = std::chrono::steady_clock::now() + std::chrono::milliseconds(kFrameTimeoutMs);
+    return true;
+  }
+  bool read(std::span<std::uint8_t> out) override {
+    return reader_.read_exact(out.data(), out.size(), frame_deadline_, stop_);
+  }
+  bool send(std::span<const std::uint8_t> frame) override { return send_all(fd_, frame); }
+
+ private:
+  int fd_;
+  int idle_timeout_ms_;
+  const std::atomic<bool>& stop_;
+  Reader reader_;
+  std::chrono::steady_clock::time_point frame_deadline_{};
+};
+
+const char* end_reason(StreamEnd end, bool stopping) {
+  switch (end) {
+    case StreamEnd::no_next_frame: return stopping ? "server stopping" : "idle timeout (--idle-timeout-s)";
+    case StreamEnd::closed: return "closed by the client";
+    case StreamEnd::malformed_header: return "malformed MBAP header";
+    case StreamEnd::incomplete_frame: return "incomplete frame";
+  }
+  return "?";
+}
 
 }  // namespace
 
@@ -135,7 +170,7 @@ void TcpServer::run() {
     const int one = 1;
     ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
     ++active_;
-    ClientInfo info{next_id_++, "tcp", address};
+    ClientInfo info{next_id_++, Transport::tcp, address};
     spdlog::info("tcp: client {} connected ({} active)", address, active_.load());
     std::lock_guard lock(connections_mutex_);
     Connection& c = connections_.emplace_back();
@@ -145,36 +180,12 @@ void TcpServer::run() {
 }
 
 void TcpServer::serve(Connection& c, ClientInfo info) {
-  std::array<std::uint8_t, 7 + 256> frame{};
-  Reader reader(c.fd);
-  const char* why = "closed by the client";
-  for (;;) {
-    if (reader.empty() && !wait_readable(c.fd, idle_timeout_s_ * 1000, stop_)) {
-      why = stop_ ? "server stopping" : "idle timeout (--idle-timeout-s)";
-      break;
-    }
-    // The whole frame, not each of its pieces, must arrive within the frame timeout.
-    const auto frame_deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(kFrameTimeoutMs);
-    if (!reader.read_exact(frame.data(), kMbapHeaderSize, frame_deadline, stop_)) break;
-    const MbapHeader h = parse_mbap(std::span<const std::uint8_t, kMbapHeaderSize>(frame.data(), kMbapHeaderSize));
-    if (!h.valid()) {
-      why = "malformed MBAP header";
-      spdlog::warn("tcp: {}: MBAP protocol {} length {}; closing the connection", info.address, h.protocol, h.length);
-      break;
-    }
-    if (!reader.read_exact(frame.data() + kMbapHeaderSize, h.pdu_size(), frame_deadline, stop_)) {
-      why = "incomplete frame";
-      break;
-    }
-    const Reply reply =
-        handler_.handle(h.unit, std::span<const std::uint8_t>(frame.data() + kMbapHeaderSize, h.pdu_size()), info);
-    if (reply.send && !send_all(c.fd, tcp_frame(h.transaction_id, h.unit, reply.pdu))) break;
-  }
-  handler_.disconnected(info);
+  SocketStream stream(c.fd, idle_timeout_s_ * 1000, stop_);
+  const StreamEnd end = serve_mbap_stream(stream, handler_, info);
   ::shutdown(c.fd, SHUT_RDWR);
   ::close(c.fd);
   --active_;
-  spdlog::info("tcp: client {} disconnected: {}", info.address, why);
+  spdlog::info("tcp: client {} disconnected: {}", info.address, end_reason(end, stop_));
   c.finished = true;
 }
 

@@ -23,16 +23,18 @@ inline constexpr std::size_t kTraceHeaderWords = 10;
 inline constexpr std::size_t kTraceSampleWords = 8;
 inline constexpr std::size_t kTraceCapacity = 1200;  // 10 + 8·1200 < 10000 records per file
 
+// Trivial, so that the buffers below can be left unwritten until a cycle
+// fills them: a new control loop would otherwise write 0.6 MB it may never use.
 struct TraceSample {
-  double time_s = 0;
-  homing::Phase phase = homing::Phase::idle;
-  double motor_mm = 0;
-  double velocity_mm_per_s = 0;
-  bool sensor = false;
+  double time_s;
+  homing::Phase phase;
+  double motor_mm;
+  double velocity_mm_per_s;
+  bool sensor;
 };
 
 struct AxisTrace {
-  std::array<TraceSample, kTraceCapacity> samples{};
+  std::array<TraceSample, kTraceCapacity> samples;  // [0, count) are written; nothing reads past count
   std::size_t count = 0;
   double interval_s = 0;           // between kept samples
   std::optional<double> reference_time_s;
@@ -58,7 +60,7 @@ class TraceRecorder {
  private:
   void keep_latest();
 
-  std::array<AxisTrace, homing::kAxisCount> traces_{};
+  std::array<AxisTrace, homing::kAxisCount> traces_;  // default-initialised: see TraceSample
   std::array<TraceSample, homing::kAxisCount> latest_{};  // the last recorded period
   bool latest_kept_ = true;
   std::array<bool, homing::kAxisCount> involved_{};

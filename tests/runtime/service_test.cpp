@@ -26,7 +26,7 @@ struct Module {
   std::unique_ptr<persistence::SettingsStore> store;
   std::unique_ptr<server::ControlLoop> loop;
   std::unique_ptr<server::ModbusService> service;
-  server::ClientInfo client{7, "tcp", "127.0.0.1:50000"};
+  server::ClientInfo client{7, server::Transport::tcp, "127.0.0.1:50000"};
 
   explicit Module(bool faulty_disk, server::ServiceConfig config = {}) {
     std::vector<persistence::SettingDefault> defaults;
@@ -157,4 +157,50 @@ home = 10
   // Y is wired: its mode may change.
   CHECK(m.write_u16("axis.y.mode", 3).size() == 5);
   CHECK(m.store->value("axis.y.mode") == 3);
+}
+
+TEST_CASE("the write allow-list binds network clients only: a client on the serial line writes, one outside the list does not") {
+  server::ServiceConfig config;
+  config.write_allow.push_back(*server::parse_cidr("10.0.0.0/8"));
+  Module m(false, config);
+  const auto before = m.store->value("axis.y.mode");
+  REQUIRE(before != 3);
+  // The TCP client at 127.0.0.1 is outside 10.0.0.0/8.
+  auto reply = m.write_u16("axis.y.mode", 3);
+  REQUIRE(reply.size() == 2);
+  CHECK(reply[0] == (6 | 0x80));
+  CHECK(reply[1] == 1);
+  CHECK(m.store->value("axis.y.mode") == before);
+  m.client = server::ClientInfo{8, server::Transport::rtu, "unit 1"};
+  CHECK(m.write_u16("axis.y.mode", 3).size() == 5);
+  CHECK(m.store->value("axis.y.mode") == 3);
+  // The audit log names the transport the write came by.
+  const auto audit = m.store->recent_changes(1);
+  REQUIRE(audit);
+  REQUIRE(audit->size() == 1);
+  CHECK(audit->front().transport == "rtu");
+  CHECK(audit->front().client == "unit 1");
+}
+
+TEST_CASE("an RTU broadcast write is applied to the module and answered with nothing") {
+  Module m(false);
+  const server::ClientInfo broadcast{0, server::Transport::rtu, "broadcast"};
+  const auto a = Module::address("axis.y.mode");
+  const std::vector<std::uint8_t> write{6, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), 0, 3};
+  REQUIRE(m.store->value("axis.y.mode") != 3);
+  CHECK_FALSE(m.service->handle(0, write, broadcast).send);
+  CHECK(m.store->value("axis.y.mode") == 3);
+  // A read broadcast is not answered either; over TCP unit 0 is the module itself.
+  const std::vector<std::uint8_t> read{3, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), 0, 1};
+  CHECK_FALSE(m.service->handle(0, read, broadcast).send);
+  CHECK(m.service->handle(0, read, m.client).pdu == std::vector<std::uint8_t>{3, 2, 0, 3});
+}
+
+TEST_CASE("a unit id that does not exist is exception 0B over TCP and silence over RTU") {
+  Module m(false);
+  const std::vector<std::uint8_t> read{3, 0, 0, 0, 1};
+  CHECK(m.service->handle(9, read, m.client).pdu == std::vector<std::uint8_t>{0x83, 0x0B});
+  const server::ClientInfo serial{0, server::Transport::rtu, "unit 1"};
+  CHECK_FALSE(m.service->handle(9, read, serial).send);
+  CHECK(m.service->handle(1, read, serial).send);
 }
