@@ -35,6 +35,11 @@ struct Options {
   // Access: TCP clients allowed to write (empty = all); others may only read.
   std::vector<std::string> write_allow;  // "192.168.1.10", "10.0.0.0/24"
   int unlock_code = 0;                   // 0 = no settings lock
+  // Device identity (FC 43, FC 17); empty: the built-in text.
+  std::string vendor_name;
+  std::string vendor_url;
+  std::string product_name;
+  std::string machine_name;
   // Offline settings transfer: act on --db and exit without serving.
   std::string export_settings;
   std::string import_settings;

@@ -30,11 +30,19 @@ struct ClientInfo {
   std::string address;                  // "127.0.0.1:40122" or "unit 5"
 };
 
+// What a transport saw on its line, for the diagnostics counters (FC 08).
+enum class BusEvent : std::uint8_t {
+  message,     // a whole frame, for this module or another unit on the bus
+  comm_error,  // a frame that failed its CRC (RTU) or a malformed MBAP header (TCP)
+  overrun,     // a frame longer than the largest ADU
+};
+
 class RequestHandler {
  public:
   virtual ~RequestHandler() = default;
   virtual Reply handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) = 0;
   virtual void disconnected(const ClientInfo& client) = 0;
+  virtual void bus_event(Transport, BusEvent) {}
 };
 
 }  // namespace server

@@ -21,9 +21,8 @@ Trace read_trace_or_explain(Connection& c, std::size_t axis) {
     return read_trace(c, axis);
   } catch (const LinkError& e) {
     if (!c.is_rtu()) throw;
-    throw LinkError(fmt::format("{}\n(homingd serves the traces (function 20) over Modbus TCP only: its RTU "
-                                "transport frames requests with libmodbus, which cannot receive function 20; "
-                                "use --tcp)", e.what()));
+    throw LinkError(fmt::format("{}\n(homingd before 0.1.0 serves the traces (function 20) over Modbus TCP "
+                                "only: use --tcp)", e.what()));
   }
 }
 
