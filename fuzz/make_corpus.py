@@ -182,4 +182,25 @@ write(t, "no_settings", 'format = "homing-module-settings"\n')
 write(t, "string_value", '[settings]\n"axis.x.pull_off" = "2.5 mm"\n')
 write(t, "float_value", '[settings]\n"axis.x.pull_off" = 2.5\n')
 write(t, "huge_value", '[settings]\n"axis.x.pull_off" = 9223372036854775807\n')
+write(t, "engineering_values", '''format = "homing-module-settings"
+format_version = 2
+
+[settings]
+axis.x.direction = "negative"
+axis.x.mode = "switch_reapproach"
+axis.x.pull_off = 2.25  # mm
+axis.x.seek_feedrate = 1500.0  # mm/min
+axis.x.sensor_nc = true
+global.allowed_without_homing = "jog_reduced"
+sequence.step1 = "x+y"
+''')
+write(t, "engineering_bad_values", '''format = "homing-module-settings"
+format_version = 2
+
+[settings]
+axis.x.direction = "sideways"
+axis.x.pull_off = 2.0005
+axis.x.mode = true
+sequence.step1 = "x+q"
+''')
 write(t, "broken_toml", '[settings\n"axis.x.pull_off" = \n')

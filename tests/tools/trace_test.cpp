@@ -1,5 +1,6 @@
 // homingctl trace: the FC 20 file of a real homing cycle as SVG, CSV and JSON,
-// over TCP and RTU; the parser on malformed files.
+// over TCP and RTU; the parser on malformed files (windows and label fitting:
+// trace_fit_test.cpp).
 #include <catch2/catch.hpp>
 #include <fcntl.h>
 #include <poll.h>
@@ -9,7 +10,7 @@
 #include <thread>
 
 #include "tools_helpers.hpp"
-#include "trace_svg.hpp"
+#include "trace.hpp"
 
 using namespace tools_test;
 
