@@ -69,6 +69,9 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
   last_result_ = CommandResult::accepted;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     AxisRun& run = axes_[a];
+    if (!((covered | unsequenced) & axis_bit(a))) continue;
+    // Whether this cycle's home correction can be trusted as a measurement.
+    run.homed_at_cycle_start = run.homed;
     if (!(covered & axis_bit(a))) continue;
     run.in_cycle = true;
     run.homed = false;

@@ -123,6 +123,10 @@ struct AxisStatus {
   bool busy = false;
   double trigger_position_mm = 0;   // reference edge, in the coordinates believed before assign
   double home_correction_mm = 0;    // assigned - believed at the reference edge
+  // The axis was homed (and still trusted) when its last homing cycle
+  // started: only then does home_correction measure drift (lost steps, a
+  // sensor that moved). Otherwise it only says where the axis happened to stand.
+  bool homed_at_cycle_start = false;
   double stop_distance_mm = 0;      // v²/2a of the seek
   double phase_distance_mm = 0;     // travelled in the current phase
 };

@@ -177,3 +177,27 @@ SCENARIO("a slave whose master is in no step is assigned its home position with 
   CHECK(r.axis(4).position_mm == Approx(7).margin(1e-9));
   CHECK(r.trace[4].path_mm == 0);
 }
+
+TEST_CASE("a home correction is a measurement only when the axis was homed when its cycle started",
+          "[sequence][statistics]") {
+  Rig r;
+  r.step();
+  CHECK_FALSE(r.axis(X).homed_at_cycle_start);
+  // The first cycle after start-up corrects by where the axis stood and says it was not homed.
+  REQUIRE(r.home_all());
+  CHECK_FALSE(r.axis(X).homed_at_cycle_start);
+  CHECK(std::abs(r.axis(X).home_correction_mm) > 50);
+  // The next cycle starts homed: its correction measures the sensor.
+  REQUIRE(r.home_all());
+  CHECK(r.axis(X).homed_at_cycle_start);
+  CHECK(std::abs(r.axis(X).home_correction_mm) < 0.01);
+  // An alarm clears the homed state (alarm_clears_homed): the next cycle is not trusted again.
+  r.sim().set_estop(true);
+  r.step();
+  r.sim().set_estop(false);
+  r.step();
+  r.reset_alarm();
+  REQUIRE_FALSE(r.axis(X).homed);
+  REQUIRE(r.home_all());
+  CHECK_FALSE(r.axis(X).homed_at_cycle_start);
+}

@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <memory>
 
 #include <toml++/toml.h>
@@ -17,6 +18,7 @@
 #include "registers/sim_bindings.hpp"
 #include "server/control_loop.hpp"
 #include "server/modbus_service.hpp"
+#include "server/monitor.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace {
@@ -73,6 +75,22 @@ struct Module {
     const auto a = address(name);
     return request({6, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), static_cast<std::uint8_t>(v >> 8),
                     static_cast<std::uint8_t>(v)});
+  }
+  std::int64_t read_u16(std::string_view name) {
+    const auto a = address(name);
+    const auto r = request({3, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), 0, 1});
+    REQUIRE(r.size() == 4);
+    return (r[2] << 8) | r[3];
+  }
+  homing::Status status() const { return loop->snapshot().status; }
+  // Steps the loop until pred holds (false after max_periods), calling each() every 10 periods.
+  bool run_until(const std::function<bool()>& pred, int max_periods, const std::function<void()>& each = {}) {
+    for (int i = 0; i < max_periods; ++i) {
+      loop->run_period(0.001);
+      if (each && i % 10 == 0) each();
+      if (pred()) return true;
+    }
+    return false;
   }
   std::vector<std::uint8_t> coil(std::string_view name) {
     const auto a = address(name);
@@ -203,4 +221,63 @@ TEST_CASE("a unit id that does not exist is exception 0B over TCP and silence ov
   const server::ClientInfo serial{0, server::Transport::rtu, "unit 1"};
   CHECK_FALSE(m.service->handle(9, read, serial).send);
   CHECK(m.service->handle(1, read, serial).send);
+}
+
+TEST_CASE("the home-correction statistics count only cycles that started homed: the first after start-up is "
+          "recorded as excluded") {
+  Module m(false);
+  server::Monitor monitor(*m.loop, *m.service, m.store.get());
+  std::int64_t now_ms = 0;
+  const auto watch = [&] { monitor.poll(now_ms += 10); };
+  watch();
+  for (int cycle = 0; cycle < 2; ++cycle) {
+    m.coil("cmd.home_all");
+    REQUIRE(m.run_until([&] { return m.status().homing; }, 100, watch));
+    REQUIRE(m.run_until([&] { return !m.status().homing; }, 400'000, watch));
+    watch();
+    REQUIRE(m.status().state == homing::MachineState::homed);
+  }
+  const auto runs = m.store->recent_runs(10);
+  REQUIRE(runs);
+  REQUIRE(runs->size() == 2);
+  for (std::size_t a : {0u, 1u, 2u}) {
+    INFO("axis " << a);
+    const auto& first = (*runs)[1].axis[a];
+    REQUIRE(first.present);
+    CHECK(first.excluded == persistence::Excluded::not_homed_before);
+    CHECK_FALSE(first.correction_mm);
+    const auto& second = (*runs)[0].axis[a];
+    REQUIRE(second.present);
+    CHECK(second.excluded == persistence::Excluded::no);
+    REQUIRE(second.correction_mm);
+    CHECK(std::abs(*second.correction_mm) < 0.05);
+    const auto summary = m.store->correction_summary(a, 10);
+    REQUIRE(summary);
+    CHECK(summary->count == 1);
+  }
+  // The registers show the statistics of the trusted cycle only.
+  const auto mean = Module::address("axis.x.correction_mean");
+  const auto r = m.request({4, static_cast<std::uint8_t>(mean >> 8), static_cast<std::uint8_t>(mean), 0, 2});
+  REQUIRE(r.size() == 6);
+  CHECK(std::abs(static_cast<std::int32_t>((r[2] << 24) | (r[3] << 16) | (r[4] << 8) | r[5])) < 50);  // µm
+}
+
+TEST_CASE("the history records an axis's correction only when its cycle succeeded and it started homed") {
+  homing::AxisStatus axis;
+  axis.home_correction_mm = 84.2;
+  axis.homed_at_cycle_start = false;
+  auto r = server::axis_record(true, axis, 1500);
+  CHECK(r.present);
+  CHECK(r.duration_ms == 1500);
+  CHECK_FALSE(r.correction_mm);
+  CHECK(r.excluded == persistence::Excluded::not_homed_before);
+  axis.homed_at_cycle_start = true;
+  axis.home_correction_mm = 0.003;
+  r = server::axis_record(true, axis, 1500);
+  REQUIRE(r.correction_mm);
+  CHECK(*r.correction_mm == 0.003);
+  CHECK(r.excluded == persistence::Excluded::no);
+  r = server::axis_record(false, axis, 1500);
+  CHECK_FALSE(r.correction_mm);
+  CHECK(r.excluded == persistence::Excluded::cycle_failed);
 }
