@@ -109,6 +109,13 @@ constexpr bool bits_in_order() {
 static_assert(bits_in_order());
 }  // namespace interlock
 
+// Whether a homing command may start now, judged by what blocks it (the
+// status.interlocks bits): estop, drive fault, a latched alarm, a lost link,
+// a missing permit, then a cycle or motion already running (refused_busy).
+// The engine judges every home command with it, and the runtime answers a
+// cmd.home_axes write with it before anything of the write is applied.
+CommandResult homing_refusal_of(std::uint16_t interlocks);
+
 std::string_view state_name(MachineState s);
 std::string_view command_result_name(CommandResult r);
 std::string_view interlock_name(int bit);  // the bit's text ("emergency stop pressed")

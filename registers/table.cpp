@@ -129,6 +129,7 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "global.history_max_rows", .offset = 14, .type = Type::u32, .min = 100, .max = 1'000'000, .def = 10'000, .fills = fills<&G::history_max_rows>, .description = "rows kept in the audit log and in the homing history each (oldest pruned)"},
     {.pattern = "global.permit_required", .offset = 13, .max = 1, .fills = fills<&G::permit_required>, .description = "flag (0/1): homing needs host.homing_permit (or the permit input) on"},
     {.pattern = "security.unlock", .offset = 30, .max = 65535, .key = Key::security_unlock, .description = "write the unlock code (homingd --unlock-code) to allow settings writes; reads 0"},
+    {.pattern = "cmd.home_axes", .offset = 40, .type = Type::bitmask, .max = 63, .key = Key::cmd_home_axes, .values = kAxisBits, .description = "write a bitmask of axes (bit 0 = X ... bit 5 = C): one cycle homes exactly those (with their gantry partners) in sequence-step order (reads back 0)"},
     {.pattern = "host.heartbeat", .offset = 20, .max = 65535, .key = Key::host_heartbeat, .description = "the master changes this at least once per watchdog period (not persisted)"},
     // input registers: status
     {.pattern = "status.map_version", .table = IR, .access = Access::r, .max = 65535, .def = kMapVersion, .key = Key::status_map_version, .description = "version of this register map"},

@@ -26,6 +26,21 @@ std::string range_text(const Register& reg) {
                      unit.empty() ? "" : " ", unit);
 }
 
+// A cmd.home_axes mask names at least one axis, and only axes that home.
+std::optional<Refusal> named_axes_refusal(const CommandRequest& c, const homing::Settings& settings) {
+  if (c.command != Command::home_axes) return std::nullopt;
+  if (c.axes == 0)
+    return Refusal{ExceptionCode::illegal_data_value,
+                   "cmd.home_axes = 0 names no axis: set bit 0 (X) ... bit 5 (C) of the axes to home; nothing was written"};
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+    if ((c.axes & homing::axis_bit(a)) && settings.axes[a].mode == homing::HomingMode::disabled)
+      return Refusal{ExceptionCode::illegal_data_value,
+                     fmt::format("cmd.home_axes names {0}, whose axis.{1}.mode is disabled: {0} cannot be homed; "
+                                 "nothing was written",
+                                 homing::kAxisUpper[a], homing::kAxisLetters[a])};
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::expected<std::vector<RawWrite>, Refusal> decode_write(Unit unit, Table table, std::uint16_t start,
@@ -96,6 +111,9 @@ std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t 
       if (reg.access == Access::w) continue;  // pulse commands hold no state
       old_raw = host_raw(result.host, reg);
       set_host_raw(result.host, reg, w.raw);
+    } else if (auto cmd = command_of(reg, w.raw)) {
+      result.commands.push_back(*cmd);
+      continue;  // a command register holds nothing
     } else if (reg.persisted) {
       old_raw = setting_raw(result.settings, reg);
       set_setting_raw(result.settings, reg, w.raw);
@@ -113,7 +131,23 @@ std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t 
     return std::unexpected(Refusal{
         ExceptionCode::illegal_data_value,
         fmt::format("{}; nothing was written", homing::describe_fault(*fault, result.settings))});
+  for (const CommandRequest& c : result.commands)
+    if (auto refused = named_axes_refusal(c, result.settings)) return std::unexpected(*refused);
   return result;
+}
+
+std::optional<Refusal> refusal_now(const AcceptedWrite& write, const homing::Status& status) {
+  for (const CommandRequest& c : write.commands) {
+    if (c.command != Command::home_axes) continue;
+    const homing::CommandResult r = homing::homing_refusal_of(status.interlocks);
+    if (r == homing::CommandResult::accepted) continue;
+    const auto code =
+        r == homing::CommandResult::refused_busy ? ExceptionCode::server_device_busy : ExceptionCode::server_device_failure;
+    return Refusal{code, fmt::format("cmd.home_axes refused ({}): {}; nothing was written",
+                                     homing::command_result_name(r),
+                                     homing::kCommandResultInfo[static_cast<std::size_t>(r)].text)};
+  }
+  return std::nullopt;
 }
 
 std::optional<Refusal> validate_settings_map(const std::map<std::string, std::int64_t>& values) {

@@ -223,6 +223,62 @@ TEST_CASE("a unit id that does not exist is exception 0B over TCP and silence ov
   CHECK(m.service->handle(1, read, serial).send);
 }
 
+TEST_CASE("cmd.home_axes homes exactly the named axes in one cycle and reads back 0") {
+  Module m(false);
+  const auto reply = m.write_u16("cmd.home_axes", 0b011);  // X and Y
+  REQUIRE(reply.size() == 5);  // echoed
+  m.periods(3);
+  REQUIRE(m.status().homing);
+  CHECK(m.status().last_command_result == homing::CommandResult::accepted);
+  CHECK(m.read_u16("cmd.home_axes") == 0);
+  const double z0 = m.loop->snapshot().sim.axes[2].actual_position_mm;
+  bool z_busy = false;
+  REQUIRE(m.run_until([&] { return !m.status().homing; }, 200'000,
+                      [&] { z_busy = z_busy || m.status().axes[2].busy; }));
+  const homing::Status st = m.status();
+  CHECK(st.homing_cycles == 1);
+  CHECK(st.axes[0].homed);
+  CHECK(st.axes[1].homed);
+  CHECK_FALSE(st.axes[2].homed);
+  CHECK_FALSE(z_busy);
+  CHECK(m.loop->snapshot().sim.axes[2].actual_position_mm == z0);
+}
+
+TEST_CASE("a cmd.home_axes write the module refuses answers its exception and changes nothing") {
+  Module m(false);
+  const auto refused = [](const std::vector<std::uint8_t>& reply, std::uint8_t code) {
+    return reply == std::vector<std::uint8_t>{6 | 0x80, code};
+  };
+  SECTION("no axis named, or a disabled one: 03") {
+    CHECK(refused(m.write_u16("cmd.home_axes", 0), 3));
+    CHECK(refused(m.write_u16("cmd.home_axes", 0b1000), 3));  // A is disabled by default
+    m.periods(3);
+    CHECK(m.status().command_count == 0);
+    CHECK_FALSE(m.status().homing);
+  }
+  SECTION("while a cycle runs: 06, and the cycle goes on as it was") {
+    REQUIRE(m.write_u16("cmd.home_axes", 0b001).size() == 5);
+    m.periods(3);
+    REQUIRE(m.status().homing);
+    const auto count = m.status().command_count;
+    CHECK(refused(m.write_u16("cmd.home_axes", 0b110), 6));
+    m.periods(3);
+    CHECK(m.status().command_count == count);
+    CHECK(m.status().homing);
+    CHECK_FALSE(m.status().axes[1].busy);
+    CHECK_FALSE(m.status().axes[2].busy);
+  }
+  SECTION("while an alarm is latched: 04") {
+    m.loop->raise_settings_lost();
+    m.periods(3);
+    REQUIRE(m.status().alarm);
+    CHECK(refused(m.write_u16("cmd.home_axes", 0b001), 4));
+    m.periods(3);
+    CHECK(m.status().command_count == 0);
+    CHECK_FALSE(m.status().homing);
+  }
+}
+
 TEST_CASE("the home-correction statistics count only cycles that started homed: the first after start-up is "
           "recorded as excluded") {
   Module m(false);
