@@ -89,6 +89,7 @@ struct AxisRun {
   bool aligning = false;        // commutator slave: running its own edge search
   double trigger_position_mm = 0;  // reported: reference edge in the coordinates believed before
   double home_correction_mm = 0;   // reported: assigned - believed at the reference edge
+  bool homed_at_cycle_start = false;  // reported: homed when its last cycle started
 
   // A new phase starts with no data.
   void set_phase(Phase p) {

@@ -8,15 +8,27 @@
 
 namespace homing {
 
-CommandResult Engine::homing_refusal(const Settings& settings) const {
-  if (estop_) return CommandResult::refused_estop;
-  if (std::any_of(drive_fault_.begin(), drive_fault_.end(), [](bool f) { return f; }))
-    return CommandResult::refused_drive_fault;
-  if (any_alarm()) return CommandResult::refused_alarm;
-  if (comm_lost_) return CommandResult::refused_communication_lost;
-  if (settings.global.permit_required && !permit_) return CommandResult::refused_no_permit;
-  if (any_motion()) return CommandResult::refused_busy;
+CommandResult homing_refusal_of(std::uint16_t interlocks) {
+  using namespace interlock;
+  if (interlocks & estop) return CommandResult::refused_estop;
+  if (interlocks & drive_fault) return CommandResult::refused_drive_fault;
+  if (interlocks & (alarm_latched | settings_lost)) return CommandResult::refused_alarm;
+  if (interlocks & communication_lost) return CommandResult::refused_communication_lost;
+  if (interlocks & permit_missing) return CommandResult::refused_no_permit;
+  if (interlocks & (homing_active | motion_active)) return CommandResult::refused_busy;
   return CommandResult::accepted;
+}
+
+CommandResult Engine::homing_refusal(const Settings& settings) const {
+  std::uint16_t blocking = 0;
+  if (estop_) blocking |= interlock::estop;
+  if (std::any_of(drive_fault_.begin(), drive_fault_.end(), [](bool f) { return f; }))
+    blocking |= interlock::drive_fault;
+  if (any_alarm()) blocking |= interlock::alarm_latched;
+  if (comm_lost_) blocking |= interlock::communication_lost;
+  if (settings.global.permit_required && !permit_) blocking |= interlock::permit_missing;
+  if (any_motion()) blocking |= interlock::motion_active;
+  return homing_refusal_of(blocking);
 }
 
 void Engine::home_command(const Settings& settings, const Inputs& inputs) {
@@ -69,6 +81,9 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
   last_result_ = CommandResult::accepted;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     AxisRun& run = axes_[a];
+    if (!((covered | unsequenced) & axis_bit(a))) continue;
+    // Whether this cycle's home correction can be trusted as a measurement.
+    run.homed_at_cycle_start = run.homed;
     if (!(covered & axis_bit(a))) continue;
     run.in_cycle = true;
     run.homed = false;

@@ -25,6 +25,7 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
               run.phase == Phase::stopping || run.motor.velocity_mm_per_s != 0;
     as.trigger_position_mm = run.trigger_position_mm;
     as.home_correction_mm = run.home_correction_mm;
+    as.homed_at_cycle_start = run.homed_at_cycle_start;
     as.stop_distance_mm =
         stop_distance_mm(mm_per_min_to_mm_per_s(s.seek_feedrate_mm_per_min), s.acceleration_mm_per_s2);
     if (!std::isfinite(as.stop_distance_mm)) as.stop_distance_mm = 0;

@@ -19,7 +19,10 @@ struct CyclePlan {
   AxisMask covered() const;
 };
 
-// `all`: home-all along global.sequence_steps; else one step of `requested`.
+// `all`: home-all along global.sequence_steps. Else the axes `requested`
+// (cmd.home.<a>, cmd.home_axes) with their gantry partners, in one cycle: in
+// the order of the sequence steps that name them (numbered from 1, no empty
+// steps), then those in no step together, homed by their mode.
 CyclePlan plan_cycle(const Settings& settings, AxisMask requested, bool all);
 
 }  // namespace homing

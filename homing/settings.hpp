@@ -112,7 +112,8 @@ struct AxisSettings {
 
 struct GlobalSettings {
   std::array<AxisMask, 6> sequence_steps{};
-  AllowedWithoutHoming allowed_without_homing = AllowedWithoutHoming::all;
+  // A new module lets nothing but a slow jog move before it knows where it is.
+  AllowedWithoutHoming allowed_without_homing = AllowedWithoutHoming::jog_reduced;
   bool alarm_clears_homed = true;
   std::uint32_t watchdog_ms = 0;
   bool permit_required = false;

@@ -109,6 +109,13 @@ constexpr bool bits_in_order() {
 static_assert(bits_in_order());
 }  // namespace interlock
 
+// Whether a homing command may start now, judged by what blocks it (the
+// status.interlocks bits): estop, drive fault, a latched alarm, a lost link,
+// a missing permit, then a cycle or motion already running (refused_busy).
+// The engine judges every home command with it, and the runtime answers a
+// cmd.home_axes write with it before anything of the write is applied.
+CommandResult homing_refusal_of(std::uint16_t interlocks);
+
 std::string_view state_name(MachineState s);
 std::string_view command_result_name(CommandResult r);
 std::string_view interlock_name(int bit);  // the bit's text ("emergency stop pressed")
@@ -123,6 +130,10 @@ struct AxisStatus {
   bool busy = false;
   double trigger_position_mm = 0;   // reference edge, in the coordinates believed before assign
   double home_correction_mm = 0;    // assigned - believed at the reference edge
+  // The axis was homed (and still trusted) when its last homing cycle
+  // started: only then does home_correction measure drift (lost steps, a
+  // sensor that moved). Otherwise it only says where the axis happened to stand.
+  bool homed_at_cycle_start = false;
   double stop_distance_mm = 0;      // v²/2a of the seek
   double phase_distance_mm = 0;     // travelled in the current phase
 };

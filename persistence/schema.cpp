@@ -73,6 +73,16 @@ CREATE TABLE homing_axes(
 CREATE INDEX homing_axes_by_axis ON homing_axes(axis, run_id);
 )sql";
 
+// v4: why a run's home correction of an axis is not in the statistics
+// (persistence::Excluded). Runs that ended with an alarm have no correction:
+// marked as such; a correction of an earlier run stays counted (whether the
+// axis was homed before it was not recorded).
+constexpr std::string_view kV4 = R"sql(
+ALTER TABLE homing_axes ADD COLUMN excluded INTEGER NOT NULL DEFAULT 0;
+UPDATE homing_axes SET excluded = 2
+  WHERE correction_mm IS NULL AND run_id IN (SELECT id FROM homing_runs WHERE result != 0);
+)sql";
+
 }  // namespace
 
 const std::vector<Step>& steps() {
@@ -80,8 +90,9 @@ const std::vector<Step>& steps() {
       {1, "settings table", kV1},
       {2, "audit log", kV2},
       {3, "audit transport/client, homing history, meta", kV3},
+      {4, "why a home correction is excluded from the statistics", kV4},
   };
-  static_assert(kSchemaVersion == 3, "append a migration step when raising kSchemaVersion");
+  static_assert(kSchemaVersion == 4, "append a migration step when raising kSchemaVersion");
   return all;
 }
 

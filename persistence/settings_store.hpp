@@ -14,6 +14,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "persistence/error.hpp"
@@ -26,7 +27,7 @@ namespace persistence {
 
 struct SettingsFileCodec;  // settings_file.hpp
 
-inline constexpr int kSchemaVersion = 3;       // see schema.cpp for the history
+inline constexpr int kSchemaVersion = 4;       // see schema.cpp for the history
 inline constexpr std::size_t kHistoryAxes = 6;  // X Y Z A B C
 
 struct SettingDefault {
@@ -97,10 +98,21 @@ struct AuditEntry {
   std::int64_t new_value = 0;
 };
 
+// Why an axis's home correction of a run is not in the correction statistics
+// (stored as the number; texts in excluded_text()).
+enum class Excluded : std::uint8_t {
+  no = 0,                // counted (or no correction was measured)
+  not_homed_before = 1,  // the axis was not homed when the cycle started: the correction is
+                         // where it happened to stand (the first cycle after a start-up)
+  cycle_failed = 2,      // the cycle ended with an alarm: no correction was assigned
+};
+std::string_view excluded_text(Excluded e);  // "not homed before the cycle"
+
 struct AxisRun {
   bool present = false;                 // axis took part and reported
-  std::optional<double> correction_mm;  // assigned - believed at the reference edge
+  std::optional<double> correction_mm;  // assigned - believed at the reference edge; only when counted
   std::int64_t duration_ms = 0;
+  Excluded excluded = Excluded::no;     // why there is no counted correction
 };
 
 struct HomingRun {
@@ -165,7 +177,8 @@ class SettingsStore {
 
   Status set_limits(std::size_t audit_max_rows, std::size_t history_max_rows);
 
-  // Homing history.
+  // Homing history. The correction statistics count only the axes recorded
+  // with a correction (Excluded::no).
   Result<std::int64_t> record_homing_run(const HomingRun& run);
   Result<std::vector<HomingRun>> recent_runs(std::size_t n) const;
   Result<std::vector<AuditEntry>> recent_changes(std::size_t n) const;

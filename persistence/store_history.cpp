@@ -9,6 +9,15 @@
 
 namespace persistence {
 
+std::string_view excluded_text(Excluded e) {
+  switch (e) {
+    case Excluded::no: return "counted";
+    case Excluded::not_homed_before: return "not homed before the cycle";
+    case Excluded::cycle_failed: return "the cycle ended with an alarm";
+  }
+  return "unknown reason";
+}
+
 Result<std::int64_t> SettingsStore::record_homing_run(const HomingRun& run) {
   std::lock_guard lock(impl_->mu);
   auto& m = *impl_;
@@ -26,7 +35,7 @@ Result<std::int64_t> SettingsStore::record_homing_run(const HomingRun& run) {
         .bind(5, static_cast<std::int64_t>(run.alarm_axis));
     if (auto s = ins->run("recording a homing run"); !s) return std::unexpected(s.error());
     id = sqlite3_last_insert_rowid(m.db.get());
-    auto ax = m.db.prepare("INSERT INTO homing_axes(run_id, axis, correction_mm, duration_ms) VALUES(?, ?, ?, ?)");
+    auto ax = m.db.prepare("INSERT INTO homing_axes(run_id, axis, correction_mm, duration_ms, excluded) VALUES(?, ?, ?, ?, ?)");
     if (!ax) return std::unexpected(ax.error());
     for (std::size_t a = 0; a < kHistoryAxes; ++a) {
       const auto& r = run.axis[a];
@@ -36,7 +45,7 @@ Result<std::int64_t> SettingsStore::record_homing_run(const HomingRun& run) {
         ax->bind(3, *r.correction_mm);
       else
         ax->bind_null(3);
-      ax->bind(4, r.duration_ms);
+      ax->bind(4, r.duration_ms).bind(5, static_cast<std::int64_t>(r.excluded));
       if (auto s = ax->run("recording a homing run axis"); !s) return std::unexpected(s.error());
     }
     std::int64_t cut = id - static_cast<std::int64_t>(std::max<std::size_t>(m.opt.history_max_rows, 1));
@@ -76,7 +85,7 @@ Result<std::vector<HomingRun>> SettingsStore::recent_runs(std::size_t n) const {
     r.alarm_axis = static_cast<std::int32_t>(st->int_at(5));
     runs.push_back(r);
   }
-  auto ax = m.db.prepare("SELECT axis, correction_mm, duration_ms FROM homing_axes WHERE run_id = ?");
+  auto ax = m.db.prepare("SELECT axis, correction_mm, duration_ms, excluded FROM homing_axes WHERE run_id = ?");
   if (!ax) return std::unexpected(ax.error());
   for (auto& r : runs) {
     ax->bind(1, r.id);
@@ -89,6 +98,7 @@ Result<std::vector<HomingRun>> SettingsStore::recent_runs(std::size_t n) const {
       r.axis[a].present = true;
       if (!ax->null_at(1)) r.axis[a].correction_mm = ax->real_at(1);
       r.axis[a].duration_ms = ax->int_at(2);
+      r.axis[a].excluded = static_cast<Excluded>(ax->int_at(3));
     }
     ax->reset();
   }
@@ -117,7 +127,7 @@ Result<CorrectionSummary> SettingsStore::correction_summary(std::size_t axis, st
     return fail(ErrorKind::invalid, fmt::format("axis index {} out of range (0..{})", axis, kHistoryAxes - 1));
   std::lock_guard lock(impl_->mu);
   auto st = impl_->db.prepare(
-      "SELECT correction_mm FROM homing_axes WHERE axis = ? AND correction_mm IS NOT NULL "
+      "SELECT correction_mm FROM homing_axes WHERE axis = ? AND correction_mm IS NOT NULL AND excluded = 0 "
       "ORDER BY run_id DESC LIMIT ?");
   if (!st) return std::unexpected(st.error());
   st->bind(1, static_cast<std::int64_t>(axis)).bind(2, static_cast<std::int64_t>(last_n));

@@ -71,8 +71,15 @@ std::int64_t to_raw(const Register& reg, double value) {
 }
 
 // ---- commands ----
-std::optional<CommandRequest> command_of(const Register& coil, bool value) {
-  if (coil.unit != Unit::module || coil.table != Table::coil) return std::nullopt;
+std::optional<CommandRequest> command_of(const Register& reg, std::int64_t raw) {
+  if (reg.unit != Unit::module) return std::nullopt;
+  if (reg.table == Table::holding_register) {
+    if (reg.key != Key::cmd_home_axes) return std::nullopt;
+    return CommandRequest{Command::home_axes, -1, true, static_cast<homing::AxisMask>(raw & homing::kAllAxes)};
+  }
+  if (reg.table != Table::coil) return std::nullopt;
+  const Register& coil = reg;
+  const bool value = raw != 0;
   const int axis = coil.axis;
   switch (coil.key) {
     case Key::cmd_home_all: return CommandRequest{Command::home_all, -1, true};
@@ -107,6 +114,7 @@ std::int64_t host_raw(const HostRegisters& host, const Register& reg) {
     case Key::host_target: return to_raw(reg, host.target_mm.at(axis_index(reg)));
     case Key::host_homing_permit: return host.homing_permit ? 1 : 0;
     case Key::security_unlock: return 0;  // a code is never read back
+    case Key::cmd_home_axes: return 0;    // a command: it holds nothing
     case Key::cmd_jog_plus: return host.jog_plus.at(axis_index(reg)) ? 1 : 0;
     case Key::cmd_jog_minus: return host.jog_minus.at(axis_index(reg)) ? 1 : 0;
     default: unbound(reg, "host");
@@ -119,6 +127,7 @@ void set_host_raw(HostRegisters& host, const Register& reg, std::int64_t raw) {
     case Key::host_target: host.target_mm.at(axis_index(reg)) = to_engineering(reg, raw); return;
     case Key::host_homing_permit: host.homing_permit = raw != 0; return;
     case Key::security_unlock: host.unlock_code = static_cast<std::uint16_t>(raw); return;
+    case Key::cmd_home_axes: return;  // a command (validate_write), nothing held
     case Key::cmd_jog_plus: host.jog_plus.at(axis_index(reg)) = raw != 0; return;
     case Key::cmd_jog_minus: host.jog_minus.at(axis_index(reg)) = raw != 0; return;
     default: unbound(reg, "host");

@@ -57,16 +57,21 @@ struct StatusExtras {
   std::uint16_t last_refusal_reason = 0;
 };
 
-// ---- coils -> commands ----
-enum class Command : std::uint8_t { home_all, home_axis, abort, reset_alarm, jog_plus, jog_minus, move, homing_permit, lock_settings };
+// ---- coils and command registers -> commands ----
+enum class Command : std::uint8_t {
+  home_all, home_axis, abort, reset_alarm, jog_plus, jog_minus, move, homing_permit, lock_settings,
+  home_axes,  // cmd.home_axes: one cycle of the named axes
+};
 struct CommandRequest {
   Command command = Command::home_all;
   int axis = -1;     // 0..5 for per-axis commands, -1 otherwise
   bool on = true;    // jog / permit: the held state written; others: always true
+  homing::AxisMask axes = 0;  // home_axes: the axes named (bit 0 = X)
   friend bool operator==(const CommandRequest&, const CommandRequest&) = default;
 };
-// The command a module coil triggers (nullopt for rows that are not coils).
-std::optional<CommandRequest> command_of(const Register& coil, bool value);
+// The command a write of `raw` to a module coil or command register triggers
+// (nullopt for rows that command nothing).
+std::optional<CommandRequest> command_of(const Register& reg, std::int64_t raw);
 
 // ---- bindings of module rows ----
 // Holding rows bound to homing::Settings (persisted rows).

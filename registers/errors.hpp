@@ -52,6 +52,9 @@ enum class RefusalReason : std::uint8_t {
   loop_not_responding,  // simulator: the control loop did not take the write in time
   empty,                // a write of 0 items
   hard_stops_inverted,  // simulator: hard_stop_min must be below hard_stop_max
+  no_axis_named,        // cmd.home_axes = 0
+  axis_disabled,        // cmd.home_axes names an axis whose mode is disabled
+  homing_blocked,       // cmd.home_axes while an alarm, e-stop, drive fault, lost link or missing permit blocks homing
 };
 // Each reason with the exception it is answered with, its name and its text.
 struct RefusalReasonInfo {
@@ -80,8 +83,14 @@ inline constexpr RefusalReasonInfo kRefusalReasonInfo[] = {
      "simulator: the control loop did not take the write in time"},
     {RefusalReason::empty, ExceptionCode::illegal_data_value, "empty", "a write of 0 items"},
     {RefusalReason::hard_stops_inverted, ExceptionCode::illegal_data_value, "hard_stops_inverted", "simulator: hard_stop_min must be below hard_stop_max"},
+    {RefusalReason::no_axis_named, ExceptionCode::illegal_data_value, "no_axis_named",
+     "cmd.home_axes names no axis: set the bits of the axes to home"},
+    {RefusalReason::axis_disabled, ExceptionCode::illegal_data_value, "axis_disabled",
+     "cmd.home_axes names an axis whose mode is disabled"},
+    {RefusalReason::homing_blocked, ExceptionCode::server_device_failure, "homing_blocked",
+     "homing cannot start now (alarm, e-stop, drive fault, lost link or missing permit): see status.interlocks"},
 };
-static_assert(homing::lists_every_value(kRefusalReasonInfo, RefusalReason::hard_stops_inverted));
+static_assert(homing::lists_every_value(kRefusalReasonInfo, RefusalReason::homing_blocked));
 constexpr std::span<const RefusalReasonInfo> enum_table(RefusalReason) { return kRefusalReasonInfo; }
 
 inline constexpr std::uint16_t kRuleReasonBase = 100;

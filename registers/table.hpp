@@ -64,6 +64,8 @@ enum class Key : std::uint8_t {
   cmd_home_all, cmd_abort, cmd_reset_alarm, host_homing_permit, cmd_lock_settings, security_unlock,
   cmd_home, cmd_jog_plus,
   cmd_jog_minus, cmd_move,
+  // holding, module: command registers (hold nothing, read 0)
+  cmd_home_axes,
   // simulator unit
   sim_seed, sim_actual_position, sim_sensor_min, sim_sensor_max, sim_hysteresis, sim_noise,
   sim_bounce_ms, sim_sensor_nc, sim_hard_stop_min, sim_hard_stop_max, sim_index_pitch,

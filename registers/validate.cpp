@@ -34,6 +34,28 @@ std::string range_text(const Register& reg) {
                      unit.empty() ? "" : " ", unit);
 }
 
+std::uint16_t home_axes_address() {
+  const Register* reg = find_register("cmd.home_axes");
+  return reg ? reg->address : std::uint16_t{0};
+}
+
+// A cmd.home_axes mask names at least one axis, and only axes that home.
+std::optional<Refusal> named_axes_refusal(const CommandRequest& c, const homing::Settings& settings) {
+  if (c.command != Command::home_axes) return std::nullopt;
+  const std::uint16_t address = home_axes_address();
+  if (c.axes == 0)
+    return Refusal::because(
+        RefusalReason::no_axis_named, address,
+        "cmd.home_axes = 0 names no axis: set bit 0 (X) ... bit 5 (C) of the axes to home; nothing was written");
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+    if ((c.axes & homing::axis_bit(a)) && settings.axes[a].mode == homing::HomingMode::disabled)
+      return Refusal::because(RefusalReason::axis_disabled, address,
+                              fmt::format("cmd.home_axes names {0}, whose axis.{1}.mode is disabled: {0} cannot be "
+                                          "homed; nothing was written",
+                                          homing::kAxisUpper[a], homing::kAxisLetters[a]));
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::expected<std::vector<RawWrite>, Refusal> decode_write(Unit unit, Table table, std::uint16_t start,
@@ -113,6 +135,9 @@ std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t 
       if (reg.access == Access::w) continue;  // pulse commands hold no state
       old_raw = host_raw(result.host, reg);
       set_host_raw(result.host, reg, w.raw);
+    } else if (auto cmd = command_of(reg, w.raw)) {
+      result.commands.push_back(*cmd);
+      continue;  // a command register holds nothing
     } else if (reg.persisted) {
       old_raw = setting_raw(result.settings, reg);
       set_setting_raw(result.settings, reg, w.raw);
@@ -129,7 +154,23 @@ std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t 
   if (const auto fault = homing::new_fault(settings, result.settings))
     return std::unexpected(
         rule_refusal(*fault, fmt::format("{}; nothing was written", homing::describe_fault(*fault, result.settings))));
+  for (const CommandRequest& c : result.commands)
+    if (auto refused = named_axes_refusal(c, result.settings)) return std::unexpected(*refused);
   return result;
+}
+
+std::optional<Refusal> refusal_now(const AcceptedWrite& write, const homing::Status& status) {
+  for (const CommandRequest& c : write.commands) {
+    if (c.command != Command::home_axes) continue;
+    const homing::CommandResult r = homing::homing_refusal_of(status.interlocks);
+    if (r == homing::CommandResult::accepted) continue;
+    return Refusal::because(
+        r == homing::CommandResult::refused_busy ? RefusalReason::busy : RefusalReason::homing_blocked,
+        home_axes_address(),
+        fmt::format("cmd.home_axes refused ({}): {}; nothing was written", homing::command_result_name(r),
+                    homing::kCommandResultInfo[static_cast<std::size_t>(r)].text));
+  }
+  return std::nullopt;
 }
 
 std::optional<Refusal> validate_settings_map(const std::map<std::string, std::int64_t>& values) {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "homing/settings.hpp"
+#include "homing/status.hpp"
 #include "registers/codec.hpp"
 #include "registers/errors.hpp"
 #include "registers/table.hpp"
@@ -52,11 +53,20 @@ struct AcceptedWrite {
 // the request is applied to a copy and homing::check_axis runs for every axis
 // the request touches whose mode is not disabled (and for slaves of a touched
 // master that passed before): a fault is 03 with describe_fault()'s text.
+// A cmd.home_axes mask that names no axis, or a disabled one, is 03.
 // Not decided here: exception 06 while a homing cycle runs (the runtime knows).
 std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t start,
                                                      std::span<const std::uint16_t> values, WordOrder order,
                                                      const homing::Settings& settings,
                                                      const HostRegisters& host);
+
+// An accepted write whose command register the module cannot carry out now,
+// judged on the published status (homing::homing_refusal_of) before anything
+// of the write is applied: 06 while a homing cycle or a motion runs, 04 while
+// an alarm, the e-stop, a drive fault, a lost link or a missing permit blocks
+// homing. Coils are not judged here: their refusal is
+// status.last_command_result, as the map promises.
+std::optional<Refusal> refusal_now(const AcceptedWrite& write, const homing::Status& status);
 
 // A whole set of settings by register name (an imported file, merged with the
 // current settings): every name must be a persisted register, every value in

@@ -35,6 +35,7 @@ std::string_view command_name(registers::Command c) {
     case Command::move: return "move";
     case Command::homing_permit: return "homing_permit";
     case Command::lock_settings: return "lock_settings";
+    case Command::home_axes: return "home_axes";
   }
   return "?";
 }
@@ -247,6 +248,8 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
     std::lock_guard lock(mutex_);
     auto accepted = registers::validate_write(table, start, values, config_.word_order, settings_, host_);
     if (!accepted) return refuse(fc, accepted.error(), client);
+    if (auto refused = registers::refusal_now(*accepted, loop_.snapshot().status))
+      return refuse(fc, *refused, client);
     if (accepted->host.unlock_code != 0) {
       const bool right = config_.unlock_code != 0 && accepted->host.unlock_code == config_.unlock_code;
       accepted->host.unlock_code = 0;
@@ -323,6 +326,7 @@ void ModbusService::run_commands(const std::vector<registers::CommandRequest>& c
     switch (r.command) {
       case Command::home_all: c.home_all = true; any = true; break;
       case Command::home_axis: c.home_axes |= homing::axis_bit(a); any = true; break;
+      case Command::home_axes: c.home_axes |= r.axes; any = true; break;
       case Command::abort: c.abort = true; any = true; break;
       case Command::reset_alarm:
         c.reset_alarm = true;
@@ -351,8 +355,10 @@ void ModbusService::run_commands(const std::vector<registers::CommandRequest>& c
     }
     const bool held = r.command == Command::jog_plus || r.command == Command::jog_minus ||
                       r.command == Command::homing_permit;
-    spdlog::info("command from {} {}: {}{}{}", client.transport, client.address, command_name(r.command),
-                 r.axis >= 0 ? "." + std::string(homing::kAxisLetters[a]) : std::string(),
+    std::string axes = r.axis >= 0 ? "." + std::string(homing::kAxisLetters[a]) : std::string();
+    for (std::size_t n = 0; n < homing::kAxisCount; ++n)
+      if (r.axes & homing::axis_bit(n)) axes += " " + std::string(homing::kAxisLetters[n]);
+    spdlog::info("command from {} {}: {}{}{}", client.transport, client.address, command_name(r.command), axes,
                  held ? (r.on ? " on" : " off") : "");
   }
   if (any) loop_.submit(c, true);

@@ -30,6 +30,19 @@ std::uint64_t resident_kb() {
 
 }  // namespace
 
+// Only a cycle that starts from a position the module trusts measures
+// anything: the first cycle after a start-up corrects by wherever the axis
+// stood (84 mm with a good sensor), which would make the sensor look broken.
+persistence::AxisRun axis_record(bool cycle_ok, const homing::AxisStatus& axis, std::int64_t duration_ms) {
+  persistence::AxisRun r;
+  r.present = true;
+  r.duration_ms = duration_ms;
+  if (!cycle_ok) r.excluded = persistence::Excluded::cycle_failed;
+  else if (!axis.homed_at_cycle_start) r.excluded = persistence::Excluded::not_homed_before;
+  else r.correction_mm = axis.home_correction_mm;
+  return r;
+}
+
 void Monitor::refresh_diagnostics() {
   const LoopStats s = loop_.stats();
   extras_.loop_periods = s.periods;
@@ -130,9 +143,11 @@ void Monitor::poll(std::int64_t now_ms) {
     if (run.result == 0 && st.global_alarm != homing::AlarmCode::none) run.result = static_cast<int>(st.global_alarm);
     for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
       if (!(run_axes_ & homing::axis_bit(a))) continue;
-      run.axis[a].present = true;
-      run.axis[a].duration_ms = now_ms - run_start_ms_;
-      if (run.result == 0) run.axis[a].correction_mm = st.axes[a].home_correction_mm;
+      run.axis[a] = axis_record(run.result == 0, st.axes[a], now_ms - run_start_ms_);
+      if (run.axis[a].excluded == persistence::Excluded::not_homed_before)
+        spdlog::info("home correction of {} not counted in its statistics: {} ({:+.3f} mm is where it stood)",
+                     homing::kAxisUpper[a], persistence::excluded_text(run.axis[a].excluded),
+                     st.axes[a].home_correction_mm);
     }
     if (run.result == 0) spdlog::info("homing done in {} ms", now_ms - run_start_ms_);
     else spdlog::warn("homing ended with alarm {}", homing::alarm_name(static_cast<homing::AlarmCode>(run.result)));

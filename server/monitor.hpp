@@ -46,4 +46,9 @@ class Monitor {
 
 std::int64_t unix_ms();
 
+// What the history records of one axis of a finished run: its correction
+// only when the cycle succeeded and the axis was homed when it started,
+// otherwise why not.
+persistence::AxisRun axis_record(bool cycle_ok, const homing::AxisStatus& axis, std::int64_t duration_ms);
+
 }  // namespace server

@@ -53,6 +53,24 @@ SCENARIO("before homing, allowed_without_homing = jog reduced: jog at 100 mm/min
   }
 }
 
+SCENARIO("a new module allows only a jog at reduced speed before homing: a move is refused", "[interlocks]") {
+  Rig r;
+  r.settings.global = GlobalSettings{};  // the engine's defaults, as a new module has them
+  r.settings.global.sequence_steps = {axis_bit(0), 0, 0, 0, 0, 0};
+  REQUIRE(r.settings.global.allowed_without_homing == AllowedWithoutHoming::jog_reduced);
+  r.step();
+  CHECK((r.status().interlocks & interlock::not_homed) != 0);
+  const double x = r.actual(0);
+  r.move(0, r.axis(0).position_mm + 50);
+  CHECK(r.status().last_command_result == CommandResult::refused_not_homed);
+  settle(r);
+  CHECK(r.actual(0) == x);
+  // A jog at the axis's full jog feedrate (600 mm/min) runs at 100 mm/min only.
+  CHECK(max_speed_while_jogging(r, 0, +1, 1.0) == Approx(100.0 / 60));
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  CHECK(r.actual(0) > x + 1);
+}
+
 SCENARIO("before homing, allowed_without_homing = none: jog and move refused", "[interlocks]") {
   Rig r;
   r.settings.global.allowed_without_homing = AllowedWithoutHoming::none;

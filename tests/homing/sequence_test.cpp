@@ -177,3 +177,109 @@ SCENARIO("a slave whose master is in no step is assigned its home position with 
   CHECK(r.axis(4).position_mm == Approx(7).margin(1e-9));
   CHECK(r.trace[4].path_mm == 0);
 }
+
+SCENARIO("homing named axes moves exactly those, in one cycle, in the order of their sequence steps",
+         "[sequence][home_axes]") {
+  GIVEN("Z in step 1, X in step 2, Y in step 3") {
+    Rig r;
+    r.add_axis(Y, 3);
+    r.add_axis(Z, 1);
+    r.settings.global.sequence_steps = {axis_bit(Z), axis_bit(X), axis_bit(Y), 0, 0, 0};
+    r.machine.axes[Y].actual_position_mm = 60;
+    r.machine.axes[Z].actual_position_mm = 30;
+    std::vector<int> steps_seen;
+    r.on_period = [&](Rig& rr) {
+      const int st = rr.status().sequence_step;
+      if (st && (steps_seen.empty() || steps_seen.back() != st)) steps_seen.push_back(st);
+    };
+    r.step();
+    r.clear_trace();
+    WHEN("X and Y are named in one command") {
+      REQUIRE(r.home_axes(static_cast<AxisMask>(axis_bit(X) | axis_bit(Y))));
+      THEN("one cycle homes X, then Y, and Z does not move") {
+        CHECK(r.status().homing_cycles == 1);
+        CHECK(steps_seen == std::vector<int>{1, 2});  // the cycle's steps, numbered without gaps
+        CHECK(r.axis(X).homed);
+        CHECK(r.axis(Y).homed);
+        CHECK(r.actual(X) == Approx(1.05).margin(1e-4));
+        CHECK(r.actual(Y) == Approx(1.05).margin(1e-4));
+        REQUIRE(r.trace[Y].first_move_period > 0);
+        CHECK(r.trace[X].last_move_period < r.trace[Y].first_move_period);
+        CHECK_FALSE(r.axis(Z).homed);
+        CHECK(r.trace[Z].path_mm == 0);
+        CHECK(r.actual(Z) == 30);
+      }
+    }
+  }
+}
+
+SCENARIO("a named axis in no sequence step homes by its mode after the named axes that are in a step",
+         "[sequence][home_axes]") {
+  Rig r;
+  r.settings.axes[A] = typical_axis();  // configured, in no step
+  r.machine.axes[A].actual_position_mm = 40;
+  r.step();
+  r.clear_trace();
+  REQUIRE(r.home_axes(static_cast<AxisMask>(axis_bit(X) | axis_bit(A))));
+  CHECK(r.status().homing_cycles == 1);
+  CHECK(r.axis(A).homed);
+  CHECK(r.actual(A) == Approx(1.05).margin(1e-4));  // it sought its sensor: not assigned where it stood
+  REQUIRE(r.trace[A].first_move_period > 0);
+  CHECK(r.trace[X].last_move_period < r.trace[A].first_move_period);
+}
+
+TEST_CASE("the plan of named axes follows the sequence steps, keeps gantry partners together and ends with the rest",
+          "[sequence][home_axes]") {
+  Settings s;
+  for (std::size_t a : {X, Y, Z, A}) s.axes[a] = typical_axis();
+  s.axes[Y].slave_of = X + 1;  // Y is X's gantry slave
+  s.global.sequence_steps = {axis_bit(Z), axis_bit(X), 0, 0, 0, 0};
+  const CyclePlan named = plan_cycle(s, static_cast<AxisMask>(axis_bit(Y) | axis_bit(Z) | axis_bit(A)), false);
+  CHECK(named.steps[0] == axis_bit(Z));
+  CHECK(named.steps[1] == (axis_bit(X) | axis_bit(Y)));  // naming the slave homes the pair
+  CHECK(named.steps[2] == axis_bit(A));                  // in no step: last
+  CHECK(named.steps[3] == 0);
+  CHECK(named.unsequenced == 0);
+  const CyclePlan one = plan_cycle(s, axis_bit(X), false);
+  CHECK(one.steps[0] == (axis_bit(X) | axis_bit(Y)));
+  CHECK(one.covered() == (axis_bit(X) | axis_bit(Y)));
+}
+
+TEST_CASE("a home correction is a measurement only when the axis was homed when its cycle started",
+          "[sequence][statistics]") {
+  Rig r;
+  r.step();
+  CHECK_FALSE(r.axis(X).homed_at_cycle_start);
+  // The first cycle after start-up corrects by where the axis stood and says it was not homed.
+  REQUIRE(r.home_all());
+  CHECK_FALSE(r.axis(X).homed_at_cycle_start);
+  CHECK(std::abs(r.axis(X).home_correction_mm) > 50);
+  // The next cycle starts homed: its correction measures the sensor.
+  REQUIRE(r.home_all());
+  CHECK(r.axis(X).homed_at_cycle_start);
+  CHECK(std::abs(r.axis(X).home_correction_mm) < 0.01);
+  // An alarm clears the homed state (alarm_clears_homed): the next cycle is not trusted again.
+  r.sim().set_estop(true);
+  r.step();
+  r.sim().set_estop(false);
+  r.step();
+  r.reset_alarm();
+  REQUIRE_FALSE(r.axis(X).homed);
+  REQUIRE(r.home_all());
+  CHECK_FALSE(r.axis(X).homed_at_cycle_start);
+}
+
+TEST_CASE("a homing command is judged by what blocks it, in one order for the engine and the Modbus side",
+          "[sequence][commands]") {
+  using namespace interlock;
+  CHECK(homing_refusal_of(0) == CommandResult::accepted);
+  CHECK(homing_refusal_of(not_homed) == CommandResult::accepted);
+  CHECK(homing_refusal_of(estop | alarm_latched) == CommandResult::refused_estop);
+  CHECK(homing_refusal_of(drive_fault | alarm_latched) == CommandResult::refused_drive_fault);
+  CHECK(homing_refusal_of(alarm_latched) == CommandResult::refused_alarm);
+  CHECK(homing_refusal_of(settings_lost) == CommandResult::refused_alarm);
+  CHECK(homing_refusal_of(communication_lost | permit_missing) == CommandResult::refused_communication_lost);
+  CHECK(homing_refusal_of(permit_missing | homing_active) == CommandResult::refused_no_permit);
+  CHECK(homing_refusal_of(homing_active) == CommandResult::refused_busy);
+  CHECK(homing_refusal_of(motion_active) == CommandResult::refused_busy);
+}

@@ -93,3 +93,37 @@ TEST_CASE("the history survives reopening", "[persistence]") {
   REQUIRE(runs->size() == 1);
   CHECK(runs->front().axis[1].correction_mm == Approx(0.25));
 }
+
+TEST_CASE("an axis recorded as excluded keeps its reason and stays out of the correction statistics",
+          "[persistence]") {
+  test::TempDir dir;
+  OpenReport report;
+  auto store = test::open_ok(dir.file("settings.db"), report);
+  HomingRun first = run_with(0, 0, 0);
+  first.axis[0] = {true, std::nullopt, 1200, Excluded::not_homed_before};
+  first.axis[1] = {true, std::nullopt, 1800, Excluded::not_homed_before};
+  REQUIRE(store.record_homing_run(first));
+  REQUIRE(store.record_homing_run(run_with(1, 0.010, 0.002)));
+  HomingRun failed = run_with(2, 0, 0, 3);
+  failed.axis[0] = {true, std::nullopt, 1200, Excluded::cycle_failed};
+  failed.axis[1] = {true, std::nullopt, 1800, Excluded::cycle_failed};
+  REQUIRE(store.record_homing_run(failed));
+  // A correction recorded with an exclusion is not counted either.
+  HomingRun odd = run_with(3, 84.0, std::nullopt);
+  odd.axis[0].excluded = Excluded::not_homed_before;
+  REQUIRE(store.record_homing_run(odd));
+
+  auto runs = store.recent_runs(10);
+  REQUIRE(runs);
+  REQUIRE(runs->size() == 4);
+  CHECK((*runs)[3].axis[0].excluded == Excluded::not_homed_before);
+  CHECK((*runs)[3].axis[1].excluded == Excluded::not_homed_before);
+  CHECK((*runs)[2].axis[0].excluded == Excluded::no);
+  CHECK((*runs)[1].axis[0].excluded == Excluded::cycle_failed);
+  CHECK(excluded_text(Excluded::not_homed_before) == "not homed before the cycle");
+  auto s = store.correction_summary(0, 10);
+  REQUIRE(s);
+  CHECK(s->count == 1);
+  CHECK(s->mean == Approx(0.010));
+  CHECK(s->spread == 0);
+}

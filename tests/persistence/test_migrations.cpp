@@ -19,7 +19,51 @@ CREATE TABLE audit(id INTEGER PRIMARY KEY AUTOINCREMENT, time_ms INTEGER NOT NUL
 PRAGMA user_version = 2;
 )";
 
+// What version 3 shipped for the history (its audit table is version 2's, upgraded).
+const std::string kV3HistorySql = R"(
+CREATE TABLE meta(key TEXT PRIMARY KEY NOT NULL, value TEXT NOT NULL) WITHOUT ROWID;
+CREATE TABLE homing_runs(id INTEGER PRIMARY KEY AUTOINCREMENT, start_ms INTEGER NOT NULL, end_ms INTEGER NOT NULL,
+                         axes INTEGER NOT NULL, result INTEGER NOT NULL, alarm_axis INTEGER NOT NULL);
+CREATE TABLE homing_axes(run_id INTEGER NOT NULL, axis INTEGER NOT NULL, correction_mm REAL,
+                         duration_ms INTEGER NOT NULL, PRIMARY KEY(run_id, axis)) WITHOUT ROWID;
+CREATE INDEX homing_axes_by_axis ON homing_axes(axis, run_id);
+)";
+
+const std::string kV3Sql = kV1Sql + R"(
+CREATE TABLE audit(id INTEGER PRIMARY KEY AUTOINCREMENT, time_ms INTEGER NOT NULL, transport TEXT NOT NULL,
+                   client TEXT NOT NULL, name TEXT NOT NULL, old_value INTEGER NOT NULL, new_value INTEGER NOT NULL);
+)" + kV3HistorySql + "PRAGMA user_version = 3;\n";
+
 }  // namespace
+
+TEST_CASE("a version 3 database upgrades: failed runs are marked excluded, earlier corrections stay counted",
+          "[persistence][migration]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  test::sql_exec(db, kV3Sql + R"(
+    INSERT INTO homing_runs(id, start_ms, end_ms, axes, result, alarm_axis) VALUES(1, 100, 200, 1, 0, -1),
+                                                                                (2, 300, 400, 1, 5, 0);
+    INSERT INTO homing_axes(run_id, axis, correction_mm, duration_ms) VALUES(1, 0, 0.012, 100), (2, 0, NULL, 100);
+  )");
+  OpenReport report;
+  auto store = test::open_ok(db, report);
+  CHECK(report.schema_version_found == 3);
+  CHECK(test::sql_int(db, "PRAGMA user_version") == kSchemaVersion);
+  auto runs = store.recent_runs(10);
+  REQUIRE(runs);
+  REQUIRE(runs->size() == 2);
+  CHECK((*runs)[0].axis[0].excluded == Excluded::cycle_failed);
+  CHECK((*runs)[1].axis[0].excluded == Excluded::no);
+  CHECK((*runs)[1].axis[0].correction_mm == Approx(0.012));
+  CHECK(store.correction_summary(0, 10)->count == 1);
+  // New runs continue after the migrated ones, with their reason.
+  HomingRun run;
+  run.axis[0] = {true, std::nullopt, 50, Excluded::not_homed_before};
+  auto id = store.record_homing_run(run);
+  REQUIRE(id);
+  CHECK(*id == 3);
+  CHECK(store.recent_runs(1)->front().axis[0].excluded == Excluded::not_homed_before);
+}
 
 TEST_CASE("a version 1 database upgrades and keeps its settings", "[persistence][migration]") {
   test::TempDir dir;

@@ -32,6 +32,13 @@ TEST_CASE("product defaults: X Y Z home on a switch, A B C disabled, Z first the
   CHECK(s.global.alarm_clears_homed);
 }
 
+TEST_CASE("a new module allows only a reduced-speed jog before homing, in the table and in the engine alike") {
+  CHECK(default_settings().global.allowed_without_homing == homing::AllowedWithoutHoming::jog_reduced);
+  CHECK(default_settings().global.allowed_without_homing == homing::GlobalSettings{}.allowed_without_homing);
+  CHECK(find_register("global.allowed_without_homing")->default_raw ==
+        static_cast<std::int64_t>(homing::AllowedWithoutHoming::jog_reduced));
+}
+
 TEST_CASE("persisted defaults hold every persisted register and no runtime value") {
   const auto rows = persisted_defaults();
   // 6 sequence steps + 5 global settings, 27 settings per axis

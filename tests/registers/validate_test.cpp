@@ -249,3 +249,57 @@ TEST_CASE("a write that leaves an already broken setting as it was is taken") {
   CHECK(write_one("axis.x.pull_off", 2000, s));
   refused_naming(write_one("axis.y.latch_feedrate", 5000, s), "slower than seek_feedrate");
 }
+
+TEST_CASE("cmd.home_axes gives one command for the axes its bits name and holds nothing") {
+  const auto s = default_settings();
+  const auto ok = write_one("cmd.home_axes", 0b011, s);  // X and Y
+  REQUIRE(ok);
+  REQUIRE(ok->commands.size() == 1);
+  CHECK(ok->commands[0] == CommandRequest{Command::home_axes, -1, true, 0b011});
+  CHECK(ok->changes.empty());
+  CHECK_FALSE(ok->changes_persisted());
+  const homing::Status status{};
+  CHECK(read_raw(reg("cmd.home_axes"), ModuleView{s, ok->host, status, StatusExtras{}}) == 0);
+}
+
+TEST_CASE("cmd.home_axes naming no axis, a disabled axis or a bit beyond C is exception 03") {
+  const auto s = default_settings();  // A B C are disabled
+  auto refused = write_one("cmd.home_axes", 0, s);
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().code == ExceptionCode::illegal_data_value);
+  CHECK(refused.error().message.find("names no axis") != std::string::npos);
+  refused = write_one("cmd.home_axes", 0b1001, s);  // X and A
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().code == ExceptionCode::illegal_data_value);
+  CHECK(refused.error().message.find("axis.a.mode is disabled") != std::string::npos);
+  refused = write_one("cmd.home_axes", 64, s);
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().code == ExceptionCode::illegal_data_value);
+}
+
+TEST_CASE("a cmd.home_axes write the module cannot start now is 06 while busy and 04 while an alarm blocks homing") {
+  const auto s = default_settings();
+  const auto ok = write_one("cmd.home_axes", 0b100, s);
+  REQUIRE(ok);
+  homing::Status st{};
+  st.interlocks = homing::interlock::not_homed;
+  CHECK_FALSE(refusal_now(*ok, st));
+  st.interlocks = homing::interlock::homing_active;
+  auto r = refusal_now(*ok, st);
+  REQUIRE(r);
+  CHECK(r->code == ExceptionCode::server_device_busy);
+  st.interlocks = homing::interlock::motion_active;
+  CHECK(refusal_now(*ok, st)->code == ExceptionCode::server_device_busy);
+  st.interlocks = homing::interlock::alarm_latched;
+  r = refusal_now(*ok, st);
+  REQUIRE(r);
+  CHECK(r->code == ExceptionCode::server_device_failure);
+  CHECK(r->message.find("an alarm is latched") != std::string::npos);
+  st.interlocks = homing::interlock::estop | homing::interlock::alarm_latched;
+  CHECK(refusal_now(*ok, st)->code == ExceptionCode::server_device_failure);
+  // Coils keep their promise: refused through status.last_command_result, never an exception.
+  const auto coil = write_one("cmd.home.x", 1, s);
+  REQUIRE(coil);
+  st.interlocks = homing::interlock::homing_active;
+  CHECK_FALSE(refusal_now(*coil, st));
+}

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <memory>
 
 #include <toml++/toml.h>
@@ -19,6 +20,7 @@
 #include "registers/sim_bindings.hpp"
 #include "server/control_loop.hpp"
 #include "server/modbus_service.hpp"
+#include "server/monitor.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace {
@@ -83,6 +85,22 @@ struct Module {
     REQUIRE(r.size() == 8);
     return {static_cast<std::uint16_t>(r[2] << 8 | r[3]), static_cast<std::uint16_t>(r[4] << 8 | r[5]),
             static_cast<std::uint16_t>(r[6] << 8 | r[7])};
+  }
+  std::int64_t read_u16(std::string_view name) {
+    const auto a = address(name);
+    const auto r = request({3, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), 0, 1});
+    REQUIRE(r.size() == 4);
+    return (r[2] << 8) | r[3];
+  }
+  homing::Status status() const { return loop->snapshot().status; }
+  // Steps the loop until pred holds (false after max_periods), calling each() every 10 periods.
+  bool run_until(const std::function<bool()>& pred, int max_periods, const std::function<void()>& each = {}) {
+    for (int i = 0; i < max_periods; ++i) {
+      loop->run_period(0.001);
+      if (each && i % 10 == 0) each();
+      if (pred()) return true;
+    }
+    return false;
   }
   std::vector<std::uint8_t> coil(std::string_view name) {
     const auto a = address(name);
@@ -230,4 +248,126 @@ TEST_CASE("a unit id that does not exist is exception 0B over TCP and silence ov
   const server::ClientInfo serial{0, server::Transport::rtu, "unit 1"};
   CHECK_FALSE(m.service->handle(9, read, serial).send);
   CHECK(m.service->handle(1, read, serial).send);
+}
+
+TEST_CASE("cmd.home_axes homes exactly the named axes in one cycle and reads back 0") {
+  Module m(false);
+  const auto reply = m.write_u16("cmd.home_axes", 0b011);  // X and Y
+  REQUIRE(reply.size() == 5);  // echoed
+  m.periods(3);
+  REQUIRE(m.status().homing);
+  CHECK(m.status().last_command_result == homing::CommandResult::accepted);
+  CHECK(m.read_u16("cmd.home_axes") == 0);
+  const double z0 = m.loop->snapshot().sim.axes[2].actual_position_mm;
+  bool z_busy = false;
+  REQUIRE(m.run_until([&] { return !m.status().homing; }, 200'000,
+                      [&] { z_busy = z_busy || m.status().axes[2].busy; }));
+  const homing::Status st = m.status();
+  CHECK(st.homing_cycles == 1);
+  CHECK(st.axes[0].homed);
+  CHECK(st.axes[1].homed);
+  CHECK_FALSE(st.axes[2].homed);
+  CHECK_FALSE(z_busy);
+  CHECK(m.loop->snapshot().sim.axes[2].actual_position_mm == z0);
+}
+
+TEST_CASE("a cmd.home_axes write the module refuses answers its exception and changes nothing") {
+  Module m(false);
+  const auto refused = [](const std::vector<std::uint8_t>& reply, std::uint8_t code) {
+    return reply == std::vector<std::uint8_t>{6 | 0x80, code};
+  };
+  SECTION("no axis named, or a disabled one: 03") {
+    const auto home_axes = Module::address("cmd.home_axes");
+    CHECK(refused(m.write_u16("cmd.home_axes", 0), 3));
+    CHECK(m.last_refusal() == std::array<std::uint16_t, 3>{1, home_axes,
+                                                           static_cast<std::uint16_t>(registers::RefusalReason::no_axis_named)});
+    CHECK(refused(m.write_u16("cmd.home_axes", 0b1000), 3));  // A is disabled by default
+    CHECK(m.last_refusal() == std::array<std::uint16_t, 3>{2, home_axes,
+                                                           static_cast<std::uint16_t>(registers::RefusalReason::axis_disabled)});
+    m.periods(3);
+    CHECK(m.status().command_count == 0);
+    CHECK_FALSE(m.status().homing);
+  }
+  SECTION("while a cycle runs: 06, and the cycle goes on as it was") {
+    REQUIRE(m.write_u16("cmd.home_axes", 0b001).size() == 5);
+    m.periods(3);
+    REQUIRE(m.status().homing);
+    const auto count = m.status().command_count;
+    CHECK(refused(m.write_u16("cmd.home_axes", 0b110), 6));
+    CHECK(m.last_refusal()[2] == static_cast<std::uint16_t>(registers::RefusalReason::busy));
+    m.periods(3);
+    CHECK(m.status().command_count == count);
+    CHECK(m.status().homing);
+    CHECK_FALSE(m.status().axes[1].busy);
+    CHECK_FALSE(m.status().axes[2].busy);
+  }
+  SECTION("while an alarm is latched: 04") {
+    m.loop->raise_settings_lost();
+    m.periods(3);
+    REQUIRE(m.status().alarm);
+    CHECK(refused(m.write_u16("cmd.home_axes", 0b001), 4));
+    CHECK(m.last_refusal()[2] == static_cast<std::uint16_t>(registers::RefusalReason::homing_blocked));
+    m.periods(3);
+    CHECK(m.status().command_count == 0);
+    CHECK_FALSE(m.status().homing);
+  }
+}
+
+TEST_CASE("the home-correction statistics count only cycles that started homed: the first after start-up is "
+          "recorded as excluded") {
+  Module m(false);
+  server::Monitor monitor(*m.loop, *m.service, m.store.get());
+  std::int64_t now_ms = 0;
+  const auto watch = [&] { monitor.poll(now_ms += 10); };
+  watch();
+  for (int cycle = 0; cycle < 2; ++cycle) {
+    m.coil("cmd.home_all");
+    REQUIRE(m.run_until([&] { return m.status().homing; }, 100, watch));
+    REQUIRE(m.run_until([&] { return !m.status().homing; }, 400'000, watch));
+    watch();
+    REQUIRE(m.status().state == homing::MachineState::homed);
+  }
+  const auto runs = m.store->recent_runs(10);
+  REQUIRE(runs);
+  REQUIRE(runs->size() == 2);
+  for (std::size_t a : {0u, 1u, 2u}) {
+    INFO("axis " << a);
+    const auto& first = (*runs)[1].axis[a];
+    REQUIRE(first.present);
+    CHECK(first.excluded == persistence::Excluded::not_homed_before);
+    CHECK_FALSE(first.correction_mm);
+    const auto& second = (*runs)[0].axis[a];
+    REQUIRE(second.present);
+    CHECK(second.excluded == persistence::Excluded::no);
+    REQUIRE(second.correction_mm);
+    CHECK(std::abs(*second.correction_mm) < 0.05);
+    const auto summary = m.store->correction_summary(a, 10);
+    REQUIRE(summary);
+    CHECK(summary->count == 1);
+  }
+  // The registers show the statistics of the trusted cycle only.
+  const auto mean = Module::address("axis.x.correction_mean");
+  const auto r = m.request({4, static_cast<std::uint8_t>(mean >> 8), static_cast<std::uint8_t>(mean), 0, 2});
+  REQUIRE(r.size() == 6);
+  CHECK(std::abs(static_cast<std::int32_t>((r[2] << 24) | (r[3] << 16) | (r[4] << 8) | r[5])) < 50);  // µm
+}
+
+TEST_CASE("the history records an axis's correction only when its cycle succeeded and it started homed") {
+  homing::AxisStatus axis;
+  axis.home_correction_mm = 84.2;
+  axis.homed_at_cycle_start = false;
+  auto r = server::axis_record(true, axis, 1500);
+  CHECK(r.present);
+  CHECK(r.duration_ms == 1500);
+  CHECK_FALSE(r.correction_mm);
+  CHECK(r.excluded == persistence::Excluded::not_homed_before);
+  axis.homed_at_cycle_start = true;
+  axis.home_correction_mm = 0.003;
+  r = server::axis_record(true, axis, 1500);
+  REQUIRE(r.correction_mm);
+  CHECK(*r.correction_mm == 0.003);
+  CHECK(r.excluded == persistence::Excluded::no);
+  r = server::axis_record(false, axis, 1500);
+  CHECK_FALSE(r.correction_mm);
+  CHECK(r.excluded == persistence::Excluded::cycle_failed);
 }

@@ -11,6 +11,8 @@ using namespace tools_test;
 
 TEST_CASE("homingctl status and get: one table, words, engineering units, --json") {
   Daemon d;
+  // Everything allowed before homing (the default allows a slow jog only): nothing blocks motion.
+  REQUIRE(ctl(d, {"set", "global.allowed_without_homing=all"}).code() == 0);
   auto r = ctl(d, {"status"});
   SHOW(r);
   REQUIRE(r.code() == 0);
@@ -28,6 +30,11 @@ TEST_CASE("homingctl status and get: one table, words, engineering units, --json
   CHECK(j["axes"][0]["unit"] == "mm");
   CHECK(j["axes"][3]["unit"] == "deg");
   CHECK(j["interlocks"].empty());
+
+  // The default: before homing, motion is limited and status says so.
+  REQUIRE(ctl(d, {"set", "global.allowed_without_homing=jog_reduced"}).code() == 0);
+  r = ctl(d, {"status"});
+  CHECK(r.out.find("blocking motion: not homed (motion limited)") != std::string::npos);
 
   r = ctl(d, {"get", "axis.x.seek_feedrate", "axis.x.pull_off", "axis.x.mode", "sequence.step2", "sim.x.sensor_max"});
   SHOW(r);

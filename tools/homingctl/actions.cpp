@@ -66,12 +66,13 @@ struct Session {
     }
   }
 
-  // Writes 1 to a command coil; the command result after the loop took it.
-  std::expected<CommandResult, std::string> pulse(const std::string& coil, bool value = true) {
+  // Writes a command coil (1) or command register; the command result after
+  // the loop took it.
+  std::expected<CommandResult, std::string> pulse(const std::string& command, std::int64_t value = 1) {
     beat();
     const auto h0 = static_cast<std::uint16_t>(c.read("status.heartbeat"));
-    if (const int ex = c.write(coil, value ? 1 : 0))
-      return std::unexpected(fmt::format("writing {} refused: {}", coil, exception_sentence(ex)));
+    if (const int ex = c.write(command, value))
+      return std::unexpected(fmt::format("writing {} refused: {}", command, exception_sentence(ex)));
     let_loop_take(h0);
     return static_cast<CommandResult>(c.read("status.last_command_result"));
   }
@@ -184,46 +185,60 @@ bool taken(CommandResult r) { return r == CommandResult::accepted || r == Comman
 
 }  // namespace
 
-ActionResult home(Connection& c, const std::vector<std::string>& targets, const ActionOptions& o) {
-  Session s(c, o);
-  std::vector<std::pair<std::string, std::string>> jobs;  // (what, coil)
-  bool all = targets.empty();
-  for (const auto& t : targets)
-    if (t == "all") all = true;
-  if (all) {
-    jobs.emplace_back("home all", "cmd.home_all");
-  } else {
-    for (const auto& t : targets) {
-      const int a = axis_index(t);
-      if (a < 0) throw std::invalid_argument(fmt::format("home: '{}' is not an axis (all, x, y, z, a, b, c)", t));
-      jobs.emplace_back(fmt::format("home {}", homing::kAxisUpper[static_cast<std::size_t>(a)]),
-                        fmt::format("cmd.home.{}", homing::kAxisLetters[static_cast<std::size_t>(a)]));
-    }
-  }
-  ActionResult last;
-  for (const auto& [what, coil] : jobs) {
-    auto r = s.pulse(coil);
-    if (!r) return failure(r.error());
-    if (!taken(*r)) {
-      if (*r == CommandResult::refused_settings_fault) {
-        auto st = read_status(c, s.settings);
-        return s.refused(what, *r, &st);
-      }
-      return s.refused(what, *r);
-    }
-    if (!o.wait) {
-      last = not_waited(what, *r);
+HomeTargets home_targets(const std::vector<std::string>& targets) {
+  HomeTargets t;
+  t.all = targets.empty();
+  for (const auto& w : targets) {
+    if (w == "all") {
+      t.all = true;
       continue;
     }
-    auto st = s.wait_for(at_rest, true);
-    if (!st) return failure(st.error());
-    last = s.finished(what, *st);
-    if (last.exit_code != 0) return last;
-    if (st->state != homing::MachineState::homed && all) {
-      last.exit_code = 1;
-      last.message = fmt::format("{}: not done, the machine ended {}", what, homing::state_name(st->state));
-      return last;
+    const int a = axis_index(w);
+    if (a < 0) throw std::invalid_argument(fmt::format("home: '{}' is not an axis (all, x, y, z, a, b, c)", w));
+    t.axes |= homing::axis_bit(static_cast<std::size_t>(a));
+  }
+  return t;
+}
+
+ActionResult home(Connection& c, const HomeTargets& targets, const ActionOptions& o) {
+  Session s(c, o);
+  std::string what = "home all";
+  std::string reg = "cmd.home_all";
+  if (!targets.all) {
+    what = "home";
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+      if (!(targets.axes & homing::axis_bit(a))) continue;
+      what += fmt::format(" {}", homing::kAxisUpper[a]);
+      if (s.settings.axes[a].mode == homing::HomingMode::disabled)
+        return failure(fmt::format("{}: {} is disabled (axis.{}.mode = disabled), it cannot be homed", what,
+                                   homing::kAxisUpper[a], homing::kAxisLetters[a]));
     }
+    reg = "cmd.home_axes";
+  }
+  auto r = s.pulse(reg, targets.all ? 1 : targets.axes);
+  if (!r) {
+    // The module refuses a cmd.home_axes write it cannot start (04, 06):
+    // say why, as for a refused command.
+    const StatusView st = read_status(c, s.settings);
+    const CommandResult why = homing::homing_refusal_of(st.interlocks);
+    if (!targets.all && why != CommandResult::accepted) return s.refused(what, why, &st);
+    return failure(r.error());
+  }
+  if (!taken(*r)) {
+    if (*r == CommandResult::refused_settings_fault) {
+      auto st = read_status(c, s.settings);
+      return s.refused(what, *r, &st);
+    }
+    return s.refused(what, *r);
+  }
+  if (!o.wait) return not_waited(what, *r);
+  auto st = s.wait_for(at_rest, true);
+  if (!st) return failure(st.error());
+  ActionResult last = s.finished(what, *st);
+  if (last.exit_code != 0) return last;
+  if (st->state != homing::MachineState::homed && targets.all) {
+    last.exit_code = 1;
+    last.message = fmt::format("{}: not done, the machine ended {}", what, homing::state_name(st->state));
   }
   return last;
 }

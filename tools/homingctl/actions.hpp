@@ -23,8 +23,17 @@ struct ActionResult {
   nlohmann::json json;   // for --json
 };
 
-// `targets`: empty or "all" -> cmd.home_all; else axis letters, homed one after the other.
-ActionResult home(Connection& c, const std::vector<std::string>& targets, const ActionOptions& o);
+// What `homingctl home` was asked to home: everything, or the named axes.
+struct HomeTargets {
+  bool all = true;
+  std::uint8_t axes = 0;  // bit 0 = X
+};
+// `targets`: empty or "all" -> home-all; else axis letters. Throws
+// std::invalid_argument naming a word that is not an axis (before any I/O).
+HomeTargets home_targets(const std::vector<std::string>& targets);
+// Home-all writes cmd.home_all; named axes write their mask to cmd.home_axes,
+// so they home in one cycle (in sequence-step order, with gantry partners).
+ActionResult home(Connection& c, const HomeTargets& targets, const ActionOptions& o);
 ActionResult abort_motion(Connection& c, const ActionOptions& o);
 ActionResult reset_alarm(Connection& c, const ActionOptions& o);
 // Holds the jog coil for `ms` (refreshing the heartbeat), then releases it.

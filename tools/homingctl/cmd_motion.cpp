@@ -26,7 +26,10 @@ int jog_axis(Context& ctx, const JogOptions& o) {
 void add_motion_commands(Commands& commands, Context& ctx) {
   auto targets = std::make_shared<std::vector<std::string>>();
   auto* home_cmd = commands.add("home", "home all axes (default) or the named ones, and wait for the result",
-                                [targets](Context& c) { return c.report(home(c.connection(), *targets, c.ao)); });
+                                [targets](Context& c) {
+                                  const HomeTargets t = home_targets(*targets);  // a bad name before connecting
+                                  return c.report(home(c.connection(), t, c.ao));
+                                });
   home_cmd->add_option("axes", *targets, "all | x y z a b c");
   commands.add_wait_options(home_cmd, ctx);
 

@@ -22,6 +22,19 @@ std::string shown(const std::string& name, std::int64_t raw) {
   return r ? value_text(*r, raw) : std::to_string(raw);
 }
 
+// "  X Y excluded: not homed before the cycle": the axes of a run whose
+// correction is not in the statistics, by reason.
+std::string exclusions(const persistence::HomingRun& r) {
+  std::string out;
+  for (auto reason : {persistence::Excluded::not_homed_before, persistence::Excluded::cycle_failed}) {
+    std::string axes;
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+      if (r.axis[a].present && r.axis[a].excluded == reason) axes += fmt::format("{} ", homing::kAxisUpper[a]);
+    if (!axes.empty()) out += fmt::format("  {}excluded: {}", axes, persistence::excluded_text(reason));
+  }
+  return out;
+}
+
 void add_runs(HistoryReport& out, const std::vector<persistence::HomingRun>& runs) {
   out.json["runs"] = nlohmann::json::array();
   out.text += fmt::format("homing runs (newest first, {} shown):\n", runs.size());
@@ -41,10 +54,13 @@ void add_runs(HistoryReport& out, const std::vector<persistence::HomingRun>& run
       corr += x.correction_mm ? fmt::format("  {} {:+.4f}", homing::kAxisUpper[a], *x.correction_mm) : "";
       jaxes[std::string(homing::kAxisLetters[a])] = {
           {"correction", x.correction_mm ? nlohmann::json(*x.correction_mm) : nlohmann::json(nullptr)},
-          {"duration_ms", x.duration_ms}};
+          {"duration_ms", x.duration_ms},
+          {"excluded", x.excluded == persistence::Excluded::no
+                           ? nlohmann::json(nullptr)
+                           : nlohmann::json(std::string(persistence::excluded_text(x.excluded)))}};
     }
-    out.text += fmt::format("  #{:<5} {}  {:7.2f} s  axes {:<6} {}{}\n", r.id, local_time(r.start_ms),
-                            (r.end_ms - r.start_ms) / 1000.0, axes, result, corr);
+    out.text += fmt::format("  #{:<5} {}  {:7.2f} s  axes {:<6} {}{}{}\n", r.id, local_time(r.start_ms),
+                            (r.end_ms - r.start_ms) / 1000.0, axes, result, corr, exclusions(r));
     out.json["runs"].push_back({{"id", r.id}, {"start_ms", r.start_ms}, {"end_ms", r.end_ms}, {"result", result},
                                 {"alarm_code", r.result}, {"axes", jaxes}});
   }
@@ -77,6 +93,21 @@ std::expected<void, std::string> add_corrections(HistoryReport& out, const persi
     out.json["corrections"].push_back({{"axis", homing::kAxisLetters[a]}, {"runs", s->count}, {"mean", s->mean},
                                        {"spread", s->spread}, {"stddev", s->stddev}, {"min", s->min},
                                        {"max", s->max}});
+  }
+  // Which of the newest n runs are left out, and why: a correction is
+  // counted only when the axis was homed before its cycle started.
+  auto runs = store.recent_runs(n);
+  if (!runs) return std::unexpected(runs.error().message);
+  out.json["excluded"] = nlohmann::json::array();
+  for (const auto& r : *runs) {
+    const std::string why = exclusions(r);
+    if (why.empty()) continue;
+    out.text += fmt::format("  run #{}:{}\n", r.id, why);
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+      if (r.axis[a].present && r.axis[a].excluded != persistence::Excluded::no)
+        out.json["excluded"].push_back({{"run", r.id},
+                                        {"axis", homing::kAxisLetters[a]},
+                                        {"reason", std::string(persistence::excluded_text(r.axis[a].excluded))}});
   }
   return {};
 }

@@ -122,10 +122,35 @@ inline CyclePlan plan_cycle(const Settings& s, bool all, AxisMask requested) {
       if (m >= 0 && (p.unsequenced & axis_bit(static_cast<std::size_t>(m)))) p.unsequenced |= axis_bit(a);
     }
   } else {
+    // The named axes with their gantry partners, in one cycle: in the order
+    // of the sequence steps that name them (numbered from 1, no gaps), then
+    // the rest together in one last step.
+    AxisMask named = 0;
     for (std::size_t a = 0; a < kAxisCount; ++a) {
       if (!(requested & axis_bit(a))) continue;
       const int m = master_index(s, a);
-      cover_with_slave(m >= 0 ? static_cast<std::size_t>(m) : a, 1);
+      const std::size_t root = m >= 0 ? static_cast<std::size_t>(m) : a;
+      named |= axis_bit(root);
+      if (const int sl = slave_index(s, root); sl >= 0) named |= axis_bit(static_cast<std::size_t>(sl));
+    }
+    int step = 0;
+    for (int i = 0; i < 6; ++i) {
+      bool counted = false;
+      for (std::size_t a = 0; a < kAxisCount; ++a) {
+        if (!(s.global.sequence_steps[static_cast<std::size_t>(i)] & axis_bit(a)) || master_index(s, a) >= 0 ||
+            !(named & axis_bit(a)) || (p.covered & axis_bit(a)))
+          continue;
+        if (!counted) ++step;
+        counted = true;
+        cover_with_slave(a, step);
+      }
+    }
+    bool rest = false;
+    for (std::size_t a = 0; a < kAxisCount; ++a) {
+      if (!(named & axis_bit(a)) || (p.covered & axis_bit(a))) continue;
+      if (!rest) ++step;
+      rest = true;
+      cover(a, step);
     }
   }
   for (std::size_t a = 0; a < kAxisCount; ++a)
