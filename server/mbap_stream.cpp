@@ -15,8 +15,8 @@ StreamEnd serve_frames(MbapStream& stream, RequestHandler& handler, const Client
     if (!stream.read(header)) return StreamEnd::closed;
     const MbapHeader h = parse_mbap(header);
     if (!h.valid()) {
-      spdlog::warn("tcp: {}: MBAP protocol {} length {}; closing the connection", client.address, h.protocol,
-                   h.length);
+      spdlog::warn("{}: {}: MBAP protocol {} length {}; closing the connection", client.transport, client.address,
+                   h.protocol, h.length);
       return StreamEnd::malformed_header;
     }
     const auto pdu = std::span(frame).subspan(kMbapHeaderSize, h.pdu_size());

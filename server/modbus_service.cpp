@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "client_role.hpp"
 #include "device_identification.hpp"
 #include "file_record.hpp"
 #include "registers/lookup.hpp"
@@ -24,9 +25,10 @@ Reply refusal_reply(std::uint8_t fc, const registers::Refusal& r, const ClientIn
   return fail(fc, r.code);
 }
 
-// Who changed a setting, for the audit log.
+// Who changed a setting, for the audit log: over TLS also the certificate's subject and role.
 persistence::ChangeSource source_of(const ClientInfo& client) {
-  return persistence::ChangeSource{std::string(transport_name(client.transport)), client.address};
+  return persistence::ChangeSource{std::string(transport_name(client.transport)),
+                                   client.identity.empty() ? client.address : client.address + " " + client.identity};
 }
 
 std::string_view command_name(registers::Command c) {
@@ -65,7 +67,7 @@ ModbusService::ModbusService(ServiceConfig config, ControlLoop& loop, persistenc
 
 // RTU clients stand at the cabinet's serial line: the allow-list is for the network.
 bool ModbusService::may_write(const ClientInfo& client) const {
-  if (client.transport != Transport::tcp || config_.write_allow.empty()) return true;
+  if (!over_network(client.transport) || config_.write_allow.empty()) return true;
   return std::any_of(config_.write_allow.begin(), config_.write_allow.end(),
                      [&](const Cidr& c) { return c.contains(client.address); });
 }
@@ -89,7 +91,7 @@ void ModbusService::disconnected(const ClientInfo& client) {
 
 Reply ModbusService::handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) {
   if (pdu.empty()) return Reply{};
-  const bool tcp = client.transport == Transport::tcp;
+  const bool tcp = over_network(client.transport);
   if (unit == config_.unit_id) return dispatch(Target::module, pdu, client);
   // The Modbus TCP implementation guide: a device addressed by its IP address
   // answers unit id 0xFF, and 0 is accepted for direct addressing too (many
@@ -192,6 +194,11 @@ std::optional<Reply> ModbusService::write(Target target, std::uint8_t fc, const 
   if (!may_write(client)) {
     spdlog::warn("{} {}: write refused, the address is not in --write-allow (exception 01)", client.transport,
                  client.address);
+    return fail(fc, ExceptionCode::illegal_function);
+  }
+  const auto unit = target == Target::module ? registers::Unit::module : registers::Unit::simulator;
+  if (auto refused = access_refusal(client, unit, w.table, w.start, w.values.size())) {
+    spdlog::warn("{} {}: write refused, {} (exception 01)", client.transport, client.address, *refused);
     return fail(fc, ExceptionCode::illegal_function);
   }
   if (target == Target::module) return write_module(fc, w.table, w.start, w.values, client);
