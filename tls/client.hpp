@@ -33,6 +33,7 @@ class Client {
 
   int fd() const { return fd_; }
   Session& session() { return session_; }
+  const Session& session() const { return session_; }
 
  private:
   Client(int fd, Session session) : fd_(fd), session_(std::move(session)) {}

@@ -4,6 +4,7 @@
 #include <openssl/err.h>
 #include <openssl/x509v3.h>
 #include <poll.h>
+#include <sys/socket.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -14,11 +15,53 @@
 namespace tls {
 namespace {
 
+// OpenSSL's own socket BIO writes with write(), which raises SIGPIPE on a
+// connection the peer has closed and would end a process that does not ignore
+// it (homingctl, the tests). This one sends with MSG_NOSIGNAL: a closed
+// connection is an error to report like any other.
+int bio_write(BIO* bio, const char* data, int length) {
+  BIO_clear_retry_flags(bio);
+  const ssize_t n = ::send(static_cast<int>(BIO_get_fd(bio, nullptr)), data, static_cast<std::size_t>(length),
+                           MSG_NOSIGNAL);
+  if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR)) BIO_set_retry_write(bio);
+  return static_cast<int>(n);
+}
+
+int bio_read(BIO* bio, char* data, int length) {
+  BIO_clear_retry_flags(bio);
+  const ssize_t n = ::recv(static_cast<int>(BIO_get_fd(bio, nullptr)), data, static_cast<std::size_t>(length), 0);
+  if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR)) BIO_set_retry_read(bio);
+  if (n == 0) BIO_set_flags(bio, BIO_FLAGS_IN_EOF);  // as OpenSSL's socket BIO: the peer closed
+  return static_cast<int>(n);
+}
+
+int bio_puts(BIO* bio, const char* text) { return bio_write(bio, text, static_cast<int>(std::strlen(text))); }
+
+// The socket BIO's controls (the descriptor, flush) with our read and write.
+const BIO_METHOD* nosignal_socket() {
+  static BIO_METHOD* const method = [] {
+    BIO_METHOD* m = BIO_meth_new(BIO_get_new_index() | BIO_TYPE_SOURCE_SINK | BIO_TYPE_DESCRIPTOR,
+                                 "socket without SIGPIPE");
+    const BIO_METHOD* base = BIO_s_socket();
+    BIO_meth_set_write(m, bio_write);
+    BIO_meth_set_read(m, bio_read);
+    BIO_meth_set_puts(m, bio_puts);
+    BIO_meth_set_ctrl(m, BIO_meth_get_ctrl(base));
+    BIO_meth_set_create(m, BIO_meth_get_create(base));
+    BIO_meth_set_destroy(m, BIO_meth_get_destroy(base));
+    return m;
+  }();
+  return method;
+}
+
 std::expected<Ssl, std::string> new_ssl(SSL_CTX* ctx, int fd) {
   ERR_clear_error();
   Ssl ssl(SSL_new(ctx));
   if (!ssl) return std::unexpected("cannot create a TLS session: " + take_errors());
-  if (SSL_set_fd(ssl.get(), fd) != 1) return std::unexpected("cannot attach the TLS session: " + take_errors());
+  BIO* bio = BIO_new(nosignal_socket());
+  if (!bio) return std::unexpected("cannot attach the TLS session: " + take_errors());
+  BIO_set_fd(bio, fd, BIO_NOCLOSE);
+  SSL_set_bio(ssl.get(), bio, bio);  // the session owns it now
   return ssl;
 }
 
