@@ -33,7 +33,7 @@ TEST_CASE("TLS is off unless --tls is given") {
   CHECK_FALSE(r->options.tls_enabled);
 }
 
-TEST_CASE("--tls without a port listens on 802, the mbaps port") {
+TEST_CASE("homingd --tls without a port listens on 802, the mbaps port") {
   const auto r = parse(with_files({"--tls", "0.0.0.0"}));
   REQUIRE(r);
   CHECK(r->options.tls_enabled);
@@ -47,7 +47,7 @@ TEST_CASE("--tls without a port listens on 802, the mbaps port") {
   CHECK(r->options.tcp_enabled);  // beside plain TCP
 }
 
-TEST_CASE("--tls HOST:PORT, --tls-crl and --tls-default-role are taken as given") {
+TEST_CASE("homingd --tls HOST:PORT, --tls-crl and --tls-default-role are taken as given") {
   auto args = with_files({"--tls", "127.0.0.1:8802", "--tls-crl", "crl.pem", "--tls-default-role", "none"});
   const auto r = parse(args);
   REQUIRE(r);
@@ -56,7 +56,7 @@ TEST_CASE("--tls HOST:PORT, --tls-crl and --tls-default-role are taken as given"
   CHECK(r->options.tls_default_role == "none");
 }
 
-TEST_CASE("--tls is refused without its certificate, key and CA, with a bad port or an unknown default role") {
+TEST_CASE("homingd --tls is refused without its certificate, key and CA, with a bad port or an unknown default role") {
   auto r = parse({"--tls", "0.0.0.0", "--tls-cert", "s.crt"});
   REQUIRE_FALSE(r);
   CHECK(r.error().find("--tls needs --tls-cert, --tls-key and --tls-ca") != std::string::npos);
@@ -74,7 +74,7 @@ TEST_CASE("TLS files without --tls are refused rather than silently ignored") {
   CHECK(r.error().find("--tls-ca is set but --tls is not") != std::string::npos);
 }
 
-TEST_CASE("--no-tcp with --tls alone serves TLS only") {
+TEST_CASE("homingd --no-tcp with --tls alone serves TLS only") {
   const auto r = parse(with_files({"--no-tcp", "--tls", "0.0.0.0"}));
   REQUIRE(r);
   CHECK_FALSE(r->options.tcp_enabled);

@@ -32,9 +32,14 @@ std::expected<TlsModbusClient, std::string> TlsModbusClient::connect(int port, c
                                                                      std::chrono::milliseconds timeout) {
   auto ctx = tls::client_context(tls::ClientFiles{identity.cert, identity.key, identity.ca});
   if (!ctx) return std::unexpected(ctx.error());
-  auto client = tls::Client::connect("127.0.0.1", port, ctx->get(), timeout);
+  return connect(port, std::move(*ctx), timeout);
+}
+
+std::expected<TlsModbusClient, std::string> TlsModbusClient::connect(int port, tls::SslCtx ctx,
+                                                                     std::chrono::milliseconds timeout) {
+  auto client = tls::Client::connect("127.0.0.1", port, ctx.get(), timeout);
   if (!client) return std::unexpected(client.error());
-  return TlsModbusClient(std::move(*ctx), std::move(*client));
+  return TlsModbusClient(std::move(ctx), std::move(*client));
 }
 
 std::expected<std::vector<std::uint8_t>, std::string> TlsModbusClient::transaction(std::uint8_t unit,

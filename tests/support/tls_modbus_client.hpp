@@ -22,6 +22,11 @@ class TlsModbusClient {
   // The TCP connection and the handshake; the error says why they failed.
   static std::expected<TlsModbusClient, std::string> connect(
       int port, const TlsIdentity& identity, std::chrono::milliseconds timeout = std::chrono::seconds(5));
+  // With a context the test made (tls::client_context, then adjusted).
+  static std::expected<TlsModbusClient, std::string> connect(
+      int port, tls::SslCtx ctx, std::chrono::milliseconds timeout = std::chrono::seconds(5));
+  // The protocol version agreed: TLS1_2_VERSION, TLS1_3_VERSION.
+  int protocol_version() const { return SSL_version(client_.session().ssl()); }
 
   // One request: the reply PDU, or why none came (the TLS alert the module
   // sent, a closed connection, a timeout).

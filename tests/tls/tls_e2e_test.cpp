@@ -17,6 +17,7 @@
 #include "registers/defaults.hpp"
 #include "tests/support/test_pki.hpp"
 #include "tests/support/tls_modbus_client.hpp"
+#include "tls/context.hpp"
 
 using namespace e2e;
 
@@ -170,6 +171,36 @@ TEST_CASE("a certificate with an unknown role gets nothing, not even a read, and
   CHECK_FALSE(refusal(d, tls_identity("unknown-role")).empty());
   CHECK(log_has(d, {"tls: refused 127.0.0.1:", "CN=unknown-role", "has role 'admin'",
                     "not viewer, operator or engineer"}));
+}
+
+TEST_CASE("TLS 1.2 and 1.3 are spoken, TLS 1.1 is refused") {
+  Daemon d(tls_options());
+  const auto context = [](std::string_view name, int min_version, int max_version) {
+    const TlsIdentity id = tls_identity(name);
+    auto ctx = tls::client_context({id.cert, id.key, id.ca});
+    REQUIRE(ctx);
+    // TLS 1.1 signs with SHA-1, which OpenSSL 3 refuses above security level 0.
+    if (max_version < TLS1_2_VERSION) REQUIRE(SSL_CTX_set_cipher_list(ctx->get(), "DEFAULT:@SECLEVEL=0") == 1);
+    SSL_CTX_set_min_proto_version(ctx->get(), min_version);
+    SSL_CTX_set_max_proto_version(ctx->get(), max_version);
+    return std::move(*ctx);
+  };
+  auto v13 = TlsModbusClient::connect(d.tls_port(), context("viewer", TLS1_3_VERSION, TLS1_3_VERSION));
+  REQUIRE(v13);
+  CHECK(v13->protocol_version() == TLS1_3_VERSION);
+  CHECK(v13->read("status.homing") == 0);
+  auto v12 = TlsModbusClient::connect(d.tls_port(), context("viewer", TLS1_2_VERSION, TLS1_2_VERSION));
+  REQUIRE(v12);
+  CHECK(v12->protocol_version() == TLS1_2_VERSION);
+  CHECK(v12->read("status.homing") == 0);
+  // In TLS 1.2 the module checks the client's certificate before the client's handshake ends.
+  auto expired = TlsModbusClient::connect(d.tls_port(), context("expired", TLS1_2_VERSION, TLS1_2_VERSION));
+  REQUIRE_FALSE(expired);
+  CHECK(expired.error().find("certificate expired") != std::string::npos);
+  auto v11 = TlsModbusClient::connect(d.tls_port(), context("viewer", TLS1_1_VERSION, TLS1_1_VERSION));
+  REQUIRE_FALSE(v11);
+  INFO(v11.error());
+  CHECK(log_has(d, {"tls: refused 127.0.0.1:", "TLS handshake failed", "unsupported protocol"}));
 }
 
 TEST_CASE("a client without a certificate is refused at the handshake") {
