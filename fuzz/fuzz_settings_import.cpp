@@ -1,7 +1,8 @@
 // libFuzzer target: `homingd --import-settings FILE`. The input is written as
 // a settings TOML file and imported into a temporary database with
-// persistence::SettingsStore::import_file and registers::validate_settings_map
-// as the validator, as main.cpp does. Besides "no crash": a refused import
+// persistence::SettingsStore::import_file, the register layer's codec for
+// engineering values and registers::validate_settings_map as the validator,
+// as server/settings_file_mode.cpp does. Besides "no crash": a refused import
 // leaves load() exactly as before; an accepted one leaves only values the
 // daemon accepts at start (settings_from_raw rejects none) that pass the
 // validator again. After an accepted import the previous values are committed
@@ -20,8 +21,10 @@
 #include <string>
 
 #include "fuzz_common.hpp"
+#include "persistence/settings_file.hpp"
 #include "persistence/settings_store.hpp"
 #include "registers/defaults.hpp"
+#include "registers/settings_file_values.hpp"
 #include "registers/validate.hpp"
 
 namespace {
@@ -57,6 +60,9 @@ Fixture& fixture() {
   return f;
 }
 
+// Engineering values (format_version 2) read as homingd reads them.
+const persistence::SettingsFileCodec kCodec{registers::file_value_text, registers::raw_of_file_value};
+
 std::optional<persistence::Rejection> validate(const std::map<std::string, std::int64_t>& all) {
   if (auto refusal = registers::validate_settings_map(all)) return persistence::Rejection{"", refusal->message};
   return std::nullopt;
@@ -87,7 +93,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
   }
   const auto& before = f.defaults;  // what the previous input restored and checked
-  const auto imported = f.store->import_file(f.file, validate);
+  const auto imported = f.store->import_file(f.file, validate, &kCodec);
   const auto after = f.store->load();
   if (!imported) {
     check(!imported.error().message.empty(), "a refused import without a message");

@@ -152,6 +152,16 @@ write(t, "bad_port", 'tcp = "127.0.0.1:70000"\n')
 write(t, "bad_cidr", 'write-allow = "10.0.0.0/33"\n')
 write(t, "same_units", 'unit = 5\nsim-unit = 5\n')
 write(t, "no_tcp_no_rtu", 'no-tcp = true\n')
+write(t, "tls_only", '''no-tcp = true
+tls = "0.0.0.0"
+tls-cert = "/etc/homingd/tls/server.crt"
+tls-key = "/etc/homingd/tls/server.key"
+tls-ca = "/etc/homingd/tls/ca.crt"
+tls-crl = "/etc/homingd/tls/crl.pem"
+tls-default-role = "operator"
+''')
+write(t, "tls_without_files", 'tls = "0.0.0.0:802"\n')
+write(t, "tls_files_without_tls", 'tls_ca = "ca.crt"\n')
 write(t, "broken_toml", 'tcp = "127.0.0.1\n[unterminated\n')
 write(t, "wrong_type", 'max-clients = "many"\n')
 write(t, "help_key", 'help = true\n')
@@ -182,4 +192,25 @@ write(t, "no_settings", 'format = "homing-module-settings"\n')
 write(t, "string_value", '[settings]\n"axis.x.pull_off" = "2.5 mm"\n')
 write(t, "float_value", '[settings]\n"axis.x.pull_off" = 2.5\n')
 write(t, "huge_value", '[settings]\n"axis.x.pull_off" = 9223372036854775807\n')
+write(t, "engineering_values", '''format = "homing-module-settings"
+format_version = 2
+
+[settings]
+axis.x.direction = "negative"
+axis.x.mode = "switch_reapproach"
+axis.x.pull_off = 2.25  # mm
+axis.x.seek_feedrate = 1500.0  # mm/min
+axis.x.sensor_nc = true
+global.allowed_without_homing = "jog_reduced"
+sequence.step1 = "x+y"
+''')
+write(t, "engineering_bad_values", '''format = "homing-module-settings"
+format_version = 2
+
+[settings]
+axis.x.direction = "sideways"
+axis.x.pull_off = 2.0005
+axis.x.mode = true
+sequence.step1 = "x+q"
+''')
 write(t, "broken_toml", '[settings\n"axis.x.pull_off" = \n')

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "alarms.hpp"
+#include "enum_info.hpp"
 #include "settings.hpp"
 
 namespace homing {
@@ -30,6 +31,39 @@ enum class CheckRule : std::uint8_t {
   backoff_too_short,        // max_backoff cannot release the sensor after the stop (and push)
   shared_limit_rests_on_sensor,  // a shared home/limit sensor needs a pull-off off the sensor
 };
+
+// Each rule in words, for the refusal codes a PLC reads
+// (status.last_refusal_reason = 100 + rule) and hmi_maps/refusals.csv.
+inline constexpr EnumInfo<CheckRule> kCheckRuleInfo[] = {
+    {CheckRule::none, "none", "no rule broken"},
+    {CheckRule::not_positive, "not_positive", "a feedrate, acceleration or travel must be greater than 0"},
+    {CheckRule::latch_not_slower, "latch_not_slower", "the latch feedrate must be below the seek feedrate"},
+    {CheckRule::stop_distance_too_long, "stop_distance_too_long",
+     "the seek cannot stop within max_stop_distance (v^2/2a plus the travel while debouncing)"},
+    {CheckRule::negative, "negative", "this distance must not be negative"},
+    {CheckRule::missing_distance, "missing_distance",
+     "the homing mode needs this distance (pre-move, push or index pitch) greater than 0"},
+    {CheckRule::slave_invalid, "slave_invalid",
+     "slave_of must name another axis that homes and is not itself a slave"},
+    {CheckRule::slave_needs_sensor, "slave_needs_sensor", "a software-slaved axis needs its own home sensor"},
+    {CheckRule::commutator_needs_switch_master, "commutator_needs_switch_master",
+     "the master of an external-commutator gantry must home on a switch, not by pushing"},
+    {CheckRule::soft_limits_inverted, "soft_limits_inverted", "soft_limit_max must be above soft_limit_min"},
+    {CheckRule::outside_soft_limits, "outside_soft_limits",
+     "the home or final position lies outside the enabled soft limits"},
+    {CheckRule::disabled_in_gantry, "disabled_in_gantry", "a disabled axis can be neither master nor slave"},
+    {CheckRule::slave_of_slave, "slave_of_slave", "the master named is itself a slave"},
+    {CheckRule::gantry_stop_too_long, "gantry_stop_too_long",
+     "the gantry pair cannot stop within max_misalignment from its fastest speed"},
+    {CheckRule::squaring_beyond_misalignment, "squaring_beyond_misalignment",
+     "the pull-off difference plus switch compensation alone exceed max_misalignment"},
+    {CheckRule::backoff_too_short, "backoff_too_short",
+     "max_backoff cannot release the sensor after the stop (and the push)"},
+    {CheckRule::shared_limit_rests_on_sensor, "shared_limit_rests_on_sensor",
+     "a home sensor shared with a limit needs a pull-off that leaves the sensor"},
+};
+static_assert(lists_every_value(kCheckRuleInfo, CheckRule::shared_limit_rests_on_sensor));
+constexpr std::span<const EnumInfo<CheckRule>> enum_table(CheckRule) { return kCheckRuleInfo; }
 
 struct SettingsFault {
   std::size_t axis = 0;

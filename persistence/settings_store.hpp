@@ -24,6 +24,8 @@ class logger;
 
 namespace persistence {
 
+struct SettingsFileCodec;  // settings_file.hpp
+
 inline constexpr int kSchemaVersion = 3;       // see schema.cpp for the history
 inline constexpr std::size_t kHistoryAxes = 6;  // X Y Z A B C
 
@@ -177,10 +179,14 @@ class SettingsStore {
   // Full integrity check of the open database.
   Status check_integrity() const;
 
-  // Export/import (TOML, keys are register names). Import validates the whole
-  // merged set with `validate` and applies it in one transaction (source "import").
-  Status export_file(const std::string& file) const;
-  Result<ImportReport> import_file(const std::string& file, const Validator& validate);
+  // Export/import (TOML, keys are register names; settings_file.hpp). Import
+  // validates the whole merged set with `validate` and applies it in one
+  // transaction (source "import"). With a codec (the register layer's) the
+  // export spells engineering values and the import reads them; without, raw
+  // values (format_version 1, which every import reads).
+  Status export_file(const std::string& file, const SettingsFileCodec* codec = nullptr) const;
+  Result<ImportReport> import_file(const std::string& file, const Validator& validate,
+                                   const SettingsFileCodec* codec = nullptr);
 
   struct Impl;
 

@@ -8,11 +8,11 @@
 
 namespace persistence {
 
-Status SettingsStore::export_file(const std::string& file) const {
+Status SettingsStore::export_file(const std::string& file, const SettingsFileCodec* codec) const {
   std::string text;
   {
     std::lock_guard lock(impl_->mu);
-    text = settings_file_text(impl_->values, impl_->path, impl_->now_ms());
+    text = settings_file_text(impl_->values, impl_->path, impl_->now_ms(), codec);
   }
   if (auto w = write_file_atomically(file, text); !w) {
     Error e = w.error();
@@ -23,22 +23,23 @@ Status SettingsStore::export_file(const std::string& file) const {
   return {};
 }
 
-Result<ImportReport> SettingsStore::import_file(const std::string& file, const Validator& validate) {
+Result<ImportReport> SettingsStore::import_file(const std::string& file, const Validator& validate,
+                                                const SettingsFileCodec* codec) {
   auto read = read_settings_file(file);
   if (!read) return std::unexpected(read.error());
-  const SettingsFileEntries& entries = *read;
+  const SettingsFileEntries& entries = read->entries;
 
   std::lock_guard lock(impl_->mu);
   auto& m = *impl_;
   ImportReport report;
   auto proposed = m.values;
-  for (const auto& [name, e] : entries) {
-    auto it = proposed.find(name);
-    if (it == proposed.end())
+  for (const auto& [name, e] : entries)
+    if (!proposed.contains(name))
       return fail(ErrorKind::invalid, fmt::format("{}:{}: unknown register '{}'; nothing was imported", file, e.line,
                                                   name));
-    it->second = e.value;
-  }
+  auto raw = raw_values(file, *read, codec);
+  if (!raw) return std::unexpected(raw.error());
+  for (const auto& [name, value] : *raw) proposed[name] = value;
   for (const auto& [name, v] : m.values)
     if (!entries.contains(name)) report.not_in_file.push_back(name);
   if (validate) {
@@ -55,7 +56,7 @@ Result<ImportReport> SettingsStore::import_file(const std::string& file, const V
   }
   std::vector<SettingWrite> writes;
   writes.reserve(entries.size());
-  for (const auto& [name, e] : entries) writes.push_back({name, e.value});
+  for (const auto& [name, value] : *raw) writes.push_back({name, value});
   auto changes = m.commit_locked(writes, ChangeSource{"import", file});
   if (!changes) {
     changes.error().message += fmt::format("; nothing was imported from {}", file);

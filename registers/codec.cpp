@@ -181,6 +181,9 @@ std::int64_t read_raw(const Register& reg, const ModuleView& view) {
     case Key::diag_engine_step_ns: return to_raw(reg, view.extras.engine_step_ns);
     case Key::diag_rss_kb: return static_cast<std::int64_t>(std::min<std::uint64_t>(view.extras.rss_kb, 0xFFFFFFFFu));
     case Key::diag_tcp_clients: return view.extras.tcp_clients;
+    case Key::status_refusal_count: return view.extras.refusal_count;
+    case Key::status_last_refused_register: return view.extras.last_refused_register;
+    case Key::status_last_refusal_reason: return view.extras.last_refusal_reason;
     case Key::status_alarm: return st.alarm ? 1 : 0;
     case Key::status_homing: return st.homing ? 1 : 0;
     case Key::status_estop: return st.estop ? 1 : 0;

@@ -51,6 +51,10 @@ struct StatusExtras {
   double engine_step_ns = 0;
   std::uint64_t rss_kb = 0;
   std::uint32_t tcp_clients = 0;
+  // The last refused write (owned by the Modbus service, not the monitor).
+  std::uint16_t refusal_count = 0;
+  std::uint16_t last_refused_register = 0;
+  std::uint16_t last_refusal_reason = 0;
 };
 
 // ---- coils -> commands ----

@@ -4,6 +4,9 @@
 #include <string>
 #include <string_view>
 
+#include "homing/enum_info.hpp"
+#include "homing/settings_check.hpp"
+
 namespace registers {
 
 // Numbers are the Modbus exception codes on the wire.
@@ -28,10 +31,86 @@ constexpr std::string_view exception_name(ExceptionCode c) {
   return "?";
 }
 
-// A refused request: the code to answer with and what a technician should know.
+// Why a write was refused, published as status.last_refusal_reason (with
+// status.last_refused_register and status.refusal_count) so that a PLC can
+// tell "illegal data value" apart. A broken configuration rule is published
+// as kRuleReasonBase + the rule (homing::CheckRule), one code per rule.
+enum class RefusalReason : std::uint8_t {
+  none = 0,
+  not_mapped,           // no register at that address
+  read_only,            // a read-only register or table
+  split_32bit,          // a write covering one half of a 32-bit value
+  out_of_range,         // a value outside the register's range
+  rule,                 // the settings after the write break a rule (published per rule)
+  client_read_only,     // the client's address is not in --write-allow
+  locked,               // settings are locked (security.unlock)
+  wrong_unlock_code,    // the code written to security.unlock is wrong
+  busy,                 // a homing cycle runs
+  wiring,               // the machine's wiring (GPIO) cannot do it
+  storage_failed,       // the settings database did not store it
+  carriage_moving,      // simulator: that carriage moves
+  loop_not_responding,  // simulator: the control loop did not take the write in time
+  empty,                // a write of 0 items
+  hard_stops_inverted,  // simulator: hard_stop_min must be below hard_stop_max
+  role,                 // Modbus/TCP Security: the client certificate's role does not allow the write
+};
+// Each reason with the exception it is answered with, its name and its text.
+struct RefusalReasonInfo {
+  RefusalReason value;
+  ExceptionCode exception;
+  std::string_view name;
+  std::string_view text;
+};
+inline constexpr RefusalReasonInfo kRefusalReasonInfo[] = {
+    {RefusalReason::none, ExceptionCode::server_device_failure, "none", "no write refused since start"},
+    {RefusalReason::not_mapped, ExceptionCode::illegal_data_address, "not_mapped", "no register at this address (see hmi_maps/registers.md)"},
+    {RefusalReason::read_only, ExceptionCode::illegal_data_address, "read_only", "this register or table is read-only"},
+    {RefusalReason::split_32bit, ExceptionCode::illegal_data_address, "split_32bit", "a 32-bit value must be written with both words in one request"},
+    {RefusalReason::out_of_range, ExceptionCode::illegal_data_value, "out_of_range", "the value is outside the register's range"},
+    {RefusalReason::rule, ExceptionCode::illegal_data_value, "rule", "the settings after this write break a rule (published as 100 + rule)"},
+    {RefusalReason::client_read_only, ExceptionCode::illegal_function, "client_read_only",
+     "this client's address is not allowed to write (homingd --write-allow)"},
+    {RefusalReason::locked, ExceptionCode::server_device_failure, "locked", "settings are locked: write the unlock code to security.unlock"},
+    {RefusalReason::wrong_unlock_code, ExceptionCode::illegal_data_value, "wrong_unlock_code", "the unlock code written to security.unlock is wrong"},
+    {RefusalReason::busy, ExceptionCode::server_device_busy, "busy", "a homing cycle runs: write settings when it has ended"},
+    {RefusalReason::wiring, ExceptionCode::illegal_data_value, "wiring", "the machine's wiring (GPIO lines) cannot do what these settings ask"},
+    {RefusalReason::storage_failed, ExceptionCode::server_device_failure, "storage_failed",
+     "the settings database did not store the write (disk full or failing): see the log"},
+    {RefusalReason::carriage_moving, ExceptionCode::server_device_busy, "carriage_moving", "simulator: that carriage moves, write when it rests"},
+    {RefusalReason::loop_not_responding, ExceptionCode::server_device_busy, "loop_not_responding",
+     "simulator: the control loop did not take the write in time"},
+    {RefusalReason::empty, ExceptionCode::illegal_data_value, "empty", "a write of 0 items"},
+    {RefusalReason::hard_stops_inverted, ExceptionCode::illegal_data_value, "hard_stops_inverted", "simulator: hard_stop_min must be below hard_stop_max"},
+    {RefusalReason::role, ExceptionCode::illegal_function, "role",
+     "the role in this client's certificate does not allow the write (Modbus/TCP Security: viewer reads, operator also commands, engineer also settings)"},
+};
+static_assert(homing::lists_every_value(kRefusalReasonInfo, RefusalReason::role));
+constexpr std::span<const RefusalReasonInfo> enum_table(RefusalReason) { return kRefusalReasonInfo; }
+
+inline constexpr std::uint16_t kRuleReasonBase = 100;
+
+// A refused request: the code to answer with, what a technician should know,
+// why (the reason, and the rule when a rule is broken) and the protocol
+// address of the first register the refusal is about.
 struct Refusal {
   ExceptionCode code = ExceptionCode::server_device_failure;
   std::string message;
+  RefusalReason reason = RefusalReason::none;
+  homing::CheckRule rule = homing::CheckRule::none;
+  std::uint16_t address = 0;
+
+  // A refusal for a reason, answered with the reason's exception.
+  static Refusal because(RefusalReason reason, std::uint16_t address, std::string message,
+                         homing::CheckRule rule = homing::CheckRule::none) {
+    return Refusal{kRefusalReasonInfo[static_cast<std::size_t>(reason)].exception, std::move(message), reason, rule,
+                   address};
+  }
+
+  // The value of status.last_refusal_reason.
+  constexpr std::uint16_t reason_code() const {
+    return reason == RefusalReason::rule ? static_cast<std::uint16_t>(kRuleReasonBase + static_cast<int>(rule))
+                                         : static_cast<std::uint16_t>(reason);
+  }
 };
 
 }  // namespace registers

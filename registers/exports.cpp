@@ -19,6 +19,7 @@ std::vector<GeneratedFile> generate_hmi_maps() {
       {"home_assistant_modbus.yaml", export_home_assistant()},
       {"alarms.csv", export_alarms_csv()},
       {"enums.csv", export_enums_csv()},
+      {"refusals.csv", export_refusals_csv()},
   };
 }
 

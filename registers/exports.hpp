@@ -23,6 +23,7 @@ std::string export_kepware(Unit unit);    // kepware_*.csv (one device per unit 
 std::string export_ignition();            // ignition_tags.json
 std::string export_home_assistant();      // home_assistant_modbus.yaml
 std::string export_alarms_csv();          // alarms.csv: the engine's alarm table
+std::string export_refusals_csv();        // refusals.csv: the codes of status.last_refusal_reason
 std::string export_enums_csv();           // enums.csv: every value list, named
 
 // Shared by the exporters.

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include "homing/alarms.hpp"
+#include "registers/errors.hpp"
 #include "registers/exports.hpp"
 
 namespace registers {
@@ -15,6 +16,23 @@ std::string export_alarms_csv() {
     if (a.value == homing::AlarmCode::none) continue;  // "no alarm" is not an alarm to import
     out += fmt::format("{},{},{},{}\n", static_cast<int>(a.value), csv_field(a.name), csv_field(a.text),
                        csv_field(a.what_to_check));
+  }
+  return out;
+}
+
+std::string export_refusals_csv() {
+  using exports_detail::csv_field;
+  std::string out = "code,name,exception,text\n";
+  for (const RefusalReasonInfo& r : kRefusalReasonInfo) {
+    if (r.value == RefusalReason::none || r.value == RefusalReason::rule) continue;  // a rule has its own codes
+    out += fmt::format("{},{},{:02X},{}\n", static_cast<int>(r.value), csv_field(r.name), static_cast<int>(r.exception),
+                       csv_field(r.text));
+  }
+  const auto rule_exception = static_cast<int>(kRefusalReasonInfo[static_cast<std::size_t>(RefusalReason::rule)].exception);
+  for (const auto& r : homing::kCheckRuleInfo) {
+    if (r.value == homing::CheckRule::none) continue;
+    out += fmt::format("{},{},{:02X},{}\n", kRuleReasonBase + static_cast<int>(r.value), csv_field(r.name),
+                       rule_exception, csv_field("combination refused: " + std::string(r.text)));
   }
   return out;
 }

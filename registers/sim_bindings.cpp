@@ -4,6 +4,8 @@
 
 #include <stdexcept>
 
+#include "registers/lookup.hpp"
+
 namespace registers {
 namespace {
 
@@ -122,11 +124,13 @@ std::expected<AcceptedSimWrite, Refusal> validate_sim_write(Table table, std::ui
   }
   for (std::size_t i = 0; i < homing::kAxisCount; ++i) {
     const AxisConfig& a = out.config.axes[i];
-    if (a.hard_stop_min_mm >= a.hard_stop_max_mm)
-      return std::unexpected(Refusal{
-          ExceptionCode::illegal_data_value,
+    if (a.hard_stop_min_mm >= a.hard_stop_max_mm) {
+      const Register* min_reg = find_register(fmt::format("sim.{}.hard_stop_min", homing::kAxisLetters[i]));
+      return std::unexpected(Refusal::because(
+          RefusalReason::hard_stops_inverted, min_reg ? min_reg->address : start,
           fmt::format("sim.{0}.hard_stop_min ({1}) must be below sim.{0}.hard_stop_max ({2}); nothing was written",
-                      homing::kAxisLetters[i], a.hard_stop_min_mm, a.hard_stop_max_mm)});
+                      homing::kAxisLetters[i], a.hard_stop_min_mm, a.hard_stop_max_mm)));
+    }
   }
   return out;
 }

@@ -12,6 +12,7 @@
 #include "homing/settings.hpp"
 #include "homing/sim/config.hpp"
 #include "homing/status.hpp"
+#include "registers/errors.hpp"
 #include "registers/fills.hpp"
 
 namespace registers {
@@ -86,6 +87,20 @@ constexpr auto kInterlocks = bits_of(homing::interlock::kInfo);
 constexpr auto kAlarms = values_of(homing::kAlarmInfo);
 constexpr auto kPhases = values_of(homing::kPhaseInfo);
 constexpr auto kSimFaults = values_of(homing::sim::kFaultInfo);
+// Why a write was refused: the reasons (registers/errors.hpp), then one code
+// per configuration rule at kRuleReasonBase + the rule (homing::CheckRule).
+constexpr auto kRefusalReasons = [] {
+  constexpr std::size_t generic = std::size(kRefusalReasonInfo) - 1;  // without `rule`
+  constexpr std::size_t rules = std::size(homing::kCheckRuleInfo) - 1;  // without `none`
+  std::array<EnumValue, generic + rules> out{};
+  std::size_t n = 0;
+  for (const auto& r : kRefusalReasonInfo)
+    if (r.value != RefusalReason::rule) out[n++] = {static_cast<std::int64_t>(r.value), r.name, r.text};
+  for (const auto& r : homing::kCheckRuleInfo)
+    if (r.value != homing::CheckRule::none)
+      out[n++] = {kRuleReasonBase + static_cast<std::int64_t>(r.value), r.name, r.text};
+  return out;
+}();
 // Register encodings of axes (not engine enums).
 constexpr EnumValue kSlaveOf[] = {{0, "none", "not a slave"},  {1, "x", "slave of X"},
                                   {2, "y", "slave of Y"},      {3, "z", "slave of Z"},
@@ -112,6 +127,7 @@ constexpr ValueList kValueLists[] = {
     {"alarm_axis", kAlarmAxis},
     {"phase", kPhases},
     {"sim_fault", kSimFaults},
+    {"refusal_reason", kRefusalReasons},
 };
 
 // ---- module unit ----
@@ -142,6 +158,9 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "status.alarm_axis", .table = IR, .offset = 9, .type = Type::enumeration, .access = Access::r, .max = 6, .key = Key::status_alarm_axis, .values = kAlarmAxis, .description = "first axis with a latched alarm (1 = X ... 6 = C), 0 none"},
     {.pattern = "status.command_count", .table = IR, .offset = 11, .access = Access::r, .max = 65535, .key = Key::status_command_count, .description = "commands judged so far (wraps): status.last_command_result is the result of the command that moved it"},
     {.pattern = "status.settings_locked", .table = IR, .offset = 10, .access = Access::r, .max = 1, .key = Key::status_settings_locked, .description = "1 while settings writes are locked (write the unlock code to security.unlock)"},
+    {.pattern = "status.refusal_count", .table = IR, .offset = 12, .access = Access::r, .max = 65535, .key = Key::status_refusal_count, .description = "writes refused since start (wraps): when it moves, the two registers below say which and why"},
+    {.pattern = "status.last_refused_register", .table = IR, .offset = 13, .access = Access::r, .max = 65535, .key = Key::status_last_refused_register, .description = "protocol address of the first register the last refused write was about (in the unit written to)"},
+    {.pattern = "status.last_refusal_reason", .table = IR, .offset = 14, .type = Type::enumeration, .access = Access::r, .max = kRefusalReasons.back().value, .key = Key::status_last_refusal_reason, .values = kRefusalReasons, .description = "why the last write was refused (hmi_maps/refusals.csv); 100 and up: the configuration rule it broke"},
     // input registers: diagnostics of the running daemon
     {.pattern = "diag.loop_periods", .table = IR, .offset = 20, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .key = Key::diag_loop_periods, .description = "control periods run since start"},
     {.pattern = "diag.loop_late_p50_us", .table = IR, .offset = 22, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .key = Key::diag_late_p50_us, .description = "median lateness of a control period's start behind its deadline, µs"},

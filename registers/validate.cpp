@@ -11,8 +11,16 @@
 namespace registers {
 namespace {
 
-Refusal address_fault(std::string message) {
-  return Refusal{ExceptionCode::illegal_data_address, std::move(message)};
+Refusal address_fault(RefusalReason reason, std::uint32_t address, std::string message) {
+  return Refusal::because(reason, static_cast<std::uint16_t>(address), std::move(message));
+}
+
+// A broken rule, about the register of the setting the fault names.
+Refusal rule_refusal(const homing::SettingsFault& fault, std::string message) {
+  const Register* reg = find_register(
+      fmt::format("axis.{}.{}", homing::kAxisLetters[fault.axis], homing::field_name(fault.field)));
+  return Refusal::because(RefusalReason::rule, reg ? reg->address : std::uint16_t{0}, std::move(message),
+                          fault.rule);
 }
 
 std::string where(Unit unit, Table table, std::uint32_t address) {
@@ -31,27 +39,36 @@ std::string range_text(const Register& reg) {
 std::expected<std::vector<RawWrite>, Refusal> decode_write(Unit unit, Table table, std::uint16_t start,
                                                             std::span<const std::uint16_t> values,
                                                             WordOrder order) {
-  if (values.empty()) return std::unexpected(Refusal{ExceptionCode::illegal_data_value, "a write of 0 items"});
+  if (values.empty())
+    return std::unexpected(
+        Refusal::because(RefusalReason::empty, start, "a write of 0 items"));
   const std::uint32_t end = std::uint32_t{start} + static_cast<std::uint32_t>(values.size());
   if (end > 65536)
-    return std::unexpected(address_fault(fmt::format("write {}..{} runs past address 65535", start, end - 1)));
+    return std::unexpected(address_fault(RefusalReason::not_mapped, start,
+                                         fmt::format("write {}..{} runs past address 65535", start, end - 1)));
 
   std::vector<RawWrite> out;
   std::optional<Refusal> value_fault;  // reported only when every address is fine
   for (std::uint32_t a = start; a < end;) {
     const Register* reg = find_register(unit, table, static_cast<std::uint16_t>(a));
     if (!reg)
-      return std::unexpected(address_fault(fmt::format("{} is not mapped; nothing was written (see hmi_maps/)",
-                                                       where(unit, table, a))));
+      return std::unexpected(address_fault(
+          RefusalReason::not_mapped, a,
+          fmt::format("{} is not mapped; nothing was written (see hmi_maps/)", where(unit, table, a))));
     if (!reg->writable() || table == Table::input_register || table == Table::discrete_input)
       return std::unexpected(address_fault(
+          RefusalReason::read_only, a,
           fmt::format("{} ({}) is read-only; nothing was written", reg->name(), where(unit, table, a))));
     if (reg->address != a)
-      return std::unexpected(address_fault(fmt::format(
+      return std::unexpected(address_fault(
+          RefusalReason::split_32bit, reg->address,
+          fmt::format(
           "{} is 32-bit ({}..{}); this write starts at its second word {}: write both words in one request",
           reg->name(), reg->address, reg->address + 1, a)));
     if (reg->end() > end)
-      return std::unexpected(address_fault(fmt::format(
+      return std::unexpected(address_fault(
+          RefusalReason::split_32bit, reg->address,
+          fmt::format(
           "{} is 32-bit ({}..{}); this write ends after its first word: write both words in one request",
           reg->name(), reg->address, reg->address + 1)));
 
@@ -63,9 +80,9 @@ std::expected<std::vector<RawWrite>, Refusal> decode_write(Unit unit, Table tabl
       raw = decode_words(*reg, words, order);
     }
     if ((raw < reg->min || raw > reg->max) && !value_fault)
-      value_fault = Refusal{ExceptionCode::illegal_data_value,
-                            fmt::format("{} = {} is outside its range {}; nothing was written", reg->name(),
-                                        format_value(*reg, raw), range_text(*reg))};
+      value_fault = Refusal::because(RefusalReason::out_of_range, reg->address,
+                                     fmt::format("{} = {} is outside its range {}; nothing was written",
+                                                 reg->name(), format_value(*reg, raw), range_text(*reg)));
     out.push_back({reg, raw});
     a = reg->end();
   }
@@ -110,9 +127,8 @@ std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t 
   // request: a write may not break a rule (the whole configuration is checked,
   // so a write to a master that breaks its slave is refused too).
   if (const auto fault = homing::new_fault(settings, result.settings))
-    return std::unexpected(Refusal{
-        ExceptionCode::illegal_data_value,
-        fmt::format("{}; nothing was written", homing::describe_fault(*fault, result.settings))});
+    return std::unexpected(
+        rule_refusal(*fault, fmt::format("{}; nothing was written", homing::describe_fault(*fault, result.settings))));
   return result;
 }
 
@@ -120,14 +136,15 @@ std::optional<Refusal> validate_settings_map(const std::map<std::string, std::in
   for (const auto& [name, raw] : values) {
     const Register* reg = find_register(name);
     if (!reg || !reg->persisted)
-      return Refusal{ExceptionCode::illegal_data_address, fmt::format("{} is not a setting of this module", name)};
+      return Refusal::because(RefusalReason::not_mapped, 0, fmt::format("{} is not a setting of this module", name));
     if (raw < reg->min || raw > reg->max)
-      return Refusal{ExceptionCode::illegal_data_value,
-                     fmt::format("{} = {} is outside its range {}", name, format_value(*reg, raw), range_text(*reg))};
+      return Refusal::because(
+          RefusalReason::out_of_range, reg->address,
+          fmt::format("{} = {} is outside its range {}", name, format_value(*reg, raw), range_text(*reg)));
   }
   const SettingsFromRaw decoded = settings_from_raw(values);
   for (const auto& fault : homing::check_settings(decoded.settings))
-    if (fault) return Refusal{ExceptionCode::illegal_data_value, homing::describe_fault(*fault, decoded.settings)};
+    if (fault) return rule_refusal(*fault, homing::describe_fault(*fault, decoded.settings));
   return std::nullopt;
 }
 

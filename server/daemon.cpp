@@ -77,6 +77,10 @@ ServiceConfig service_config(const Options& opt, const ControlLoop& loop, const 
   config.word_order = opt.word_order;
   for (const auto& entry : opt.write_allow) config.write_allow.push_back(*parse_cidr(entry));
   config.unlock_code = static_cast<std::uint16_t>(opt.unlock_code);
+  if (!opt.vendor_name.empty()) config.identity.vendor_name = opt.vendor_name;
+  if (!opt.vendor_url.empty()) config.identity.vendor_url = opt.vendor_url;
+  if (!opt.product_name.empty()) config.identity.product_name = opt.product_name;
+  if (!opt.machine_name.empty()) config.identity.user_application_name = opt.machine_name;
   if (wiring) config.machine_check = [w = *wiring](const homing::Settings& s) { return homing::gpiod::check_wiring(w, s); };
   return config;
 }

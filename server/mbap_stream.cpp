@@ -15,12 +15,14 @@ StreamEnd serve_frames(MbapStream& stream, RequestHandler& handler, const Client
     if (!stream.read(header)) return StreamEnd::closed;
     const MbapHeader h = parse_mbap(header);
     if (!h.valid()) {
+      handler.bus_event(client.transport, BusEvent::comm_error);
       spdlog::warn("{}: {}: MBAP protocol {} length {}; closing the connection", client.transport, client.address,
                    h.protocol, h.length);
       return StreamEnd::malformed_header;
     }
     const auto pdu = std::span(frame).subspan(kMbapHeaderSize, h.pdu_size());
     if (!stream.read(pdu)) return StreamEnd::incomplete_frame;
+    handler.bus_event(client.transport, BusEvent::message);
     const Reply reply = handler.handle(h.unit, pdu, client);
     if (reply.send && !stream.send(tcp_frame(h.transaction_id, h.unit, reply.pdu))) return StreamEnd::closed;
   }

@@ -19,12 +19,6 @@ using registers::Table;
 
 Reply fail(std::uint8_t fc, ExceptionCode code) { return exception_reply(fc, static_cast<std::uint8_t>(code)); }
 
-Reply refusal_reply(std::uint8_t fc, const registers::Refusal& r, const ClientInfo& client) {
-  spdlog::debug("{} {}: FC{} refused with exception {:02X} ({}): {}", client.transport, client.address, fc,
-                static_cast<int>(r.code), registers::exception_name(r.code), r.message);
-  return fail(fc, r.code);
-}
-
 // Who changed a setting, for the audit log: over TLS also the certificate's subject and role.
 persistence::ChangeSource source_of(const ClientInfo& client) {
   return persistence::ChangeSource{std::string(transport_name(client.transport)),
@@ -57,7 +51,31 @@ std::string describe_changes(const std::vector<registers::Change>& changes) {
   return out;
 }
 
+// The address of the first register a refused write is about: the first
+// value it changes, else the first register it names.
+std::uint16_t first_address(const std::vector<registers::Change>& changes, std::uint16_t start) {
+  return changes.empty() ? start : changes.front().reg->address;
+}
+
 }  // namespace
+
+Reply ModbusService::refuse(std::uint8_t fc, const registers::Refusal& r, const ClientInfo& client) {
+  const auto level = r.reason == registers::RefusalReason::storage_failed ? spdlog::level::err : spdlog::level::warn;
+  spdlog::log(level, "{} {}: write refused with exception {:02X} ({}), reason {} ({}) at address {}: {}",
+              client.transport, client.address, static_cast<int>(r.code), registers::exception_name(r.code),
+              r.reason_code(),
+              r.reason == registers::RefusalReason::rule ? homing::name_of(r.rule) : homing::name_of(r.reason),
+              r.address, r.message);
+  // Count, register and reason of one refusal in one word, so that a read
+  // never pairs the count of one refusal with the reason of another.
+  std::uint64_t old = last_refusal_.load();
+  std::uint64_t next = 0;
+  do {
+    const std::uint64_t count = (old + 1) & 0xFFFF;
+    next = count | (std::uint64_t{r.address} << 16) | (std::uint64_t{r.reason_code()} << 32);
+  } while (!last_refusal_.compare_exchange_weak(old, next));
+  return fail(fc, r.code);
+}
 
 ModbusService::ModbusService(ServiceConfig config, ControlLoop& loop, persistence::SettingsStore* store,
                              const homing::Settings& settings)
@@ -91,6 +109,17 @@ void ModbusService::disconnected(const ClientInfo& client) {
 
 Reply ModbusService::handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) {
   if (pdu.empty()) return Reply{};
+  // Over RTU a frame for a unit that is not here is another device's; over
+  // TCP (plain or TLS) every request is this server's (it answers 0B for unknown units).
+  const bool ours = over_network(client.transport) || unit == 0 || unit == config_.unit_id ||
+                    (config_.sim_unit_id && unit == *config_.sim_unit_id);
+  if (ours) diagnostics_.addressed(client.transport);
+  Reply reply = route(unit, pdu, client);
+  if (ours) diagnostics_.answered(client.transport, reply);
+  return reply;
+}
+
+Reply ModbusService::route(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) {
   const bool tcp = over_network(client.transport);
   if (unit == config_.unit_id) return dispatch(Target::module, pdu, client);
   // The Modbus TCP implementation guide: a device addressed by its IP address
@@ -112,8 +141,12 @@ Reply ModbusService::handle(std::uint8_t unit, std::span<const std::uint8_t> pdu
 
 Reply ModbusService::dispatch(Target target, std::span<const std::uint8_t> pdu, const ClientInfo& client) {
   const std::uint8_t fc = pdu[0];
-  // The traces are the module's: the simulator unit has no files.
-  if (fc == static_cast<std::uint8_t>(FunctionCode::read_file_record) && target != Target::module)
+  // The traces, the line diagnostics and the identity are the module's: the
+  // simulator unit has none.
+  if ((fc == static_cast<std::uint8_t>(FunctionCode::read_file_record) ||
+       fc == static_cast<std::uint8_t>(FunctionCode::diagnostics) ||
+       fc == static_cast<std::uint8_t>(FunctionCode::report_server_id)) &&
+      target != Target::module)
     return fail(fc, ExceptionCode::illegal_function);
   const auto request = decode_request(pdu);
   if (!request) {
@@ -142,7 +175,10 @@ Reply ModbusService::apply(Target target, const Request& request, const ClientIn
   }
   if (const auto* f = std::get_if<FileRecordRequest>(&request.body))
     return read_trace_records(*f, [this](std::size_t axis) { return trace_file(loop_.trace(axis)); });
-  return device_identification(std::get<DeviceIdRequest>(request.body));
+  if (const auto* d = std::get_if<DiagnosticsRequest>(&request.body)) return diagnostics_.answer(client.transport, *d);
+  if (std::holds_alternative<ReportServerIdRequest>(request.body))
+    return report_server_id(config_.unit_id, config_.identity);
+  return device_identification(std::get<DeviceIdRequest>(request.body), config_.identity);
 }
 
 namespace {
@@ -176,7 +212,12 @@ Reply ModbusService::read(Target target, std::uint8_t fc, const ReadRequest& r) 
   std::optional<registers::Refusal> refused;
   if (target == Target::module) {
     std::lock_guard lock(mutex_);
-    const registers::ModuleView view{settings_, host_, snap.status, extras_};
+    registers::StatusExtras extras = extras_;
+    const std::uint64_t refusal = last_refusal_.load();
+    extras.refusal_count = static_cast<std::uint16_t>(refusal & 0xFFFF);
+    extras.last_refused_register = static_cast<std::uint16_t>((refusal >> 16) & 0xFFFF);
+    extras.last_refusal_reason = static_cast<std::uint16_t>((refusal >> 32) & 0xFFFF);
+    const registers::ModuleView view{settings_, host_, snap.status, extras};
     refused = bits ? registers::read_module_bits(r.table, r.start, flags, view)
                    : registers::read_module_words(r.table, r.start, words, config_.word_order, view);
   } else {
@@ -191,16 +232,18 @@ Reply ModbusService::read(Target target, std::uint8_t fc, const ReadRequest& r) 
 
 std::optional<Reply> ModbusService::write(Target target, std::uint8_t fc, const WriteRequest& w,
                                           const ClientInfo& client) {
-  if (!may_write(client)) {
-    spdlog::warn("{} {}: write refused, the address is not in --write-allow (exception 01)", client.transport,
-                 client.address);
-    return fail(fc, ExceptionCode::illegal_function);
-  }
+  if (!may_write(client))
+    return refuse(fc,
+                  registers::Refusal::because(registers::RefusalReason::client_read_only, w.start,
+                                              fmt::format("{} is not in --write-allow; nothing was written",
+                                                          client.address)),
+                  client);
   const auto unit = target == Target::module ? registers::Unit::module : registers::Unit::simulator;
-  if (auto refused = access_refusal(client, unit, w.table, w.start, w.values.size())) {
-    spdlog::warn("{} {}: write refused, {} (exception 01)", client.transport, client.address, *refused);
-    return fail(fc, ExceptionCode::illegal_function);
-  }
+  if (auto refused = access_refusal(client, unit, w.table, w.start, w.values.size()))
+    return refuse(fc,
+                  registers::Refusal::because(registers::RefusalReason::role, w.start,
+                                              *refused + "; nothing was written"),
+                  client);
   if (target == Target::module) return write_module(fc, w.table, w.start, w.values, client);
   return write_sim(fc, w.table, w.start, w.values, client);
 }
@@ -211,47 +254,53 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
   {
     std::lock_guard lock(mutex_);
     auto accepted = registers::validate_write(table, start, values, config_.word_order, settings_, host_);
-    if (!accepted) return refusal_reply(fc, accepted.error(), client);
+    if (!accepted) return refuse(fc, accepted.error(), client);
     if (accepted->host.unlock_code != 0) {
       const bool right = config_.unlock_code != 0 && accepted->host.unlock_code == config_.unlock_code;
       accepted->host.unlock_code = 0;
       if (!right) {
-        spdlog::warn("{} {}: wrong unlock code written to security.unlock (exception 03); settings stay locked",
-                     client.transport, client.address);
-        return fail(fc, ExceptionCode::illegal_data_value);
+        const registers::Register* unlock = registers::find_register("security.unlock");
+        return refuse(fc,
+                      registers::Refusal::because(registers::RefusalReason::wrong_unlock_code,
+                                                  unlock ? unlock->address : start,
+                                                  "wrong unlock code written to security.unlock; settings stay locked"),
+                      client);
       }
       if (locked_) spdlog::info("settings unlocked by {} {}", client.transport, client.address);
       locked_ = false;
       extras_.settings_locked = false;
     }
     if (accepted->changes_persisted()) {
-      if (locked_) {
-        spdlog::warn("{} {}: settings write refused, settings are locked (exception 04): {}", client.transport,
-                     client.address, describe_changes(accepted->changes));
-        return fail(fc, ExceptionCode::server_device_failure);
-      }
+      using registers::RefusalReason;
+      const std::uint16_t about = first_address(accepted->changes, start);
+      const std::string changes = describe_changes(accepted->changes);
+      if (locked_)
+        return refuse(fc,
+                      registers::Refusal::because(RefusalReason::locked, about,
+                                                  "settings are locked (write the unlock code to security.unlock): " +
+                                                      changes),
+                      client);
       if (config_.machine_check) {
-        if (auto problem = config_.machine_check(accepted->settings)) {
-          spdlog::warn("{} {}: settings write refused, the machine's wiring cannot do it (exception 03): {}; {}",
-                       client.transport, client.address, *problem, describe_changes(accepted->changes));
-          return fail(fc, ExceptionCode::illegal_data_value);
-        }
+        if (auto problem = config_.machine_check(accepted->settings))
+          return refuse(fc,
+                        registers::Refusal::because(RefusalReason::wiring, about,
+                                                    "the machine's wiring cannot do it: " + *problem + "; " + changes),
+                        client);
       }
-      if (loop_.snapshot().status.homing) {
-        spdlog::warn("{} {}: settings write refused while a homing cycle runs (exception 06): {}",
-                     client.transport, client.address, describe_changes(accepted->changes));
-        return fail(fc, ExceptionCode::server_device_busy);
-      }
+      if (loop_.snapshot().status.homing)
+        return refuse(
+            fc, registers::Refusal::because(RefusalReason::busy, about, "a homing cycle runs: " + changes), client);
       std::vector<persistence::SettingWrite> writes;
       for (const auto& c : accepted->changes)
         if (c.reg->persisted) writes.push_back({c.reg->name(), c.new_raw});
       if (store_) {
         auto committed = store_->commit(writes, source_of(client));
-        if (!committed) {
-          spdlog::error("{} {}: settings not stored, answered exception 04: {}", client.transport, client.address,
-                        committed.error().message);
-          return fail(fc, ExceptionCode::server_device_failure);
-        }
+        if (!committed)
+          return refuse(fc,
+                        registers::Refusal::because(RefusalReason::storage_failed, about,
+                                                    "settings not stored: " + committed.error().message + "; " +
+                                                        changes),
+                        client);
       }
       const bool new_limit = accepted->settings.global.history_max_rows != settings_.global.history_max_rows;
       settings_ = accepted->settings;
@@ -322,7 +371,7 @@ std::optional<Reply> ModbusService::write_sim(std::uint8_t fc, Table table, std:
   // Address, access and range need no machine: refused here at once.
   if (auto decoded = registers::decode_write(registers::Unit::simulator, table, start, values, config_.word_order);
       !decoded)
-    return refusal_reply(fc, decoded.error(), client);
+    return refuse(fc, decoded.error(), client);
   // The rest is decided and applied on the live simulator inside the control
   // loop (never on a snapshot that may miss the previous write), and answered
   // once a snapshot shows it: an acknowledged write holds and reads back.
@@ -356,17 +405,19 @@ std::optional<Reply> ModbusService::write_sim(std::uint8_t fc, Table table, std:
     sim.set_start_button(w.switches.start_button);
     changes = w.changes;
   };
-  if (!loop_.edit_sim(edit, std::chrono::seconds(2))) {
-    spdlog::warn("{} {}: simulator write not taken by the control loop in time (exception 06)", client.transport,
-                 client.address);
-    return fail(fc, ExceptionCode::server_device_busy);
-  }
-  if (refused) return refusal_reply(fc, *refused, client);
-  if (busy_axis >= 0) {
-    spdlog::info("{} {}: simulator write to sim.{}.* refused while that carriage moves (exception 06)",
-                 client.transport, client.address, homing::kAxisLetters[static_cast<std::size_t>(busy_axis)]);
-    return fail(fc, ExceptionCode::server_device_busy);
-  }
+  using registers::RefusalReason;
+  if (!loop_.edit_sim(edit, std::chrono::seconds(2)))
+    return refuse(fc,
+                  registers::Refusal::because(RefusalReason::loop_not_responding, start,
+                                              "the control loop did not take the simulator write in time"),
+                  client);
+  if (refused) return refuse(fc, *refused, client);
+  if (busy_axis >= 0)
+    return refuse(fc,
+                  registers::Refusal::because(RefusalReason::carriage_moving, start,
+                                              fmt::format("sim.{}.* is not written while that carriage moves",
+                                                          homing::kAxisLetters[static_cast<std::size_t>(busy_axis)])),
+                  client);
   if (!changes.empty())
     spdlog::info("simulator changed by {} {}: {}", client.transport, client.address, describe_changes(changes));
   return std::nullopt;

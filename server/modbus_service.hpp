@@ -3,6 +3,7 @@
 // which unit ids exist, who may write (--write-allow), locked settings, the
 // busy rule, the durable commit of a settings write, commands and the
 // simulator unit. Transports (TCP, RTU) call handle() with a PDU; fuzzers can too.
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <mutex>
@@ -11,6 +12,8 @@
 #include <span>
 
 #include "control_loop.hpp"
+#include "device_identification.hpp"
+#include "line_diagnostics.hpp"
 #include "options.hpp"
 #include "persistence/settings_store.hpp"
 #include "registers/codec.hpp"
@@ -29,6 +32,7 @@ struct ServiceConfig {
   // What the machine behind can do (GPIO wiring): settings it cannot run are
   // refused with exception 03 and the returned reason. Empty: anything.
   std::function<std::optional<std::string>(const homing::Settings&)> machine_check;
+  DeviceIdentity identity;  // FC 43, FC 17
 };
 
 class ModbusService final : public RequestHandler {
@@ -38,6 +42,8 @@ class ModbusService final : public RequestHandler {
 
   Reply handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) override;
   void disconnected(const ClientInfo& client) override;
+  void bus_event(Transport transport, BusEvent event) override { diagnostics_.bus_event(transport, event); }
+  LineCounters line_counters(Transport transport) const { return diagnostics_.counters(transport); }
 
   // Called by the monitor with the history summary.
   void set_extras(const registers::StatusExtras& extras);
@@ -45,6 +51,7 @@ class ModbusService final : public RequestHandler {
 
  private:
   enum class Target { module, simulator };
+  Reply route(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client);
   Reply dispatch(Target target, std::span<const std::uint8_t> pdu, const ClientInfo& client);
   Reply apply(Target target, const Request& request, const ClientInfo& client);
   Reply read(Target target, std::uint8_t fc, const ReadRequest& request);
@@ -56,6 +63,10 @@ class ModbusService final : public RequestHandler {
                                  std::span<const std::uint16_t> values, const ClientInfo& client);
   void run_commands(const std::vector<registers::CommandRequest>& commands, const ClientInfo& client);
   std::int64_t sim_raw(const registers::Register& reg, const Snapshot& snap) const;
+  // Logs a refused write (warn: client, reason, register, the rule in words),
+  // records it for status.refusal_count / last_refused_register /
+  // last_refusal_reason, and answers its exception.
+  Reply refuse(std::uint8_t fc, const registers::Refusal& refusal, const ClientInfo& client);
 
   ServiceConfig config_;
   ControlLoop& loop_;
@@ -66,6 +77,9 @@ class ModbusService final : public RequestHandler {
   bool locked_ = false;
   registers::HostRegisters host_{};
   registers::StatusExtras extras_{};
+  LineDiagnostics diagnostics_;
+  // The last refused write: count (bits 0-15), register (16-31), reason (32-47).
+  std::atomic<std::uint64_t> last_refusal_{0};
 };
 
 }  // namespace server

@@ -134,12 +134,22 @@ struct OptionParser::Table {
   }
 };
 
+// Device identification objects are ASCII strings a reply can carry.
+const CLI::Validator identity_text(
+    [](const std::string& text) -> std::string {
+      if (text.size() > 100) return "at most 100 characters";
+      for (unsigned char ch : text)
+        if (ch < 0x20 || ch > 0x7E) return "printable ASCII only (device identification objects are ASCII)";
+      return {};
+    },
+    "TEXT");
+
 OptionParser::Table::Table() {
-  app.set_version_flag("--version", "homingd 0.1.0");
+  app.set_version_flag("--version", "homingd " HOMING_VERSION);
   app.set_config("--config", "", "TOML config file; every option below can be a key in it")
       ->check(CLI::ExistingFile);
   app.add_option("--tcp", tcp, "Modbus TCP listen address HOST:PORT")->capture_default_str();
-  app.add_flag("--no-tcp,--no_tcp", no_tcp, "Serve RTU only");
+  app.add_flag("--no-tcp,--no_tcp", no_tcp, "No plain Modbus TCP: serve RTU and/or TLS only");
   app.add_option("--tls", tls,
                  "Modbus/TCP Security (TLS, client certificates) listen address HOST[:PORT], port 802 when not "
                  "given; served beside TCP and RTU");
@@ -194,6 +204,16 @@ OptionParser::Table::Table() {
   app.add_option("--unlock-code,--unlock_code", o.unlock_code,
                  "Lock settings writes until this code (1..65535) is written to security.unlock")
       ->check(CLI::Range(1, 65535));
+  app.add_option("--vendor-name,--vendor_name", o.vendor_name,
+                 "Vendor name the module reports (FC 43 object 0)")
+      ->check(identity_text);
+  app.add_option("--vendor-url,--vendor_url", o.vendor_url, "Vendor URL the module reports (FC 43 object 3)")
+      ->check(identity_text);
+  app.add_option("--product-name,--product_name", o.product_name, "Product name the module reports (FC 43 object 4)")
+      ->check(identity_text);
+  app.add_option("--machine-name,--machine_name", o.machine_name,
+                 "The machine's name, reported as the user application name (FC 43 object 6, FC 17)")
+      ->check(identity_text);
   app.add_option("--export-settings,--export_settings", o.export_settings,
                  "Write every setting of --db to this TOML file and exit (no server)");
   app.add_option("--import-settings,--import_settings", o.import_settings,

@@ -44,6 +44,11 @@ struct Options {
   std::string tls_ca;       // the CA that signs client certificates
   std::string tls_crl;      // revoked client certificates; empty: none
   std::string tls_default_role = "viewer";  // of a certificate without a role; "none": refused
+  // Device identity (FC 43, FC 17); empty: the built-in text.
+  std::string vendor_name;
+  std::string vendor_url;
+  std::string product_name;
+  std::string machine_name;
   // Offline settings transfer: act on --db and exit without serving.
   std::string export_settings;
   std::string import_settings;

@@ -109,6 +109,28 @@ Decoded decode_encapsulated(std::span<const std::uint8_t> pdu) {
   return Request{FunctionCode::encapsulated_interface, DeviceIdRequest{code, pdu[3]}};
 }
 
+// FC 8: sub-function, then data words. A sub-function the module does not
+// implement is 01 (the specification's answer); data that does not fit it, 03.
+Decoded decode_diagnostics(std::span<const std::uint8_t> pdu) {
+  if (pdu.size() < 3 || (pdu.size() - 3) % 2 != 0) return kBadValue;
+  DiagnosticsRequest r{be16(pdu, 1), words_at(pdu, 3, static_cast<std::uint16_t>((pdu.size() - 3) / 2))};
+  using D = DiagnosticsRequest;
+  const bool counter = r.sub_function >= D::clear_counters && r.sub_function <= D::last_counter;
+  if (r.sub_function != D::return_query_data && r.sub_function != D::restart_communications && !counter)
+    return std::unexpected(ExceptionCode::illegal_function);
+  if (r.sub_function == D::restart_communications &&
+      (r.data.size() != 1 || (r.data[0] != 0x0000 && r.data[0] != 0xFF00)))
+    return kBadValue;
+  if (counter && (r.data.size() != 1 || r.data[0] != 0)) return kBadValue;
+  return Request{FunctionCode::diagnostics, std::move(r)};
+}
+
+// FC 17: the function code alone.
+Decoded decode_report_server_id(std::span<const std::uint8_t> pdu) {
+  if (pdu.size() != 1) return kBadValue;
+  return Request{FunctionCode::report_server_id, ReportServerIdRequest{}};
+}
+
 }  // namespace
 
 Decoded decode_request(std::span<const std::uint8_t> pdu) {
@@ -125,6 +147,8 @@ Decoded decode_request(std::span<const std::uint8_t> pdu) {
     case FunctionCode::read_file_record: return decode_file_record(pdu);
     case FunctionCode::read_write_registers: return decode_read_write(pdu);
     case FunctionCode::encapsulated_interface: return decode_encapsulated(pdu);
+    case FunctionCode::diagnostics: return decode_diagnostics(pdu);
+    case FunctionCode::report_server_id: return decode_report_server_id(pdu);
   }
   return std::unexpected(ExceptionCode::illegal_function);
 }

@@ -26,8 +26,10 @@ enum class FunctionCode : std::uint8_t {
   read_input_registers = 4,
   write_single_coil = 5,
   write_single_register = 6,
+  diagnostics = 8,  // serial line diagnostics: sub-functions 00, 01, 0A..12
   write_multiple_coils = 15,
   write_multiple_registers = 16,
+  report_server_id = 17,
   read_file_record = 20,
   read_write_registers = 23,
   encapsulated_interface = 43,  // only MEI type 14, read device identification
@@ -72,9 +74,25 @@ struct DeviceIdRequest {
   std::uint8_t object_id = 0;
 };
 
+// FC 8: a sub-function the module implements and its data: any number of
+// words for 00 (echoed), 0000 or FF00 for 01, 0000 for 0A..12.
+struct DiagnosticsRequest {
+  static constexpr std::uint16_t return_query_data = 0x00;
+  static constexpr std::uint16_t restart_communications = 0x01;
+  static constexpr std::uint16_t clear_counters = 0x0A;
+  static constexpr std::uint16_t last_counter = 0x12;  // 0B..12: the counters
+  std::uint16_t sub_function = 0;
+  std::vector<std::uint16_t> data;
+};
+
+// FC 17: no fields.
+struct ReportServerIdRequest {};
+
 struct Request {
   FunctionCode function = FunctionCode::read_holding_registers;
-  std::variant<ReadRequest, WriteRequest, ReadWriteRequest, FileRecordRequest, DeviceIdRequest> body;
+  std::variant<ReadRequest, WriteRequest, ReadWriteRequest, FileRecordRequest, DeviceIdRequest, DiagnosticsRequest,
+               ReportServerIdRequest>
+      body;
 };
 
 // The PDU must not be empty (pdu[0] is the function code).

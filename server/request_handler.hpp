@@ -2,6 +2,7 @@
 // What a transport hands a request to: the unit id, the PDU and who sent it.
 #include <fmt/format.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -16,6 +17,7 @@ namespace server {
 // --write-allow list, broadcasts, silence for unknown units). tls is
 // Modbus/TCP Security: Modbus TCP inside TLS, the client known by its certificate.
 enum class Transport : std::uint8_t { tcp, rtu, tls };
+inline constexpr std::size_t kTransportCount = 3;  // arrays indexed by Transport
 
 // "tcp", "rtu", "tls": for the log and the audit log's transport column.
 constexpr std::string_view transport_name(Transport t) {
@@ -52,11 +54,19 @@ struct ClientInfo {
   std::string identity;                 // TLS: "CN=hmi-3,O=Plant (role operator)"; else empty
 };
 
+// What a transport saw on its line, for the diagnostics counters (FC 08).
+enum class BusEvent : std::uint8_t {
+  message,     // a whole frame, for this module or another unit on the bus
+  comm_error,  // a frame that failed its CRC (RTU) or a malformed MBAP header (TCP)
+  overrun,     // a frame longer than the largest ADU
+};
+
 class RequestHandler {
  public:
   virtual ~RequestHandler() = default;
   virtual Reply handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) = 0;
   virtual void disconnected(const ClientInfo& client) = 0;
+  virtual void bus_event(Transport, BusEvent) {}
 };
 
 }  // namespace server

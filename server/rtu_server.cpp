@@ -4,8 +4,11 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <poll.h>
+
 #include <array>
 #include <cerrno>
+#include <cstring>
 
 namespace server {
 
@@ -24,42 +27,61 @@ std::expected<void, std::string> RtuServer::open() {
   modbus_set_slave(ctx_, config_.unit_id);
   if (modbus_connect(ctx_) < 0)
     return std::unexpected("--rtu " + config_.device + ": cannot open the serial device: " + modbus_strerror(errno));
-  // Wake up regularly to notice stop(); a frame's bytes must follow closely.
-  modbus_set_indication_timeout(ctx_, 0, 200000);
-  modbus_set_byte_timeout(ctx_, 0, 100000);
   return {};
 }
 
 void RtuServer::run() {
-  std::array<std::uint8_t, MODBUS_RTU_MAX_ADU_LENGTH> req{};
   const ClientInfo broadcast_info{0, Transport::rtu, "broadcast"};
   const ClientInfo unit_info{0, Transport::rtu, "unit " + std::to_string(config_.unit_id)};
+  const int fd = modbus_get_socket(ctx_);
+  RtuFramer framer(static_cast<std::uint8_t>(config_.unit_id));
+  std::array<std::uint8_t, MODBUS_RTU_MAX_ADU_LENGTH> chunk{};
   while (!stop_) {
-    const int rc = modbus_receive(ctx_, req.data());
-    if (rc == 0) continue;  // a frame for another unit on the bus
-    if (rc < 0) {
-      if (errno == ETIMEDOUT) continue;  // nothing came: just the stop check
-      ++bad_frames_;
-      spdlog::debug("rtu: bad frame ({}), {} so far; carrying on", modbus_strerror(errno), bad_frames_.load());
-      modbus_flush(ctx_);
+    // Idle: wake up regularly to notice stop(). Inside a frame: its bytes must
+    // follow within the byte timeout, else the frame ends there.
+    pollfd p{fd, POLLIN, 0};
+    const int ready = ::poll(&p, 1, framer.pending() ? kByteTimeoutMs : kIdleWakeMs);
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready <= 0) {
+      if (auto r = framer.silence()) take(*r, broadcast_info, unit_info);
       continue;
     }
-    if (rc < 4) continue;
-    const std::uint8_t unit = req[0];
-    const auto pdu = std::span<const std::uint8_t>(req.data() + 1, static_cast<std::size_t>(rc - 3));
-    const Reply reply = handler_.handle(unit, pdu, unit == 0 ? broadcast_info : unit_info);
-    if (!reply.send || unit == 0) continue;  // broadcasts are never answered
-    const auto frame = rtu_frame(unit, reply.pdu);
-    const int fd = modbus_get_socket(ctx_);
-    std::size_t sent = 0;
-    while (sent < frame.size()) {
-      const ssize_t w = ::write(fd, frame.data() + sent, frame.size() - sent);
-      if (w <= 0) {
-        if (w < 0 && errno == EINTR) continue;
-        break;
-      }
-      sent += static_cast<std::size_t>(w);
+    const ssize_t n = ::read(fd, chunk.data(), chunk.size());
+    if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
+    if (n <= 0) {
+      spdlog::error("rtu: reading {} failed ({}); the serial line is no longer served", config_.device,
+                    n == 0 ? "end of file" : std::strerror(errno));
+      return;
     }
+    for (ssize_t i = 0; i < n; ++i)
+      if (auto r = framer.push(chunk[static_cast<std::size_t>(i)])) take(*r, broadcast_info, unit_info);
+  }
+}
+
+void RtuServer::take(const RtuFramer::Result& r, const ClientInfo& broadcast_info, const ClientInfo& unit_info) {
+  if (r.event != RtuFramer::Event::frame) {
+    handler_.bus_event(Transport::rtu, r.event == RtuFramer::Event::overrun ? BusEvent::overrun : BusEvent::comm_error);
+    ++bad_frames_;
+    spdlog::debug("rtu: bad frame ({}), {} so far; carrying on",
+                  r.event == RtuFramer::Event::overrun ? "overrun" : "CRC", bad_frames_.load());
+    return;
+  }
+  handler_.bus_event(Transport::rtu, BusEvent::message);
+  const std::uint8_t unit = r.frame[0];
+  if (unit != config_.unit_id && unit != 0) return;  // another device on the bus
+  const auto pdu = std::span<const std::uint8_t>(r.frame.data() + 1, r.frame.size() - 3);
+  const Reply reply = handler_.handle(unit, pdu, unit == 0 ? broadcast_info : unit_info);
+  if (!reply.send || unit == 0) return;  // broadcasts are never answered
+  const auto frame = rtu_frame(unit, reply.pdu);
+  const int fd = modbus_get_socket(ctx_);
+  std::size_t sent = 0;
+  while (sent < frame.size()) {
+    const ssize_t w = ::write(fd, frame.data() + sent, frame.size() - sent);
+    if (w <= 0) {
+      if (w < 0 && errno == EINTR) continue;
+      break;
+    }
+    sent += static_cast<std::size_t>(w);
   }
 }
 

@@ -1,14 +1,16 @@
 #pragma once
-// Modbus RTU on a serial line with libmodbus (framing by function code, CRC
-// check). libmodbus drops frames for other unit ids before their CRC is
-// checked, so RTU serves the module's unit id (and broadcast 0) only; the
-// simulator unit is reached over TCP.
+// Modbus RTU on a serial line: libmodbus opens and configures the port, the
+// frames are cut by server/rtu_framer.hpp (libmodbus cannot frame functions
+// 08, 20 and 43). RTU serves the module's unit id (and broadcast 0) only; the
+// simulator unit is reached over TCP. Every frame on the line, for any unit,
+// is counted for function 08.
 #include <atomic>
 #include <cstdint>
 #include <expected>
 #include <string>
 
 #include "request_handler.hpp"
+#include "rtu_framer.hpp"
 
 typedef struct _modbus modbus_t;
 
@@ -35,6 +37,11 @@ class RtuServer {
   std::uint64_t bad_frames() const { return bad_frames_.load(); }
 
  private:
+  // A frame's bytes follow each other within this; 200 ms idle wake-ups to notice stop().
+  static constexpr int kByteTimeoutMs = 100;
+  static constexpr int kIdleWakeMs = 200;
+  void take(const RtuFramer::Result& result, const ClientInfo& broadcast_info, const ClientInfo& unit_info);
+
   RtuConfig config_;
   RequestHandler& handler_;
   modbus_t* ctx_ = nullptr;

@@ -5,14 +5,19 @@
 #include <optional>
 #include <string>
 
+#include "persistence/settings_file.hpp"
+#include "registers/settings_file_values.hpp"
 #include "registers/validate.hpp"
 #include "start_up.hpp"
 
 namespace server {
 namespace {
 
+// Engineering values and value names (format_version 2), as homingctl writes them.
+const persistence::SettingsFileCodec kCodec{registers::file_value_text, registers::raw_of_file_value};
+
 int export_settings(const persistence::SettingsStore& store, const Options& opt) {
-  if (auto r = store.export_file(opt.export_settings); !r) return fail_start("--export-settings: " + r.error().message);
+  if (auto r = store.export_file(opt.export_settings, &kCodec); !r) return fail_start("--export-settings: " + r.error().message);
   std::printf("homingd: settings of %s written to %s\n", opt.db_path.c_str(), opt.export_settings.c_str());
   return 0;
 }
@@ -23,7 +28,7 @@ int import_settings(persistence::SettingsStore& store, const Options& opt) {
     if (auto refusal = registers::validate_settings_map(all)) return persistence::Rejection{"", refusal->message};
     return std::nullopt;
   };
-  auto r = store.import_file(opt.import_settings, validate);
+  auto r = store.import_file(opt.import_settings, validate, &kCodec);
   if (!r) return fail_start("--import-settings " + opt.import_settings + ": " + r.error().message + "; nothing changed");
   std::printf("homingd: %zu settings changed from %s\n", r->changes.size(), opt.import_settings.c_str());
   for (const auto& c : r->changes)

@@ -1,9 +1,13 @@
 #include <catch2/catch.hpp>
 
+#include <fmt/format.h>
+
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
 #include "helpers.hpp"
+#include "persistence/settings_file.hpp"
 
 using namespace persistence;
 
@@ -130,4 +134,73 @@ TEST_CASE("an unknown register, a wrong type or broken syntax in the file is rep
 
   CHECK(store.value("axis.x.mode") == 3);
   CHECK(store.recent_changes(10)->empty());
+}
+
+namespace {
+
+// Like the register layer's codec: "mm" settings are written and read in mm
+// (raw µm / 1000), everything else as the raw integer; a text is refused.
+const SettingsFileCodec kMmCodec{
+    [](const std::string& name, std::int64_t raw) {
+      return name.ends_with("position") ? fmt::format("{:.3f}  # mm", raw / 1000.0) : std::to_string(raw);
+    },
+    [](const std::string& name, const SettingsFileValue& v) -> std::expected<std::int64_t, std::string> {
+      if (const auto* d = std::get_if<double>(&v)) return std::llround(*d * 1000);
+      if (const auto* i = std::get_if<std::int64_t>(&v)) return name.ends_with("position") ? *i * 1000 : *i;
+      return std::unexpected(fmt::format("{} = {}: not a number", name, file_spelling(v)));
+    }};
+
+}  // namespace
+
+TEST_CASE("with the register layer's codec the file holds engineering values and reads back exactly",
+          "[persistence][transfer]") {
+  test::TempDir dir;
+  OpenReport report;
+  auto a = test::open_ok(dir.file("a.db"), report);
+  REQUIRE(a.commit({{"axis.x.home_position", -12500}, {"axis.x.mode", 5}}, test::kTcp));
+  REQUIRE(a.export_file(dir.file("machine.toml"), &kMmCodec));
+  const auto text = read_all(dir.file("machine.toml"));
+  CHECK_THAT(text, Catch::Contains("format_version = 2\n"));
+  CHECK_THAT(text, Catch::Contains("\naxis.x.home_position = -12.500  # mm\n"));
+  CHECK_THAT(text, Catch::Contains("\naxis.x.mode = 5\n"));
+
+  auto b = test::open_ok(dir.file("b.db"), report);
+  auto r = b.import_file(dir.file("machine.toml"), validator, &kMmCodec);
+  REQUIRE(r);
+  CHECK(b.load() == a.load());
+
+  // Without the codec an engineering file is not guessed at: refused, nothing changed.
+  auto c = test::open_ok(dir.file("c.db"), report);
+  r = c.import_file(dir.file("machine.toml"), validator);
+  REQUIRE_FALSE(r);
+  CHECK_THAT(r.error().message, Catch::Contains("format_version 2") && Catch::Contains("nothing was imported"));
+  CHECK(c.value("axis.x.home_position") == test::open_ok(dir.file("d.db"), report).value("axis.x.home_position"));
+}
+
+TEST_CASE("every value of an engineering file that cannot be read is named with its line, and nothing changes",
+          "[persistence][transfer]") {
+  test::TempDir dir;
+  OpenReport report;
+  auto store = test::open_ok(dir.file("settings.db"), report);
+  const auto before = store.load();
+  test::write_text(dir.file("bad.toml"), "format_version = 2\n[settings]\naxis.x.home_position = 2.5\n"
+                                         "axis.x.mode = \"fast\"\naxis.y.mode = \"slow\"\n");
+  auto r = store.import_file(dir.file("bad.toml"), validator, &kMmCodec);
+  REQUIRE_FALSE(r);
+  CHECK_THAT(r.error().message, Catch::Contains("2 values cannot be imported") &&
+                                    Catch::Contains(dir.file("bad.toml") + ":4: axis.x.mode = \"fast\": not a number") &&
+                                    Catch::Contains(dir.file("bad.toml") + ":5: axis.y.mode = \"slow\": not a number"));
+  CHECK(store.load() == before);
+
+  // A raw file does not accept decimals, and says how to write engineering values.
+  test::write_text(dir.file("raw.toml"), "format_version = 1\n[settings]\n\"axis.x.home_position\" = 2.5\n");
+  r = store.import_file(dir.file("raw.toml"), validator, &kMmCodec);
+  REQUIRE_FALSE(r);
+  CHECK_THAT(r.error().message, Catch::Contains(":3: 'axis.x.home_position' must be an integer") &&
+                                    Catch::Contains("format_version = 2"));
+  test::write_text(dir.file("future.toml"), "format_version = 3\n[settings]\n");
+  r = store.import_file(dir.file("future.toml"), validator, &kMmCodec);
+  REQUIRE_FALSE(r);
+  CHECK_THAT(r.error().message, Catch::Contains("format_version must be 1 (raw register values) or 2"));
+  CHECK(store.load() == before);
 }

@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cstdio>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -9,7 +10,9 @@
 #include <vector>
 
 #include "homing/alarms.hpp"
+#include "registers/errors.hpp"
 #include "registers/exports.hpp"
+#include "registers/lookup.hpp"
 #include "registers/table.hpp"
 
 namespace {
@@ -79,6 +82,38 @@ TEST_CASE("alarms.csv lists every alarm code of the engine with its name, text a
     CHECK(lines[c].rfind(std::to_string(c) + "," + std::string(homing::alarm_name(code)) + ",", 0) == 0);
     CHECK(lines[c].find(homing::alarm_what_to_check(code)) != std::string::npos);
   }
+}
+
+TEST_CASE("refusals.csv lists every code status.last_refusal_reason can take, with its exception") {
+  const auto lines = lines_of(generated("refusals.csv"));
+  REQUIRE(!lines.empty());
+  CHECK(lines[0] == "code,name,exception,text");
+  const std::set<std::string> rows(lines.begin() + 1, lines.end());
+  const auto listed = [&](std::int64_t code, std::string_view name, std::string_view exception) {
+    return std::any_of(rows.begin(), rows.end(), [&](const std::string& row) {
+      return row.rfind(std::to_string(code) + "," + std::string(name) + "," + std::string(exception) + ",", 0) == 0;
+    });
+  };
+  std::size_t expected = 0;
+  for (const auto& r : registers::kRefusalReasonInfo) {
+    if (r.value == registers::RefusalReason::none || r.value == registers::RefusalReason::rule) continue;
+    INFO(r.name);
+    char exception[3];
+    std::snprintf(exception, sizeof exception, "%02X", static_cast<int>(r.exception));
+    CHECK(listed(static_cast<int>(r.value), r.name, exception));
+    ++expected;
+  }
+  for (const auto& r : homing::kCheckRuleInfo) {
+    if (r.value == homing::CheckRule::none) continue;
+    INFO(r.name);
+    CHECK(listed(registers::kRuleReasonBase + static_cast<int>(r.value), r.name, "03"));
+    ++expected;
+  }
+  CHECK(rows.size() == expected);
+  // The register's value list is the same set of codes (plus 0, none).
+  const auto* reg = registers::find_register("status.last_refusal_reason");
+  REQUIRE(reg != nullptr);
+  CHECK(reg->values.size() == expected + 1);
 }
 
 TEST_CASE("enums.csv holds every value of every enum and bitmask register") {

@@ -188,9 +188,9 @@ TEST_CASE("decoder: a request longer or shorter than its function's fields is ex
 }
 
 TEST_CASE("decoder: an unknown function code is exception 01") {
-  // 7 (read exception status), 8 (diagnostics), 11, 17 (report server id),
-  // 0x41 (user-defined), 0 and codes with the exception bit set.
-  for (std::uint8_t fc : {0, 7, 8, 11, 12, 17, 21, 22, 24, 0x41, 0x64, 0x83, 0xFF}) {
+  // 7 (read exception status), 11 (get comm event counter), 12, 0x41
+  // (user-defined), 0 and codes with the exception bit set.
+  for (std::uint8_t fc : {0, 7, 11, 12, 21, 22, 24, 0x41, 0x64, 0x83, 0xFF}) {
     INFO("FC " << int(fc));
     CHECK(refusal(Bytes{fc, 0, 0, 0, 1}) == ExceptionCode::illegal_function);
   }
@@ -235,4 +235,42 @@ TEST_CASE("decoder: a file record request is whole 7-byte sub-requests, else exc
   CHECK(refusal(Bytes{20, 6, 6, 0, 1, 0, 0, 0}) == ExceptionCode::illegal_data_value);        // not 7 bytes
   CHECK(refusal(Bytes{20, 7, 6, 0, 1, 0, 0, 0}) == ExceptionCode::illegal_data_value);        // 7 announced, 6 sent
   CHECK(refusal(Bytes{20, 7, 6, 0, 1, 0, 0, 0, 1, 0}) == ExceptionCode::illegal_data_value);  // one byte too many
+}
+
+TEST_CASE("decoder: diagnostics serve sub-functions 00, 01 and 0A to 12, any other is exception 01") {
+  for (std::uint16_t sub : {0x00, 0x01, 0x0A, 0x0B, 0x0C, 0x0D, 0x0E, 0x0F, 0x10, 0x11, 0x12}) {
+    INFO("sub-function " << sub);
+    const auto d = body_of<server::DiagnosticsRequest>(pdu(8, sub, 0));
+    CHECK(d.sub_function == sub);
+    CHECK(d.data == std::vector<std::uint16_t>{0});
+  }
+  for (std::uint16_t sub : {0x02, 0x03, 0x04, 0x09, 0x13, 0x14, 0x15, 0xFFFF}) {
+    INFO("sub-function " << sub);
+    CHECK(refusal(pdu(8, sub, 0)) == ExceptionCode::illegal_function);
+  }
+}
+
+TEST_CASE("decoder: diagnostics data must fit the sub-function, else exception 03") {
+  // 00 echoes any number of words.
+  Bytes echo{8, 0, 0};
+  for (std::uint16_t w : {0x1234, 0xABCD, 0x0000}) put16(echo, w);
+  CHECK(body_of<server::DiagnosticsRequest>(echo).data == std::vector<std::uint16_t>{0x1234, 0xABCD, 0x0000});
+  CHECK(refusal(Bytes{8, 0, 0, 0x12}) == ExceptionCode::illegal_data_value);  // half a word
+  CHECK(refusal(Bytes{8, 0}) == ExceptionCode::illegal_data_value);          // no sub-function
+  // 01: 0000 or FF00 only.
+  CHECK(body_of<server::DiagnosticsRequest>(pdu(8, 0x01, 0xFF00)).data == std::vector<std::uint16_t>{0xFF00});
+  CHECK(refusal(pdu(8, 0x01, 0x1234)) == ExceptionCode::illegal_data_value);
+  // The counters: 0000 only, one word.
+  CHECK(refusal(pdu(8, 0x0B, 0x0001)) == ExceptionCode::illegal_data_value);
+  CHECK(refusal(Bytes{8, 0, 0x0B}) == ExceptionCode::illegal_data_value);
+  Bytes two = pdu(8, 0x0E, 0);
+  put16(two, 0);
+  CHECK(refusal(two) == ExceptionCode::illegal_data_value);
+}
+
+TEST_CASE("decoder: report server id is the function code alone, anything after it is exception 03") {
+  const auto decoded = decode_request(Bytes{17});
+  REQUIRE(decoded);
+  CHECK(decoded->function == FunctionCode::report_server_id);
+  CHECK(refusal(Bytes{17, 0}) == ExceptionCode::illegal_data_value);
 }

@@ -2,6 +2,7 @@
 // checked on the real request path (ModbusService) with the loop stepped by hand.
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
@@ -13,6 +14,7 @@
 #include "homing/sim/simulator_io.hpp"
 #include "persistence/settings_store.hpp"
 #include "registers/defaults.hpp"
+#include "registers/errors.hpp"
 #include "registers/lookup.hpp"
 #include "registers/sim_bindings.hpp"
 #include "server/control_loop.hpp"
@@ -74,6 +76,14 @@ struct Module {
     return request({6, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), static_cast<std::uint8_t>(v >> 8),
                     static_cast<std::uint8_t>(v)});
   }
+  // status.refusal_count, last_refused_register, last_refusal_reason, in one request.
+  std::array<std::uint16_t, 3> last_refusal() {
+    const auto a = address("status.refusal_count");
+    const auto r = request({4, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), 0, 3});
+    REQUIRE(r.size() == 8);
+    return {static_cast<std::uint16_t>(r[2] << 8 | r[3]), static_cast<std::uint16_t>(r[4] << 8 | r[5]),
+            static_cast<std::uint16_t>(r[6] << 8 | r[7])};
+  }
   std::vector<std::uint8_t> coil(std::string_view name) {
     const auto a = address(name);
     return request({5, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), 0xFF, 0x00});
@@ -95,6 +105,11 @@ TEST_CASE("a settings write the disk cannot store is answered with exception 04 
       CHECK(m.read_i32("axis.x.pull_off") == 1000);
       CHECK(m.service->settings().axes[0].pull_off_mm == 1.0);
       CHECK(m.store->value("axis.x.pull_off") == 1000);
+      // Published as storage_failed, about the register written.
+      const auto refusal = m.last_refusal();
+      CHECK(refusal[0] == 1);
+      CHECK(refusal[1] == Module::address("axis.x.pull_off"));
+      CHECK(refusal[2] == static_cast<std::uint16_t>(registers::RefusalReason::storage_failed));
     }
     // The disk is back: the same write is stored and answered.
     const auto reply = m.write_i32("axis.x.pull_off", 2500);
@@ -154,6 +169,10 @@ home = 10
   CHECK(reply[1] == 3);
   CHECK(m.store->value("axis.a.mode") == 0);
   CHECK(m.service->settings().axes[3].mode == homing::HomingMode::disabled);
+  const auto refusal = m.last_refusal();
+  CHECK(refusal[0] == 1);
+  CHECK(refusal[1] == Module::address("axis.a.mode"));
+  CHECK(refusal[2] == static_cast<std::uint16_t>(registers::RefusalReason::wiring));
   // Y is wired: its mode may change.
   CHECK(m.write_u16("axis.y.mode", 3).size() == 5);
   CHECK(m.store->value("axis.y.mode") == 3);
@@ -190,6 +209,14 @@ TEST_CASE("an RTU broadcast write is applied to the module and answered with not
   REQUIRE(m.store->value("axis.y.mode") != 3);
   CHECK_FALSE(m.service->handle(0, write, broadcast).send);
   CHECK(m.store->value("axis.y.mode") == 3);
+  // A refused broadcast is silent on the bus, but a PLC can read why.
+  const std::vector<std::uint8_t> bad{6, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), 0, 99};
+  CHECK_FALSE(m.service->handle(0, bad, broadcast).send);
+  CHECK(m.store->value("axis.y.mode") == 3);
+  const auto refusal = m.last_refusal();
+  CHECK(refusal[0] == 1);
+  CHECK(refusal[1] == a);
+  CHECK(refusal[2] == static_cast<std::uint16_t>(registers::RefusalReason::out_of_range));
   // A read broadcast is not answered either; over TCP unit 0 is the module itself.
   const std::vector<std::uint8_t> read{3, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), 0, 1};
   CHECK_FALSE(m.service->handle(0, read, broadcast).send);

@@ -62,9 +62,10 @@ TEST_CASE("exception 01: an unknown function code is answered at once, nothing c
   int answered = 0;
   for (int i = 0; i < 20; ++i) {
     // FC 7 (read exception status: libmodbus would not answer it at all), FC 0x41
-    // (user-defined), FC 17 (report server id: libmodbus's own identity), FC 8.
+    // (user-defined), FC 11 (get comm event counter), FC 8 sub-function 02
+    // (return diagnostic register: the module serves 00, 01, 0A..12 only).
     for (const auto& req : std::vector<std::vector<std::uint8_t>>{
-             {1, 0x07}, {1, 0x41, 0x00, 0x01}, {1, 0x11}, {1, 0x08, 0x00, 0x00, 0x12, 0x34}}) {
+             {1, 0x07}, {1, 0x41, 0x00, 0x01}, {1, 0x0B}, {1, 0x08, 0x00, 0x02, 0x00, 0x00}}) {
       const auto reply = c.raw(req);
       INFO("FC " << int(req[1]) << ", errno " << modbus_strerror(c.last_errno()));
       CHECK(exception_in(reply, req[1]) == MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
@@ -379,7 +380,7 @@ TEST_CASE("FC43/14 read device identification answers our identity, not libmodbu
   REQUIRE(objects.size() == 3);
   CHECK_FALSE(objects.at(0).empty());  // vendor
   CHECK_FALSE(objects.at(1).empty());  // product code
-  CHECK(objects.at(2) == "0.1.0");     // revision
+  CHECK(objects.at(2) == HOMING_VERSION);  // revision: the build's version
   for (const auto& [id, text] : objects) CHECK(text.find("libmodbus") == std::string::npos);
   const auto regular = object_map(raw_tcp_transaction(d.port(), 1, {0x2B, 0x0E, 0x02, 0x00}));
   CHECK(regular.size() >= 4);

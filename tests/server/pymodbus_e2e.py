@@ -187,13 +187,14 @@ def main():
     ap.add_argument("--homingd", required=True)
     ap.add_argument("--map", required=True)
     ap.add_argument("--sim-map", required=True)
+    ap.add_argument("--version", required=True, help="the build's version (CMake project version)")
     args = ap.parse_args()
     rows = Map(args.map, args.sim_map)
 
     with tempfile.TemporaryDirectory(prefix="homingd-py-") as tmp:
         d = Daemon(args.homingd, os.path.join(tmp, "settings.db"))
         try:
-            run(d, rows)
+            run(d, rows, args.version)
         finally:
             code = d.stop()
             check(code == 0, f"SIGTERM: homingd exited {code}")
@@ -203,7 +204,7 @@ def main():
     return 0
 
 
-def run(d, rows):
+def run(d, rows, version):
     c = ModbusTcpClient("127.0.0.1", port=d.port, timeout=2, retries=0)
     if not check(c.connect(), "connected"):
         return
@@ -218,7 +219,7 @@ def run(d, rows):
     info = getattr(rsp, "information", {}) if not rsp.isError() else {}
     texts = {k: (v.decode() if isinstance(v, bytes) else str(v)) for k, v in info.items()}
     check(len(texts) == 3 and all(texts.values()), f"device identification basic objects: {texts}")
-    check(texts.get(2) == "0.1.0", "revision 0.1.0")
+    check(texts.get(2) == version, "revision " + version)
     check(not any("libmodbus" in t for t in texts.values()), "identity is ours, not libmodbus's")
 
     # Unknown unit: 0x0B; unknown function: 01 (raw over a socket); quantity: 03.

@@ -11,8 +11,9 @@ using namespace e2e;
 
 namespace {
 
+// The value of `key` in an exported file (a line "key = value  # unit").
 std::string replace_line(const std::string& text, const std::string& key, const std::string& value) {
-  return std::regex_replace(text, std::regex("\"" + key + "\" = -?[0-9]+"), "\"" + key + "\" = " + value);
+  return std::regex_replace(text, std::regex("\n" + key + " = [^\n]*"), "\n" + key + " = " + value);
 }
 
 }  // namespace
@@ -30,7 +31,7 @@ TEST_CASE("settings exported from one module's database import onto another and 
   const RunResult exported = run_program({homingd_path(), "--db", a, "--export-settings", file}, 20s);
   REQUIRE(exported.code() == 0);
   const std::string text = read_file(file);
-  CHECK(text.find("\"axis.x.pull_off\" = 2500") != std::string::npos);
+  CHECK(text.find("\naxis.x.pull_off = 2.5  # mm\n") != std::string::npos);  // engineering units
 
   const RunResult imported = run_program({homingd_path(), "--db", b, "--import-settings", file}, 20s);
   REQUIRE(imported.code() == 0);
@@ -41,14 +42,27 @@ TEST_CASE("settings exported from one module's database import onto another and 
   CHECK(c.read("axis.y.seek_feedrate") == 1500);
 }
 
+TEST_CASE("a settings file of raw register values (format_version 1) still imports") {
+  TempDir dir;
+  const std::string db = dir.file("m.db"), file = dir.file("old.toml");
+  std::ofstream(file) << "format = \"homing-module-settings\"\nformat_version = 1\n\n[settings]\n"
+                         "\"axis.x.pull_off\" = 3000\n\"axis.x.direction\" = 1\n";
+  const RunResult r = run_program({homingd_path(), "--db", db, "--import-settings", file}, 20s);
+  REQUIRE(r.code() == 0);
+  Daemon d({.db = db});
+  Client c = Client::tcp(d.port());
+  CHECK(c.read("axis.x.pull_off") == um(3.0));
+  CHECK(c.read("axis.x.direction") == 1);
+}
+
 TEST_CASE("an imported file that a Modbus write would refuse changes nothing and names the setting") {
   TempDir dir;
   const std::string db = dir.file("m.db"), file = dir.file("bad.toml");
   REQUIRE(run_program({homingd_path(), "--db", db, "--export-settings", file}, 20s).code() == 0);
   const std::string good = read_file(file);
   {
-    std::ofstream(file) << replace_line(replace_line(good, "axis.x.pull_off", "3000"), "axis.x.seek_feedrate",
-                                        "60000");
+    std::ofstream(file) << replace_line(replace_line(good, "axis.x.pull_off", "3.0"), "axis.x.seek_feedrate",
+                                        "60000.0");
   }
   const RunResult r = run_program({homingd_path(), "--db", db, "--import-settings", file}, 20s);
   CHECK(r.code() == 1);

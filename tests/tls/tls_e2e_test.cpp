@@ -15,6 +15,7 @@
 #include "homing/status.hpp"
 #include "persistence/settings_store.hpp"
 #include "registers/defaults.hpp"
+#include "registers/errors.hpp"
 #include "tests/support/test_pki.hpp"
 #include "tests/support/tls_modbus_client.hpp"
 #include "tls/context.hpp"
@@ -122,7 +123,12 @@ TEST_CASE("an operator certificate homes the machine but a settings write gets e
   CHECK(c.write("cmd.lock_settings", 1) == 1);
   CHECK(c.write("sim.x.sensor_max", um(1.5)) == 1);
   CHECK(c.read("sim.x.sensor_max") == 0);
-  CHECK(log_has(d, {"tls 127.0.0.1:", "CN=operator", "may not write settings", "(exception 01)"}));
+  CHECK(log_has(d, {"tls 127.0.0.1:", "write refused with exception 01", "reason 16 (role)", "CN=operator",
+                    "may not write settings"}));
+  // Counted and published like every other refused write: the last one was the simulator write.
+  CHECK(c.read("status.refusal_count") == 4);
+  CHECK(c.read("status.last_refusal_reason") == static_cast<int>(registers::RefusalReason::role));
+  CHECK(c.read("status.last_refused_register") == reg("sim.x.sensor_max").address);
   REQUIRE(c.write("cmd.home_all", 1) == 0);
   CHECK(homing_started(c));
 }
@@ -141,7 +147,9 @@ TEST_CASE("a viewer certificate reads everything but every write gets exception 
   CHECK(c.read("axis.x.seek_feedrate") == 1000);
   std::this_thread::sleep_for(300ms);
   CHECK(c.read("status.homing") == 0);
-  CHECK(log_has(d, {"tls 127.0.0.1:", "CN=viewer", "may only read", "(exception 01)"}));
+  CHECK(log_has(d, {"tls 127.0.0.1:", "write refused with exception 01", "reason 16 (role)", "CN=viewer",
+                    "may only read"}));
+  CHECK(c.read("status.refusal_count") == 4);
 }
 
 TEST_CASE("a certificate without a role gets --tls-default-role, viewer unless set") {

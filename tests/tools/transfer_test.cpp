@@ -1,6 +1,8 @@
 // homingctl export/import write and read the same file as persistence's
-// export_file/import_file: a file from one imports into the other. Import is
-// checked like a Modbus write and is all or nothing.
+// export_file/import_file (with the register layer's codec, as homingd uses
+// them): a file from one imports into the other. The values are in
+// engineering units with value names; raw files of format_version 1 still
+// import. Import is checked like a Modbus write and is all or nothing.
 #include <catch2/catch.hpp>
 
 #include <fmt/format.h>
@@ -8,8 +10,10 @@
 #include <fstream>
 
 #include "homing/settings_check.hpp"
+#include "persistence/settings_file.hpp"
 #include "persistence/settings_store.hpp"
 #include "registers/defaults.hpp"
+#include "registers/settings_file_values.hpp"
 #include "settings_io.hpp"
 #include "tools_helpers.hpp"
 
@@ -35,15 +39,22 @@ std::optional<persistence::Rejection> validate(const std::map<std::string, std::
   return std::nullopt;
 }
 
-void replace_value(const std::string& file, const std::string& name, std::int64_t value) {
+// homingd's reading of engineering values.
+const persistence::SettingsFileCodec kCodec{registers::file_value_text, registers::raw_of_file_value};
+
+// Replaces the value of `name` in an exported file (a line "name = value  # unit").
+void replace_value(const std::string& file, const std::string& name, const std::string& value) {
   std::string text = read_file(file);
-  const std::string key = "\"" + name + "\" = ";
+  const std::string key = "\n" + name + " = ";
   const auto at = text.find(key);
   REQUIRE(at != std::string::npos);
-  const auto end = text.find('\n', at);
-  text.replace(at, end - at, key + std::to_string(value));
+  const auto end = text.find('\n', at + 1);
+  text.replace(at, end - at, key + value);
   std::ofstream(file) << text;
 }
+
+// The file without its comment header (time and source differ between exports).
+std::string from_format(const std::string& text) { return text.substr(text.find("format =")); }
 
 }  // namespace
 
@@ -61,13 +72,13 @@ TEST_CASE("homingctl export imports with persistence's import_file, and persiste
   }
   const std::string text = read_file(exported);
   CHECK(text.find("format = \"homing-module-settings\"") != std::string::npos);
-  CHECK(text.find("\"axis.x.pull_off\" = 2250\n") != std::string::npos);
+  CHECK(text.find("\naxis.x.pull_off = 2.25  # mm\n") != std::string::npos);
 
-  // Into a store: every value arrives.
+  // Into a store, read as homingd reads it: every value arrives.
   persistence::OpenReport report;
   auto store = persistence::SettingsStore::open(dir.file("other.db"), defaults(), report);
   REQUIRE(store);
-  auto imported = store->import_file(exported, validate);
+  auto imported = store->import_file(exported, validate, &kCodec);
   REQUIRE(imported);
   CHECK(imported->not_in_file.empty());
   const auto values = store->load();
@@ -76,7 +87,8 @@ TEST_CASE("homingctl export imports with persistence's import_file, and persiste
   CHECK(values.at("axis.y.home_position") == -12500);
   CHECK(values.at("sequence.step3") == 8);
 
-  // The other way: change the store, export it, import it with homingctl.
+  // The other way: change the store, export it (raw values, as the first
+  // files were), import it with homingctl.
   auto committed = store->commit({{"axis.x.pull_off", 3000}, {"axis.y.seek_feedrate", 1500}, {"axis.a.mode", 0}},
                                  persistence::ChangeSource{"cli", "test"});
   REQUIRE(committed);
@@ -95,8 +107,10 @@ TEST_CASE("homingctl export imports with persistence's import_file, and persiste
   const auto module = homingctl::settings_file_text(store->load(), "x", 0);
   auto again = ctl(d, {"export", dir.file("again.toml")});
   REQUIRE(again.code() == 0);
-  auto strip = [](std::string s) { return s.substr(s.find("format =")); };
-  CHECK(strip(read_file(dir.file("again.toml"))) == strip(module));
+  CHECK(from_format(read_file(dir.file("again.toml"))) == from_format(module));
+  // And homingd's own export of the store is the same file.
+  REQUIRE(store->export_file(dir.file("store-v2.toml"), &kCodec));
+  CHECK(from_format(read_file(dir.file("store-v2.toml"))) == from_format(module));
 }
 
 TEST_CASE("homingctl import is checked like a Modbus write, ordered, and all or nothing") {
@@ -108,8 +122,8 @@ TEST_CASE("homingctl import is checked like a Modbus write, ordered, and all or 
   const auto before = holding_snapshot(c);
 
   // A stop distance beyond its limit: refused with the reason, nothing written.
-  replace_value(file, "axis.x.pull_off", 4000);
-  replace_value(file, "axis.x.seek_feedrate", 20000);
+  replace_value(file, "axis.x.pull_off", "4.0");
+  replace_value(file, "axis.x.seek_feedrate", "20000.0");
   auto r = ctl(d, {"import", file});
   {
     SHOW(r);
@@ -119,9 +133,9 @@ TEST_CASE("homingctl import is checked like a Modbus write, ordered, and all or 
   CHECK(holding_snapshot(c) == before);
 
   // Valid together, but only in one order (max_stop_distance first): imported.
-  replace_value(file, "axis.x.seek_feedrate", 12000);
-  replace_value(file, "axis.x.max_stop_distance", 50000);
-  replace_value(file, "axis.x.max_backoff", 60000);  // the back-off must release after a 40 mm stop
+  replace_value(file, "axis.x.seek_feedrate", "12000.0");
+  replace_value(file, "axis.x.max_stop_distance", "50.0");
+  replace_value(file, "axis.x.max_backoff", "60.0");  // the back-off must release after a 40 mm stop
   r = ctl(d, {"import", "--dry-run", file});
   CHECK(r.code() == 0);
   CHECK(holding_snapshot(c) == before);

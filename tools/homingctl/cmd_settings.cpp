@@ -8,6 +8,7 @@
 #include <variant>
 
 #include "check.hpp"
+#include "homing/settings_check.hpp"
 #include "cli.hpp"
 #include "registers/lookup.hpp"
 #include "settings_io.hpp"
@@ -194,6 +195,20 @@ int export_settings(Context& ctx, const std::string& file) {
   return kOk;
 }
 
+// Where in the file the setting of a broken cross-setting rule is, with its
+// value ("machine.toml:12: axis.x.max_stop_distance = 10.0: "), or the file.
+std::string rule_location(const std::string& file, const SettingsFileValues& wanted, const RawMap& current) {
+  RawMap after = current;
+  for (const auto& [name, raw] : wanted.values) after[name] = raw;
+  const auto fault = homing::new_fault(settings_of(current), settings_of(after));
+  if (!fault || fault->field == homing::AxisField::none) return file + ": ";
+  const std::string name = fmt::format("axis.{}.{}", homing::kAxisLetters[fault->axis], homing::field_name(fault->field));
+  const auto line = wanted.lines.find(name);
+  const Register* r = registers::find_register(name);
+  if (line == wanted.lines.end() || !r || !after.contains(name)) return file + ": ";
+  return fmt::format("{}:{}: {} = {}: ", file, line->second, name, file_value_text(*r, after.at(name)));
+}
+
 int import_settings(Context& ctx, const std::string& file, bool dry_run) {
   auto wanted = read_settings_file(file);
   if (!wanted) {
@@ -202,9 +217,9 @@ int import_settings(Context& ctx, const std::string& file, bool dry_run) {
   }
   Connection& c = ctx.connection();
   const auto current = read_settings_raw(c);
-  auto plan = plan_write(current, *wanted, ctx.co.word_order);
+  auto plan = plan_write(current, wanted->values, ctx.co.word_order);
   if (!plan) {
-    fmt::print(stderr, "refused: {}: {}\n", file, plan.error());
+    fmt::print(stderr, "refused: {}{}\n", rule_location(file, *wanted, current), plan.error());
     return kFailed;
   }
   print_changes(ctx, *plan);
@@ -213,7 +228,7 @@ int import_settings(Context& ctx, const std::string& file, bool dry_run) {
       fmt::print(stderr, "refused: {}\n", done.error());
       return kFailed;
     }
-  const std::size_t not_in_file = current.size() - wanted->size();
+  const std::size_t not_in_file = current.size() - wanted->values.size();
   if (ctx.json)
     print_json({{"ok", true}, {"dry_run", dry_run}, {"changed", plan->changes.size()}, {"not_in_file", not_in_file}});
   else
@@ -243,12 +258,12 @@ void add_settings_commands(Commands& commands, Context&) {
   commands.add("check", "what the settings imply per axis before anything moves", check);
 
   auto file = std::make_shared<std::string>();
-  commands.add("export", "write all settings to a TOML file (the daemon's export format)",
+  commands.add("export", "write all settings to a TOML file in engineering units and value names (the daemon's export format)",
                [file](Context& c) { return export_settings(c, *file); })
       ->add_option("file", *file, "output file")
       ->required();
   auto dry_run = std::make_shared<bool>(false);
-  auto* import_cmd = commands.add("import", "write the settings of a TOML file (checked first; all or nothing)",
+  auto* import_cmd = commands.add("import", "write the settings of a TOML file (engineering values, or raw ones of a format_version 1 file; checked first; all or nothing)",
                                   [file, dry_run](Context& c) { return import_settings(c, *file, *dry_run); });
   import_cmd->add_option("file", *file, "settings file")->required();
   import_cmd->add_flag("--dry-run", *dry_run, "show what would change, write nothing");

@@ -8,6 +8,7 @@
 #include "persistence/settings_file.hpp"
 #include "registers/defaults.hpp"
 #include "registers/lookup.hpp"
+#include "registers/settings_file_values.hpp"
 #include "registers/validate.hpp"
 #include "values.hpp"
 
@@ -219,11 +220,34 @@ std::expected<void, std::string> execute_plan(Connection& c, const WritePlan& pl
 }
 
 // ------------------------------------------------------------------ file
-// The layout is persistence's (persistence/settings_file.hpp): a file exported
-// here imports into a database and the other way round.
+// The layout is persistence's (persistence/settings_file.hpp), the spelling of
+// the values the register layer's: a file exported here imports into a
+// database and the other way round.
+
+namespace {
+
+const persistence::SettingsFileCodec& codec() {
+  static const persistence::SettingsFileCodec c{registers::file_value_text, registers::raw_of_file_value};
+  return c;
+}
+
+std::string problems_text(const std::string& file, const std::vector<std::string>& problems) {
+  if (problems.size() == 1) return problems.front() + "; nothing was imported";
+  std::string s = fmt::format("{}: {} values cannot be imported; nothing was imported:", file, problems.size());
+  for (const auto& p : problems) s += "\n  " + p;
+  return s;
+}
+
+}  // namespace
 
 std::string settings_file_text(const RawMap& values, const std::string& source, std::int64_t now_ms) {
-  return persistence::settings_file_text(values, source, now_ms);
+  return persistence::settings_file_text(values, source, now_ms, &codec());
+}
+
+std::string file_value_text(const registers::Register& reg, std::int64_t raw) {
+  std::string text = registers::file_value_text(reg.name(), raw);
+  if (const auto comment = text.find("  #"); comment != std::string::npos) text.resize(comment);
+  return text;
 }
 
 std::expected<void, std::string> write_file_atomically(const std::string& path, const std::string& text) {
@@ -231,19 +255,28 @@ std::expected<void, std::string> write_file_atomically(const std::string& path, 
   return {};
 }
 
-std::expected<RawMap, std::string> read_settings_file(const std::string& file) {
-  auto entries = persistence::read_settings_file(file);
-  if (!entries) return std::unexpected(entries.error().message);
-  RawMap out;
-  for (const auto& [name, e] : *entries) {
+std::expected<SettingsFileValues, std::string> read_settings_file(const std::string& file) {
+  auto parsed = persistence::read_settings_file(file);
+  if (!parsed) return std::unexpected(parsed.error().message);
+  SettingsFileValues out;
+  std::vector<std::string> problems;
+  for (const auto& [name, e] : parsed->entries) {
     const Register* r = registers::find_register(name);
     if (!r || r->unit != Unit::module || r->table != Table::holding_register || !r->persisted)
-      return std::unexpected(fmt::format("{}:{}: unknown register '{}'; nothing was imported", file, e.line, name));
-    if (e.value < r->min || e.value > r->max)
-      return std::unexpected(fmt::format("{}:{}: '{}' = {} is outside its range {}; nothing was imported", file,
-                                         e.line, name, e.value, accepted_text(*r)));
-    out[name] = e.value;
+      problems.push_back(fmt::format("{}:{}: unknown register '{}'", file, e.line, name));
+    out.lines[name] = e.line;
   }
+  if (!problems.empty()) return std::unexpected(problems_text(file, problems));
+  auto raw = persistence::raw_values(file, *parsed, &codec());
+  if (!raw) return std::unexpected(raw.error().message);
+  for (const auto& [name, value] : *raw) {  // a raw (version 1) file is range-checked here
+    const Register& r = register_named(name);
+    if (value < r.min || value > r.max)
+      problems.push_back(fmt::format("{}:{}: '{}' = {} is outside its range {}", file, out.lines.at(name), name, value,
+                                     accepted_text(r)));
+  }
+  if (!problems.empty()) return std::unexpected(problems_text(file, problems));
+  out.values = std::move(*raw);
   return out;
 }
 

@@ -2,7 +2,8 @@
 // Settings over Modbus: read them all, plan an all-or-nothing write of several
 // values (validated locally with the daemon's own code first, so a refusal
 // names the setting and the rule), execute it, and the export/import file
-// (the same TOML as persistence's export_file / import_file).
+// (the same TOML as persistence's export_file / import_file, in engineering
+// units with value names).
 #include <cstdint>
 #include <expected>
 #include <map>
@@ -51,10 +52,20 @@ std::expected<WritePlan, std::string> plan_write(const RawMap& current, const Ra
 // already written are written back to their old values; the error says why.
 std::expected<void, std::string> execute_plan(Connection& c, const WritePlan& plan);
 
-// ---- the settings file (persistence/transfer.cpp's format) ----
+// ---- the settings file (persistence/settings_file.hpp's format) ----
+// Engineering values and value names (format_version 2), as homingd exports them.
 std::string settings_file_text(const RawMap& values, const std::string& source, std::int64_t now_ms);
+// A value as the file spells it ("1500.0", "\"negative\"", "true"), for messages.
+std::string file_value_text(const registers::Register& reg, std::int64_t raw);
 std::expected<void, std::string> write_file_atomically(const std::string& path, const std::string& text);
-// name -> raw from a settings file; errors carry file:line, like import_file.
-std::expected<RawMap, std::string> read_settings_file(const std::string& path);
+
+struct SettingsFileValues {
+  RawMap values;                                // name -> raw
+  std::map<std::string, std::uint32_t> lines;  // name -> line in the file
+};
+// The settings of a file (engineering values, or raw ones of a format_version 1
+// file), each a setting of the module in its range. Every value that is not
+// is named with file:line, the value and the rule, all in one error.
+std::expected<SettingsFileValues, std::string> read_settings_file(const std::string& path);
 
 }  // namespace homingctl

@@ -1,21 +1,25 @@
-#include "trace_svg.hpp"
-
+// The trace of an axis drawn as an SVG: position, velocity and sensor against
+// time, phases shaded, the reference edge marked. Every label is measured
+// (text_fit.hpp) and placed where it fits: long titles and alarm texts wrap,
+// the left margin takes the widest tick label, time ticks are spaced for their
+// labels, the legend starts new rows, the edge label turns left at the right end.
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
+
+#include "text_fit.hpp"
+#include "trace.hpp"
 
 namespace homingctl {
 
 namespace {
 
-constexpr std::size_t kHeader = 10, kSample = 8;
-
-std::uint32_t u32(const std::vector<std::uint16_t>& w, std::size_t at) {
-  return (static_cast<std::uint32_t>(w[at]) << 16) | w[at + 1];
-}
-std::int32_t i32(const std::vector<std::uint16_t>& w, std::size_t at) { return static_cast<std::int32_t>(u32(w, at)); }
+constexpr double kWidth = 960, kMargin = 20, kMinLeft = 80;
+constexpr double kFont = 11, kTitleFont = 15;
+constexpr double kLine = 15, kTitleLine = 19, kLegendRow = 20;
+constexpr double kPlotH = 150, kGap = 30, kSensorH = 60;
+constexpr double kAxisLabelX = 12;  // the rotated axis labels' baseline
 
 std::string xml_escape(std::string_view s) {
   std::string o;
@@ -50,215 +54,267 @@ double tick_step(double span, int want) {
   return 10 * mag;
 }
 
-}  // namespace
-
-Trace parse_trace(std::size_t axis, const std::vector<std::uint16_t>& w) {
-  if (w.size() < kHeader) throw std::runtime_error("trace file shorter than its header");
-  Trace t;
-  t.axis = axis;
-  const std::size_t count = w[0];
-  if (w.size() < kHeader + kSample * count)
-    throw std::runtime_error(fmt::format("trace file has {} words, its header announces {} samples", w.size(), count));
-  t.interval_ms = w[1] / 10.0;
-  if (const auto e = u32(w, 2); e != 0xFFFFFFFFu) t.edge_time_ms = e;
-  t.edge_position_mm = i32(w, 4) / 1000.0;
-  t.alarm = static_cast<homing::AlarmCode>(w[6]);
-  t.alarm_phase = static_cast<homing::Phase>(w[7]);
-  t.duration_ms = u32(w, 8);
-  t.samples.reserve(count);
-  for (std::size_t i = 0; i < count; ++i) {
-    const std::size_t at = kHeader + kSample * i;
-    t.samples.push_back(TracePoint{u32(w, at), static_cast<homing::Phase>(w[at + 2]), i32(w, at + 3) / 1000.0,
-                                   i32(w, at + 5) / 1000.0, w[at + 7] != 0});
-  }
-  return t;
+// A tick value with as many decimals as its step needs ("0.05", "1200", never "-0").
+std::string tick_text(double v, double step) {
+  const int decimals = step >= 1 ? 0 : static_cast<int>(std::ceil(-std::log10(step) - 1e-9));
+  if (std::abs(v) < step * 1e-6) v = 0;
+  return fmt::format("{:.{}f}", v, decimals);
 }
 
-Trace read_trace(Connection& c, std::size_t axis) {
-  const int file = static_cast<int>(axis) + 1;
-  std::vector<std::uint16_t> words = c.read_file_record(file, 0, static_cast<int>(kHeader));
-  const std::size_t total = kHeader + kSample * std::size_t{words[0]};
-  while (words.size() < total) {
-    const int n = static_cast<int>(std::min<std::size_t>(120, total - words.size()));
-    const auto part = c.read_file_record(file, static_cast<int>(words.size()), n);
-    words.insert(words.end(), part.begin(), part.end());
-  }
-  return parse_trace(axis, words);
-}
-
-std::string trace_csv(const Trace& t) {
-  std::string out = "time_ms,phase,position_mm,velocity_mm_per_s,sensor\n";
-  for (const auto& s : t.samples)
-    out += fmt::format("{},{},{:.3f},{:.3f},{}\n", s.time_ms, homing::phase_name(s.phase), s.position_mm,
-                       s.velocity_mm_per_s, s.sensor ? 1 : 0);
+struct Tick {
+  double value = 0;
+  std::string text;
+};
+std::vector<Tick> ticks(double lo, double hi, double step) {
+  std::vector<Tick> out;
+  for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + step * 1e-9; v += step) out.push_back({v, tick_text(v, step)});
   return out;
 }
-
-nlohmann::json trace_json(const Trace& t) {
-  nlohmann::json j;
-  j["axis"] = std::string(homing::kAxisLetters[t.axis]);
-  j["interval_ms"] = t.interval_ms;
-  j["duration_ms"] = t.duration_ms;
-  j["reference_edge"] = t.edge_time_ms ? nlohmann::json{{"time_ms", *t.edge_time_ms}, {"position", t.edge_position_mm}}
-                                       : nlohmann::json(nullptr);
-  j["alarm"] = t.alarm == homing::AlarmCode::none
-                   ? nlohmann::json(nullptr)
-                   : nlohmann::json{{"name", std::string(homing::alarm_name(t.alarm))},
-                                    {"phase", std::string(homing::phase_name(t.alarm_phase))}};
-  j["samples"] = nlohmann::json::array();
-  for (const auto& s : t.samples)
-    j["samples"].push_back({s.time_ms, std::string(homing::phase_name(s.phase)), s.position_mm, s.velocity_mm_per_s,
-                            s.sensor ? 1 : 0});
-  return j;
+double widest(const std::vector<Tick>& ts) {
+  double w = 0;
+  for (const auto& t : ts) w = std::max(w, text_width(t.text, kFont));
+  return w;
 }
 
-std::string trace_svg(const Trace& t, const std::string& alarm_text) {
-  const double W = 960, left = 80, right = 20, plot_w = W - left - right;
-  const double top = alarm_text.empty() ? 50 : 70;
-  const double ph = 150, gap = 30, sensor_h = 60;
-  const double y_pos = top, y_vel = y_pos + ph + gap, y_sen = y_vel + ph + gap;
-  const double legend_y = y_sen + sensor_h + 45;
-  const double H = legend_y + 40;
-  const auto unit = homing::axis_unit(t.axis);
-  const char X = homing::kAxisUpper[t.axis];
-
-  double t_end = t.duration_ms;
-  if (!t.samples.empty()) t_end = std::max<double>(t_end, t.samples.back().time_ms);
-  if (t_end <= 0) t_end = 1;
-  auto tx = [&](double ms) { return left + plot_w * ms / t_end; };
-
-  auto range = [&](auto get) {
-    double lo = 0, hi = 0;
-    bool first = true;
-    for (const auto& s : t.samples) {
-      const double v = get(s);
-      lo = first ? v : std::min(lo, v);
-      hi = first ? v : std::max(hi, v);
-      first = false;
-    }
-    if (hi - lo < 1e-6) {
-      lo -= 1;
-      hi += 1;
-    }
-    const double pad = (hi - lo) * 0.05;
-    return std::pair{lo - pad, hi + pad};
-  };
-  const auto [p_lo, p_hi] = range([](const TracePoint& s) { return s.position_mm; });
-  const auto [v_lo, v_hi] = range([](const TracePoint& s) { return s.velocity_mm_per_s; });
-
-  std::string o;
-  o += fmt::format("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{:.0f}\" height=\"{:.0f}\" viewBox=\"0 0 {:.0f} {:.0f}\" "
-                   "font-family=\"sans-serif\" font-size=\"11\">\n",
-                   W, H, W, H);
-  o += fmt::format("<rect width=\"{:.0f}\" height=\"{:.0f}\" fill=\"white\"/>\n", W, H);
-  o += fmt::format("<text id=\"title\" x=\"{:.0f}\" y=\"22\" font-size=\"15\" font-weight=\"bold\">Homing trace, axis {}: "
-                   "{} samples every {:g} ms, cycle {:.3f} s{}</text>\n",
-                   left, X, t.samples.size(), t.interval_ms, t.duration_ms / 1000.0,
-                   t.alarm == homing::AlarmCode::none ? "" : fmt::format(", alarm {}", homing::alarm_name(t.alarm)));
-  if (!alarm_text.empty())
-    o += fmt::format("<text id=\"alarm\" x=\"{:.0f}\" y=\"44\" fill=\"#c00000\">{}</text>\n", left, xml_escape(alarm_text));
-
-  // Phase bands over the three plots.
-  o += "<g id=\"phases\">\n";
-  std::vector<homing::Phase> seen;
-  for (std::size_t i = 0; i < t.samples.size();) {
-    std::size_t j = i;
-    while (j + 1 < t.samples.size() && t.samples[j + 1].phase == t.samples[i].phase) ++j;
-    const double x0 = tx(t.samples[i].time_ms);
-    const double x1 = j + 1 < t.samples.size() ? tx(t.samples[j + 1].time_ms) : tx(t_end);
-    const auto p = t.samples[i].phase;
-    if (std::find(seen.begin(), seen.end(), p) == seen.end()) seen.push_back(p);
-    o += fmt::format("<rect class=\"phase-band\" data-phase=\"{}\" x=\"{:.2f}\" y=\"{:.0f}\" width=\"{:.2f}\" height=\"{:.0f}\" "
-                     "fill=\"{}\" fill-opacity=\"0.35\"><title>{} {}..{} ms</title></rect>\n",
-                     homing::phase_name(p), x0, top, std::max(0.5, x1 - x0), y_sen + sensor_h - top, phase_colour(p),
-                     homing::phase_name(p), t.samples[i].time_ms, j + 1 < t.samples.size() ? t.samples[j + 1].time_ms : static_cast<std::uint32_t>(t_end));
-    i = j + 1;
+// The values plotted: a range padded by 5 %, never empty.
+template <class Get>
+std::pair<double, double> value_range(const Trace& t, Get get) {
+  double lo = 0, hi = 0;
+  bool first = true;
+  for (const auto& s : t.samples) {
+    const double v = get(s);
+    lo = first ? v : std::min(lo, v);
+    hi = first ? v : std::max(hi, v);
+    first = false;
   }
-  o += "</g>\n";
+  if (hi - lo < 1e-6) {
+    lo -= 1;
+    hi += 1;
+  }
+  const double pad = (hi - lo) * 0.05;
+  return {lo - pad, hi + pad};
+}
 
-  // One plot: frame, y ticks, polyline.
-  auto plot = [&](std::string_view id, std::string_view label, double y0, double h, double lo, double hi, auto get,
-                  std::string_view colour, bool step) {
+struct LegendItem {
+  std::string label;
+  std::string_view colour;  // "" = the reference edge's dashed line
+  double x = 0, y = 0;
+};
+
+class Drawing {
+ public:
+  Drawing(const Trace& t, const std::string& alarm) : t_(t) {
+    t0_ = t.window ? t.window->from_ms : 0.0;
+    t1_ = t.window ? t.window->to_ms : t.end_ms();
+    if (t1_ <= t0_) t1_ = t0_ + 1;
+    std::tie(p_lo_, p_hi_) = value_range(t, [](const TracePoint& s) { return s.position_mm; });
+    std::tie(v_lo_, v_hi_) = value_range(t, [](const TracePoint& s) { return s.velocity_mm_per_s; });
+    p_ticks_ = ticks(p_lo_, p_hi_, tick_step(p_hi_ - p_lo_, 4));
+    v_ticks_ = ticks(v_lo_, v_hi_, tick_step(v_hi_ - v_lo_, 4));
+    // The tick labels end 6 px left of the plots and clear the rotated axis label.
+    left_ = std::max(kMinLeft, std::ceil(std::max(widest(p_ticks_), widest(v_ticks_)) + 6 + kAxisLabelX + 0.2 * kFont + 6));
+    plot_w_ = kWidth - left_ - kMargin;
+    title_ = wrap_text(title_text(), kWidth - 2 * kMargin, kTitleFont, true);
+    if (!alarm.empty()) alarm_ = wrap_text(alarm, kWidth - 2 * kMargin, kFont);
+    const double last_text = 22 + kTitleLine * static_cast<double>(title_.size() - 1) +
+                             (alarm_.empty() ? 0 : 6 + kLine * static_cast<double>(alarm_.size()));
+    top_ = last_text + 26;
+    y_vel_ = top_ + kPlotH + kGap;
+    y_sen_ = y_vel_ + kPlotH + kGap;
+    place_legend(y_sen_ + kSensorH + 45);
+  }
+
+  std::string svg() {
+    o_ += fmt::format("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{:.0f}\" height=\"{:.0f}\" viewBox=\"0 0 {:.0f} "
+                      "{:.0f}\" font-family=\"DejaVu Sans, sans-serif\" font-size=\"{:g}\">\n",
+                      kWidth, height_, kWidth, height_, kFont);
+    o_ += fmt::format("<rect width=\"{:.0f}\" height=\"{:.0f}\" fill=\"white\"/>\n", kWidth, height_);
+    heading();
+    phases();
+    const auto unit = homing::axis_unit(t_.axis);
+    plot("position", fmt::format("position ({})", unit), top_, kPlotH, p_lo_, p_hi_, p_ticks_,
+         [](const TracePoint& s) { return s.position_mm; }, "#1f4e9c", false);
+    plot("velocity", fmt::format("velocity ({}/s)", unit), y_vel_, kPlotH, v_lo_, v_hi_, v_ticks_,
+         [](const TracePoint& s) { return s.velocity_mm_per_s; }, "#2a8c3a", false);
+    plot("sensor", "sensor", y_sen_, kSensorH, -0.2, 1.2, {{0, "off"}, {1, "active"}},
+         [](const TracePoint& s) { return s.sensor ? 1.0 : 0.0; }, "#b03030", true);
+    time_axis();
+    reference_edge();
+    legend();
+    o_ += "</svg>\n";
+    return std::move(o_);
+  }
+
+ private:
+  double tx(double ms) const { return left_ + plot_w_ * (ms - t0_) / (t1_ - t0_); }
+  bool edge_shown() const { return t_.edge_time_ms && *t_.edge_time_ms >= t0_ && *t_.edge_time_ms <= t1_; }
+
+  std::string title_text() const {
+    std::string s = fmt::format("Homing trace, axis {}: {} samples every {:g} ms, cycle {:.3f} s",
+                                homing::kAxisUpper[t_.axis], t_.samples.size(), t_.interval_ms, t_.duration_ms / 1000.0);
+    if (t_.alarm != homing::AlarmCode::none) s += fmt::format(", alarm {}", homing::alarm_name(t_.alarm));
+    if (t_.window) s += fmt::format(", shown {:g} s to {:g} s", t0_ / 1000.0, t1_ / 1000.0);
+    return s;
+  }
+
+  void heading() {
+    o_ += "<g id=\"title\">\n";
+    for (std::size_t i = 0; i < title_.size(); ++i)
+      o_ += fmt::format("<text x=\"{:.0f}\" y=\"{:.0f}\" font-size=\"{:g}\" font-weight=\"bold\">{}</text>\n", kMargin,
+                        22 + kTitleLine * static_cast<double>(i), kTitleFont, xml_escape(title_[i]));
+    o_ += "</g>\n";
+    if (alarm_.empty()) return;
+    const double y0 = 22 + kTitleLine * static_cast<double>(title_.size() - 1) + 6 + kLine;
+    o_ += "<g id=\"alarm\" fill=\"#c00000\">\n";
+    for (std::size_t i = 0; i < alarm_.size(); ++i)
+      o_ += fmt::format("<text x=\"{:.0f}\" y=\"{:.0f}\">{}</text>\n", kMargin, y0 + kLine * static_cast<double>(i),
+                        xml_escape(alarm_[i]));
+    o_ += "</g>\n";
+  }
+
+  // Phase bands over the three plots, cut at the window.
+  void phases() {
+    o_ += "<g id=\"phases\">\n";
+    const auto& ss = t_.samples;
+    for (std::size_t i = 0; i < ss.size();) {
+      std::size_t j = i;
+      while (j + 1 < ss.size() && ss[j + 1].phase == ss[i].phase) ++j;
+      const double from = ss[i].time_ms, to = j + 1 < ss.size() ? ss[j + 1].time_ms : t1_;
+      const double x0 = tx(std::max(from, t0_)), x1 = tx(std::min(to, t1_));
+      const auto p = ss[i].phase;
+      o_ += fmt::format("<rect class=\"phase-band\" data-phase=\"{}\" x=\"{:.2f}\" y=\"{:.0f}\" width=\"{:.2f}\" "
+                        "height=\"{:.0f}\" fill=\"{}\" fill-opacity=\"0.35\"><title>{} {:g}..{:g} ms</title></rect>\n",
+                        homing::phase_name(p), x0, top_, std::max(0.5, x1 - x0), y_sen_ + kSensorH - top_,
+                        phase_colour(p), homing::phase_name(p), from, to);
+      i = j + 1;
+    }
+    o_ += "</g>\n";
+  }
+
+  // One plot: frame, y ticks, polyline (a step line for the sensor).
+  template <class Get>
+  void plot(std::string_view id, std::string_view label, double y0, double h, double lo, double hi,
+            const std::vector<Tick>& ts, Get get, std::string_view colour, bool step) {
     auto ty = [&](double v) { return y0 + h - h * (v - lo) / (hi - lo); };
-    o += fmt::format("<g id=\"{}\">\n", id);
-    o += fmt::format("<rect class=\"frame\" x=\"{:.0f}\" y=\"{:.0f}\" width=\"{:.0f}\" height=\"{:.0f}\" fill=\"none\" stroke=\"#444\"/>\n",
-                     left, y0, plot_w, h);
-    o += fmt::format("<text class=\"axis-label\" x=\"12\" y=\"{:.0f}\" transform=\"rotate(-90 12 {:.0f})\" text-anchor=\"middle\">{}</text>\n",
-                     y0 + h / 2, y0 + h / 2, label);
-    if (step) {
-      for (int v = 0; v <= 1; ++v)
-        o += fmt::format("<text class=\"tick\" x=\"{:.0f}\" y=\"{:.1f}\" text-anchor=\"end\">{}</text>\n", left - 6, ty(v) + 4,
-                         v ? "active" : "off");
-    } else {
-      const double st = tick_step(hi - lo, 4);
-      for (double v = std::ceil(lo / st) * st; v <= hi + 1e-9; v += st) {
-        o += fmt::format("<line class=\"grid\" x1=\"{:.0f}\" x2=\"{:.0f}\" y1=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#ddd\"/>\n", left,
-                         left + plot_w, ty(v), ty(v));
-        o += fmt::format("<text class=\"tick\" x=\"{:.0f}\" y=\"{:.1f}\" text-anchor=\"end\">{:g}</text>\n", left - 6, ty(v) + 4,
-                         std::abs(v) < st * 1e-6 ? 0.0 : v);
-      }
+    o_ += fmt::format("<g id=\"{}\">\n", id);
+    o_ += fmt::format("<rect class=\"frame\" x=\"{:.0f}\" y=\"{:.0f}\" width=\"{:.0f}\" height=\"{:.0f}\" fill=\"none\" "
+                      "stroke=\"#444\"/>\n",
+                      left_, y0, plot_w_, h);
+    o_ += fmt::format("<text class=\"axis-label\" x=\"{:g}\" y=\"{:.0f}\" transform=\"rotate(-90 {:g} {:.0f})\" "
+                      "text-anchor=\"middle\">{}</text>\n",
+                      kAxisLabelX, y0 + h / 2, kAxisLabelX, y0 + h / 2, label);
+    for (const auto& tick : ts) {
+      if (!step)
+        o_ += fmt::format("<line class=\"grid\" x1=\"{:.0f}\" x2=\"{:.0f}\" y1=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#ddd\"/>\n",
+                          left_, left_ + plot_w_, ty(tick.value), ty(tick.value));
+      o_ += fmt::format("<text class=\"tick\" x=\"{:.0f}\" y=\"{:.1f}\" text-anchor=\"end\">{}</text>\n", left_ - 6,
+                        ty(tick.value) + 4, tick.text);
     }
     std::string pts;
     double prev_y = 0;
     bool first = true;
-    for (const auto& s : t.samples) {
+    for (const auto& s : t_.samples) {
       const double x = tx(s.time_ms), y = ty(get(s));
       if (step && !first) pts += fmt::format("{:.2f},{:.2f} ", x, prev_y);
       pts += fmt::format("{:.2f},{:.2f} ", x, y);
       prev_y = y;
       first = false;
     }
-    o += fmt::format("<polyline class=\"trace\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" points=\"{}\"/>\n", colour, pts);
-    o += "</g>\n";
-  };
-  plot("position", fmt::format("position ({})", unit), y_pos, ph, p_lo, p_hi,
-       [](const TracePoint& s) { return s.position_mm; }, "#1f4e9c", false);
-  plot("velocity", fmt::format("velocity ({}/s)", unit), y_vel, ph, v_lo, v_hi,
-       [](const TracePoint& s) { return s.velocity_mm_per_s; }, "#2a8c3a", false);
-  plot("sensor", "sensor", y_sen, sensor_h, -0.2, 1.2, [](const TracePoint& s) { return s.sensor ? 1.0 : 0.0; },
-       "#b03030", true);
-
-  // Shared time axis under the sensor plot.
-  o += "<g id=\"time-axis\">\n";
-  const double base = y_sen + sensor_h;
-  const double st = tick_step(t_end, 8);
-  for (double v = 0; v <= t_end + 1e-9; v += st) {
-    o += fmt::format("<line x1=\"{:.1f}\" x2=\"{:.1f}\" y1=\"{:.0f}\" y2=\"{:.0f}\" stroke=\"#444\"/>\n", tx(v), tx(v), base, base + 5);
-    o += fmt::format("<text class=\"tick\" x=\"{:.1f}\" y=\"{:.0f}\" text-anchor=\"middle\">{:g}</text>\n", tx(v), base + 17, v);
-  }
-  o += fmt::format("<text class=\"axis-label\" x=\"{:.0f}\" y=\"{:.0f}\" text-anchor=\"middle\">time (ms)</text>\n",
-                   left + plot_w / 2, base + 32);
-  o += "</g>\n";
-
-  // The reference edge: where the homing found its reference.
-  if (t.edge_time_ms) {
-    const double x = tx(*t.edge_time_ms);
-    o += "<g id=\"reference-edge\">\n";
-    o += fmt::format("<line x1=\"{:.2f}\" x2=\"{:.2f}\" y1=\"{:.0f}\" y2=\"{:.0f}\" stroke=\"#d00000\" stroke-width=\"1.5\" "
-                     "stroke-dasharray=\"5,3\"/>\n",
-                     x, x, top, y_sen + sensor_h);
-    o += fmt::format("<text x=\"{:.2f}\" y=\"{:.0f}\" fill=\"#d00000\">reference edge {:.3f} {} at {} ms</text>\n", x + 4,
-                     top + 12, t.edge_position_mm, unit, *t.edge_time_ms);
-    o += "</g>\n";
+    o_ += fmt::format("<polyline class=\"trace\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" points=\"{}\"/>\n",
+                      colour, pts);
+    o_ += "</g>\n";
   }
 
-  // Legend of the phases shown.
-  o += "<g id=\"legend\">\n";
-  double lx = left;
-  for (const auto p : seen) {
-    const auto name = homing::phase_name(p);
-    o += fmt::format("<rect x=\"{:.0f}\" y=\"{:.0f}\" width=\"12\" height=\"12\" fill=\"{}\" fill-opacity=\"0.6\" stroke=\"#888\"/>\n",
-                     lx, legend_y, phase_colour(p));
-    o += fmt::format("<text class=\"legend-phase\" x=\"{:.0f}\" y=\"{:.0f}\">{}</text>\n", lx + 16, legend_y + 10, name);
-    lx += 30 + 7.0 * static_cast<double>(name.size());
+  // Shared time axis under the sensor plot; the step grows until the widest
+  // label fits between two ticks.
+  void time_axis() {
+    const double span = t1_ - t0_;
+    double st = tick_step(span, 8);
+    std::vector<Tick> ts = ticks(t0_, t1_, st);
+    while (widest(ts) + 12 > plot_w_ * st / span) {
+      st = tick_step(st * 1.5, 1);
+      ts = ticks(t0_, t1_, st);
+    }
+    const double base = y_sen_ + kSensorH;
+    o_ += "<g id=\"time-axis\">\n";
+    for (const auto& tick : ts) {
+      const double x = tx(tick.value);
+      o_ += fmt::format("<line x1=\"{:.1f}\" x2=\"{:.1f}\" y1=\"{:.0f}\" y2=\"{:.0f}\" stroke=\"#444\"/>\n", x, x, base,
+                        base + 5);
+      o_ += fmt::format("<text class=\"tick\" x=\"{:.1f}\" y=\"{:.0f}\" text-anchor=\"middle\">{}</text>\n", x, base + 17,
+                        tick.text);
+    }
+    o_ += fmt::format("<text class=\"axis-label\" x=\"{:.0f}\" y=\"{:.0f}\" text-anchor=\"middle\">time (ms)</text>\n",
+                      left_ + plot_w_ / 2, base + 34);
+    o_ += "</g>\n";
   }
-  if (t.edge_time_ms) {
-    o += fmt::format("<line x1=\"{:.0f}\" x2=\"{:.0f}\" y1=\"{:.0f}\" y2=\"{:.0f}\" stroke=\"#d00000\" stroke-dasharray=\"5,3\"/>\n",
-                     lx, lx + 16, legend_y + 6, legend_y + 6);
-    o += fmt::format("<text x=\"{:.0f}\" y=\"{:.0f}\">reference edge</text>\n", lx + 20, legend_y + 10);
+
+  // The reference edge: where the homing found its reference. Its label reads
+  // to the right of the line, or to the left where the plot ends.
+  void reference_edge() {
+    if (!edge_shown()) return;
+    const double x = tx(*t_.edge_time_ms);
+    const std::string label = fmt::format("reference edge {:.3f} {} at {} ms", t_.edge_position_mm,
+                                          homing::axis_unit(t_.axis), *t_.edge_time_ms);
+    const bool left_of_line = x + 4 + text_width(label, kFont) > left_ + plot_w_;
+    o_ += "<g id=\"reference-edge\">\n";
+    o_ += fmt::format("<line x1=\"{:.2f}\" x2=\"{:.2f}\" y1=\"{:.0f}\" y2=\"{:.0f}\" stroke=\"#d00000\" "
+                      "stroke-width=\"1.5\" stroke-dasharray=\"5,3\"/>\n",
+                      x, x, top_, y_sen_ + kSensorH);
+    o_ += fmt::format("<text x=\"{:.2f}\" y=\"{:.0f}\" fill=\"#d00000\" text-anchor=\"{}\">{}</text>\n",
+                      left_of_line ? x - 4 : x + 4, top_ + 12, left_of_line ? "end" : "start", label);
+    o_ += "</g>\n";
   }
-  o += "</g>\n</svg>\n";
-  return o;
-}
+
+  // Legend items in rows as wide as the plots.
+  void place_legend(double y) {
+    std::vector<LegendItem> items;
+    for (const auto& s : t_.samples)
+      if (std::none_of(items.begin(), items.end(), [&](const auto& i) { return i.label == homing::phase_name(s.phase); }))
+        items.push_back({std::string(homing::phase_name(s.phase)), phase_colour(s.phase)});
+    if (edge_shown()) items.push_back({"reference edge", ""});
+    double x = left_;
+    for (auto& item : items) {
+      const double w = 20 + text_width(item.label, kFont);
+      if (x > left_ && x + w > left_ + plot_w_) {
+        x = left_;
+        y += kLegendRow;
+      }
+      item.x = x;
+      item.y = y;
+      x += w + 14;
+    }
+    legend_ = std::move(items);
+    height_ = y + 12 + 20;
+  }
+
+  void legend() {
+    o_ += "<g id=\"legend\">\n";
+    for (const auto& item : legend_) {
+      if (item.colour.empty())
+        o_ += fmt::format("<line x1=\"{:.0f}\" x2=\"{:.0f}\" y1=\"{:.0f}\" y2=\"{:.0f}\" stroke=\"#d00000\" "
+                          "stroke-dasharray=\"5,3\"/>\n<text x=\"{:.0f}\" y=\"{:.0f}\">{}</text>\n",
+                          item.x, item.x + 16, item.y + 6, item.y + 6, item.x + 20, item.y + 10, item.label);
+      else
+        o_ += fmt::format("<rect x=\"{:.0f}\" y=\"{:.0f}\" width=\"12\" height=\"12\" fill=\"{}\" fill-opacity=\"0.6\" "
+                          "stroke=\"#888\"/>\n<text class=\"legend-phase\" x=\"{:.0f}\" y=\"{:.0f}\">{}</text>\n",
+                          item.x, item.y, item.colour, item.x + 20, item.y + 10, item.label);
+    }
+    o_ += "</g>\n";
+  }
+
+  const Trace& t_;
+  double t0_ = 0, t1_ = 1;
+  double p_lo_ = 0, p_hi_ = 1, v_lo_ = 0, v_hi_ = 1;
+  std::vector<Tick> p_ticks_, v_ticks_;
+  double left_ = kMinLeft, plot_w_ = 0, top_ = 0, y_vel_ = 0, y_sen_ = 0, height_ = 0;
+  std::vector<std::string> title_, alarm_;
+  std::vector<LegendItem> legend_;
+  std::string o_;
+};
+
+}  // namespace
+
+std::string trace_svg(const Trace& t, const std::string& alarm_text) { return Drawing(t, alarm_text).svg(); }
 
 }  // namespace homingctl

@@ -8,21 +8,18 @@
 #include <nlohmann/json.hpp>
 
 #include "registers/table.hpp"
+#include "registers/value_text.hpp"
 
 namespace homingctl {
 
-// "12.5", "12.5mm", "switch_reapproach", "2", "on", "x+y" (bitmask) -> raw.
-// Range-checked against the table; the error says what is accepted.
-std::expected<std::int64_t, std::string> parse_value(const registers::Register& reg, std::string_view text);
-
-// "12.5 mm", "switch_reapproach", "x+y", "1" (flags), for tables.
-std::string value_text(const registers::Register& reg, std::int64_t raw);
+// parse_value, value_text and accepted_text: the register layer's, shared
+// with the settings file (registers/value_text.hpp).
+using registers::accepted_text;
+using registers::parse_value;
+using registers::value_text;
 
 // {"raw":..,"value":..,"unit":..,"name":..}
 nlohmann::json value_json(const registers::Register& reg, std::int64_t raw);
-
-// "1 mm .. 60000 mm", or the enum names.
-std::string accepted_text(const registers::Register& reg);
 
 // Splits "NAME=VALUE".
 std::expected<std::pair<std::string, std::string>, std::string> split_assignment(std::string_view arg);

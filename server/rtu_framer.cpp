@@ -1,0 +1,97 @@
+#include "rtu_framer.hpp"
+
+#include <modbus/modbus.h>
+
+#include <span>
+
+#include "pdu.hpp"
+
+namespace server {
+namespace {
+
+bool crc_matches(std::span<const std::uint8_t> frame) {
+  if (frame.size() < 4) return false;
+  const std::size_t n = frame.size();
+  const std::uint16_t crc = crc16(frame.first(n - 2));
+  return frame[n - 2] == (crc & 0xFF) && frame[n - 1] == (crc >> 8);
+}
+
+constexpr std::uint8_t kDiagnostics = 0x08;
+
+}  // namespace
+
+std::optional<std::size_t> rtu_request_length(const std::vector<std::uint8_t>& f) {
+  constexpr std::size_t kUnitFcCrc = 4;  // unit id, function code, CRC
+  if (f.size() < 2) return std::nullopt;
+  switch (f[1]) {
+    case 1: case 2: case 3: case 4: case 5: case 6:
+    case kDiagnostics:                                   // sub-function + one word (00 may have more)
+      return kUnitFcCrc + 4;
+    case 15: case 16:                                    // start, quantity, byte count, data
+      if (f.size() < 7) return std::nullopt;
+      return kUnitFcCrc + 5 + f[6];
+    case 23:                                             // read start/quantity, write start/quantity, byte count
+      if (f.size() < 11) return std::nullopt;
+      return kUnitFcCrc + 9 + f[10];
+    case 20:                                             // byte count, sub-requests
+      if (f.size() < 3) return std::nullopt;
+      return kUnitFcCrc + 1 + f[2];
+    case 43:                                             // MEI type, read code, object id
+      return kUnitFcCrc + 3;
+    case 17:                                             // nothing after the function code
+      return kUnitFcCrc;
+    default:
+      return 0;
+  }
+}
+
+std::optional<RtuFramer::Result> RtuFramer::check_own_frame(std::size_t length) {
+  if (buf_.size() < length) return std::nullopt;
+  if (crc_matches(buf_)) {
+    Result r{Event::frame, std::move(buf_)};
+    buf_.clear();
+    return r;
+  }
+  // Function 08 sub-function 00 echoes any number of words: extend by words.
+  if (buf_[1] == kDiagnostics && buf_[2] == 0 && buf_[3] == 0) return std::nullopt;
+  buf_.clear();
+  discarding_ = true;
+  return Result{Event::bad_crc, {}};
+}
+
+std::optional<RtuFramer::Result> RtuFramer::push(std::uint8_t byte) {
+  if (discarding_) return std::nullopt;
+  buf_.push_back(byte);
+  if (buf_.size() > MODBUS_RTU_MAX_ADU_LENGTH) {
+    buf_.clear();
+    discarding_ = true;
+    return Result{Event::overrun, {}};
+  }
+  if (buf_.size() < 4) return std::nullopt;
+  const bool ours = buf_[0] == own_unit_ || buf_[0] == 0;
+  if (ours) {
+    const auto length = rtu_request_length(buf_);
+    if (!length) return std::nullopt;
+    if (*length != 0) {
+      // Past the function's length only function 08's echo may grow, by words.
+      if (buf_.size() > *length && (buf_.size() - *length) % 2 != 0) return std::nullopt;
+      return check_own_frame(buf_.size() < *length ? *length : buf_.size());
+    }
+  }
+  // Another unit's frame (request or answer) or an unknown function: the
+  // frame ends where its CRC first matches.
+  if (!crc_matches(buf_)) return std::nullopt;
+  Result r{Event::frame, std::move(buf_)};
+  buf_.clear();
+  return r;
+}
+
+std::optional<RtuFramer::Result> RtuFramer::silence() {
+  const bool had = !buf_.empty();
+  buf_.clear();
+  discarding_ = false;
+  if (had) return Result{Event::bad_crc, {}};
+  return std::nullopt;
+}
+
+}  // namespace server

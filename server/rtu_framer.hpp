@@ -1,0 +1,51 @@
+#pragma once
+// Modbus RTU framing of the bytes read from a serial line. libmodbus 3.1.6
+// frames RTU requests by function code and knows nothing of function 08, 20
+// or 43 (it takes their data bytes for the CRC), so the module frames them
+// itself: a frame for this module with a known function code ends at that
+// function's length (function 08 sub-function 00 may echo more words: the
+// frame is extended word by word until its CRC matches); any other frame (for
+// another unit on the bus, or a function the module does not know) ends where
+// its CRC first matches. Silence on the line (the caller's byte timeout) ends
+// a frame that never matched: a communication error. Pure: no I/O, no clock.
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+namespace server {
+
+class RtuFramer {
+ public:
+  enum class Event : std::uint8_t {
+    frame,    // a whole frame whose CRC matches (unit id first, CRC last)
+    bad_crc,  // a frame that failed its CRC (or was cut short)
+    overrun,  // more bytes than the largest RTU ADU (256) without a frame
+  };
+  struct Result {
+    Event event = Event::frame;
+    std::vector<std::uint8_t> frame;  // Event::frame only
+  };
+
+  explicit RtuFramer(std::uint8_t own_unit) : own_unit_(own_unit) {}
+
+  // One byte from the line; a result when it completes or breaks a frame.
+  std::optional<Result> push(std::uint8_t byte);
+  // The line stayed quiet for the byte timeout: a frame begun ends here.
+  std::optional<Result> silence();
+  // Bytes of a frame are waiting (the caller then polls with the byte timeout).
+  bool pending() const { return !buf_.empty() || discarding_; }
+
+ private:
+  std::optional<Result> check_own_frame(std::size_t length);
+
+  std::uint8_t own_unit_;
+  std::vector<std::uint8_t> buf_;
+  bool discarding_ = false;  // after a bad frame: drop bytes until silence
+};
+
+// The whole length (unit id to CRC) of a request for function `pdu_head[0]`,
+// once enough of the frame is there to know it: nullopt while more header
+// bytes are needed, 0 for a function code the module does not know.
+std::optional<std::size_t> rtu_request_length(const std::vector<std::uint8_t>& frame);
+
+}  // namespace server
