@@ -362,6 +362,126 @@ def rtu(b, results):
     results["rtu"] = rows
 
 
+def tls(b, results, clients_list=(1, 8), connects=200):
+    """Modbus/TCP Security against plain TCP on one homingd, the same client
+    program (tls_load) for both, A B A B; then the cost of a connection."""
+    pki = os.path.join(b.work, "pki")
+    b.run("make-certs.sh", ["bash", os.path.join(ROOT, "tools", "tls", "make-certs.sh"), "init", pki], timeout=120)
+    rows = {}
+    for clients in clients_list:
+        rows[clients] = {"tcp": [], "tls": [], "ratio_rps": [], "ratio_p99": []}
+    conn = {"tcp": [], "tls": []}
+    for r in range(b.rounds):
+        port, tls_port = free_port(), free_port()
+        hd = b.homingd(port, extra=["--tls", f"127.0.0.1:{tls_port}", "--tls-cert", f"{pki}/server.crt",
+                                    "--tls-key", f"{pki}/server.key", "--tls-ca", f"{pki}/ca.crt"])
+        try:
+            for clients in clients_list:
+                log(f"tls: {clients} clients, round {r + 1}/{b.rounds}")
+                figures = {}
+                for transport in ("tcp", "tls"):
+                    argv = [b.path("tls_load"), "--port", str(port), "--clients", str(clients),
+                            "--duration", str(b.duration)]
+                    if transport == "tls":
+                        argv[2] = str(tls_port)
+                        argv += ["--tls", "--pki", pki]
+                    figures[transport] = parse_result(b.run(f"tls_load {transport}", argv, timeout=b.duration + 30))
+                row = rows[clients]
+                row["tcp"].append(figures["tcp"])
+                row["tls"].append(figures["tls"])
+                row["ratio_rps"].append(figures["tls"]["rps"] / figures["tcp"]["rps"] if figures["tcp"]["rps"] else None)
+                row["ratio_p99"].append(figures["tls"]["p99_us"] / figures["tcp"]["p99_us"]
+                                        if figures["tcp"]["p99_us"] else None)
+            log(f"tls: connection cost, round {r + 1}/{b.rounds}")
+            for transport in ("tcp", "tls"):
+                argv = [b.path("tls_load"), "--port", str(port), "--connects", str(connects)]
+                if transport == "tls":
+                    argv[2] = str(tls_port)
+                    argv += ["--tls", "--pki", pki]
+                conn[transport].append(parse_result(b.run(f"tls_load {transport} connects", argv, timeout=120)))
+        finally:
+            b.stop(hd)
+    results["tls"] = {"load": rows, "connects": conn, "count": connects}
+
+
+TLS_HEADING = "## Modbus/TCP Security: TLS beside plain TCP"
+
+
+def tls_section(b, t, only_info=None):
+    """The TLS section's lines; only_info: it was measured on its own (--only tls)."""
+    L = []
+    w = L.append
+    w(TLS_HEADING)
+    w("")
+    if only_info:
+        i = only_info
+        w(f"Measured on its own on {i['date']} by `bash bench/run_benchmarks.sh --only tls` (commit {i['commit']}, "
+          f"build {i['build']}, load average {' '.join(i['load'])}, {b.rounds} rounds of {b.duration:g} s); the "
+          "rest of this file is from the run described at the top.")
+        w("")
+    w("One homingd serves plain Modbus TCP and Modbus/TCP Security (`--tls`, certificates of "
+      "`tools/tls/make-certs.sh`, an engineer client certificate) at the same time; `tls_load` drives both with "
+      "the same client code (MBAP frames built by hand, FC3 of 10 holding registers, one request in flight per "
+      "connection; TLS through OpenSSL), plain then TLS in every round, so the difference is TLS alone. No "
+      f"homing cycles run. Agreed: {', '.join(sorted({x['agreed'] for row in t['load'].values() for x in row['tls']}))}"
+      "; EC P-256 certificates; no session resumption.")
+    w("")
+    w("| clients | transport | req/s | p50 µs | p99 µs | p99.9 µs | max µs | errors | TLS/TCP req/s | TLS/TCP p99 |")
+    w("|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for clients, row in sorted(t["load"].items()):
+        for transport in ("tcp", "tls"):
+            rr = row[transport]
+            ratios = ("", "")
+            if transport == "tls":
+                ratios = (f"{med(row['ratio_rps']):.2f}× ({', '.join(f'{x:.2f}' for x in row['ratio_rps'] if x)})",
+                          f"{med(row['ratio_p99']):.2f}×")
+            w(f"| {clients} | {'**TLS**' if transport == 'tls' else 'plain TCP'} | {fmt(med([x['rps'] for x in rr]))} "
+              f"| {fmt(med([x['p50_us'] for x in rr]), 1)} | {fmt(med([x['p99_us'] for x in rr]), 1)} "
+              f"| {fmt(med([x['p999_us'] for x in rr]), 1)} | {fmt(med([x['max_us'] for x in rr]))} "
+              f"| {sum(int(x['errors']) for x in rr)} | {ratios[0]} | {ratios[1]} |")
+    w("")
+    c = t["connects"]
+    w(f"Connection cost: {t['count']} connections one after the other, each connect (TLS: and the full handshake, "
+      "the client's certificate verified by homingd), one FC3 of 10 registers, close.")
+    w("")
+    w("| transport | connections/s | connected p50 µs | connected p99 µs | first answer p50 µs | first answer p99 µs "
+      "| errors |")
+    w("|---|---:|---:|---:|---:|---:|---:|")
+    for transport in ("tcp", "tls"):
+        rr = c[transport]
+        w(f"| {'**TLS**' if transport == 'tls' else 'plain TCP'} | {fmt(med([x['per_s'] for x in rr]))} "
+          f"| {fmt(med([x['connect_p50_us'] for x in rr]), 1)} | {fmt(med([x['connect_p99_us'] for x in rr]), 1)} "
+          f"| {fmt(med([x['answer_p50_us'] for x in rr]), 1)} | {fmt(med([x['answer_p99_us'] for x in rr]), 1)} "
+          f"| {sum(int(x['errors']) for x in rr)} |")
+    w("")
+    hs = med([x["answer_p50_us"] for x in c["tls"]]) - med([x["answer_p50_us"] for x in c["tcp"]])
+    w(f"A TLS connection costs about {fmt(hs / 1000, 1)} ms more than a plain one before its first answer (the "
+      "handshake: key exchange, both certificates, the CRL check when `--tls-crl` is set); after that a request "
+      "costs what the table above shows. A client that keeps its connection open pays the handshake once.")
+    if only_info:
+        w("")
+        w("```")
+        for cmd, what in b.commands.items():
+            if what.startswith(("tls_load", "make-certs", "homingd")):
+                w(cmd)
+        w("```")
+    w("")
+    return L
+
+
+def splice_tls_section(out_path, lines):
+    """Replaces the TLS section of an existing BENCHMARKS.md (or puts it before "## Commands")."""
+    with open(out_path) as f:
+        old = f.read().split("\n")
+    if TLS_HEADING in old:
+        start = old.index(TLS_HEADING)
+        end = next((i for i in range(start + 1, len(old)) if old[i].startswith("## ")), len(old))
+    else:
+        start = end = next((i for i, line in enumerate(old) if line == "## Commands"), len(old))
+    with open(out_path, "w") as f:
+        f.write("\n".join(old[:start] + lines + old[end:]))
+
+
 def engine(b, results):
     log("engine: Google Benchmark and homing repeatability")
     out = b.run("engine_step_bench", [b.path("engine_step_bench"), "--benchmark_min_time=0.5",
@@ -416,7 +536,7 @@ def machine_info(build):
         with open(cache) as f:
             for line in f:
                 if line.startswith("CMAKE_BUILD_TYPE:"):
-                    build_type = line.split("=", 1)[1].strip()
+                    build_type = line.split("=", 1)[1].strip() or "RelWithDebInfo (the CMakeLists default)"
     info["build"] = build_type
     cc = subprocess.run(["c++", "--version"], capture_output=True, text=True).stdout.splitlines()
     info["compiler"] = cc[0] if cc else "?"
@@ -714,6 +834,9 @@ def report(b, results, info, args, started, out_path, causes):
               f"| {sum(int(x['errors']) for x in hh)} |")
     w("")
 
+    if results.get("tls"):
+        L.extend(tls_section(b, results["tls"]))
+
     w("## Commands")
     w("")
     w("Run from the repository root by `bench/run_benchmarks.sh`; `$WORK` is a scratch directory it creates "
@@ -763,12 +886,13 @@ def main():
     p.add_argument("--idle-seconds", type=float, default=5.0)
     p.add_argument("--writes", type=int, default=200)
     p.add_argument("--quick", action="store_true", help="1 round, short loads (a smoke run)")
+    p.add_argument("--only", choices=["tls"], help="measure only this section and replace it in --out")
     args = p.parse_args()
     if args.quick:
         args.rounds, args.duration, args.idle_seconds, args.writes = 1, 0.5, 1.0, 20
     build = os.path.abspath(args.build)
     for prog in ("homingd", "modbus_load", "bare_modbus_server", "tcp_pingpong", "loop_floor", "sqlite_commit",
-                 "engine_step_bench", "homing_repeatability"):
+                 "engine_step_bench", "homing_repeatability", "tls_load"):
         if not os.access(os.path.join(build, "bin", prog), os.X_OK):
             sys.exit(f"run_benchmarks: {build}/bin/{prog} is missing: build first "
                      f"(cmake -S . -B {args.build} -G Ninja -DCMAKE_BUILD_TYPE=Release && cmake --build {args.build})")
@@ -779,12 +903,18 @@ def main():
     b = Bench(build, work, args.duration, args.rounds)
     results = {"throughput": {}, "mixes": {}}
     try:
+        if args.only == "tls":
+            tls(b, results)
+            splice_tls_section(args.out, tls_section(b, results["tls"], only_info=info))
+            log(f"run_benchmarks: replaced the TLS section of {args.out}")
+            return
         engine(b, results)
         idle(b, results, args.idle_seconds)
         durable(b, results, args.writes)
         throughput(b, [int(c) for c in args.clients.split(",")], results)
         mixes(b, args.mix_clients, results)
         rtu(b, results)
+        tls(b, results)
         report(b, results, info, args, started, args.out, load_causes())
     finally:
         shutil.rmtree(work, ignore_errors=True)

@@ -5,7 +5,8 @@
 # server at 1, 8 and 64 clients with homing cycles running; control-loop
 # lateness beside a bare clock_nanosleep loop; the engine's step cost; idle CPU
 # and memory; homing repeatability and cycle time; durable settings writes
-# beside a bare SQLite commit; RTU turnaround over a socat pty pair.
+# beside a bare SQLite commit; RTU turnaround over a socat pty pair; Modbus/TCP
+# Security (TLS) beside plain TCP on one homingd, and the cost of a handshake.
 #
 #   bash bench/run_benchmarks.sh [BUILD_DIR] [options]
 #
@@ -13,6 +14,7 @@
 # benchmark programs are missing. Options go to bench/run_benchmarks.py:
 #   --rounds N (3)  --duration S (2, per load round)  --clients 1,8,64
 #   --out FILE (BENCHMARKS.md)  --quick (one short round of everything: a smoke run)
+#   --only tls (measure only the TLS section and replace it in --out)
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -29,7 +31,7 @@ done
 
 need_build=0
 for prog in homingd modbus_load bare_modbus_server tcp_pingpong loop_floor sqlite_commit engine_step_bench \
-            homing_repeatability; do
+            homing_repeatability tls_load; do
   [ -x "$build/bin/$prog" ] || need_build=1
 done
 if [ "$need_build" = 1 ]; then

@@ -73,7 +73,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     check(o.parity == 'N' || o.parity == 'E' || o.parity == 'O', "parity");
     check(o.stop_bits == 1 || o.stop_bits == 2, "stop bits");
     check(o.unlock_code >= 0 && o.unlock_code <= 65535, "unlock code out of range");
-    check(o.tcp_enabled || !o.rtu_device.empty(), "nothing to serve");
+    check(o.tcp_enabled || !o.rtu_device.empty() || o.tls_enabled, "nothing to serve");
+    check(!o.tls_enabled || (o.tls_port >= 1 && o.tls_port <= 65535), "tls port out of range");
+    check(!o.tls_enabled || (!o.tls_cert.empty() && !o.tls_key.empty() && !o.tls_ca.empty()), "tls without its files");
+    check(o.tls_default_role == "viewer" || o.tls_default_role == "operator" || o.tls_default_role == "engineer" ||
+              o.tls_default_role == "none",
+          "tls default role");
     for (const auto& entry : o.write_allow) check(server::parse_cidr(entry).has_value(), "bad --write-allow entry");
     check(o.backend == "sim" || o.backend == "gpiod", "backend");
   }

@@ -152,6 +152,16 @@ write(t, "bad_port", 'tcp = "127.0.0.1:70000"\n')
 write(t, "bad_cidr", 'write-allow = "10.0.0.0/33"\n')
 write(t, "same_units", 'unit = 5\nsim-unit = 5\n')
 write(t, "no_tcp_no_rtu", 'no-tcp = true\n')
+write(t, "tls_only", '''no-tcp = true
+tls = "0.0.0.0"
+tls-cert = "/etc/homingd/tls/server.crt"
+tls-key = "/etc/homingd/tls/server.key"
+tls-ca = "/etc/homingd/tls/ca.crt"
+tls-crl = "/etc/homingd/tls/crl.pem"
+tls-default-role = "operator"
+''')
+write(t, "tls_without_files", 'tls = "0.0.0.0:802"\n')
+write(t, "tls_files_without_tls", 'tls_ca = "ca.crt"\n')
 write(t, "broken_toml", 'tcp = "127.0.0.1\n[unterminated\n')
 write(t, "wrong_type", 'max-clients = "many"\n')
 write(t, "help_key", 'help = true\n')

@@ -52,6 +52,7 @@ enum class RefusalReason : std::uint8_t {
   loop_not_responding,  // simulator: the control loop did not take the write in time
   empty,                // a write of 0 items
   hard_stops_inverted,  // simulator: hard_stop_min must be below hard_stop_max
+  role,                 // Modbus/TCP Security: the client certificate's role does not allow the write
   no_axis_named,        // cmd.home_axes = 0
   axis_disabled,        // cmd.home_axes names an axis whose mode is disabled
   homing_blocked,       // cmd.home_axes while an alarm, e-stop, drive fault, lost link or missing permit blocks homing
@@ -83,6 +84,8 @@ inline constexpr RefusalReasonInfo kRefusalReasonInfo[] = {
      "simulator: the control loop did not take the write in time"},
     {RefusalReason::empty, ExceptionCode::illegal_data_value, "empty", "a write of 0 items"},
     {RefusalReason::hard_stops_inverted, ExceptionCode::illegal_data_value, "hard_stops_inverted", "simulator: hard_stop_min must be below hard_stop_max"},
+    {RefusalReason::role, ExceptionCode::illegal_function, "role",
+     "the role in this client's certificate does not allow the write (Modbus/TCP Security: viewer reads, operator also commands, engineer also settings)"},
     {RefusalReason::no_axis_named, ExceptionCode::illegal_data_value, "no_axis_named",
      "cmd.home_axes names no axis: set the bits of the axes to home"},
     {RefusalReason::axis_disabled, ExceptionCode::illegal_data_value, "axis_disabled",

@@ -22,6 +22,7 @@
 #include "start_up.hpp"
 #include "systemd_notify.hpp"
 #include "tcp_server.hpp"
+#include "tls_channel.hpp"
 
 namespace server {
 namespace {
@@ -86,8 +87,19 @@ ServiceConfig service_config(const Options& opt, const ControlLoop& loop, const 
 
 struct Transports {
   std::unique_ptr<TcpServer> tcp;
+  std::unique_ptr<TcpServer> tls;  // Modbus/TCP Security
   std::unique_ptr<RtuServer> rtu;
 };
+
+// The TLS listener: certificate, key, CA and CRL loaded, bound; the error names the file or address.
+std::expected<std::unique_ptr<TcpServer>, std::string> open_tls(const Options& opt, ModbusService& service) {
+  auto opener = TlsOpener::create(TlsConfig{{opt.tls_cert, opt.tls_key, opt.tls_ca, opt.tls_crl}, opt.tls_default_role});
+  if (!opener) return std::unexpected(opener.error());
+  auto server = std::make_unique<TcpServer>(ListenConfig{opt.tls_host, opt.tls_port, opt.max_clients, opt.idle_timeout_s},
+                                            service, std::move(*opener));
+  if (auto r = server->listen(); !r) return std::unexpected(r.error());
+  return server;
+}
 
 // Bound and opened, not yet serving; the error names the address or device.
 std::expected<Transports, std::string> open_transports(const Options& opt, ModbusService& service) {
@@ -95,6 +107,11 @@ std::expected<Transports, std::string> open_transports(const Options& opt, Modbu
   if (opt.tcp_enabled) {
     t.tcp = std::make_unique<TcpServer>(opt.tcp_host, opt.tcp_port, opt.max_clients, opt.idle_timeout_s, service);
     if (auto r = t.tcp->listen(); !r) return std::unexpected(r.error());
+  }
+  if (opt.tls_enabled) {
+    auto tls = open_tls(opt, service);
+    if (!tls) return std::unexpected(tls.error());
+    t.tls = std::move(*tls);
   }
   if (!opt.rtu_device.empty()) {
     t.rtu = std::make_unique<RtuServer>(RtuConfig{opt.rtu_device, opt.baud, opt.parity, opt.stop_bits, opt.unit_id},
@@ -108,6 +125,8 @@ std::expected<Transports, std::string> open_transports(const Options& opt, Modbu
 std::string announce(const Options& opt, const Transports& t, bool has_sim) {
   std::string where;
   if (t.tcp) where += "tcp " + opt.tcp_host + ":" + std::to_string(opt.tcp_port);
+  if (t.tls)
+    where += std::string(where.empty() ? "" : ", ") + "tls " + opt.tls_host + ":" + std::to_string(opt.tls_port);
   if (t.rtu) where += std::string(where.empty() ? "" : ", ") + "rtu " + opt.rtu_device + " " + std::to_string(opt.baud) +
                       " 8" + opt.parity + std::to_string(opt.stop_bits);
   const std::string sim_unit = has_sim ? ", simulator unit " + std::to_string(opt.sim_unit_id) : std::string();
@@ -123,11 +142,12 @@ void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, Modbu
            persistence::SettingsStore& store, Transports& t) {
   loop.start(opt.rt_priority);
   Monitor monitor(loop, service, &store, [&t]() -> std::uint32_t {
-    return t.tcp ? static_cast<std::uint32_t>(t.tcp->active_clients()) : 0;
+    return static_cast<std::uint32_t>((t.tcp ? t.tcp->active_clients() : 0) + (t.tls ? t.tls->active_clients() : 0));
   });
   monitor.start();
-  std::thread tcp_thread, rtu_thread;
+  std::thread tcp_thread, tls_thread, rtu_thread;
   if (t.tcp) tcp_thread = std::thread([&] { t.tcp->run(); });
+  if (t.tls) tls_thread = std::thread([&] { t.tls->run(); });
   if (t.rtu) rtu_thread = std::thread([&] { t.rtu->run(); });
   SystemdNotifier systemd([&loop] { return loop.snapshot().periods; });  // Type=notify, WatchdogSec=
   systemd.ready("listening on " + announce(opt, t, loop.has_sim()));
@@ -137,12 +157,15 @@ void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, Modbu
   systemd.stopping();
   spdlog::info("{} received: stopping motion and shutting down", sig == SIGINT ? "SIGINT" : "SIGTERM");
   if (t.tcp) t.tcp->stop();
+  if (t.tls) t.tls->stop();
   if (t.rtu) t.rtu->stop();
   if (tcp_thread.joinable()) tcp_thread.join();
+  if (tls_thread.joinable()) tls_thread.join();
   if (rtu_thread.joinable()) rtu_thread.join();
   loop.stop();
   monitor.stop();
   t.tcp.reset();
+  t.tls.reset();
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 #pragma once
 // Modbus serial line diagnostics (function 08) and their counters, one set per
-// transport (RTU and TCP count apart). Transports report what they see on the
+// transport (RTU, TCP and TLS count apart). Transports report what they see on the
 // line (bus_event); the service reports what it was asked and answered
 // (addressed, answered); answer() serves the sub-functions the module implements.
 #include <array>
@@ -42,7 +42,7 @@ class LineDiagnostics {
   struct Atomic {
     std::array<std::atomic<std::uint16_t>, 8> c{};
   };
-  std::array<Atomic, 2> by_transport_{};  // index: Transport
+  std::array<Atomic, kTransportCount> by_transport_{};  // index: Transport
 };
 
 }  // namespace server

@@ -16,8 +16,8 @@ StreamEnd serve_frames(MbapStream& stream, RequestHandler& handler, const Client
     const MbapHeader h = parse_mbap(header);
     if (!h.valid()) {
       handler.bus_event(client.transport, BusEvent::comm_error);
-      spdlog::warn("tcp: {}: MBAP protocol {} length {}; closing the connection", client.address, h.protocol,
-                   h.length);
+      spdlog::warn("{}: {}: MBAP protocol {} length {}; closing the connection", client.transport, client.address,
+                   h.protocol, h.length);
       return StreamEnd::malformed_header;
     }
     const auto pdu = std::span(frame).subspan(kMbapHeaderSize, h.pdu_size());

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "client_role.hpp"
 #include "device_identification.hpp"
 #include "file_record.hpp"
 #include "registers/lookup.hpp"
@@ -18,9 +19,10 @@ using registers::Table;
 
 Reply fail(std::uint8_t fc, ExceptionCode code) { return exception_reply(fc, static_cast<std::uint8_t>(code)); }
 
-// Who changed a setting, for the audit log.
+// Who changed a setting, for the audit log: over TLS also the certificate's subject and role.
 persistence::ChangeSource source_of(const ClientInfo& client) {
-  return persistence::ChangeSource{std::string(transport_name(client.transport)), client.address};
+  return persistence::ChangeSource{std::string(transport_name(client.transport)),
+                                   client.identity.empty() ? client.address : client.address + " " + client.identity};
 }
 
 std::string_view command_name(registers::Command c) {
@@ -84,7 +86,7 @@ ModbusService::ModbusService(ServiceConfig config, ControlLoop& loop, persistenc
 
 // RTU clients stand at the cabinet's serial line: the allow-list is for the network.
 bool ModbusService::may_write(const ClientInfo& client) const {
-  if (client.transport != Transport::tcp || config_.write_allow.empty()) return true;
+  if (!over_network(client.transport) || config_.write_allow.empty()) return true;
   return std::any_of(config_.write_allow.begin(), config_.write_allow.end(),
                      [&](const Cidr& c) { return c.contains(client.address); });
 }
@@ -109,8 +111,8 @@ void ModbusService::disconnected(const ClientInfo& client) {
 Reply ModbusService::handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) {
   if (pdu.empty()) return Reply{};
   // Over RTU a frame for a unit that is not here is another device's; over
-  // TCP every request is this server's (it answers 0B for unknown units).
-  const bool ours = client.transport == Transport::tcp || unit == 0 || unit == config_.unit_id ||
+  // TCP (plain or TLS) every request is this server's (it answers 0B for unknown units).
+  const bool ours = over_network(client.transport) || unit == 0 || unit == config_.unit_id ||
                     (config_.sim_unit_id && unit == *config_.sim_unit_id);
   if (ours) diagnostics_.addressed(client.transport);
   Reply reply = route(unit, pdu, client);
@@ -119,7 +121,7 @@ Reply ModbusService::handle(std::uint8_t unit, std::span<const std::uint8_t> pdu
 }
 
 Reply ModbusService::route(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) {
-  const bool tcp = client.transport == Transport::tcp;
+  const bool tcp = over_network(client.transport);
   if (unit == config_.unit_id) return dispatch(Target::module, pdu, client);
   // The Modbus TCP implementation guide: a device addressed by its IP address
   // answers unit id 0xFF, and 0 is accepted for direct addressing too (many
@@ -236,6 +238,12 @@ std::optional<Reply> ModbusService::write(Target target, std::uint8_t fc, const 
                   registers::Refusal::because(registers::RefusalReason::client_read_only, w.start,
                                               fmt::format("{} is not in --write-allow; nothing was written",
                                                           client.address)),
+                  client);
+  const auto unit = target == Target::module ? registers::Unit::module : registers::Unit::simulator;
+  if (auto refused = access_refusal(client, unit, w.table, w.start, w.values.size()))
+    return refuse(fc,
+                  registers::Refusal::because(registers::RefusalReason::role, w.start,
+                                              *refused + "; nothing was written"),
                   client);
   if (target == Target::module) return write_module(fc, w.table, w.start, w.values, client);
   return write_sim(fc, w.table, w.start, w.values, client);

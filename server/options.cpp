@@ -10,10 +10,20 @@
 namespace server {
 namespace {
 
-std::expected<void, std::string> split_host_port(const std::string& text, Options& o) {
+struct HostPort {
+  std::string host;
+  int port = 0;
+};
+
+// "HOST:PORT"; for --tls also "HOST" alone, on the default port.
+std::expected<HostPort, std::string> split_host_port(const std::string& option, const std::string& text,
+                                                     std::optional<int> default_port) {
   const auto colon = text.rfind(':');
+  if (default_port && colon == std::string::npos && !text.empty()) return HostPort{text, *default_port};
+  const std::string usage = default_port ? "HOST or HOST:PORT (for example 0.0.0.0:802)"
+                                         : "HOST:PORT (for example 127.0.0.1:1502)";
   if (colon == std::string::npos || colon == 0 || colon + 1 >= text.size())
-    return std::unexpected("--tcp: expected HOST:PORT (for example 127.0.0.1:1502), got '" + text + "'");
+    return std::unexpected(option + ": expected " + usage + ", got '" + text + "'");
   const std::string port = text.substr(colon + 1);
   int value = 0;
   try {
@@ -21,12 +31,25 @@ std::expected<void, std::string> split_host_port(const std::string& text, Option
     value = std::stoi(port, &used);
     if (used != port.size()) throw std::invalid_argument(port);
   } catch (const std::exception&) {
-    return std::unexpected("--tcp: port '" + port + "' is not a number (1..65535)");
+    return std::unexpected(option + ": port '" + port + "' is not a number (1..65535)");
   }
   if (value < 1 || value > 65535)
-    return std::unexpected("--tcp: port " + port + " is outside 1..65535");
-  o.tcp_host = text.substr(0, colon);
-  o.tcp_port = value;
+    return std::unexpected(option + ": port " + port + " is outside 1..65535");
+  return HostPort{text.substr(0, colon), value};
+}
+
+// --tls and its files come together: the files alone would serve nothing.
+std::expected<void, std::string> check_tls(const Options& o, const CLI::App& app) {
+  if (!o.tls_enabled) {
+    for (const char* name : {"--tls-cert", "--tls-key", "--tls-ca", "--tls-crl", "--tls-default-role"})
+      if (app.get_option(name)->count() > 0)
+        return std::unexpected(std::string(name) + " is set but --tls is not: add --tls HOST[:PORT] to serve "
+                               "Modbus/TCP Security");
+    return {};
+  }
+  if (o.tls_cert.empty() || o.tls_key.empty() || o.tls_ca.empty())
+    return std::unexpected("--tls needs --tls-cert, --tls-key and --tls-ca: the module's certificate, its key, and "
+                           "the CA that signs client certificates");
   return {};
 }
 
@@ -91,6 +114,7 @@ struct OptionParser::Table {
   CLI::App app{"homingd: Modbus TCP/RTU homing module (simulator or GPIO backend)", "homingd"};
   Options o;
   std::string tcp = "127.0.0.1:1502";
+  std::string tls;  // empty: no Modbus/TCP Security
   std::string parity = "E";
   std::string word_order = "high-first";
   // A bool flag: CLI11 2.1's integer flag callback throws std::invalid_argument
@@ -102,6 +126,7 @@ struct OptionParser::Table {
   void reset() {
     o = Options{};
     tcp = "127.0.0.1:1502";
+    tls.clear();
     parity = "E";
     word_order = "high-first";
     no_tcp = false;
@@ -124,7 +149,18 @@ OptionParser::Table::Table() {
   app.set_config("--config", "", "TOML config file; every option below can be a key in it")
       ->check(CLI::ExistingFile);
   app.add_option("--tcp", tcp, "Modbus TCP listen address HOST:PORT")->capture_default_str();
-  app.add_flag("--no-tcp,--no_tcp", no_tcp, "Serve RTU only");
+  app.add_flag("--no-tcp,--no_tcp", no_tcp, "No plain Modbus TCP: serve RTU and/or TLS only");
+  app.add_option("--tls", tls,
+                 "Modbus/TCP Security (TLS, client certificates) listen address HOST[:PORT], port 802 when not "
+                 "given; served beside TCP and RTU");
+  app.add_option("--tls-cert,--tls_cert", o.tls_cert, "The module's TLS certificate (PEM)");
+  app.add_option("--tls-key,--tls_key", o.tls_key, "The private key of --tls-cert (PEM, no pass phrase)");
+  app.add_option("--tls-ca,--tls_ca", o.tls_ca, "The CA certificate that signs client certificates (PEM)");
+  app.add_option("--tls-crl,--tls_crl", o.tls_crl, "Revoked client certificates (PEM CRL of that CA)");
+  app.add_option("--tls-default-role,--tls_default_role", o.tls_default_role,
+                 "Role of a client certificate without the role extension; none: refuse it")
+      ->check(CLI::IsMember({"viewer", "operator", "engineer", "none"}))
+      ->capture_default_str();
   app.add_option("--rtu", o.rtu_device, "Serial device for Modbus RTU (e.g. /dev/ttyUSB0)");
   app.add_option("--baud", o.baud, "RTU baud rate")
       ->check(CLI::IsMember({1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200}))
@@ -217,14 +253,25 @@ std::expected<ParseOutcome, std::string> OptionParser::parse(int argc, char** ar
     if (auto r = check_config_file(o.config_path, app); !r) return std::unexpected(r.error());
   }
   if (o.tcp_enabled) {
-    if (auto r = split_host_port(t.tcp, o); !r) return std::unexpected(r.error());
+    auto where = split_host_port("--tcp", t.tcp, std::nullopt);
+    if (!where) return std::unexpected(where.error());
+    o.tcp_host = where->host;
+    o.tcp_port = where->port;
   }
+  if (!t.tls.empty()) {
+    auto where = split_host_port("--tls", t.tls, 802);
+    if (!where) return std::unexpected(where.error());
+    o.tls_enabled = true;
+    o.tls_host = where->host;
+    o.tls_port = where->port;
+  }
+  if (auto r = check_tls(o, app); !r) return std::unexpected(r.error());
   o.parity = t.parity.empty() ? 'E' : t.parity[0];
   o.word_order = t.word_order == "low-first" ? registers::WordOrder::low_first : registers::WordOrder::high_first;
   for (const auto& entry : o.write_allow)
     if (!parse_cidr(entry)) return std::unexpected("--write-allow: '" + entry + "' is not an IPv4 address or CIDR (e.g. 10.0.0.0/24)");
-  if (!o.tcp_enabled && o.rtu_device.empty())
-    return std::unexpected("--no-tcp needs --rtu DEVICE: with neither, nothing would be served");
+  if (!o.tcp_enabled && o.rtu_device.empty() && !o.tls_enabled)
+    return std::unexpected("--no-tcp needs --rtu DEVICE or --tls HOST[:PORT]: with neither, nothing would be served");
   if (o.sim_unit_id == o.unit_id && o.backend == "sim")
     return std::unexpected("--sim-unit " + std::to_string(o.sim_unit_id) + " must differ from --unit " +
                            std::to_string(o.unit_id));

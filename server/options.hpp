@@ -35,6 +35,15 @@ struct Options {
   // Access: TCP clients allowed to write (empty = all); others may only read.
   std::vector<std::string> write_allow;  // "192.168.1.10", "10.0.0.0/24"
   int unlock_code = 0;                   // 0 = no settings lock
+  // Modbus/TCP Security (TLS) beside TCP and RTU: off unless --tls is given.
+  bool tls_enabled = false;
+  std::string tls_host;
+  int tls_port = 802;       // mbaps
+  std::string tls_cert;     // the module's certificate (PEM)
+  std::string tls_key;      // its private key
+  std::string tls_ca;       // the CA that signs client certificates
+  std::string tls_crl;      // revoked client certificates; empty: none
+  std::string tls_default_role = "viewer";  // of a certificate without a role; "none": refused
   // Device identity (FC 43, FC 17); empty: the built-in text.
   std::string vendor_name;
   std::string vendor_url;

@@ -2,32 +2,56 @@
 // What a transport hands a request to: the unit id, the PDU and who sent it.
 #include <fmt/format.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include "pdu.hpp"
 
 namespace server {
 
 // Where a request came from: the rules differ (unit ids 0 and 0xFF, the
-// --write-allow list, broadcasts, silence for unknown units).
-enum class Transport : std::uint8_t { tcp, rtu };
+// --write-allow list, broadcasts, silence for unknown units). tls is
+// Modbus/TCP Security: Modbus TCP inside TLS, the client known by its certificate.
+enum class Transport : std::uint8_t { tcp, rtu, tls };
+inline constexpr std::size_t kTransportCount = 3;  // arrays indexed by Transport
 
-// "tcp", "rtu": for the log and the audit log's transport column.
+// "tcp", "rtu", "tls": for the log and the audit log's transport column.
 constexpr std::string_view transport_name(Transport t) {
   switch (t) {
     case Transport::tcp: return "tcp";
     case Transport::rtu: return "rtu";
+    case Transport::tls: return "tls";
   }
   return "?";
 }
 
+// Modbus TCP framing and a network address: plain or inside TLS.
+constexpr bool over_network(Transport t) { return t != Transport::rtu; }
+
+// What a client may change, each level including the ones before it. Plain
+// TCP and RTU clients have `settings` (--write-allow and the unlock code still
+// apply to them); a TLS client what its certificate's role grants
+// (server/client_role.hpp).
+enum class Access : std::uint8_t {
+  read_only,  // reads only
+  commands,   // also commands, the heartbeat, move targets, the homing permit
+  settings,   // also settings, the settings lock and the simulator unit
+};
+
 struct ClientInfo {
+  ClientInfo() = default;
+  ClientInfo(std::uint64_t id, Transport transport, std::string address)
+      : id(id), transport(transport), address(std::move(address)) {}
+
   std::uint64_t id = 0;                 // unique per connection (jog ownership)
   Transport transport = Transport::tcp;
   std::string address;                  // "127.0.0.1:40122" or "unit 5"
+  Access access = Access::settings;
+  std::string identity;                 // TLS: "CN=hmi-3,O=Plant (role operator)"; else empty
 };
 
 // What a transport saw on its line, for the diagnostics counters (FC 08).

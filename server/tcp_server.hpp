@@ -1,23 +1,49 @@
 #pragma once
-// Modbus TCP: one thread per connection so that a slow or stalled client never
-// delays the others; frames delimited by the MBAP length field as the standard
-// says (libmodbus 3.1.6 frames TCP by function code and ignores that length,
-// so one odd request would desynchronise the stream).
+// Modbus TCP, plain or inside TLS: one thread per connection so that a slow
+// or stalled client (or a TLS handshake) never delays the others; frames
+// delimited by the MBAP length field as the standard says (libmodbus 3.1.6
+// frames TCP by function code and ignores that length, so one odd request
+// would desynchronise the stream).
 #include <atomic>
 #include <cstdint>
 #include <expected>
 #include <list>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
 
+#include "byte_channel.hpp"
 #include "request_handler.hpp"
 
 namespace server {
 
+// What a listener makes of an accepted connection before requests flow, on
+// the connection's own thread: plain TCP takes the socket as it is; TLS
+// (server/tls_channel.hpp) runs the handshake and learns who the client is.
+class ChannelOpener {
+ public:
+  virtual ~ChannelOpener() = default;
+  virtual Transport transport() const = 0;
+  // The channel to serve, or why the connection is refused (logged, then closed).
+  // May fill in client.access and client.identity.
+  virtual std::expected<std::unique_ptr<ByteChannel>, std::string> open(int fd, ClientInfo& client,
+                                                                         const std::atomic<bool>& stop) = 0;
+};
+
+struct ListenConfig {
+  std::string host;
+  int port = 0;
+  int max_clients = 32;
+  int idle_timeout_s = 60;
+};
+
 class TcpServer {
  public:
+  // Plain Modbus TCP.
   TcpServer(std::string host, int port, int max_clients, int idle_timeout_s, RequestHandler& handler);
+  // Each connection through `opener` first (Modbus/TCP Security: a TlsOpener).
+  TcpServer(ListenConfig config, RequestHandler& handler, std::unique_ptr<ChannelOpener> opener);
   ~TcpServer();
   TcpServer(const TcpServer&) = delete;
   TcpServer& operator=(const TcpServer&) = delete;
@@ -38,12 +64,11 @@ class TcpServer {
   };
   void serve(Connection& connection, ClientInfo info);
   void reap(bool all);
+  std::string_view name() const;  // "tcp", "tls": for the log
 
-  std::string host_;
-  int port_;
-  int max_clients_;
-  int idle_timeout_s_;
+  ListenConfig config_;
   RequestHandler& handler_;
+  std::unique_ptr<ChannelOpener> opener_;
   int listen_fd_ = -1;
   std::atomic<bool> stop_{false};
   std::atomic<int> active_{0};

@@ -15,7 +15,7 @@ if(NOT SOURCE_DIR)
 endif()
 
 # The project's parts (top-level directories whose headers code may include).
-set(parts homing registers persistence server tools bench fuzz tests)
+set(parts homing registers persistence server tools bench fuzz tests tls)
 # What each checked layer may include, itself first.
 set(may_include_homing homing)
 set(may_include_registers registers homing)

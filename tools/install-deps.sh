@@ -8,6 +8,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libmodbus-dev libgpiod-dev libsqlite3-dev sqlite3 libsystemd-dev
   catch2 libcli11-dev libtomlplusplus-dev libspdlog-dev libfmt-dev
+  libssl-dev openssl
   nlohmann-json3-dev libbenchmark-dev
   mbpoll socat python3-pymodbus python3-serial python3-serial-asyncio python3-yaml
   clang-16 libclang-rt-16-dev

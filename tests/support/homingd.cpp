@@ -18,6 +18,7 @@ Homingd::Homingd(DaemonOptions options) : options_(std::move(options)), dir_(opt
   std::string last_error;
   for (int attempt = 0; attempt < 5; ++attempt) {
     port_ = !options_.tcp ? 0 : options_.port != 0 ? options_.port : free_port();
+    tls_port_ = options_.tls.empty() ? 0 : free_port();
     if (try_start(last_error)) return;
   }
   throw std::runtime_error("homingd did not start: " + last_error);
@@ -46,6 +47,10 @@ bool Homingd::try_start(std::string& error) {
   }
   argv.insert(argv.end(), {"--db", options_.db, "--time-scale", std::to_string(options_.time_scale)});
   argv.insert(argv.end(), options_.extra.begin(), options_.extra.end());
+  if (!options_.tls.empty()) {
+    argv.insert(argv.end(), {"--tls", "127.0.0.1:" + std::to_string(tls_port_)});
+    argv.insert(argv.end(), options_.tls.begin(), options_.tls.end());
+  }
 
   const Spawned child = spawn(argv, Output::pipe(), Output::append_to(log_path()));
   std::string got;

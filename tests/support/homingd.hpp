@@ -21,6 +21,9 @@ struct DaemonOptions {
   std::string db;                    // empty: a fresh database in the daemon's temp dir
   double time_scale = 10;
   std::vector<std::string> extra;    // more options (--rtu ..., --max-clients ...)
+  // Not empty: Modbus/TCP Security too, --tls 127.0.0.1:<a free port> followed
+  // by these options (tls_server_options() of tests/support/test_pki.hpp).
+  std::vector<std::string> tls;
   bool tcp = true;
   std::chrono::milliseconds start_timeout = std::chrono::seconds(10);
   std::string temp_prefix = "homingd";  // name of its temporary directory
@@ -36,6 +39,7 @@ class Homingd {
   Homingd& operator=(const Homingd&) = delete;
 
   int port() const { return port_; }
+  int tls_port() const { return tls_port_; }
   pid_t pid() const { return pid_; }
   const std::string& db() const { return options_.db; }
   const std::string& listening_line() const { return line_; }
@@ -54,6 +58,7 @@ class Homingd {
   DaemonOptions options_;
   TempDir dir_;
   int port_ = 0;
+  int tls_port_ = 0;
   pid_t pid_ = -1;
   int out_fd_ = -1;  // kept open: homingd's stdout never sees a closed pipe
   std::string line_;

@@ -10,6 +10,7 @@
 #include <cstring>
 
 #include "registers/lookup.hpp"
+#include "tls_tunnel.hpp"
 
 namespace homingctl {
 
@@ -73,6 +74,10 @@ std::uint16_t crc16(const std::uint8_t* p, std::size_t n) {
 Connection::Connection(const ConnectionOptions& options) : options_(options) {
   if (!options_.rtu.empty()) {
     ctx_ = modbus_new_rtu(options_.rtu.c_str(), options_.baud, options_.parity, 8, options_.stop_bits);
+  } else if (!options_.tls.empty()) {
+    tunnel_ = std::make_unique<TlsTunnel>(
+        TlsOptions{options_.tls, options_.cert, options_.key, options_.ca, std::max(3000, options_.timeout_ms)});
+    ctx_ = modbus_new_tcp("127.0.0.1", 802);  // never connects: its socket is the tunnel's
   } else {
     auto [host, port] = split_host_port(options_.tcp);
     ctx_ = modbus_new_tcp(host.c_str(), port);
@@ -80,7 +85,9 @@ Connection::Connection(const ConnectionOptions& options) : options_(options) {
   if (!ctx_) throw LinkError(fmt::format("cannot set up {}: {}", describe(), modbus_strerror(errno)));
   const int ms = std::max(1, options_.timeout_ms);
   modbus_set_response_timeout(ctx_, static_cast<std::uint32_t>(ms / 1000), static_cast<std::uint32_t>((ms % 1000) * 1000));
-  if (modbus_connect(ctx_) != 0) {
+  if (tunnel_) {
+    modbus_set_socket(ctx_, tunnel_->take_modbus_end());
+  } else if (modbus_connect(ctx_) != 0) {
     const int e = errno;
     modbus_free(ctx_);
     ctx_ = nullptr;
@@ -100,6 +107,7 @@ std::string Connection::describe() const {
   if (!options_.rtu.empty())
     return fmt::format("rtu {} {} {}{}{} unit {}", options_.rtu, options_.baud, 8, options_.parity, options_.stop_bits,
                        options_.unit);
+  if (!options_.tls.empty()) return fmt::format("tls {} unit {}", options_.tls, options_.unit);
   return fmt::format("tcp {} unit {}", options_.tcp, options_.unit);
 }
 
@@ -113,7 +121,12 @@ void Connection::fail(const std::string& what, int err) {
     throw ModbusException(ex, fmt::format("{}: {}", what, exception_sentence(ex)));
   }
   if (is_rtu()) modbus_flush(ctx_);
-  throw LinkError(fmt::format("{}: no valid answer from {}: {}", what, describe(), modbus_strerror(err)));
+  throw LinkError(fmt::format("{}: no valid answer from {}: {}{}", what, describe(), modbus_strerror(err), tls_failure()));
+}
+
+std::string Connection::tls_failure() const {
+  const std::string why = tunnel_ ? tunnel_->failure() : std::string();
+  return why.empty() ? why : " (" + why + ")";
 }
 
 std::vector<std::uint16_t> Connection::read_words(Unit unit, Table table, int start, int count) {
@@ -192,8 +205,9 @@ int Connection::write_words(Unit unit, int start, std::span<const std::uint16_t>
   const int err = errno;
   if (const int ex = exception_of(err)) return no_answer_at_unit(fmt::format("writing holding registers {}", start), ex);
   if (is_rtu()) modbus_flush(ctx_);
-  throw LinkError(fmt::format("writing holding registers {}..{}: no valid answer from {}: {}", start,
-                              start + static_cast<int>(words.size()) - 1, describe(), modbus_strerror(err)));
+  throw LinkError(fmt::format("writing holding registers {}..{}: no valid answer from {}: {}{}", start,
+                              start + static_cast<int>(words.size()) - 1, describe(), modbus_strerror(err),
+                              tls_failure()));
 }
 
 int Connection::write_bit(Unit unit, int address, bool on) {
@@ -203,7 +217,8 @@ int Connection::write_bit(Unit unit, int address, bool on) {
   const int err = errno;
   if (const int ex = exception_of(err)) return no_answer_at_unit(fmt::format("writing coil {}", address), ex);
   if (is_rtu()) modbus_flush(ctx_);
-  throw LinkError(fmt::format("writing coil {}: no valid answer from {}: {}", address, describe(), modbus_strerror(err)));
+  throw LinkError(fmt::format("writing coil {}: no valid answer from {}: {}{}", address, describe(),
+                              modbus_strerror(err), tls_failure()));
 }
 
 int Connection::write(const Register& reg, std::int64_t raw) {

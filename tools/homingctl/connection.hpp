@@ -1,5 +1,6 @@
 #pragma once
-// A Modbus client connection (libmodbus, TCP or RTU) that knows the register
+// A Modbus client connection (libmodbus: TCP, RTU, or TCP inside TLS through
+// a TlsTunnel) that knows the register
 // table: reads and writes by register, grouped into few requests (a slow RTU
 // line matters), FC 20 file records framed by hand (libmodbus has no client
 // call for them and cannot size their response).
@@ -7,6 +8,7 @@
 
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -17,9 +19,13 @@
 
 namespace homingctl {
 
+class TlsTunnel;
+
 struct ConnectionOptions {
   std::string tcp = "127.0.0.1:1502";  // HOST:PORT
   std::string rtu;                     // serial device; wins over tcp when set
+  std::string tls;                     // Modbus/TCP Security HOST[:PORT]; wins over tcp when set
+  std::string cert, key, ca;           // for tls: this client's certificate and key, the module's CA
   int baud = 19200;
   char parity = 'E';
   int stop_bits = 1;
@@ -76,8 +82,10 @@ class Connection {
  private:
   void select(registers::Unit unit);
   [[noreturn]] void fail(const std::string& what, int err);
+  std::string tls_failure() const;  // " (why the module ended the TLS connection)" or ""
 
   ConnectionOptions options_;
+  std::unique_ptr<TlsTunnel> tunnel_;
   modbus_t* ctx_ = nullptr;
   std::uint16_t tid_ = 0x4000;
 };

@@ -1,4 +1,5 @@
-// homingctl: the operator's command-line client of homingd (Modbus TCP or RTU).
+// homingctl: the operator's command-line client of homingd (Modbus TCP, RTU, or
+// Modbus/TCP Security with --tls).
 // It knows the register table by name and unit. Exit codes: 0 ok, 1 the
 // operation failed (alarm, refused command or write: the reason is printed),
 // 2 usage error, 3 cannot connect / no answer. The subcommands are in
@@ -21,6 +22,10 @@ void add_global_options(CLI::App& app, Context& ctx) {
                  "homingd config file whose tcp, unit, sim_unit, word_order and db are the defaults here "
                  "(default: $HOMINGD_CONFIG, else /etc/homingd/homingd.toml when it exists)");
   app.add_option("--rtu", co.rtu, "Modbus RTU serial device (instead of TCP)");
+  app.add_option("--tls", co.tls, "Modbus/TCP Security address HOST[:PORT] (port 802 when not given), instead of TCP");
+  app.add_option("--cert", co.cert, "with --tls: this client's certificate (PEM; its role decides what it may do)");
+  app.add_option("--key", co.key, "with --tls: the private key of --cert (PEM)");
+  app.add_option("--ca", co.ca, "with --tls: the CA certificate that signed the module's certificate (PEM)");
   app.add_option("--baud", co.baud, "RTU baud rate")->capture_default_str();
   app.add_option("--parity", ctx.parity, "RTU parity N|E|O")->check(CLI::IsMember({"N", "E", "O"}))->capture_default_str();
   app.add_option("--stop-bits", co.stop_bits, "RTU stop bits")->check(CLI::IsMember({1, 2}))->capture_default_str();
@@ -43,7 +48,7 @@ bool apply_daemon_config(CLI::App& app, Context& ctx) {
     return !choice.named;
   }
   if (*local) {
-    const GivenOptions given{app.get_option("--tcp")->count() > 0 || !ctx.co.rtu.empty(),
+    const GivenOptions given{app.get_option("--tcp")->count() > 0 || !ctx.co.rtu.empty() || !ctx.co.tls.empty(),
                              app.get_option("--unit")->count() > 0, app.get_option("--sim-unit")->count() > 0,
                              app.get_option("--word-order")->count() > 0,
                              app.get_subcommand("history")->get_option("--db")->count() > 0};

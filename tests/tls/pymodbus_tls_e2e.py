@@ -1,0 +1,267 @@
+#!/usr/bin/python3
+"""Modbus/TCP Security end-to-end with pymodbus 3.0's TLS client (Debian's
+python3-pymodbus, run with /usr/bin/python3), an implementation independent of
+OpenSSL's C API as homingd uses it and of libmodbus.
+
+Makes certificates with the README's recipe (tools/tls/make-certs.sh init
+--test-set) in a temporary directory, starts homingd with --tls on a free
+127.0.0.1 port, then: an engineer reads and writes a setting; an operator can
+home but a settings write gets exception 01 and changes nothing; a viewer
+only reads; no client certificate, a certificate from another CA, an expired
+one and plain Modbus TCP on the TLS port are refused at the handshake, and
+the log says why. Exits non-zero on the first failure. Every wait is bounded.
+
+pymodbus 3.0's TLS clients default to their own "TLS framer", which sends a
+bare PDU with no MBAP header; the Modbus/TCP Security protocol keeps the MBAP
+header inside TLS, so the client is given the socket framer. The asyncio
+client is used: the synchronous one reads a reply in two parts and waits in
+select() for the second, which OpenSSL has already taken off the socket.
+"""
+import argparse
+import asyncio
+import csv
+import os
+import select
+import signal
+import socket
+import ssl
+import subprocess
+import sys
+import tempfile
+import time
+import types
+
+try:
+    import serial_asyncio  # noqa: F401  (pymodbus 3.0 imports it even for TCP)
+except ImportError:
+    _stub = types.ModuleType("serial_asyncio")
+    _stub.create_serial_connection = None
+    sys.modules["serial_asyncio"] = _stub
+
+try:
+    from pymodbus.client import AsyncModbusTlsClient, ModbusTcpClient
+    from pymodbus.framer.socket_framer import ModbusSocketFramer
+    from pymodbus.pdu import ExceptionResponse
+except ImportError as e:  # a missing tool fails the test, never skips it
+    print(f"FAIL: pymodbus is not importable ({e}); run tools/install-deps.sh", file=sys.stderr)
+    sys.exit(1)
+
+failures = []
+
+
+def check(cond, what):
+    print(f"{'ok  ' if cond else 'FAIL'} {what}")
+    if not cond:
+        failures.append(what)
+    return cond
+
+
+def free_port():
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
+
+
+class Map:
+    def __init__(self, path):
+        with open(path, newline="") as f:
+            self.rows = {row["name"]: row for row in csv.DictReader(f)}
+
+    def address(self, name):
+        return int(self.rows[name]["address"])
+
+
+class Daemon:
+    def __init__(self, exe, pki, db):
+        last = ""
+        for _ in range(5):
+            self.port, self.tls_port = free_port(), free_port()
+            self.log_path = db + ".log"
+            self.log = open(self.log_path, "wb")
+            self.proc = subprocess.Popen(
+                [exe, "--tcp", f"127.0.0.1:{self.port}", "--db", db, "--time-scale", "10",
+                 "--tls", f"127.0.0.1:{self.tls_port}", "--tls-cert", f"{pki}/server.crt",
+                 "--tls-key", f"{pki}/server.key", "--tls-ca", f"{pki}/ca.crt", "--tls-crl", f"{pki}/crl.pem"],
+                stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=self.log)
+            line = b""
+            deadline = time.monotonic() + 10
+            while time.monotonic() < deadline and b"\n" not in line:
+                ready, _, _ = select.select([self.proc.stdout], [], [], 0.2)
+                if ready:
+                    chunk = os.read(self.proc.stdout.fileno(), 512)
+                    if not chunk:
+                        break
+                    line += chunk
+            if b"listening" in line:
+                return
+            last = line.decode(errors="replace")
+            self.kill()
+        raise RuntimeError(f"homingd did not start: {last!r}")
+
+    def log_has(self, *parts, timeout=5):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            with open(self.log_path, errors="replace") as f:
+                if any(all(p in line for p in parts) for line in f):
+                    return True
+            time.sleep(0.05)
+        return False
+
+    def stop(self):
+        self.proc.send_signal(signal.SIGTERM)
+        try:
+            return self.proc.wait(15)
+        except subprocess.TimeoutExpired:
+            self.kill()
+            return None
+
+    def kill(self):
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait(5)
+
+
+def context(pki, name):
+    """What a plant's client does: verify the module against the CA, show its own certificate."""
+    ctx = ssl.create_default_context(ssl.Purpose.SERVER_AUTH, cafile=f"{pki}/ca.crt")
+    ctx.minimum_version = ssl.TLSVersion.TLSv1_2
+    if name:
+        ctx.load_cert_chain(f"{pki}/{name}.crt", f"{pki}/{name}.key")
+    return ctx
+
+
+def as_client(daemon, pki, name, actions, timeout=20):
+    """Runs actions(client) on a new TLS connection with this certificate; None when it did not connect."""
+    async def session():
+        c = AsyncModbusTlsClient("127.0.0.1", port=daemon.tls_port, framer=ModbusSocketFramer,
+                                 sslctx=context(pki, name), timeout=2, retries=0)
+        await c.connect()
+        try:
+            return await actions(c) if c.connected else None
+        finally:
+            await c.close()
+    return asyncio.run(asyncio.wait_for(session(), timeout))
+
+
+def refused(daemon, pki, name):
+    """The module refuses this certificate: the connection fails, or (TLS 1.3: the client's side of the
+    handshake ends before the module has checked its certificate) the first request gets no answer."""
+    async def read_state(c):
+        return await c.read_input_registers(1, 1, slave=1)
+    try:
+        rsp = as_client(daemon, pki, name, read_state, timeout=10)
+    except Exception as e:  # pylint: disable=broad-except
+        print(f"     ({name or 'no certificate'}: {type(e).__name__}: {e})")
+        return True
+    return rsp is None or (rsp.isError() and not isinstance(rsp, ExceptionResponse))
+
+
+def is_exception(rsp, code):
+    return isinstance(rsp, ExceptionResponse) and rsp.exception_code == code
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--homingd", required=True)
+    ap.add_argument("--make-certs", required=True)
+    ap.add_argument("--map", required=True)
+    args = ap.parse_args()
+    regs = Map(args.map)
+    feed = regs.address("axis.x.seek_feedrate")
+
+    with tempfile.TemporaryDirectory(prefix="pymodbus-tls-") as tmp:
+        pki = os.path.join(tmp, "pki")
+        subprocess.run(["bash", args.make_certs, "init", pki, "--test-set"], check=True, timeout=120,
+                       stdout=subprocess.DEVNULL)
+        d = Daemon(args.homingd, pki, os.path.join(tmp, "settings.db"))
+        try:
+            async def engineer(c):
+                before = await c.read_holding_registers(feed, 1, slave=1)
+                written = await c.write_register(feed, 1200, slave=1)
+                after = await c.read_holding_registers(feed, 1, slave=1)
+                return before, written, after
+            got = as_client(d, pki, "engineer", engineer)
+            check(got is not None, "engineer: TLS connection")
+            if got:
+                before, written, after = got
+                check(not before.isError() and before.registers == [1000], f"engineer reads axis.x.seek_feedrate: {before}")
+                check(not written.isError(), f"engineer writes axis.x.seek_feedrate: {written}")
+                check(not after.isError() and after.registers == [1200], f"engineer reads back 1200: {after}")
+
+            async def operator(c):
+                refused_write = await c.write_register(feed, 1500, slave=1)
+                unchanged = await c.read_holding_registers(feed, 1, slave=1)
+                home = await c.write_coil(regs.address("cmd.home_all"), True, slave=1)
+                started = False
+                deadline = time.monotonic() + 5
+                while time.monotonic() < deadline and not started:
+                    state = await c.read_input_registers(regs.address("status.state"), 1, slave=1)
+                    homing = await c.read_discrete_inputs(regs.address("status.homing"), 1, slave=1)
+                    started = (not homing.isError() and homing.bits[0]) or (not state.isError() and state.registers[0] == 2)
+                    await asyncio.sleep(0.05)
+                return refused_write, unchanged, home, started
+            got = as_client(d, pki, "operator", operator)
+            check(got is not None, "operator: TLS connection")
+            if got:
+                refused_write, unchanged, home, started = got
+                check(is_exception(refused_write, 1), f"operator settings write: exception 01: {refused_write}")
+                check(not unchanged.isError() and unchanged.registers == [1200],
+                      f"operator: the setting did not change: {unchanged}")
+                check(not home.isError(), f"operator: cmd.home_all accepted: {home}")
+                check(started, "operator: the homing cycle started")
+
+            async def viewer(c):
+                read = await c.read_holding_registers(feed, 1, slave=1)
+                command = await c.write_coil(regs.address("cmd.abort"), True, slave=1)
+                heartbeat = await c.write_register(regs.address("host.heartbeat"), 5, slave=1)
+                return read, command, heartbeat
+            got = as_client(d, pki, "viewer", viewer)
+            check(got is not None, "viewer: TLS connection")
+            if got:
+                read, command, heartbeat = got
+                check(not read.isError() and read.registers == [1200], f"viewer reads: {read}")
+                check(is_exception(command, 1), f"viewer command: exception 01: {command}")
+                check(is_exception(heartbeat, 1), f"viewer heartbeat: exception 01: {heartbeat}")
+
+            check(not refused(d, pki, "engineer"), "the refusal check passes an engineer (its control case)")
+            check(refused(d, pki, ""), "no client certificate: refused")
+            check(d.log_has("tls: refused 127.0.0.1:", "the client sent no certificate"), "log: no certificate")
+            check(refused(d, pki, "other-ca-engineer"), "certificate from another CA: refused")
+            check(d.log_has("tls: refused", "CN=other-ca-engineer", "not signed by the CA of --tls-ca"),
+                  "log: another CA, with the subject")
+            check(refused(d, pki, "expired"), "expired certificate: refused")
+            check(d.log_has("tls: refused", "CN=expired", "certificate has expired"), "log: expired")
+            check(refused(d, pki, "revoked"), "revoked certificate: refused")
+            check(d.log_has("tls: refused", "CN=revoked", "certificate revoked"), "log: revoked")
+
+            control = ModbusTcpClient("127.0.0.1", port=d.port, timeout=1, retries=0)
+            rsp = control.read_input_registers(1, 1, slave=1) if control.connect() else None
+            control.close()
+            check(rsp is not None and not rsp.isError(), f"plain Modbus TCP on the TCP port: answered: {rsp}")
+            plain = ModbusTcpClient("127.0.0.1", port=d.tls_port, timeout=1, retries=0)
+            try:
+                ok = plain.connect()
+                rsp = plain.read_input_registers(1, 1, slave=1) if ok else None
+                check(rsp is None or (rsp.isError() and not isinstance(rsp, ExceptionResponse)),
+                      f"plain Modbus TCP on the TLS port: no answer: {rsp}")
+            except Exception as e:  # pylint: disable=broad-except
+                check(True, f"plain Modbus TCP on the TLS port: no answer ({type(e).__name__})")
+            finally:
+                plain.close()
+            check(d.log_has("tls: refused", "not a TLS handshake"), "log: plain Modbus TCP on the TLS port")
+        finally:
+            rc = d.stop()
+            check(rc == 0, f"homingd stopped cleanly (exit {rc})")
+            if failures:
+                with open(d.log_path, errors="replace") as f:
+                    print("--- homingd log ---\n" + f.read())
+    if failures:
+        print(f"{len(failures)} failure(s)")
+        sys.exit(1)
+    print("all passed")
+
+
+if __name__ == "__main__":
+    main()
