@@ -13,23 +13,13 @@ cycle. Exits non-zero on the first failure. Every wait is bounded.
 import argparse
 import csv
 import os
-import select
-import signal
 import socket
-import subprocess
 import sys
 import tempfile
 import time
-import types
 
-# Debian's pymodbus 3.0 imports serial_asyncio for its serial clients even
-# when only TCP is used; python3-serial-asyncio may be absent.
-try:
-    import serial_asyncio  # noqa: F401
-except ImportError:
-    _stub = types.ModuleType("serial_asyncio")
-    _stub.create_serial_connection = None
-    sys.modules["serial_asyncio"] = _stub
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from homingd_py import Daemon, check, failures  # noqa: E402  (also stubs serial_asyncio)
 
 try:
     from pymodbus.client import ModbusTcpClient
@@ -52,65 +42,6 @@ class Map:
 
     def __getitem__(self, name):
         return self.rows[name]
-
-
-def free_port():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
-
-
-class Daemon:
-    def __init__(self, exe, db, time_scale=10):
-        self.proc = None
-        last = ""
-        for _ in range(5):
-            self.port = free_port()
-            self.log = tempfile.TemporaryFile()
-            self.proc = subprocess.Popen(
-                [exe, "--tcp", f"127.0.0.1:{self.port}", "--db", db, "--time-scale", str(time_scale)],
-                stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=self.log)
-            line = b""
-            deadline = time.monotonic() + 10
-            while time.monotonic() < deadline and b"\n" not in line:
-                ready, _, _ = select.select([self.proc.stdout], [], [], 0.2)
-                if ready:
-                    chunk = os.read(self.proc.stdout.fileno(), 512)
-                    if not chunk:
-                        break
-                    line += chunk
-            if b"listening" in line:
-                return
-            last = line.decode(errors="replace")
-            self.kill()
-        raise RuntimeError(f"homingd did not start: {last!r}")
-
-    def stop(self, sig=signal.SIGTERM, timeout=15):
-        self.proc.send_signal(sig)
-        try:
-            return self.proc.wait(timeout)
-        except subprocess.TimeoutExpired:
-            self.kill()
-            return None
-
-    def kill(self):
-        if self.proc and self.proc.poll() is None:
-            self.proc.kill()
-            self.proc.wait(5)
-
-
-failures = []
-
-
-def check(cond, what):
-    if cond:
-        print(f"ok   {what}")
-    else:
-        print(f"FAIL {what}")
-        failures.append(what)
-    return cond
 
 
 def is_exception(rsp, code=None):

@@ -21,22 +21,14 @@ import argparse
 import asyncio
 import csv
 import os
-import select
-import signal
-import socket
 import ssl
 import subprocess
 import sys
 import tempfile
 import time
-import types
 
-try:
-    import serial_asyncio  # noqa: F401  (pymodbus 3.0 imports it even for TCP)
-except ImportError:
-    _stub = types.ModuleType("serial_asyncio")
-    _stub.create_serial_connection = None
-    sys.modules["serial_asyncio"] = _stub
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from homingd_py import Daemon, check, failures  # noqa: E402  (also stubs serial_asyncio)
 
 try:
     from pymodbus.client import AsyncModbusTlsClient, ModbusTcpClient
@@ -45,23 +37,6 @@ try:
 except ImportError as e:  # a missing tool fails the test, never skips it
     print(f"FAIL: pymodbus is not importable ({e}); run tools/install-deps.sh", file=sys.stderr)
     sys.exit(1)
-
-failures = []
-
-
-def check(cond, what):
-    print(f"{'ok  ' if cond else 'FAIL'} {what}")
-    if not cond:
-        failures.append(what)
-    return cond
-
-
-def free_port():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
 
 
 class Map:
@@ -73,54 +48,14 @@ class Map:
         return int(self.rows[name]["address"])
 
 
-class Daemon:
+class TlsDaemon(Daemon):
+    """homingd with plain TCP (for checks outside TLS) and --tls, each on a free port."""
+
     def __init__(self, exe, pki, db):
-        last = ""
-        for _ in range(5):
-            self.port, self.tls_port = free_port(), free_port()
-            self.log_path = db + ".log"
-            self.log = open(self.log_path, "wb")
-            self.proc = subprocess.Popen(
-                [exe, "--tcp", f"127.0.0.1:{self.port}", "--db", db, "--time-scale", "10",
-                 "--tls", f"127.0.0.1:{self.tls_port}", "--tls-cert", f"{pki}/server.crt",
-                 "--tls-key", f"{pki}/server.key", "--tls-ca", f"{pki}/ca.crt", "--tls-crl", f"{pki}/crl.pem"],
-                stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=self.log)
-            line = b""
-            deadline = time.monotonic() + 10
-            while time.monotonic() < deadline and b"\n" not in line:
-                ready, _, _ = select.select([self.proc.stdout], [], [], 0.2)
-                if ready:
-                    chunk = os.read(self.proc.stdout.fileno(), 512)
-                    if not chunk:
-                        break
-                    line += chunk
-            if b"listening" in line:
-                return
-            last = line.decode(errors="replace")
-            self.kill()
-        raise RuntimeError(f"homingd did not start: {last!r}")
-
-    def log_has(self, *parts, timeout=5):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            with open(self.log_path, errors="replace") as f:
-                if any(all(p in line for p in parts) for line in f):
-                    return True
-            time.sleep(0.05)
-        return False
-
-    def stop(self):
-        self.proc.send_signal(signal.SIGTERM)
-        try:
-            return self.proc.wait(15)
-        except subprocess.TimeoutExpired:
-            self.kill()
-            return None
-
-    def kill(self):
-        if self.proc.poll() is None:
-            self.proc.kill()
-            self.proc.wait(5)
+        super().__init__(exe, db, ports=2, extra=lambda p: [
+            "--tls", f"127.0.0.1:{p[1]}", "--tls-cert", f"{pki}/server.crt", "--tls-key", f"{pki}/server.key",
+            "--tls-ca", f"{pki}/ca.crt", "--tls-crl", f"{pki}/crl.pem"])
+        self.tls_port = self.ports[1]
 
 
 def context(pki, name):
@@ -175,7 +110,7 @@ def main():
         pki = os.path.join(tmp, "pki")
         subprocess.run(["bash", args.make_certs, "init", pki, "--test-set"], check=True, timeout=120,
                        stdout=subprocess.DEVNULL)
-        d = Daemon(args.homingd, pki, os.path.join(tmp, "settings.db"))
+        d = TlsDaemon(args.homingd, pki, os.path.join(tmp, "settings.db"))
         try:
             async def engineer(c):
                 before = await c.read_holding_registers(feed, 1, slave=1)

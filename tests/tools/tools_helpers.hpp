@@ -34,4 +34,11 @@ inline nlohmann::json json_of(const RunResult& r) {
 
 #define SHOW(r) INFO("exit " << (r).code() << "\nstdout:\n" << (r).out << "\nstderr:\n" << (r).err)
 
+// How often `what` occurs in `s` (overlapping occurrences counted).
+inline std::size_t count_of(const std::string& s, const std::string& what) {
+  std::size_t n = 0;
+  for (auto at = s.find(what); at != std::string::npos; at = s.find(what, at + 1)) ++n;
+  return n;
+}
+
 }  // namespace tools_test

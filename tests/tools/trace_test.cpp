@@ -14,13 +14,6 @@
 
 using namespace tools_test;
 
-namespace {
-std::size_t count_of(const std::string& s, const std::string& what) {
-  std::size_t n = 0;
-  for (auto at = s.find(what); at != std::string::npos; at = s.find(what, at + 1)) ++n;
-  return n;
-}
-}  // namespace
 
 TEST_CASE("homingctl trace of a real cycle as SVG with axes, phases and the reference edge, as CSV and as JSON") {
   Daemon d;
