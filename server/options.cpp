@@ -3,9 +3,8 @@
 #include <arpa/inet.h>
 
 #include <CLI/CLI.hpp>
-#include <set>
-#include <sstream>
-#include <toml++/toml.h>
+
+#include "config_file.hpp"
 
 namespace server {
 namespace {
@@ -50,33 +49,6 @@ std::expected<void, std::string> check_tls(const Options& o, const CLI::App& app
   if (o.tls_cert.empty() || o.tls_key.empty() || o.tls_ca.empty())
     return std::unexpected("--tls needs --tls-cert, --tls-key and --tls-ca: the module's certificate, its key, and "
                            "the CA that signs client certificates");
-  return {};
-}
-
-// CLI11 ignores keys it does not know in a config file; a typo there must
-// not silently fall back to a default, so the file is checked first.
-std::expected<void, std::string> check_config_file(const std::string& path, const CLI::App& app) {
-  toml::table file;
-  try {
-    file = toml::parse_file(path);
-  } catch (const toml::parse_error& e) {
-    return std::unexpected("--config " + path + ": line " + std::to_string(e.source().begin.line) + ": " +
-                           std::string(e.description()));
-  }
-  std::set<std::string> known;
-  for (const CLI::Option* opt : app.get_options()) {
-    for (const auto& name : opt->get_lnames()) known.insert(name);
-  }
-  for (const auto& [key, value] : file) {
-    const std::string k(key.str());
-    if (value.is_table()) {
-      if (k == "gpiod") continue;  // read by the GPIO backend
-      return std::unexpected("--config " + path + ": unknown section [" + k + "] (known: [gpiod])");
-    }
-    if (!known.contains(k) || k == "config" || k == "help" || k == "version")
-      return std::unexpected("--config " + path + ": unknown key '" + k + "'; keys are the long option names "
-                             "without the leading dashes, e.g. tcp = \"0.0.0.0:502\", log_level = \"warn\"");
-  }
   return {};
 }
 
@@ -146,6 +118,7 @@ const CLI::Validator identity_text(
 
 OptionParser::Table::Table() {
   app.set_version_flag("--version", "homingd " HOMING_VERSION);
+  app.config_formatter(std::make_shared<ConfigFileReader>(app));
   app.set_config("--config", "", "TOML config file; every option below can be a key in it")
       ->check(CLI::ExistingFile);
   app.add_option("--tcp", tcp, "Modbus TCP listen address HOST:PORT")->capture_default_str();
@@ -239,6 +212,8 @@ std::expected<ParseOutcome, std::string> OptionParser::parse(int argc, char** ar
     out.exit_now = true;
     out.exit_code = app.exit(e);
     return out;
+  } catch (const ConfigFileError& e) {
+    return std::unexpected("--config " + app.get_option("--config")->as<std::string>() + ": " + e.what());
   } catch (const CLI::ParseError& e) {
     std::string what = e.what();
     if (auto cfg = app.get_option("--config"); cfg && cfg->count() > 0)
@@ -250,7 +225,6 @@ std::expected<ParseOutcome, std::string> OptionParser::parse(int argc, char** ar
   if (t.no_tcp) o.tcp_enabled = false;
   if (auto cfg = app.get_option("--config"); cfg->count() > 0) {
     o.config_path = cfg->as<std::string>();
-    if (auto r = check_config_file(o.config_path, app); !r) return std::unexpected(r.error());
   }
   if (o.tcp_enabled) {
     auto where = split_host_port("--tcp", t.tcp, std::nullopt);
