@@ -23,6 +23,7 @@
 #include "homing/sim/simulator_io.hpp"
 #include "registers/codec.hpp"
 #include "registers/defaults.hpp"
+#include "registers/lookup.hpp"
 #include "registers/sim_bindings.hpp"
 #include "server/control_loop.hpp"
 #include "server/modbus_service.hpp"
@@ -78,6 +79,20 @@ inline bool contains_code(std::span<const std::uint8_t> pdu, std::uint16_t code)
   for (std::size_t i = 0; i + 1 < pdu.size(); ++i)
     if (pdu[i] == (code >> 8) && pdu[i + 1] == (code & 0xFF)) return true;
   return false;
+}
+
+// Whether an accepted write may start motion: a coil write (commands, the
+// simulator's start button) or a holding write that covers cmd.home_axes
+// (one cycle homes the axes it names).
+inline bool commands_motion(std::uint8_t fc, std::span<const std::uint8_t> pdu) {
+  if (fc == 5 || fc == 15) return true;
+  static const std::uint16_t home_axes = registers::find_register("cmd.home_axes")->address;
+  const auto word = [&](std::size_t at) { return static_cast<std::uint16_t>(pdu[at] << 8 | pdu[at + 1]); };
+  std::size_t first = 0, count = 0;
+  if (fc == 6 && pdu.size() >= 3) first = word(1), count = 1;
+  if (fc == 16 && pdu.size() >= 5) first = word(1), count = word(3);
+  if (fc == 23 && pdu.size() >= 9) first = word(5), count = word(7);
+  return first <= home_axes && home_axes < first + count;
 }
 
 // The default machine, built once: seeding the simulator's random sources
@@ -184,11 +199,11 @@ struct Harness {
         violated("locked settings changed without the unlock code", unit, pdu);
     }
     if (access == Access::locked && accepted && contains_code(pdu, kUnlockCode)) maybe_unlocked = true;
-    // Motion only after an accepted coil write (commands, the simulator's start button).
-    if (accepted && (fc == 5 || fc == 15)) motion_allowed = true;
+    // Motion only after an accepted write that commands it.
+    if (accepted && commands_motion(fc, pdu)) motion_allowed = true;
     if (!motion_allowed && moving()) {
       print_motion();
-      violated("an axis moves but no coil write was accepted", unit, pdu);
+      violated("an axis moves but no write that commands motion was accepted", unit, pdu);
     }
     return reply;
   }
@@ -237,7 +252,7 @@ struct Harness {
     step(5);
     if (!motion_allowed && moving()) {
       print_motion();
-      violated("an axis moves at the end but no coil write was accepted", 0, {});
+      violated("an axis moves at the end but no write that commands motion was accepted", 0, {});
     }
   }
 

@@ -44,6 +44,8 @@ WRITES = {
     "fc06_heartbeat": b"\x06" + be16(20, 7),
     "fc06_unlock": b"\x06" + be16(30, 0xBEEF),
     "fc06_watchdog": b"\x06" + be16(12, 500),
+    "fc06_home_axes_xyz": b"\x06" + be16(40, 7),
+    "fc16_home_axes_x": b"\x10" + be16(40, 1) + b"\x02" + be16(1),
     "fc15_coils": b"\x0f" + be16(0, 2) + b"\x01\x00",
     "fc16_pull_off": b"\x10" + be16(126, 2) + b"\x04" + be16(0, 2500),
     "fc16_target_x": b"\x10" + be16(160, 2) + b"\x04" + be16(0, 5000),
