@@ -208,8 +208,7 @@ std::optional<Refusal> check_read_range(Unit unit, Table table, std::uint16_t st
     return Refusal{ExceptionCode::illegal_data_address,
                    fmt::format("{} {}..{} runs past address 65535", table_name(table), start,
                                std::size_t{start} + count - 1)};
-  for (std::size_t i = 0; i < count; ++i)
-    if (find_register(unit, table, static_cast<std::uint16_t>(start + i))) return std::nullopt;
+  if (!registers_overlapping(unit, table, start, count).empty()) return std::nullopt;
   return Refusal{ExceptionCode::illegal_data_address,
                  fmt::format("no {} of the {} unit is mapped at {}..{} (see hmi_maps/)", table_name(table),
                              unit_name(unit), start, std::size_t{start} + count - 1)};
@@ -219,16 +218,14 @@ std::optional<Refusal> check_read_range(Unit unit, Table table, std::uint16_t st
 std::optional<Refusal> read_words(Unit unit, Table table, std::uint16_t start, std::span<std::uint16_t> out,
                                   WordOrder order, const RawReader& raw_of) {
   if (auto bad = check_read_range(unit, table, start, out.size())) return bad;
-  for (std::size_t i = 0; i < out.size();) {
-    const auto address = static_cast<std::uint16_t>(start + i);
-    const Register* reg = find_register(unit, table, address);
-    if (!reg) {
-      out[i++] = 0;  // a gap in the map
-      continue;
-    }
+  std::fill(out.begin(), out.end(), 0);  // gaps in the map read 0
+  for (const Register& reg : registers_overlapping(unit, table, start, out.size())) {
     std::array<std::uint16_t, 2> w{};
-    encode_words(*reg, raw_of(*reg), order, std::span(w).first(reg->words()));
-    for (std::size_t k = address - reg->address; k < reg->words() && i < out.size(); ++k) out[i++] = w[k];
+    encode_words(reg, raw_of(reg), order, std::span(w).first(reg.words()));
+    for (std::size_t k = 0; k < reg.words(); ++k) {
+      const std::size_t address = std::size_t{reg.address} + k;
+      if (address >= start && address - start < out.size()) out[address - start] = w[k];
+    }
   }
   return std::nullopt;
 }
@@ -236,10 +233,9 @@ std::optional<Refusal> read_words(Unit unit, Table table, std::uint16_t start, s
 std::optional<Refusal> read_bits(Unit unit, Table table, std::uint16_t start, std::span<std::uint8_t> out,
                                  const RawReader& raw_of) {
   if (auto bad = check_read_range(unit, table, start, out.size())) return bad;
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    const Register* reg = find_register(unit, table, static_cast<std::uint16_t>(start + i));
-    out[i] = reg && raw_of(*reg) != 0 ? 1 : 0;
-  }
+  std::fill(out.begin(), out.end(), 0);
+  for (const Register& reg : registers_overlapping(unit, table, start, out.size()))
+    if (reg.address >= start) out[reg.address - start] = raw_of(reg) != 0 ? 1 : 0;  // a bit register is one address
   return std::nullopt;
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <string>
+#include <tuple>
 #include <unordered_map>
 
 namespace registers {
@@ -18,6 +19,21 @@ const Register* find_register(Unit unit, Table table, std::uint16_t address) {
   const Register& r = *std::prev(it);
   if (r.unit != unit || r.table != table || r.end() <= address) return nullptr;
   return &r;
+}
+
+std::span<const Register> registers_overlapping(Unit unit, Table table, std::uint16_t first, std::size_t count) {
+  // Registers of one (unit, table) do not overlap, so their ends rise with
+  // their addresses as the table's order does.
+  const auto regs = all_registers();
+  const auto before = [&](const Register& r) { return std::tie(r.unit, r.table) < std::tie(unit, table); };
+  const auto same = [&](const Register& r) { return r.unit == unit && r.table == table; };
+  const auto begin = std::partition_point(regs.begin(), regs.end(), [&](const Register& r) {
+    return before(r) || (same(r) && r.end() <= first);
+  });
+  const auto end = std::partition_point(begin, regs.end(), [&](const Register& r) {
+    return same(r) && std::size_t{r.address} < std::size_t{first} + count;
+  });
+  return {begin, end};
 }
 
 const Register* find_register(std::string_view name) {

@@ -108,6 +108,38 @@ TEST_CASE("a read over a gap in the map reads zeros, a read of nothing mapped is
   CHECK(refusal->code == ExceptionCode::illegal_data_address);
 }
 
+TEST_CASE("a read that starts on the second word of a 32-bit value returns that word") {
+  homing::Settings s;
+  HostRegisters h;
+  homing::Status st;
+  st.axes[1].position_mm = -12.345;
+  StatusExtras ex;
+  const ModuleView view{s, h, st, ex};
+  const Register& pos = reg("axis.y.position");
+  std::array<std::uint16_t, 2> whole{}, second{};
+  REQUIRE(!read_module_words(Table::input_register, pos.address, whole, WordOrder::high_first, view));
+  REQUIRE(!read_module_words(Table::input_register, pos.address + 1, second, WordOrder::high_first, view));
+  CHECK(second[0] == whole[1]);
+  CHECK(static_cast<std::int32_t>(std::uint32_t{whole[0]} << 16 | whole[1]) == -12345);
+}
+
+TEST_CASE("a bit read over gaps reads the mapped bits and zeros between them") {
+  homing::Settings s;
+  HostRegisters h;
+  homing::Status st;
+  st.axes[2].homed = true;
+  StatusExtras ex;
+  const ModuleView view{s, h, st, ex};
+  const Register& homed_z = reg("axis.z.homed");
+  std::array<std::uint8_t, 64> bits{};
+  bits.fill(7);
+  REQUIRE(!read_module_bits(Table::discrete_input, homed_z.address - 10, bits, view));
+  for (std::size_t i = 0; i < bits.size(); ++i) {
+    INFO("bit " << i);
+    CHECK(bits[i] == (i == 10 ? 1 : 0));
+  }
+}
+
 TEST_CASE("command coils map to command ids with their axis") {
   const auto home_y = command_of(reg("cmd.home.y"), true);
   REQUIRE(home_y);

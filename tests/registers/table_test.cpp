@@ -135,6 +135,25 @@ TEST_CASE("lookup by address finds both words of a 32-bit register and nothing i
   CHECK(find_register(Unit::simulator, Table::input_register, 0) == nullptr);
 }
 
+TEST_CASE("registers overlapping a range include a 32-bit register cut by either end of it") {
+  const Register* pos = find_register("axis.y.position");
+  REQUIRE(pos);
+  const auto from_second_word = registers_overlapping(Unit::module, Table::input_register, pos->address + 1, 1);
+  REQUIRE(from_second_word.size() == 1);
+  CHECK(&from_second_word.front() == pos);
+  const auto to_first_word = registers_overlapping(Unit::module, Table::input_register, pos->address - 1, 2);
+  REQUIRE_FALSE(to_first_word.empty());
+  CHECK(&to_first_word.back() == pos);
+  const auto before = registers_overlapping(Unit::module, Table::input_register, pos->address - 1, 1);
+  CHECK((before.empty() || &before.back() != pos));
+  CHECK(registers_overlapping(Unit::module, Table::holding_register, 90, 4).empty());
+  CHECK(registers_overlapping(Unit::simulator, Table::input_register, 0, 1).empty());
+  // The whole address space of a table holds every register of it, and only those.
+  std::size_t coils = 0;
+  for (const Register& r : all_registers()) coils += r.unit == Unit::module && r.table == Table::coil;
+  CHECK(registers_overlapping(Unit::module, Table::coil, 0, 65536).size() == coils);
+}
+
 TEST_CASE("enum value names in the table match the engine's names") {
   auto values_of = [](const char* name) { return find_register(name)->values; };
   for (const auto& v : values_of("axis.x.mode"))
