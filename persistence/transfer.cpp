@@ -32,13 +32,13 @@ Result<ImportReport> SettingsStore::import_file(const std::string& file, const V
   std::lock_guard lock(impl_->mu);
   auto& m = *impl_;
   ImportReport report;
-  auto proposed = m.values;
   for (const auto& [name, e] : entries)
-    if (!proposed.contains(name))
+    if (!m.values.contains(name))
       return fail(ErrorKind::invalid, fmt::format("{}:{}: unknown register '{}'; nothing was imported", file, e.line,
                                                   name));
   auto raw = raw_values(file, *read, codec);
   if (!raw) return std::unexpected(raw.error());
+  auto proposed = m.values;
   for (const auto& [name, value] : *raw) proposed[name] = value;
   for (const auto& [name, v] : m.values)
     if (!entries.contains(name)) report.not_in_file.push_back(name);
