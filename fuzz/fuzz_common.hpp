@@ -147,9 +147,9 @@ struct Harness {
     if (!untouched) rebuild();
   }
 
-  // Every persisted setting as its raw register value, in table order: what
-  // the settings database would hold.
-  std::vector<std::int64_t> settings() const { return raw_of(service->settings()); }
+  // The settings the service holds: what the settings database would hold
+  // (every setting is filled from its register, and only from it).
+  homing::Settings settings() const { return service->settings(); }
 
   bool moving() const {
     const server::Snapshot s = loop->snapshot();
@@ -232,7 +232,7 @@ struct Harness {
   bool motion_allowed = false;
   bool maybe_unlocked = false;
   bool untouched = false;                  // no request since the last rebuild
-  std::vector<std::int64_t> settings_now;  // settings() after the last request, broadcast or rebuild
+  homing::Settings settings_now;  // settings() after the last request, broadcast or rebuild
 
  private:
   void rebuild() {
@@ -244,7 +244,7 @@ struct Harness {
     motion_allowed = false;
     maybe_unlocked = false;
     untouched = true;
-    settings_now = default_raw();
+    settings_now = defaults();
   }
 
   void finish_now() {
@@ -259,25 +259,6 @@ struct Harness {
   static const homing::Settings& defaults() {
     static const homing::Settings s = registers::default_settings();
     return s;
-  }
-  static const std::vector<std::int64_t>& default_raw() {
-    static const std::vector<std::int64_t> raw = raw_of(defaults());
-    return raw;
-  }
-  static std::vector<std::int64_t> raw_of(const homing::Settings& s) {
-    std::vector<std::int64_t> raw;
-    raw.reserve(persisted().size());
-    for (const registers::Register* r : persisted()) raw.push_back(registers::setting_raw(s, *r));
-    return raw;
-  }
-  static const std::vector<const registers::Register*>& persisted() {
-    static const std::vector<const registers::Register*> regs = [] {
-      std::vector<const registers::Register*> out;
-      for (const registers::Register& r : registers::registers_of(registers::Unit::module))
-        if (r.persisted) out.push_back(&r);
-      return out;
-    }();
-    return regs;
   }
 };
 
