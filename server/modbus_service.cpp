@@ -9,7 +9,7 @@
 #include "device_identification.hpp"
 #include "file_record.hpp"
 #include "registers/lookup.hpp"
-#include "registers/sim_bindings.hpp"
+#include "write_log.hpp"
 
 namespace server {
 namespace {
@@ -18,39 +18,6 @@ using registers::ExceptionCode;
 using registers::Table;
 
 Reply fail(std::uint8_t fc, ExceptionCode code) { return exception_reply(fc, static_cast<std::uint8_t>(code)); }
-
-// Who changed a setting, for the audit log: over TLS also the certificate's subject and role.
-persistence::ChangeSource source_of(const ClientInfo& client) {
-  return persistence::ChangeSource{std::string(transport_name(client.transport)),
-                                   client.identity.empty() ? client.address : client.address + " " + client.identity};
-}
-
-std::string_view command_name(registers::Command c) {
-  using registers::Command;
-  switch (c) {
-    case Command::home_all: return "home_all";
-    case Command::home_axis: return "home";
-    case Command::abort: return "abort";
-    case Command::reset_alarm: return "reset_alarm";
-    case Command::jog_plus: return "jog_plus";
-    case Command::jog_minus: return "jog_minus";
-    case Command::move: return "move";
-    case Command::homing_permit: return "homing_permit";
-    case Command::lock_settings: return "lock_settings";
-    case Command::home_axes: return "home_axes";
-  }
-  return "?";
-}
-
-std::string describe_changes(const std::vector<registers::Change>& changes) {
-  std::string out;
-  for (const auto& c : changes) {
-    if (!out.empty()) out += "; ";
-    out += c.reg->name() + ": " + registers::format_value(*c.reg, c.old_raw) + " -> " +
-           registers::format_value(*c.reg, c.new_raw);
-  }
-  return out;
-}
 
 // The address of the first register a refused write is about: the first
 // value it changes, else the first register it names.
@@ -182,29 +149,6 @@ Reply ModbusService::apply(Target target, const Request& request, const ClientIn
   return device_identification(std::get<DeviceIdRequest>(request.body), config_.identity);
 }
 
-namespace {
-
-registers::SimReadback readback_of(const homing::sim::SimulatorView& sim) {
-  registers::SimReadback r;
-  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-    r.actual_position_mm[a] = sim.axes[a].actual_position_mm;
-    r.sensor[a] = sim.axes[a].sensor;
-    r.at_hard_stop[a] = sim.axes[a].at_hard_stop;
-    r.driven_by[a] = sim.axes[a].driven_by;
-  }
-  return r;
-}
-
-registers::SimSwitches switches_of(const homing::sim::SimulatorView& sim) {
-  return registers::SimSwitches{sim.estop, sim.start_button};
-}
-
-}  // namespace
-
-std::int64_t ModbusService::sim_raw(const registers::Register& reg, const Snapshot& snap) const {
-  return registers::sim_raw(reg, snap.sim.config, switches_of(snap.sim), readback_of(snap.sim));
-}
-
 Reply ModbusService::read(Target target, std::uint8_t fc, const ReadRequest& r) {
   const Snapshot snap = loop_.snapshot();
   const bool bits = r.table == Table::coil || r.table == Table::discrete_input;
@@ -322,110 +266,6 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
     commands = std::move(accepted->commands);
   }
   run_commands(commands, client);
-  return std::nullopt;
-}
-
-void ModbusService::run_commands(const std::vector<registers::CommandRequest>& commands, const ClientInfo& client) {
-  using registers::Command;
-  homing::Commands c{};
-  bool any = false;
-  for (const auto& r : commands) {
-    const std::size_t a = r.axis >= 0 ? static_cast<std::size_t>(r.axis) : 0;
-    switch (r.command) {
-      case Command::home_all: c.home_all = true; any = true; break;
-      case Command::home_axis: c.home_axes |= homing::axis_bit(a); any = true; break;
-      case Command::home_axes: c.home_axes |= r.axes; any = true; break;
-      case Command::abort: c.abort = true; any = true; break;
-      case Command::reset_alarm:
-        c.reset_alarm = true;
-        any = true;
-        if (store_ && store_->settings_lost()) {
-          std::lock_guard lock(mutex_);
-          (void)store_->acknowledge_settings_lost(source_of(client));
-        }
-        break;
-      case Command::jog_plus: loop_.set_jog(a, r.on ? 1 : 0, client.id); break;
-      case Command::jog_minus: loop_.set_jog(a, r.on ? -1 : 0, client.id); break;
-      case Command::move: {
-        std::lock_guard lock(mutex_);
-        c.move_axes |= homing::axis_bit(a);
-        c.move_target_mm[a] = host_.target_mm[a];
-        any = true;
-        break;
-      }
-      case Command::homing_permit: loop_.set_permit_coil(r.on); break;
-      case Command::lock_settings: {
-        std::lock_guard lock(mutex_);
-        locked_ = config_.unlock_code != 0;
-        extras_.settings_locked = locked_;
-        break;
-      }
-    }
-    const bool held = r.command == Command::jog_plus || r.command == Command::jog_minus ||
-                      r.command == Command::homing_permit;
-    std::string axes = r.axis >= 0 ? "." + std::string(homing::kAxisLetters[a]) : std::string();
-    for (std::size_t n = 0; n < homing::kAxisCount; ++n)
-      if (r.axes & homing::axis_bit(n)) axes += " " + std::string(homing::kAxisLetters[n]);
-    spdlog::info("command from {} {}: {}{}{}", client.transport, client.address, command_name(r.command), axes,
-                 held ? (r.on ? " on" : " off") : "");
-  }
-  if (any) loop_.submit(c, true);
-}
-
-std::optional<Reply> ModbusService::write_sim(std::uint8_t fc, Table table, std::uint16_t start,
-                                              std::span<const std::uint16_t> values, const ClientInfo& client) {
-  // Address, access and range need no machine: refused here at once.
-  if (auto decoded = registers::decode_write(registers::Unit::simulator, table, start, values, config_.word_order);
-      !decoded)
-    return refuse(fc, decoded.error(), client);
-  // The rest is decided and applied on the live simulator inside the control
-  // loop (never on a snapshot that may miss the previous write), and answered
-  // once a snapshot shows it: an acknowledged write holds and reads back.
-  std::optional<registers::Refusal> refused;
-  int busy_axis = -1;
-  std::vector<registers::Change> changes;
-  const ControlLoop::SimEdit edit = [&](homing::sim::SimulatorControls& sim, const homing::Outputs& next) {
-    const homing::sim::SimulatorView now = sim.view();
-    auto accepted = registers::validate_sim_write(table, start, values, config_.word_order, now.config,
-                                                  switches_of(now), readback_of(now));
-    if (!accepted) {
-      refused = accepted.error();
-      return;
-    }
-    const registers::AcceptedSimWrite& w = *accepted;
-    // A carriage that moves (or is about to) is not touched at all.
-    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-      if (w.axes_written[a] && sim.in_motion(a, next)) {
-        busy_axis = static_cast<int>(a);
-        return;
-      }
-    }
-    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-      if (!w.axes_written[a]) continue;
-      sim.set_axis_config(a, w.config.axes[a]);
-      if (w.placed[a]) sim.place(a, w.config.axes[a].actual_position_mm);
-      if (w.lose_steps_mm[a] != 0) sim.lose_steps(a, w.lose_steps_mm[a]);
-    }
-    if (w.seed_written) sim.set_seed(w.config.seed);
-    sim.set_estop(w.switches.estop);
-    sim.set_start_button(w.switches.start_button);
-    changes = w.changes;
-  };
-  using registers::RefusalReason;
-  if (!loop_.edit_sim(edit, std::chrono::seconds(2)))
-    return refuse(fc,
-                  registers::Refusal::because(RefusalReason::loop_not_responding, start,
-                                              "the control loop did not take the simulator write in time"),
-                  client);
-  if (refused) return refuse(fc, *refused, client);
-  if (busy_axis >= 0)
-    return refuse(fc,
-                  registers::Refusal::because(RefusalReason::carriage_moving, start,
-                                              fmt::format("sim.{}.* is not written while that carriage moves",
-                                                          homing::kAxisLetters[static_cast<std::size_t>(busy_axis)])),
-                  client);
-  if (!changes.empty())
-    spdlog::info("simulator changed by {} {}: {}", client.transport, client.address, describe_changes(changes));
   return std::nullopt;
 }
 

@@ -3,6 +3,9 @@
 // which unit ids exist, who may write (--write-allow), locked settings, the
 // busy rule, the durable commit of a settings write, commands and the
 // simulator unit. Transports (TCP, RTU) call handle() with a PDU; fuzzers can too.
+// modbus_service.cpp routes, reads and writes the module's registers;
+// modbus_service_commands.cpp hands commands to the loop; modbus_service_sim.cpp
+// serves the simulator unit.
 #include <atomic>
 #include <cstdint>
 #include <functional>

@@ -1,0 +1,77 @@
+// ModbusService: the commands an accepted write carries (coils, cmd.home_axes)
+// handed to the control loop, each logged with the client that sent it.
+#include <spdlog/spdlog.h>
+
+#include "modbus_service.hpp"
+#include "write_log.hpp"
+
+namespace server {
+namespace {
+
+std::string_view command_name(registers::Command c) {
+  using registers::Command;
+  switch (c) {
+    case Command::home_all: return "home_all";
+    case Command::home_axis: return "home";
+    case Command::abort: return "abort";
+    case Command::reset_alarm: return "reset_alarm";
+    case Command::jog_plus: return "jog_plus";
+    case Command::jog_minus: return "jog_minus";
+    case Command::move: return "move";
+    case Command::homing_permit: return "homing_permit";
+    case Command::lock_settings: return "lock_settings";
+    case Command::home_axes: return "home_axes";
+  }
+  return "?";
+}
+
+}  // namespace
+
+void ModbusService::run_commands(const std::vector<registers::CommandRequest>& commands, const ClientInfo& client) {
+  using registers::Command;
+  homing::Commands c{};
+  bool any = false;
+  for (const auto& r : commands) {
+    const std::size_t a = r.axis >= 0 ? static_cast<std::size_t>(r.axis) : 0;
+    switch (r.command) {
+      case Command::home_all: c.home_all = true; any = true; break;
+      case Command::home_axis: c.home_axes |= homing::axis_bit(a); any = true; break;
+      case Command::home_axes: c.home_axes |= r.axes; any = true; break;
+      case Command::abort: c.abort = true; any = true; break;
+      case Command::reset_alarm:
+        c.reset_alarm = true;
+        any = true;
+        if (store_ && store_->settings_lost()) {
+          std::lock_guard lock(mutex_);
+          (void)store_->acknowledge_settings_lost(source_of(client));
+        }
+        break;
+      case Command::jog_plus: loop_.set_jog(a, r.on ? 1 : 0, client.id); break;
+      case Command::jog_minus: loop_.set_jog(a, r.on ? -1 : 0, client.id); break;
+      case Command::move: {
+        std::lock_guard lock(mutex_);
+        c.move_axes |= homing::axis_bit(a);
+        c.move_target_mm[a] = host_.target_mm[a];
+        any = true;
+        break;
+      }
+      case Command::homing_permit: loop_.set_permit_coil(r.on); break;
+      case Command::lock_settings: {
+        std::lock_guard lock(mutex_);
+        locked_ = config_.unlock_code != 0;
+        extras_.settings_locked = locked_;
+        break;
+      }
+    }
+    const bool held = r.command == Command::jog_plus || r.command == Command::jog_minus ||
+                      r.command == Command::homing_permit;
+    std::string axes = r.axis >= 0 ? "." + std::string(homing::kAxisLetters[a]) : std::string();
+    for (std::size_t n = 0; n < homing::kAxisCount; ++n)
+      if (r.axes & homing::axis_bit(n)) axes += " " + std::string(homing::kAxisLetters[n]);
+    spdlog::info("command from {} {}: {}{}{}", client.transport, client.address, command_name(r.command), axes,
+                 held ? (r.on ? " on" : " off") : "");
+  }
+  if (any) loop_.submit(c, true);
+}
+
+}  // namespace server
