@@ -58,7 +58,6 @@ TEST_CASE("exception 01: an unknown function code is answered at once, nothing c
   Daemon d;
   Client c = Client::tcp(d.port());
   const auto before = holding_snapshot(c);
-  const auto t0 = Clock::now();
   int answered = 0;
   for (int i = 0; i < 20; ++i) {
     // FC 7 (read exception status: libmodbus would not answer it at all), FC 0x41
@@ -72,10 +71,17 @@ TEST_CASE("exception 01: an unknown function code is answered at once, nothing c
       ++answered;
     }
   }
-  const auto elapsed = Clock::now() - t0;
   CHECK(answered == 80);
-  // libmodbus's own answer would sleep its response timeout (0.5 s) each time.
-  CHECK(elapsed < 2s);
+  // libmodbus's own answer to an unknown function sleeps and then flushes what
+  // the client sent meanwhile: a read sent right behind it would be lost. The
+  // module answers both, in order.
+  const auto replies = raw_tcp_pipeline(d.port(), {{1, {0x41, 0x00, 0x01}}, {1, {0x03, 0x00, 0x00, 0x00, 0x01}}});
+  REQUIRE(replies.size() == 2);
+  CHECK(replies[0].first == 1);
+  CHECK(replies[0].second == std::vector<std::uint8_t>{0xC1, MODBUS_EXCEPTION_ILLEGAL_FUNCTION});
+  CHECK(replies[1].first == 2);
+  CHECK(replies[1].second.size() == 4);
+  CHECK(replies[1].second[0] == 0x03);
   CHECK(holding_snapshot(c) == before);
   // The connection is still good.
   CHECK(c.read("status.map_version") == registers::kMapVersion);

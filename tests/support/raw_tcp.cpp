@@ -10,6 +10,15 @@ namespace test_support {
 
 std::vector<std::uint8_t> raw_tcp_transaction(int port, std::uint8_t unit, const std::vector<std::uint8_t>& pdu,
                                               std::chrono::milliseconds timeout) {
+  auto replies = raw_tcp_pipeline(port, {{unit, pdu}}, timeout);
+  if (replies.empty()) return {};
+  return std::move(replies.front().second);
+}
+
+std::vector<std::pair<std::uint16_t, std::vector<std::uint8_t>>> raw_tcp_pipeline(
+    int port, const std::vector<std::pair<std::uint8_t, std::vector<std::uint8_t>>>& requests,
+    std::chrono::milliseconds timeout) {
+  std::vector<std::pair<std::uint16_t, std::vector<std::uint8_t>>> replies;
   const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
   sockaddr_in a{};
   a.sin_family = AF_INET;
@@ -17,27 +26,38 @@ std::vector<std::uint8_t> raw_tcp_transaction(int port, std::uint8_t unit, const
   a.sin_port = htons(static_cast<std::uint16_t>(port));
   if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)) != 0) {
     ::close(fd);
-    return {};
+    return replies;
   }
-  std::vector<std::uint8_t> frame{0x12, 0x34, 0, 0, static_cast<std::uint8_t>((pdu.size() + 1) >> 8),
-                                  static_cast<std::uint8_t>((pdu.size() + 1) & 0xFF), unit};
-  frame.insert(frame.end(), pdu.begin(), pdu.end());
-  (void)::send(fd, frame.data(), frame.size(), MSG_NOSIGNAL);
+  std::vector<std::uint8_t> frames;
+  std::uint16_t tid = 0;
+  for (const auto& [unit, pdu] : requests) {
+    ++tid;
+    frames.insert(frames.end(), {static_cast<std::uint8_t>(tid >> 8), static_cast<std::uint8_t>(tid & 0xFF), 0, 0,
+                                 static_cast<std::uint8_t>((pdu.size() + 1) >> 8),
+                                 static_cast<std::uint8_t>((pdu.size() + 1) & 0xFF), unit});
+    frames.insert(frames.end(), pdu.begin(), pdu.end());
+  }
+  (void)::send(fd, frames.data(), frames.size(), MSG_NOSIGNAL);
   std::vector<std::uint8_t> got;
   const auto deadline = std::chrono::steady_clock::now() + timeout;
-  std::size_t want = 7;
-  while (got.size() < want && std::chrono::steady_clock::now() < deadline) {
+  while (replies.size() < requests.size() && std::chrono::steady_clock::now() < deadline) {
     pollfd p{fd, POLLIN, 0};
     if (::poll(&p, 1, 50) <= 0) continue;
     std::uint8_t buf[300];
     const ssize_t n = ::recv(fd, buf, sizeof(buf), 0);
     if (n <= 0) break;
     got.insert(got.end(), buf, buf + n);
-    if (got.size() >= 6) want = 6 + ((got[4] << 8) | got[5]);
+    // Whole frames off the front: header (7 bytes, length counts unit + PDU), PDU.
+    while (got.size() >= 7) {
+      const std::size_t length = static_cast<std::size_t>(got[4] << 8 | got[5]);
+      if (length < 2 || got.size() < 6 + length) break;
+      replies.emplace_back(static_cast<std::uint16_t>(got[0] << 8 | got[1]),
+                           std::vector<std::uint8_t>(got.begin() + 7, got.begin() + static_cast<long>(6 + length)));
+      got.erase(got.begin(), got.begin() + static_cast<long>(6 + length));
+    }
   }
   ::close(fd);
-  if (got.size() < want || got.size() < 8) return {};
-  return std::vector<std::uint8_t>(got.begin() + 7, got.begin() + static_cast<long>(want));
+  return replies;
 }
 
 }  // namespace test_support

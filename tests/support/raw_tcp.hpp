@@ -1,8 +1,9 @@
 #pragma once
-// One Modbus/TCP transaction framed here, on its own socket: for PDUs that
-// libmodbus cannot frame or parse (FC 43/14).
+// Modbus/TCP framed here, on a socket of its own: for PDUs that libmodbus
+// cannot frame or parse (FC 43/14), and for requests sent back to back.
 #include <chrono>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace test_support {
@@ -10,5 +11,12 @@ namespace test_support {
 // The reply PDU (function code first), or empty when nothing came within the timeout.
 std::vector<std::uint8_t> raw_tcp_transaction(int port, std::uint8_t unit, const std::vector<std::uint8_t>& pdu,
                                               std::chrono::milliseconds timeout = std::chrono::milliseconds(2000));
+
+// Every request (unit, PDU) in one send, transaction ids 1, 2, ...; the reply
+// PDUs in the order they came, each paired with its transaction id. Stops at
+// as many replies as requests, at the timeout, or when the server closes.
+std::vector<std::pair<std::uint16_t, std::vector<std::uint8_t>>> raw_tcp_pipeline(
+    int port, const std::vector<std::pair<std::uint8_t, std::vector<std::uint8_t>>>& requests,
+    std::chrono::milliseconds timeout = std::chrono::milliseconds(2000));
 
 }  // namespace test_support
