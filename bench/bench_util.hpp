@@ -1,9 +1,12 @@
 #pragma once
 // Small helpers shared by the benchmark programs: a monotonic clock,
-// percentiles of a latency sample, and "--key value" argument parsing.
+// percentiles of a latency sample, "--key value" argument parsing, and
+// reading a whole reply from a socket.
+#include <sys/socket.h>
 #include <time.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -18,6 +21,20 @@ inline std::int64_t now_ns() {
   timespec ts{};
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+// n bytes from a blocking socket; false when it closes or fails first.
+inline bool recv_exact(int fd, std::uint8_t* p, std::size_t n) {
+  std::size_t got = 0;
+  while (got < n) {
+    const ssize_t r = ::recv(fd, p + got, n - got, 0);
+    if (r <= 0) {
+      if (r < 0 && errno == EINTR) continue;
+      return false;
+    }
+    got += static_cast<std::size_t>(r);
+  }
+  return true;
 }
 
 // Value below which a fraction q of the sample lies (nearest rank).

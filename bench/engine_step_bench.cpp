@@ -8,6 +8,7 @@
 #include <memory>
 #include <vector>
 
+#include "bench_axis.hpp"
 #include "homing/engine.hpp"
 #include "homing/sim/simulator.hpp"
 
@@ -21,16 +22,7 @@ Settings six_axes() {
   Settings settings;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     AxisSettings& s = settings.axes[a];
-    s.mode = HomingMode::switch_release;
-    s.direction = Direction::negative;
-    s.seek_feedrate_mm_per_min = 1200;
-    s.latch_feedrate_mm_per_min = 60;
-    s.acceleration_mm_per_s2 = 500;
-    s.max_seek_travel_mm = 300;
-    s.max_stop_distance_mm = 10;
-    s.max_backoff_mm = 10;
-    s.pull_off_mm = 1;
-    s.jog_feedrate_mm_per_min = 600;
+    s = bench::switch_axis();
     s.soft_limit_min_mm = -1;
     s.soft_limit_max_mm = 500;
   }

@@ -76,19 +76,6 @@ int raw_connect(const Config& c) {
   return fd;
 }
 
-bool recv_exact(int fd, std::uint8_t* p, std::size_t n) {
-  std::size_t got = 0;
-  while (got < n) {
-    const ssize_t r = ::recv(fd, p + got, n - got, 0);
-    if (r <= 0) {
-      if (r < 0 && errno == EINTR) continue;
-      return false;
-    }
-    got += static_cast<std::size_t>(r);
-  }
-  return true;
-}
-
 // One raw request; returns 0 ok, >0 exception code, -1 transport error.
 int raw_request(int fd, std::uint16_t tid, std::uint8_t unit, const std::vector<std::uint8_t>& pdu) {
   std::uint8_t out[7 + 256];
@@ -102,9 +89,9 @@ int raw_request(int fd, std::uint16_t tid, std::uint8_t unit, const std::vector<
   const std::size_t n = 7 + pdu.size();
   if (::send(fd, out, n, MSG_NOSIGNAL) != static_cast<ssize_t>(n)) return -1;
   std::uint8_t in[7 + 256];
-  if (!recv_exact(fd, in, 7)) return -1;
+  if (!bench::recv_exact(fd, in, 7)) return -1;
   const std::size_t len = static_cast<std::size_t>((in[4] << 8) | in[5]);
-  if (len < 2 || len > 254 || !recv_exact(fd, in + 7, len - 1)) return -1;
+  if (len < 2 || len > 254 || !bench::recv_exact(fd, in + 7, len - 1)) return -1;
   if (((in[0] << 8) | in[1]) != tid) return -1;
   if (in[7] & 0x80) return len >= 3 ? in[8] : 1;
   return 0;

@@ -37,6 +37,7 @@
 #include <random>
 #include <vector>
 
+#include "bench_axis.hpp"
 #include "homing/engine.hpp"
 #include "homing/sim/simulator.hpp"
 
@@ -102,16 +103,7 @@ int main(int argc, char** argv) {
 
   Settings settings;
   AxisSettings& s = settings.axes[0];
-  s.mode = HomingMode::switch_release;
-  s.direction = Direction::negative;
-  s.seek_feedrate_mm_per_min = 1200;
-  s.latch_feedrate_mm_per_min = 60;
-  s.acceleration_mm_per_s2 = 500;
-  s.max_seek_travel_mm = 300;
-  s.max_stop_distance_mm = 10;
-  s.max_backoff_mm = 10;
-  s.pull_off_mm = 1;
-  s.jog_feedrate_mm_per_min = 600;
+  s = bench::switch_axis();
   settings.global.sequence_steps = {axis_bit(0), 0, 0, 0, 0, 0};
 
   sim::MachineConfig machine;

@@ -22,6 +22,8 @@ import tempfile
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "tests", "support"))
+from homingd_py import free_port  # noqa: E402  (one free-port helper for tests and benchmarks)
 PYTHON = "/usr/bin/python3"  # Debian's, with python3-pymodbus
 
 # Module register addresses (hmi_maps/registers.csv): input registers.
@@ -30,14 +32,6 @@ DIAG = {"p50": 22, "p99": 24, "p999": 26, "max": 28, "engine_ns": 30, "rss_kb": 
 
 def log(msg):
     print(msg, file=sys.stderr, flush=True)
-
-
-def free_port():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
 
 
 def parse_result(text):

@@ -22,25 +22,12 @@
 
 namespace {
 
-bool recv_exact(int fd, std::uint8_t* p, std::size_t n) {
-  std::size_t got = 0;
-  while (got < n) {
-    const ssize_t r = ::recv(fd, p + got, n - got, 0);
-    if (r <= 0) {
-      if (r < 0 && errno == EINTR) continue;
-      return false;
-    }
-    got += static_cast<std::size_t>(r);
-  }
-  return true;
-}
-
 void serve(int fd) {
   std::uint8_t in[7 + 256], out[7 + 256]{};
   for (;;) {
-    if (!recv_exact(fd, in, 7)) break;
+    if (!bench::recv_exact(fd, in, 7)) break;
     const std::size_t len = static_cast<std::size_t>((in[4] << 8) | in[5]);
-    if (len < 2 || len > 254 || !recv_exact(fd, in + 7, len - 1)) break;
+    if (len < 2 || len > 254 || !bench::recv_exact(fd, in + 7, len - 1)) break;
     const std::uint8_t fc = in[7];
     std::size_t pdu = len - 1;  // echo
     if ((fc == 3 || fc == 4) && len >= 6) pdu = 2 + 2 * static_cast<std::size_t>((in[10] << 8) | in[11]);
