@@ -39,6 +39,7 @@
 
 #include "bench_axis.hpp"
 #include "homing/engine.hpp"
+#include "homing/motion.hpp"
 #include "homing/sim/simulator.hpp"
 
 using namespace homing;
@@ -54,16 +55,17 @@ double ramp_time(double d, double v0, double v, double a) {
 double ramp_speed(double d, double v0, double v, double a) { return std::min(v, std::sqrt(v0 * v0 + 2 * a * d)); }
 
 double minimum_cycle_s(const AxisSettings& s, double distance_to_trigger_mm, double hysteresis_mm) {
-  const double vs = s.seek_feedrate_mm_per_min / 60.0, vl = s.latch_feedrate_mm_per_min / 60.0;
+  const double vs = mm_per_min_to_mm_per_s(s.seek_feedrate_mm_per_min);
+  const double vl = mm_per_min_to_mm_per_s(s.latch_feedrate_mm_per_min);
   const double a = s.acceleration_mm_per_s2;
   const double t1 = ramp_time(distance_to_trigger_mm, 0, vs, a);
   const double v1 = ramp_speed(distance_to_trigger_mm, 0, vs, a);
   const double t2 = v1 / a;
-  const double back = v1 * v1 / (2 * a) + hysteresis_mm;
+  const double back = stop_distance_mm(v1, a) + hysteresis_mm;
   const double t3 = ramp_time(back, 0, vl, a);
   const double v3 = ramp_speed(back, 0, vl, a);
   const double p = s.pull_off_mm;
-  const double d_up = (vs * vs - v3 * v3) / (2 * a), d_down = vs * vs / (2 * a);
+  const double d_up = (vs * vs - v3 * v3) / (2 * a), d_down = stop_distance_mm(vs, a);
   double t4;
   if (p >= d_up + d_down) {
     t4 = (vs - v3) / a + vs / a + (p - d_up - d_down) / vs;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "engine.hpp"
+#include "settings_check.hpp"
 
 namespace homing {
 
@@ -26,8 +27,7 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
     as.trigger_position_mm = run.trigger_position_mm;
     as.home_correction_mm = run.home_correction_mm;
     as.homed_at_cycle_start = run.homed_at_cycle_start;
-    as.stop_distance_mm =
-        stop_distance_mm(mm_per_min_to_mm_per_s(s.seek_feedrate_mm_per_min), s.acceleration_mm_per_s2);
+    as.stop_distance_mm = seek_stop_distance_mm(s);  // the figure the configuration check holds to
     if (!std::isfinite(as.stop_distance_mm)) as.stop_distance_mm = 0;
     as.phase_distance_mm = std::abs(run.motor.position_mm - run.phase_start_mm);
     all_homed = all_homed && as.homed;

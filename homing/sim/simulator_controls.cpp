@@ -1,5 +1,6 @@
 #include "simulator_controls.hpp"
 
+#include "homing/gantry.hpp"
 #include "simulator.hpp"
 
 namespace homing::sim {
@@ -7,15 +8,9 @@ namespace homing::sim {
 std::array<int, kAxisCount> commutator_wiring(const Settings& settings) {
   std::array<int, kAxisCount> slave_of_master;
   slave_of_master.fill(-1);
-  for (std::size_t s = 0; s < kAxisCount; ++s) {
-    const AxisSettings& a = settings.axes[s];
-    const int m = master_of(a);
-    if (a.slave_mode != SlaveMode::external_commutator || m < 0 || m >= static_cast<int>(kAxisCount) ||
-        m == static_cast<int>(s))
-      continue;
-    auto& slot = slave_of_master[static_cast<std::size_t>(m)];
-    if (slot < 0) slot = static_cast<int>(s);
-  }
+  for (std::size_t s = 0; s < kAxisCount; ++s)
+    if (is_commutator_slave(settings, s))
+      slave_of_master[static_cast<std::size_t>(gantry_master(settings, s))] = static_cast<int>(s);
   return slave_of_master;
 }
 

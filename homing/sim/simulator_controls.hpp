@@ -36,8 +36,10 @@ struct SimulatorView {
 };
 
 // The commutator wiring the settings describe (MachineConfig::commutator_slave):
-// master m's output drives slave s when s is an external-commutator slave of m.
-// Two slaves on one master: the first is wired.
+// master m's output drives slave s when the engine takes s for an
+// external-commutator slave of m (homing::is_commutator_slave): a pair the
+// engine does not run as a gantry (a disabled slave, a second slave of one
+// master) is not wired, so no carriage follows a master the engine ignores.
 std::array<int, kAxisCount> commutator_wiring(const Settings& settings);
 
 class SimulatorControls {

@@ -56,6 +56,18 @@ SCENARIO("pre-move only if the sensor is active", "[phases][pre_move]") {
   }
 }
 
+SCENARIO("the published stop distance is the seek's v^2/2a plus its travel while debouncing", "[phases][stop]") {
+  Rig r;
+  AxisSettings& s = r.settings.axes[0];
+  s.seek_feedrate_mm_per_min = 1200;  // 20 mm/s
+  s.acceleration_mm_per_s2 = 500;
+  s.debounce_ms = 5;
+  r.step();
+  // 20^2 / (2 * 500) = 0.4 mm, and 20 mm/s * 5 ms = 0.1 mm: what max_stop_distance is checked against.
+  CHECK(r.axis(0).stop_distance_mm == Approx(0.5).margin(1e-12));
+  CHECK(r.axis(0).stop_distance_mm == Approx(seek_stop_distance_mm(s)).margin(1e-12));
+}
+
 SCENARIO("switch already active at start goes straight to back-off", "[phases]") {
   Rig r;
   r.machine.axes[0].actual_position_mm = -0.5;

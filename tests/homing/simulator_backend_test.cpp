@@ -2,6 +2,7 @@
 // the runtime reaches the simulator's extra controls only through the backend.
 #include <catch2/catch.hpp>
 
+#include "homing/gantry.hpp"
 #include "homing/machine_io.hpp"
 #include "homing/sim/simulator_io.hpp"
 
@@ -26,6 +27,13 @@ MachineConfig machine() {
     m.axes[a].sensor_max_mm = 20;
   }
   return m;
+}
+
+// Every axis homes on a switch: a gantry needs both sides to.
+Settings switch_axes() {
+  Settings s;
+  for (auto& a : s.axes) a.mode = HomingMode::switch_release;
+  return s;
 }
 
 Settings external_commutator_slave(Settings s, std::size_t slave, std::size_t master) {
@@ -68,7 +76,7 @@ TEST_CASE("simulator controls change the machine the backend reads and show it i
 }
 
 TEST_CASE("external-commutator slaves in the settings are wired to their master and only the first of two on one master") {
-  const Settings own = Settings{};
+  const Settings own = switch_axes();
   CHECK(commutator_wiring(own) == std::array<int, kAxisCount>{-1, -1, -1, -1, -1, -1});
 
   Settings s = external_commutator_slave(own, 1, 0);  // Y on X's output
@@ -77,15 +85,23 @@ TEST_CASE("external-commutator slaves in the settings are wired to their master 
   CHECK(commutator_wiring(s) == std::array<int, kAxisCount>{1, -1, -1, -1, -1, -1});
 }
 
+TEST_CASE("a disabled axis named as a commutator slave is not wired to its master") {
+  Settings s = external_commutator_slave(switch_axes(), 1, 0);  // Y on X's output
+  REQUIRE(commutator_wiring(s)[0] == 1);
+  s.axes[1].mode = HomingMode::disabled;
+  CHECK_FALSE(is_commutator_slave(s, 1));
+  CHECK(commutator_wiring(s) == std::array<int, kAxisCount>{-1, -1, -1, -1, -1, -1});
+}
+
 TEST_CASE("the simulated commutators follow the settings when they change") {
   SimulatorIo io(machine());
   SimulatorControls& controls = *io.simulator_controls();
-  controls.follow_settings(external_commutator_slave(Settings{}, 2, 1));  // Z on Y's output
+  controls.follow_settings(external_commutator_slave(switch_axes(), 2, 1));  // Z on Y's output
   CHECK(controls.view().config.commutator_slave[1] == 2);
   CHECK(controls.view().axes[2].driven_by == 2);  // master Y is output 1: shown as 1 + 1
   CHECK(controls.view().axes[1].driven_by == 0);
 
-  controls.follow_settings(Settings{});
+  controls.follow_settings(switch_axes());
   CHECK(controls.view().config.commutator_slave[1] == -1);
   CHECK(controls.view().axes[2].driven_by == 0);
 }
