@@ -10,14 +10,14 @@ namespace test_support {
 
 std::vector<std::uint8_t> raw_tcp_transaction(int port, std::uint8_t unit, const std::vector<std::uint8_t>& pdu,
                                               std::chrono::milliseconds timeout) {
-  auto replies = raw_tcp_pipeline(port, {{unit, pdu}}, timeout);
+  auto replies = raw_tcp_pipeline(port, {{unit, pdu}}, timeout, 0x1234);
   if (replies.empty()) return {};
   return std::move(replies.front().second);
 }
 
 std::vector<std::pair<std::uint16_t, std::vector<std::uint8_t>>> raw_tcp_pipeline(
     int port, const std::vector<std::pair<std::uint8_t, std::vector<std::uint8_t>>>& requests,
-    std::chrono::milliseconds timeout) {
+    std::chrono::milliseconds timeout, std::uint16_t first_tid) {
   std::vector<std::pair<std::uint16_t, std::vector<std::uint8_t>>> replies;
   const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
   sockaddr_in a{};
@@ -29,13 +29,13 @@ std::vector<std::pair<std::uint16_t, std::vector<std::uint8_t>>> raw_tcp_pipelin
     return replies;
   }
   std::vector<std::uint8_t> frames;
-  std::uint16_t tid = 0;
+  std::uint16_t tid = first_tid;
   for (const auto& [unit, pdu] : requests) {
-    ++tid;
     frames.insert(frames.end(), {static_cast<std::uint8_t>(tid >> 8), static_cast<std::uint8_t>(tid & 0xFF), 0, 0,
                                  static_cast<std::uint8_t>((pdu.size() + 1) >> 8),
                                  static_cast<std::uint8_t>((pdu.size() + 1) & 0xFF), unit});
     frames.insert(frames.end(), pdu.begin(), pdu.end());
+    ++tid;
   }
   (void)::send(fd, frames.data(), frames.size(), MSG_NOSIGNAL);
   std::vector<std::uint8_t> got;
