@@ -9,22 +9,13 @@ PhaseRunner::PhaseRunner(Engine& engine, const Settings& st, std::size_t a)
   is_slave = gantry_master(st, a) >= 0;
   partner = gantry_partner(st, a);
   channel = e.sensor_channel(st, a);
+  // The slave motor alone only corrects the gantry's skew (the gantry guard
+  // stops it before the pair could rack beyond max_misalignment).
+  if (commutator_slave()) s = commutator_slave_homing(s);
   dir = s.direction == Direction::positive ? 1.0 : -1.0;
   seek_v = mm_per_min_to_mm_per_s(s.seek_feedrate_mm_per_min);
   latch_v = mm_per_min_to_mm_per_s(s.latch_feedrate_mm_per_min);
   accel = s.acceleration_mm_per_s2;
-  if (commutator_slave()) {
-    // The slave motor alone only corrects the gantry's skew, from its
-    // master's reference edge: slowly (latch feedrate), on its switch edge
-    // alone, and never further than the allowed misalignment (the gantry
-    // guard stops it before the pair could rack beyond it).
-    s.max_seek_travel_mm = s.max_misalignment_mm;
-    s.pre_move_mode = PreMove::none;
-    s.final_move_enable = false;
-    if (mode_is_pushing(s.mode) || s.mode == HomingMode::switch_index)
-      s.mode = mode_reapproaches(s.mode) ? HomingMode::switch_reapproach : HomingMode::switch_release;
-    seek_v = latch_v;
-  }
 }
 
 void PhaseRunner::begin() {

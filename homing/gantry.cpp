@@ -55,4 +55,14 @@ Settings motion_settings(const Settings& settings) {
   return out;
 }
 
+AxisSettings commutator_slave_homing(AxisSettings s) {
+  s.max_seek_travel_mm = s.max_misalignment_mm;
+  s.pre_move_mode = PreMove::none;
+  s.final_move_enable = false;
+  if (mode_is_pushing(s.mode) || s.mode == HomingMode::switch_index)
+    s.mode = mode_reapproaches(s.mode) ? HomingMode::switch_reapproach : HomingMode::switch_release;
+  s.seek_feedrate_mm_per_min = s.latch_feedrate_mm_per_min;
+  return s;
+}
+
 }  // namespace homing

@@ -28,4 +28,11 @@ bool is_commutator_slave(const Settings& settings, std::size_t axis);
 // asked for more than it can do, in homing, jog, move and every stop.
 Settings motion_settings(const Settings& settings);
 
+// What an external-commutator slave homes with when its motor runs alone,
+// from its motion settings: it only corrects the gantry's skew from its
+// master's reference edge, slowly (seek at the latch feedrate), on its own
+// switch edge (no pre-move, push, index or final move), never further than
+// the allowed misalignment (max_seek_travel = max_misalignment).
+AxisSettings commutator_slave_homing(AxisSettings pair_motion);
+
 }  // namespace homing

@@ -131,7 +131,10 @@ std::string render_status(const StatusView& s, const homing::Settings& settings,
                        disabled ? "-" : std::string(homing::phase_name(x.phase)), pos, x.homed ? "yes" : "no",
                        disabled ? "-" : (x.sensor ? "on" : "off"), alarm);
     if (progress && !disabled && x.busy) {
-      const double bound = phase_bound_mm(x.phase, moves.axes[a]);
+      const homing::AxisSettings& homes_with = homing::is_commutator_slave(settings, a)
+                                                   ? homing::commutator_slave_homing(moves.axes[a])
+                                                   : moves.axes[a];
+      const double bound = phase_bound_mm(x.phase, homes_with);
       if (bound > 0)
         out += fmt::format("     {} {} {:.3f} / {:g} {}\n", progress_bar(x.phase_distance, bound, 30),
                            homing::phase_name(x.phase), std::abs(x.phase_distance), bound, homing::axis_unit(a));
