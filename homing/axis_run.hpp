@@ -3,9 +3,11 @@
 // lives in that phase's data and goes with the phase; what a homing cycle
 // establishes for the gantry partner to wait on is one milestone.
 #include <cstdint>
+#include <optional>
 #include <variant>
 
 #include "alarms.hpp"
+#include "home_frame.hpp"
 #include "motion.hpp"
 #include "phases.hpp"
 
@@ -77,6 +79,7 @@ struct AxisRun {
   MotionCommand last_command{}; // what ran during the period that just ended
   double offset_mm = 0;         // machine position = motor + offset
   bool homed = false;
+  std::optional<HomeFrame> homed_in;  // the frame `homed` holds for (home_frame.hpp)
   bool sensor_active = false;   // debounced, polarity applied
   bool push_output = false;
   bool commutator_output = false;

@@ -1,7 +1,7 @@
 // The engine's period: motion, inputs, safety, commands, homing phases,
 // gantries, status and outputs, in that order. Each step has its own file:
-// sensor_inputs, safety and alarm_path, cycle and axis_phases, jog_move,
-// gantry_guard, publish and output_routing.
+// home_frame, sensor_inputs, safety and alarm_path, cycle and axis_phases,
+// jog_move, gantry_guard, publish and output_routing.
 #include "engine.hpp"
 
 #include <algorithm>
@@ -24,6 +24,7 @@ StepResult Engine::step(const Settings& configured, const Inputs& inputs, double
   ++heartbeat_;
   time_s_ += dt_s;
   advance_motion(dt_s);
+  keep_home_frames(settings);
   read_inputs(settings, inputs, dt_s);
   check_safety(settings, inputs);
   handle_commands(settings, inputs);
@@ -32,6 +33,7 @@ StepResult Engine::step(const Settings& configured, const Inputs& inputs, double
   follow_masters(settings);
   guard_gantries(settings);
   release_commutators(settings);
+  keep_home_frames(settings);
   publish(settings, inputs);
   route_outputs(settings);
   first_step_ = false;

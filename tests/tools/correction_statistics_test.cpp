@@ -66,3 +66,24 @@ TEST_CASE("home-correction statistics over a daemon restart count only cycles th
   CHECK(r.out.find("  run #3:  X Y Z excluded: not homed before the cycle\n") != std::string::npos);
   CHECK(r.out.find("\n  X     2 ") != std::string::npos);
 }
+
+TEST_CASE("a new home position unhomes the axis, so the next cycle's correction of it is left out") {
+  TempDir dir;
+  const std::string db = dir.file("machine.db");
+  Daemon d({.db = db, .time_scale = 10});
+  REQUIRE(ctl(d, {"home"}).code() == 0);
+  Client c = Client::tcp(d.port());
+  REQUIRE(c.read("axis.x.homed") == 1);
+  REQUIRE(ctl(d, {"set", "axis.x.home_position=5"}).code() == 0);
+  // X's coordinates were measured for the old home position: no longer homed. Y keeps its.
+  CHECK(wait_until([&] { return c.read("axis.x.homed") == 0; }, 5s));
+  CHECK(c.read("axis.y.homed") == 1);
+  auto r = ctl(d, {"home"});
+  SHOW(r);
+  REQUIRE(r.code() == 0);
+  CHECK(c.read("axis.x.position") == 5000);  // µm: the new coordinate
+  REQUIRE(wait_until([&] { return history(db)["runs"].size() == 2; }, 5s));
+  const auto j = history(db);
+  CHECK(j["runs"][0]["axes"]["x"]["excluded"] == "not homed before the cycle");
+  CHECK(j["runs"][0]["axes"]["y"]["excluded"].is_null());
+}
