@@ -227,7 +227,7 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     {.pattern = "axis.<a>.alarm_value", .table = IR, .offset = 20, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_alarm_value, .description = "the figure the alarm text quotes (distance travelled, misalignment, position), 0 without alarm"},
     {.pattern = "axis.<a>.correction_spread", .table = IR, .offset = 18, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_correction_spread, .description = "spread (max - min) of the last 10 home corrections"},
     // discrete inputs
-    {.pattern = "axis.<a>.homed", .table = DI, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::axis_homed, .description = "the axis is homed"},
+    {.pattern = "axis.<a>.homed", .table = DI, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::axis_homed, .description = "the axis is homed (cleared by an alarm per global.alarm_clears_homed, and when a setting of its home frame changes: home_position, pull_off, switch_compensation, mode, direction, sensor_nc, slave_of, slave_mode)"},
     {.pattern = "axis.<a>.sensor", .table = DI, .offset = 1, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::axis_sensor, .description = "home sensor active (debounced, polarity applied)"},
     {.pattern = "axis.<a>.busy", .table = DI, .offset = 2, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::axis_busy, .description = "the axis is moving or homing"},
     // coils
