@@ -5,7 +5,8 @@ Run from the repository root: python3 fuzz/make_corpus.py. The files are
 committed; rerunning rewrites the same files. Kept as they are, not written
 here: fuzz_settings_import/exported.toml (`homingd --export-settings` of a
 fresh database), fuzz_config/gpiod (the example of homing/gpiod/README.md) and
-inputs that once found a bug (fuzz_config/no_tcp_bad_value)."""
+inputs that once found a bug (fuzz_config/no_tcp_bad_value,
+fuzz_settings_import/format_version_huge_float)."""
 import os
 import struct
 
@@ -110,6 +111,17 @@ write(t, "mbap_length_300", mbap(1, 1, READS["fc03_holding"], length=300))
 write(t, "mbap_protocol_1", mbap(1, 1, READS["fc03_holding"], protocol=1))
 write(t, "incomplete_frame", mbap(1, 1, READS["fc03_holding"], length=20))
 write(t, "two_frames_one_short", mbap(1, 1, READS["fc03_holding"]) + mbap(2, 1, READS["fc03_holding"])[:9])
+
+# ---------------------------------------------------------------- TLS roles
+# The same connection streams, played as a viewer and as an operator.
+t = "fuzz_tls_roles"
+for name, pdu in {**READS, **WRITES, **OTHER}.items():
+    write(t, name, mbap(1, 1, pdu))
+for name, pdu in SIM_WRITES.items():
+    write(t, name, mbap(2, 247, pdu))
+write(t, "session_unlock_then_write",
+      mbap(1, 1, WRITES["fc06_unlock"]) + mbap(2, 1, WRITES["fc06_seek_feedrate"]) + mbap(3, 1, WRITES["fc05_lock"]))
+write(t, "session_home_read", mbap(1, 1, WRITES["fc05_home_all"]) + mbap(2, 1, READS["fc04_input"]) * 3)
 
 # ---------------------------------------------------------------- RTU
 t = "fuzz_rtu_frame"

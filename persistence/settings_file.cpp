@@ -158,7 +158,10 @@ Result<SettingsFile> read_settings_file(const std::string& file) {
   }
   SettingsFile parsed;
   if (auto ver = doc["format_version"]; ver) {
-    auto v = ver.value<std::int64_t>();
+    // An integer node only: toml++'s value<int64_t>() of a float such as 1e44
+    // would convert it out of range (undefined behaviour, found by fuzzing).
+    const toml::value<std::int64_t>* version = ver.as_integer();
+    const std::optional<std::int64_t> v = version ? std::optional(version->get()) : std::nullopt;
     if (!v || *v < kRawFormatVersion || *v > kEngineeringFormatVersion)
       return fail(ErrorKind::invalid,
                   fmt::format("{}:{}: format_version must be {} (raw register values) or {} (engineering values); "

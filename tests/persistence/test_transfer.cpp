@@ -202,5 +202,13 @@ TEST_CASE("every value of an engineering file that cannot be read is named with 
   r = store.import_file(dir.file("future.toml"), validator, &kMmCodec);
   REQUIRE_FALSE(r);
   CHECK_THAT(r.error().message, Catch::Contains("format_version must be 1 (raw register values) or 2"));
+  // Not an integer (found by fuzz_settings_import: 1e44 was converted out of range, undefined behaviour).
+  for (const char* version : {"2.0", "1e44", "-1e44", "\"2\""}) {
+    INFO(version);
+    test::write_text(dir.file("odd.toml"), std::string("format_version = ") + version + "\n[settings]\n");
+    r = store.import_file(dir.file("odd.toml"), validator, &kMmCodec);
+    REQUIRE_FALSE(r);
+    CHECK_THAT(r.error().message, Catch::Contains(":1: format_version must be 1 (raw register values) or 2"));
+  }
   CHECK(store.load() == before);
 }

@@ -108,6 +108,15 @@ TEST_CASE("homingctl local daemon: a missing packaged file means no local daemon
 
   const std::string garbled = write(dir, "garbled.toml", "tcp = \n");
   REQUIRE_FALSE(read_local_daemon({garbled, true}));
+
+  // A unit id that is no whole number, or too large for one, is named (1e44 was once converted out of range).
+  for (const char* unit : {"1e44", "2.5", "99999999999"}) {
+    INFO(unit);
+    const std::string odd = write(dir, "odd.toml", std::string("unit = ") + unit + "\n");
+    auto r = read_local_daemon({odd, true});
+    REQUIRE_FALSE(r);
+    CHECK_THAT(r.error(), Catch::Contains(odd) && Catch::Contains("unit is"));
+  }
 }
 
 TEST_CASE("homingctl finds the daemon its HOMINGD_CONFIG names without --tcp, and a missing named config exits 2") {

@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 
 namespace homingctl {
 namespace {
@@ -22,7 +23,12 @@ std::expected<std::optional<int>, std::string> int_key(const toml::table& t, std
                                                        const std::string& path) {
   const toml::node* n = key(t, name);
   if (!n) return std::optional<int>{};
-  if (auto v = n->value<std::int64_t>()) return std::optional<int>{static_cast<int>(*v)};
+  // An integer node only (toml++'s value<int64_t>() of a large float is undefined behaviour).
+  if (const auto* v = n->as_integer()) {
+    if (v->get() >= std::numeric_limits<int>::min() && v->get() <= std::numeric_limits<int>::max())
+      return std::optional<int>{static_cast<int>(v->get())};
+    return std::unexpected(path + ": " + std::string(name) + " is out of range");
+  }
   if (auto s = n->value<std::string>()) {
     try {
       std::size_t used = 0;
