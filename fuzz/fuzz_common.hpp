@@ -128,10 +128,21 @@ class ForwardingIo final : public homing::MachineIo {
 // it would see then is the same for every input (the engine, the simulator and
 // its seeded noise are deterministic), and it is checked once, at start.
 struct Harness {
-  enum class Access { open, read_only, locked };
+  // read_only: a TCP client outside --write-allow; viewer and operator: TLS
+  // clients whose certificate names that role (server/client_role.hpp).
+  enum class Access { open, read_only, locked, viewer, operator_role };
 
   explicit Harness(Access a, server::Transport transport = server::Transport::tcp) : access(a) {
-    client = server::ClientInfo{7, transport, transport == server::Transport::tcp ? "127.0.0.1:40000" : "unit 1"};
+    if (a == Access::viewer || a == Access::operator_role) transport = server::Transport::tls;
+    client = server::ClientInfo{7, transport, transport == server::Transport::rtu ? "unit 1" : "127.0.0.1:40000"};
+    if (a == Access::viewer) {
+      client.access = server::Access::read_only;
+      client.identity = "CN=fuzz (role viewer)";
+    }
+    if (a == Access::operator_role) {
+      client.access = server::Access::commands;
+      client.identity = "CN=fuzz (role operator)";
+    }
     config.unit_id = kModuleUnit;
     config.sim_unit_id = kSimUnit;
     if (a == Access::read_only) config.write_allow.push_back(*server::parse_cidr("10.0.0.0/8"));
@@ -188,6 +199,10 @@ struct Harness {
     }
     const bool accepted = accepted_write(fc, reply);
     if (access == Access::read_only && accepted) violated("a client outside --write-allow got a write accepted", unit, pdu);
+    if (access == Access::viewer && accepted) violated("a TLS viewer got a write accepted", unit, pdu);
+    if (access == Access::operator_role && accepted && unit == kSimUnit)
+      violated("a TLS operator got a write to the simulator unit accepted", unit, pdu);
+    if (access == Access::operator_role && settings_now != before) violated("a TLS operator changed a setting", unit, pdu);
     // Settings change only by an accepted write of holding registers to the module.
     if (settings_now != before) {
       // Over TCP, unit ids 0xFF and 0 address the module too.
