@@ -40,6 +40,15 @@ namespace fuzz {
 
 inline void quiet_logs() { spdlog::set_level(spdlog::level::off); }
 
+// LLVMFuzzerInitialize of the request targets: logs off, and the services
+// built before the first input (so that building them is not timed as one).
+template <class Services>
+int initialize(Services& (*services)()) {
+  quiet_logs();
+  (void)services();
+  return 0;
+}
+
 // Where the targets that need files keep them: tmpfs (/dev/shm) when there is
 // one, so that writing an input, and the database's fsyncs, cost no disk I/O.
 inline const std::filesystem::path& scratch_dir() {

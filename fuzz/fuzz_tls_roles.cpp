@@ -21,13 +21,8 @@ std::array<fuzz::Harness, 2>& services() {
 
 }  // namespace
 
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  fuzz::quiet_logs();
-  (void)services();
-  return 0;
-}
+extern "C" int LLVMFuzzerInitialize(int*, char***) { return fuzz::initialize(services); }
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  for (fuzz::Harness& service : services()) fuzz::play_connection(std::span<const std::uint8_t>(data, size), service);
-  return 0;
+  return fuzz::play_connection(data, size, services());
 }

@@ -62,12 +62,16 @@ class CheckedHandler final : public server::RequestHandler {
   fuzz::Harness& harness_;
 };
 
-// One connection's bytes into one harness.
-inline void play_connection(std::span<const std::uint8_t> bytes, Harness& harness) {
-  harness.reset();
-  BufferStream stream(bytes);
-  CheckedHandler handler(harness);
-  (void)server::serve_mbap_stream(stream, handler, harness.client);
+// One connection's bytes into each harness, each from its reset state.
+template <class Harnesses>
+int play_connection(const std::uint8_t* data, std::size_t size, Harnesses& harnesses) {
+  for (Harness& harness : harnesses) {
+    harness.reset();
+    BufferStream stream(std::span<const std::uint8_t>(data, size));
+    CheckedHandler handler(harness);
+    (void)server::serve_mbap_stream(stream, handler, harness.client);
+  }
+  return 0;
 }
 
 }  // namespace fuzz
