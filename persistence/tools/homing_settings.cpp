@@ -10,7 +10,9 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "persistence/settings_file.hpp"
 #include "persistence/settings_store.hpp"
+#include "registers/settings_file_values.hpp"
 
 namespace {
 
@@ -30,8 +32,12 @@ int show(const persistence::SettingsStore& store) {
   return 0;
 }
 
+// Engineering values and value names (format_version 2), the file homingctl
+// export and homingd --export-settings write and every importer reads.
+const persistence::SettingsFileCodec kCodec{registers::file_value_text, registers::raw_of_file_value};
+
 int export_to(const persistence::SettingsStore& store, const std::string& file) {
-  if (auto s = store.export_file(file); !s) {
+  if (auto s = store.export_file(file, &kCodec); !s) {
     fmt::print(stderr, "error: {}\n", s.error().message);
     return kFailed;
   }
@@ -56,7 +62,7 @@ int main(int argc, char** argv) {
   std::string out_file;
   app.add_option("--db", db_path, "settings database file")->capture_default_str();
   auto* show_cmd = app.add_subcommand("show", "all settings (raw register values)");
-  auto* export_cmd = app.add_subcommand("export", "write all settings to a TOML file");
+  auto* export_cmd = app.add_subcommand("export", "write all settings to a TOML file (engineering values, as homingctl export)");
   export_cmd->add_option("file", out_file, "output file")->required();
   auto* check_cmd = app.add_subcommand("check", "integrity check");
   std::vector<CLI::App*> moved;
