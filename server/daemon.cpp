@@ -36,6 +36,7 @@ sigset_t take_signals() {
   sigemptyset(&signals);
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGHUP);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   signal(SIGPIPE, SIG_IGN);
   return signals;
@@ -88,17 +89,36 @@ ServiceConfig service_config(const Options& opt, const ControlLoop& loop, const 
 struct Transports {
   std::unique_ptr<TcpServer> tcp;
   std::unique_ptr<TcpServer> tls;  // Modbus/TCP Security
+  TlsOpener* tls_files = nullptr;  // tls's opener: reloads its files on SIGHUP
   std::unique_ptr<RtuServer> rtu;
 };
 
 // The TLS listener: certificate, key, CA and CRL loaded, bound; the error names the file or address.
-std::expected<std::unique_ptr<TcpServer>, std::string> open_tls(const Options& opt, ModbusService& service) {
+std::expected<void, std::string> open_tls(const Options& opt, ModbusService& service, Transports& t) {
   auto opener = TlsOpener::create(TlsConfig{{opt.tls_cert, opt.tls_key, opt.tls_ca, opt.tls_crl}, opt.tls_default_role});
   if (!opener) return std::unexpected(opener.error());
+  TlsOpener* files = opener->get();
   auto server = std::make_unique<TcpServer>(ListenConfig{opt.tls_host, opt.tls_port, opt.max_clients, opt.idle_timeout_s},
                                             service, std::move(*opener));
   if (auto r = server->listen(); !r) return std::unexpected(r.error());
-  return server;
+  t.tls = std::move(server);
+  t.tls_files = files;
+  return {};
+}
+
+// SIGHUP: the TLS files read again (a new CRL, a renewed certificate); the
+// machine keeps running either way.
+void reload_tls(const Options& opt, Transports& t) {
+  if (!t.tls_files) {
+    spdlog::info("SIGHUP received: nothing to reload (no --tls)");
+    return;
+  }
+  if (auto r = t.tls_files->reload(); !r) {
+    spdlog::error("SIGHUP received: TLS files not reloaded, the previous ones stay in use: {}", r.error());
+    return;
+  }
+  spdlog::info("SIGHUP received: TLS files reloaded ({}, {}, {}{}); new connections use them", opt.tls_cert,
+               opt.tls_key, opt.tls_ca, opt.tls_crl.empty() ? "" : ", " + opt.tls_crl);
 }
 
 // Bound and opened, not yet serving; the error names the address or device.
@@ -109,9 +129,7 @@ std::expected<Transports, std::string> open_transports(const Options& opt, Modbu
     if (auto r = t.tcp->listen(); !r) return std::unexpected(r.error());
   }
   if (opt.tls_enabled) {
-    auto tls = open_tls(opt, service);
-    if (!tls) return std::unexpected(tls.error());
-    t.tls = std::move(*tls);
+    if (auto r = open_tls(opt, service, t); !r) return std::unexpected(r.error());
   }
   if (!opt.rtu_device.empty()) {
     t.rtu = std::make_unique<RtuServer>(RtuConfig{opt.rtu_device, opt.baud, opt.parity, opt.stop_bits, opt.unit_id},
@@ -136,8 +154,9 @@ std::string announce(const Options& opt, const Transports& t, bool has_sim) {
   return where;
 }
 
-// Runs the loop, the monitor and the transports until SIGINT or SIGTERM, then
-// stops them: the transports first (no new commands), motion last.
+// Runs the loop, the monitor and the transports until SIGINT or SIGTERM (a
+// SIGHUP reloads the TLS files), then stops them: the transports first (no
+// new commands), motion last.
 void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, ModbusService& service,
            persistence::SettingsStore& store, Transports& t) {
   loop.start(opt.rt_priority);
@@ -153,7 +172,7 @@ void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, Modbu
   systemd.ready("listening on " + announce(opt, t, loop.has_sim()));
 
   int sig = 0;
-  sigwait(&signals, &sig);
+  while (sigwait(&signals, &sig) == 0 && sig == SIGHUP) reload_tls(opt, t);
   systemd.stopping();
   spdlog::info("{} received: stopping motion and shutting down", sig == SIGINT ? "SIGINT" : "SIGTERM");
   if (t.tcp) t.tcp->stop();

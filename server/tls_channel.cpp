@@ -120,7 +120,24 @@ std::expected<std::unique_ptr<TlsOpener>, std::string> TlsOpener::create(const T
     return std::unexpected("--tls-default-role " + config.default_role + ": not a role (viewer, operator, engineer, none)");
   auto ctx = tls::server_context(config.files);
   if (!ctx) return std::unexpected("--tls: " + ctx.error());
-  return std::unique_ptr<TlsOpener>(new TlsOpener(std::move(*ctx), config.default_role));
+  return std::unique_ptr<TlsOpener>(new TlsOpener(std::move(*ctx), config));
+}
+
+TlsOpener::TlsOpener(tls::SslCtx ctx, TlsConfig config)
+    : config_(std::move(config)), ctx_(ctx.release(), SSL_CTX_free) {}
+
+std::shared_ptr<SSL_CTX> TlsOpener::context() const {
+  std::lock_guard lock(mutex_);
+  return ctx_;
+}
+
+std::expected<void, std::string> TlsOpener::reload() {
+  auto ctx = tls::server_context(config_.files);
+  if (!ctx) return std::unexpected(ctx.error());
+  std::shared_ptr<SSL_CTX> fresh(ctx->release(), SSL_CTX_free);
+  std::lock_guard lock(mutex_);
+  ctx_ = std::move(fresh);
+  return {};
 }
 
 std::expected<std::unique_ptr<ByteChannel>, std::string> TlsOpener::open(int fd, ClientInfo& client,
@@ -129,7 +146,9 @@ std::expected<std::unique_ptr<ByteChannel>, std::string> TlsOpener::open(int fd,
   if (::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK) != 0)
     return std::unexpected(std::string("cannot make the socket non-blocking: ") + std::strerror(errno));
   if (auto r = expect_tls(fd, deadline, stop); !r) return std::unexpected(r.error());
-  auto session = tls::Session::accept(ctx_.get(), fd);
+  // The session holds its own reference to the context (SSL_new), so a
+  // reload meanwhile does not pull it away.
+  auto session = tls::Session::accept(context().get(), fd);
   if (!session) return std::unexpected(session.error());
   for (;;) {
     const tls::Progress p = session->handshake();
@@ -155,10 +174,10 @@ std::expected<void, std::string> TlsOpener::admit(SSL* ssl, ClientInfo& client) 
   const std::string subject = tls::subject_of(cert);
   const auto role = tls::role_of(cert);
   if (!role) return std::unexpected("certificate " + subject + ": " + role.error() + "; it gets nothing");
-  if (!*role && default_role_ == "none")
+  if (!*role && config_.default_role == "none")
     return std::unexpected("certificate " + subject + " has no role (extension " + tls::kRoleOid +
                            ") and --tls-default-role is none; it gets nothing");
-  const std::string name = role->value_or(default_role_);
+  const std::string name = role->value_or(config_.default_role);
   const auto access = access_of_role(name);
   if (!access)
     return std::unexpected("certificate " + subject + " has role '" + name +

@@ -7,6 +7,7 @@
 // subject and why.
 #include <expected>
 #include <memory>
+#include <mutex>
 #include <string>
 
 #include "tcp_server.hpp"
@@ -31,13 +32,21 @@ class TlsOpener final : public ChannelOpener {
   std::expected<std::unique_ptr<ByteChannel>, std::string> open(int fd, ClientInfo& client,
                                                                  const std::atomic<bool>& stop) override;
 
+  // Reads the certificate, key, CA and CRL files again (homingd on SIGHUP: a
+  // new CRL or certificate without stopping the machine). Connections made
+  // from then on use them; open ones keep theirs. On error nothing changes
+  // and the error names the file.
+  std::expected<void, std::string> reload();
+
  private:
-  TlsOpener(tls::SslCtx ctx, std::string default_role) : ctx_(std::move(ctx)), default_role_(std::move(default_role)) {}
+  TlsOpener(tls::SslCtx ctx, TlsConfig config);
   // The role of the verified peer: client.access and client.identity, or why it gets nothing.
   std::expected<void, std::string> admit(SSL* ssl, ClientInfo& client) const;
+  std::shared_ptr<SSL_CTX> context() const;
 
-  tls::SslCtx ctx_;
-  std::string default_role_;
+  const TlsConfig config_;
+  mutable std::mutex mutex_;  // ctx_
+  std::shared_ptr<SSL_CTX> ctx_;
 };
 
 }  // namespace server

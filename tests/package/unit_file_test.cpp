@@ -98,5 +98,6 @@ TEST_CASE("homingd.service is Type=notify with a watchdog, restarts on failure a
   CHECK(one(unit, "Service.RestartPreventExitStatus") == "2");  // a config mistake is not restarted forever
   CHECK(words(one(unit, "Service.ExecStart")) ==
         std::vector<std::string>{"/usr/bin/homingd", "--config", "/etc/homingd/homingd.toml"});
+  CHECK(one(unit, "Service.ExecReload") == "/bin/kill -HUP $MAINPID");  // reload: the TLS files again
   CHECK(one(unit, "Install.WantedBy") == "multi-user.target");
 }

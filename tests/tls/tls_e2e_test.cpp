@@ -6,6 +6,7 @@
 #include <arpa/inet.h>
 #include <catch2/catch.hpp>
 #include <netinet/in.h>
+#include <signal.h>
 #include <sys/socket.h>
 
 #include <algorithm>
@@ -33,11 +34,13 @@ DaemonOptions tls_options(std::vector<std::string> extra = {}, bool with_crl = t
   return o;
 }
 
-TlsModbusClient connect_as(const Daemon& d, std::string_view name) {
-  auto c = TlsModbusClient::connect(d.tls_port(), tls_identity(name));
-  if (!c) FAIL("cannot connect as " << name << ": " << c.error());
+TlsModbusClient connect_as_identity(const Daemon& d, const TlsIdentity& id) {
+  auto c = TlsModbusClient::connect(d.tls_port(), id);
+  if (!c) FAIL("cannot connect with " << id.cert << ": " << c.error());
   return std::move(*c);
 }
+
+TlsModbusClient connect_as(const Daemon& d, std::string_view name) { return connect_as_identity(d, tls_identity(name)); }
 
 const std::vector<std::uint8_t> kReadState{4, 0x00, 0x01, 0x00, 0x01};  // FC4 status.state
 
@@ -263,6 +266,44 @@ TEST_CASE("plain Modbus TCP on the TLS port is refused and the log says what it 
   CHECK(log_has(d, {"tls: refused 127.0.0.1:", "not a TLS handshake (first byte 0x12)", "plain Modbus TCP"}));
   // raw_tcp_transaction sends transaction id 0x1234. The plain TCP port is unaffected.
   CHECK(raw_tcp_transaction(d.port(), 1, kReadState).size() == 4);
+}
+
+TEST_CASE("SIGHUP reloads the TLS files: a certificate revoked meanwhile is refused, a broken file changes nothing") {
+  TempDir dir;
+  const std::string pki = dir.file("pki");
+  const auto make_certs = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), {"bash", MAKE_CERTS_SCRIPT});
+    const RunResult r = run_program(args, 120s);
+    INFO(r.out << r.err);
+    REQUIRE(r.code() == 0);
+  };
+  make_certs({"init", pki});
+  const auto file = [&](const std::string& name) { return pki + "/" + name; };
+  const auto identity = [&](const std::string& name) {
+    return TlsIdentity{file(name + ".crt"), file(name + ".key"), file("ca.crt")};
+  };
+  DaemonOptions o;
+  o.tls = {"--tls-cert", file("server.crt"), "--tls-key", file("server.key"), "--tls-ca", file("ca.crt"),
+           "--tls-crl", file("crl.pem")};
+  Daemon d(o);
+  auto held = connect_as_identity(d, identity("operator"));  // open before the reload: keeps working
+  REQUIRE(refusal(d, identity("operator")).empty());
+
+  make_certs({"revoke", pki, "operator"});
+  REQUIRE(refusal(d, identity("operator")).empty());  // the CRL is read at start ...
+  REQUIRE(::kill(d.pid(), SIGHUP) == 0);             // ... and again on SIGHUP
+  REQUIRE(log_has(d, {"SIGHUP received: TLS files reloaded", file("crl.pem")}));
+  CHECK_THAT(refusal(d, identity("operator")), Catch::Contains("certificate revoked"));
+  CHECK(refusal(d, identity("engineer")).empty());
+  CHECK(held.read("status.state") >= 0);
+
+  // A file that cannot be read: logged, and the files read before stay in use.
+  test_support::write_text(file("crl.pem"), "not a CRL\n");
+  REQUIRE(::kill(d.pid(), SIGHUP) == 0);
+  CHECK(log_has(d, {"SIGHUP received: TLS files not reloaded, the previous ones stay in use", "crl.pem"}));
+  CHECK_THAT(refusal(d, identity("operator")), Catch::Contains("certificate revoked"));
+  CHECK(refusal(d, identity("engineer")).empty());
+  CHECK(d.stop() == 0);
 }
 
 TEST_CASE("a stalled TLS handshake does not delay a polling client and is dropped within the handshake timeout") {
