@@ -20,8 +20,14 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
 
   if (inputs.settings_lost) raise_global(settings, AlarmCode::settings_lost);
 
-  for (std::size_t a = 0; a < kAxisCount; ++a)
-    if (drive_fault_[a]) raise(settings, axis_bit(a), Alarm{AlarmCode::drive_fault});
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (!drive_fault_[a]) continue;
+    // A drive in fault does not follow its steps: an axis commanded to move
+    // meanwhile is no longer where its coordinate says, whatever
+    // global.alarm_clears_homed says (at rest it has lost nothing).
+    if (axes_[a].motor.velocity_mm_per_s != 0 || axes_[a].period_start.velocity_mm_per_s != 0) axes_[a].homed = false;
+    raise(settings, axis_bit(a), Alarm{AlarmCode::drive_fault});
+  }
 
   comm_lost_ = inputs.communication_lost;
   if (comm_lost_ && any_motion()) {

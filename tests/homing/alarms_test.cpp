@@ -464,6 +464,26 @@ SCENARIO("the first alarm on an axis wins, and an alarm on one axis stops every 
   }
 }
 
+SCENARIO("a drive that faults while its axis moves unhomes that axis even with alarm_clears_homed off",
+         "[alarms][stop]") {
+  Rig r;
+  r.add_axis(1, 2);
+  r.settings.global.alarm_clears_homed = false;
+  r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+  REQUIRE(r.home_all());
+  r.held.jog[1] = 1;  // Y moves
+  r.run_for(0.3);
+  REQUIRE(r.axis(1).velocity_mm_per_s != 0);
+  auto c = r.sim().axis_config(1);
+  c.fault = sim::Fault::drive_fault;
+  r.sim().set_axis_config(1, c);
+  r.run_for(0.5);  // the engine brakes, the faulted drive does not follow its steps
+  r.held.jog[1] = 0;
+  REQUIRE(r.axis(1).alarm.code == AlarmCode::drive_fault);
+  CHECK_FALSE(r.axis(1).homed);  // where it stands is no longer known
+  CHECK(r.axis(0).homed);        // X did not move and keeps its coordinate
+}
+
 SCENARIO("an axis alarm clears every axis's homed state exactly when global.alarm_clears_homed is set",
          "[alarms]") {
   for (bool clears : {true, false}) {
