@@ -28,6 +28,7 @@
 #include "server/control_loop.hpp"
 #include "server/modbus_service.hpp"
 #include "server/pdu.hpp"
+#include "server/request_decoder.hpp"
 
 namespace fuzz {
 
@@ -92,16 +93,18 @@ inline bool contains_code(std::span<const std::uint8_t> pdu, std::uint16_t code)
 
 // Whether an accepted write may start motion: a coil write (commands, the
 // simulator's start button) or a holding write that covers cmd.home_axes
-// (one cycle homes the axes it names).
-inline bool commands_motion(std::uint8_t fc, std::span<const std::uint8_t> pdu) {
-  if (fc == 5 || fc == 15) return true;
+// (one cycle homes the axes it names). The PDU as the service decodes it.
+inline bool commands_motion(std::span<const std::uint8_t> pdu) {
+  if (pdu.empty()) return false;
+  const auto request = server::decode_request(pdu);
+  if (!request) return false;
+  const server::WriteRequest* w = std::get_if<server::WriteRequest>(&request->body);
+  if (const auto* rw = std::get_if<server::ReadWriteRequest>(&request->body)) w = &rw->write;
+  if (!w) return false;
+  if (w->table == registers::Table::coil) return true;
   static const std::uint16_t home_axes = registers::find_register("cmd.home_axes")->address;
-  const auto word = [&](std::size_t at) { return static_cast<std::uint16_t>(pdu[at] << 8 | pdu[at + 1]); };
-  std::size_t first = 0, count = 0;
-  if (fc == 6 && pdu.size() >= 3) first = word(1), count = 1;
-  if (fc == 16 && pdu.size() >= 5) first = word(1), count = word(3);
-  if (fc == 23 && pdu.size() >= 9) first = word(5), count = word(7);
-  return first <= home_axes && home_axes < first + count;
+  return w->table == registers::Table::holding_register && w->start <= home_axes &&
+         home_axes < std::size_t{w->start} + w->values.size();
 }
 
 // The default machine, built once: seeding the simulator's random sources
@@ -188,7 +191,10 @@ struct Harness {
   }
 
   void step(int periods = 1) {
-    for (int i = 0; i < periods; ++i) loop->run_period(0.001);
+    for (int i = 0; i < periods; ++i) {
+      loop->run_period(0.001);
+      elapsed_ns += 1'000'000;
+    }
   }
 
   // One request through ModbusService::handle, then one control period; aborts
@@ -224,7 +230,7 @@ struct Harness {
     }
     if (access == Access::locked && accepted && contains_code(pdu, kUnlockCode)) maybe_unlocked = true;
     // Motion only after an accepted write that commands it.
-    if (accepted && commands_motion(fc, pdu)) motion_allowed = true;
+    if (accepted && commands_motion(pdu)) motion_allowed = true;
     if (!motion_allowed && moving()) {
       print_motion();
       violated("an axis moves but no write that commands motion was accepted", unit, pdu);
@@ -257,13 +263,17 @@ struct Harness {
   bool maybe_unlocked = false;
   bool untouched = false;                  // no request since the last rebuild
   homing::Settings settings_now;  // settings() after the last request, broadcast or rebuild
+  std::int64_t elapsed_ns = 0;    // the periods stepped since the last rebuild
 
  private:
   void rebuild() {
     service.reset();
     loop.reset();
     machine.emplace(default_machine());
-    loop.emplace(defaults(), std::make_unique<ForwardingIo>(*machine), 1000, 1.0);
+    // The watchdog on this harness's periods, not the wall clock: services
+    // compared with each other see it expire alike, and an input replays alike.
+    elapsed_ns = 0;
+    loop.emplace(defaults(), std::make_unique<ForwardingIo>(*machine), 1000, 1.0, [this] { return elapsed_ns; });
     service.emplace(config, *loop, nullptr, defaults());
     motion_allowed = false;
     maybe_unlocked = false;

@@ -19,10 +19,10 @@ std::int64_t monotonic_ns() {
 }
 
 ControlLoop::ControlLoop(const homing::Settings& settings, std::unique_ptr<homing::MachineIo> io, int period_us,
-                         double time_scale)
+                         double time_scale, Clock watchdog_clock)
     : settings_(settings), io_(std::move(io)), period_us_(std::max(period_us, 50)),
-      time_scale_(time_scale > 0 ? time_scale : 1.0) {
-  heartbeat_changed_ns_ = monotonic_ns();
+      time_scale_(time_scale > 0 ? time_scale : 1.0), watchdog_clock_(std::move(watchdog_clock)) {
+  heartbeat_changed_ns_ = watchdog_clock_();
   simulator_follows_settings();
   // A first period with no elapsed time: the engine learns the inputs' levels.
   run_period(0);
@@ -101,7 +101,7 @@ void ControlLoop::raise_settings_lost() {
 }
 
 void ControlLoop::heartbeat_written(std::uint16_t value) {
-  if (heartbeat_value_.exchange(value) != value) heartbeat_changed_ns_ = monotonic_ns();
+  if (heartbeat_value_.exchange(value) != value) heartbeat_changed_ns_ = watchdog_clock_();
 }
 
 bool ControlLoop::edit_sim(const SimEdit& edit, std::chrono::milliseconds timeout) {
@@ -205,7 +205,7 @@ void ControlLoop::take_mailbox(Mailbox& out) {
 bool ControlLoop::watchdog_expired() const {
   const std::uint32_t ms = settings_.global.watchdog_ms;
   if (ms == 0 || !modbus_motion_) return false;
-  return monotonic_ns() - heartbeat_changed_ns_.load() > std::int64_t{ms} * 1'000'000;
+  return watchdog_clock_() - heartbeat_changed_ns_.load() > std::int64_t{ms} * 1'000'000;
 }
 
 void ControlLoop::run_period(double wall_dt_s) {

@@ -46,6 +46,9 @@ struct LoopStats {
   double lateness_percentile_us(double q) const;
 };
 
+// Nanoseconds since an arbitrary point (CLOCK_MONOTONIC).
+std::int64_t monotonic_ns();
+
 class ControlLoop {
  public:
   // An edit of the live simulator through its backend's controls, run inside
@@ -53,8 +56,14 @@ class ControlLoop {
   // about to run (to tell which carriages move: SimulatorControls::in_motion).
   using SimEdit = std::function<void(homing::sim::SimulatorControls& sim, const homing::Outputs& next)>;
 
+  // Nanoseconds on a monotonic clock: what the communication watchdog
+  // (global.watchdog_ms) measures heartbeats against.
+  using Clock = std::function<std::int64_t()>;
+
+  // watchdog_clock: the wall clock (monotonic_ns) in homingd; a test may give
+  // one that follows its simulated periods, so the watchdog is deterministic.
   ControlLoop(const homing::Settings& settings, std::unique_ptr<homing::MachineIo> io, int period_us,
-              double time_scale);
+              double time_scale, Clock watchdog_clock = monotonic_ns);
   ~ControlLoop();
   ControlLoop(const ControlLoop&) = delete;
   ControlLoop& operator=(const ControlLoop&) = delete;
@@ -134,6 +143,7 @@ class ControlLoop {
   bool modbus_motion_ = false;
 
   std::atomic<std::uint16_t> heartbeat_value_{0};
+  const Clock watchdog_clock_;
   std::atomic<std::int64_t> heartbeat_changed_ns_{0};
 
   TraceRecorder recorder_;
@@ -158,6 +168,5 @@ class ControlLoop {
   std::thread thread_;
 };
 
-std::int64_t monotonic_ns();
 
 }  // namespace server
