@@ -5,7 +5,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake ninja-build pkg-config
+  build-essential cmake ninja-build pkg-config ccache
   libmodbus-dev libgpiod-dev libsqlite3-dev sqlite3 libsystemd-dev
   catch2 libcli11-dev libtomlplusplus-dev libspdlog-dev libfmt-dev
   libssl-dev openssl
