@@ -42,13 +42,15 @@ void Engine::stop_all(const Settings& settings) {
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     AxisRun& run = axes_[a];
     run.command = stop_command(settings.axes[a].acceleration_mm_per_s2);
-    run.push_output = false;
+    const bool moving = run.motor.velocity_mm_per_s != 0;
+    // A push cut short brakes on toward (or into) the stop it was pushing
+    // into: the current stays reduced until the motor rests (phase stopping).
+    if (!moving) run.push_output = false;
     // The commutator is switched back by release_commutators once the slave
     // motor is at rest: switching it under a moving motor would hand the
     // pulses to the other motor.
     run.in_cycle = false;
     run.aligning = false;
-    const bool moving = run.motor.velocity_mm_per_s != 0;
     if (moving) run.set_phase(Phase::stopping);
     else if (run.phase != Phase::done) run.set_phase(Phase::idle);
   }

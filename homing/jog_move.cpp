@@ -149,7 +149,10 @@ void Engine::run_motion(const Settings& settings) {
           run.command.limit_mm =
               (run.motor.velocity_mm_per_s > 0 ? s.soft_limit_max_mm : s.soft_limit_min_mm) - run.offset_mm;
         }
-        if (run.motor.velocity_mm_per_s == 0) run.set_phase(Phase::idle);
+        if (run.motor.velocity_mm_per_s == 0) {
+          run.set_phase(Phase::idle);
+          run.push_output = false;  // a push cut short: at rest, full current again
+        }
         break;
       case Phase::idle:
       case Phase::done:

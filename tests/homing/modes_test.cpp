@@ -157,6 +157,39 @@ SCENARIO("pushing modes push into the mechanical stop with the push output on, t
   }
 }
 
+SCENARIO("a push cut short by an alarm keeps the current reduced until the axis rests", "[modes][push][alarm]") {
+  // Campaign seed 35012: a communication loss stopped a push whose carriage
+  // had reached the stop; the push output went off at once, and the motor
+  // braked on into the stop at full current.
+  Rig r;
+  r.settings.axes[0].mode = HomingMode::pushing_release;
+  r.settings.axes[0].push_distance_mm = 2;
+  r.settings.axes[0].acceleration_mm_per_s2 = 100;  // a stop of 5 ms from latch speed
+  r.machine.axes[0].hard_stop_min_mm = -1;
+  r.clear_trace();
+  r.pending.home_all = true;
+  r.step();
+  // Pushing at latch speed with the carriage held by the stop.
+  REQUIRE(r.run_until([&] {
+    return r.axis(0).phase == Phase::push && r.simulator->at_hard_stop(0) && r.axis(0).velocity_mm_per_s != 0;
+  }, 60));
+  r.pending.abort = true;
+  r.step();
+  REQUIRE(r.axis(0).alarm.code == AlarmCode::aborted);
+  REQUIRE(r.axis(0).phase == Phase::stopping);
+  int braking_periods = 0;
+  while (r.axis(0).velocity_mm_per_s != 0 && braking_periods < 1000) {
+    CHECK(r.engine.outputs().axes[0].push_output);
+    r.step();
+    ++braking_periods;
+  }
+  CHECK(braking_periods > 0);
+  CHECK(r.axis(0).phase == Phase::idle);
+  r.step();
+  CHECK_FALSE(r.engine.outputs().axes[0].push_output);
+  CHECK(r.trace[0].min_actual >= -1);
+}
+
 SCENARIO("final move after a switch homing when final_move_enable is set", "[modes]") {
   Rig r;
   r.settings.axes[0].final_move_enable = true;
