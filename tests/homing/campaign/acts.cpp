@@ -25,8 +25,8 @@ void Run::exercise_motion() {
   const AxisSettings e = effective(r_.settings, a);
   Causes causes;
   if (e.shared_limit || (slave >= 0 && r_.settings.axes[static_cast<std::size_t>(slave)].shared_limit))
-    causes.allow({AlarmCode::hard_limit});
-  w_->alarms_seen = 0;
+    causes.add("the jogged pair's shared-limit sensor", {AlarmCode::hard_limit}, movers);
+  w_->clear_alarms_seen();
   w_->set_outside_movers(movers);
   const int dir = d_.chance(0.5) ? 1 : -1;
   say(std::string("jog ") + kAxisUpper[a] + (dir > 0 ? " +" : " -"));
@@ -55,8 +55,7 @@ void Run::exercise_motion() {
     settle(10);
   }
   w_->set_outside_movers(0);
-  if (const std::uint32_t stray = w_->alarms_seen & ~causes.allowed)
-    w_->fail("alarm " + alarm_list(stray) + " without a cause", "during jogs and moves");
+  if (auto u = explain(*w_, causes, r_.settings)) w_->fail(u->what + " during jogs and moves", u->detail);
 }
 
 // A shared-limit axis jogged into its own sensor: the trip must be recoverable.
@@ -75,15 +74,19 @@ void Run::hard_limit_recovery() {
   const int slave = slave_index(r_.settings, a);
   const AxisMask movers = static_cast<AxisMask>(axis_bit(a) | (slave >= 0 ? axis_bit(static_cast<std::size_t>(slave)) : 0));
   const int toward = dir_of(effective(r_.settings, a)) > 0 ? 1 : -1;
-  w_->alarms_seen = 0;
+  w_->clear_alarms_seen();
   w_->set_outside_movers(movers);
   say(std::string("jog ") + kAxisUpper[a] + " toward its shared-limit sensor");
   r_.jog(a, toward);
   r_.run_until([&] { return r_.status().alarm || !ok(); }, 10);
   r_.release_jogs();
   settle(10);
-  const std::uint32_t hard = 1u << static_cast<unsigned>(AlarmCode::hard_limit);
-  if (w_->alarms_seen & ~hard) w_->fail("alarm " + alarm_list(w_->alarms_seen & ~hard) + " without a cause", "jogging into a shared-limit sensor");
+  {
+    Causes causes;
+    // The jogged axis, or its slave riding along, meets its sensor first.
+    causes.add(std::string(1, kAxisUpper[a]) + "'s shared-limit sensor or its slave's", {AlarmCode::hard_limit}, movers);
+    if (auto u = explain(*w_, causes, r_.settings)) w_->fail(u->what + " jogging into a shared-limit sensor", u->detail);
+  }
   if (r_.axis(a).alarm.code != AlarmCode::hard_limit || !ok()) {
     w_->set_outside_movers(0);
     return;  // the soft limits kept it off its sensor

@@ -114,18 +114,22 @@ void Run::apply(const Event& e, Causes& causes) {
     case EventKind::home_again: r_.pending.home_all = true; break;
     case EventKind::count: break;
   }
-  event_cause(causes, e, r_.settings);
-  // A slave's sensor blinded (stuck inactive, an open NO circuit) while the
-  // slave searches off it looks exactly like its release edge: the engine
-  // squares there, short of a skew it cannot see any more. Nothing can tell.
-  if (master_index(r_.settings, e.axis) >= 0 && (w_->dead_sensor & axis_bit(e.axis))) {
-    const std::string skew = std::string(1, kAxisUpper[e.axis]) + "'s skew beyond its max misalignment";
-    std::erase(causes.must, skew);
+  event_cause(causes, e, r_.settings, r_.status(), w_->plan);
+  // What no engine can see, named: a slave's sensor blinded (stuck inactive,
+  // an open NO circuit) while the slave searches off it looks exactly like
+  // its release edge, so the engine squares there, short of a skew it can no
+  // longer see; and a sensor stuck active that goes dead during the back-off
+  // is, to the engine, its release edge. Those causes may still show, but
+  // need not.
+  if (w_->dead_sensor & axis_bit(e.axis)) {
+    const std::string axis(1, kAxisUpper[e.axis]);
+    for (Cause& c : causes.list)
+      if ((master_index(r_.settings, e.axis) >= 0 && c.what == axis + "'s skew beyond its max misalignment") ||
+          c.what == axis + "'s faulty sensor") {
+        c.must = false;
+        c.what += " (its sensor went dead: it need not show)";
+      }
   }
-  // Likewise a sensor stuck active that goes dead during the back-off: to the
-  // engine that is its release edge, and it homes there.
-  if (w_->dead_sensor & axis_bit(e.axis))
-    std::erase(causes.must, std::string(1, kAxisUpper[e.axis]) + "'s faulty sensor");
 }
 
 // One homing cycle, to its end and the machine at rest, then its verdict.
@@ -135,7 +139,7 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
   Causes causes = standing_causes(r_, m_, plan, refused, encoder_invalid_);
   const std::uint32_t cycles_before = r_.status().homing_cycles;
   w_->begin_window(plan, refused);
-  w_->alarms_seen = 0;
+  w_->clear_alarms_seen();
   {
     std::ostringstream o;
     o << (all ? "home all" : "home axes ");
@@ -167,15 +171,22 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
   const double limit = time_bound(r_, m_, plan);
   std::vector<bool> done(events.size(), false);
   while (r_.status().homing && r_.sim().time_s() - t0 < limit && ok()) {
+    bool comm_lost_now = false;
     for (std::size_t i = 0; i < events.size(); ++i)
       if (!done[i] && r_.sim().time_s() - t0 >= events[i].at_s) {
         done[i] = true;
         apply(events[i], causes);
+        comm_lost_now = comm_lost_now || events[i].kind == EventKind::comm_lost;
         acts_ |= act::event_in_cycle;
       }
     if (button_periods > 0 && --button_periods == 0) r_.sim().set_start_button(false);
     const bool home_again = r_.pending.home_all;
     step();
+    // The last carriage arrived at rest in the very period the link was lost
+    // and the cycle ended: nothing moved after the engine saw it, so nothing to stop.
+    if (comm_lost_now && !r_.status().homing && !r_.any_moving())
+      for (Cause& c : causes.list)
+        if (c.what == "the communication loss") c.must = false;
     if (home_again) {
       const CommandResult again = r_.status().last_command_result;
       if (r_.status().homing && again != CommandResult::already_running && again != CommandResult::refused_busy)
@@ -320,8 +331,11 @@ Outcome Run::run() {
     if (m_.invalid == Invalid::none && master_index(r_.settings, f->axis) >= 0 && p >= 0 && inherited_field(f->field))
       w_->fail("the configuration check judges a slave by a setting it inherits from its master",
                describe_fault(*f, r_.settings));
-    else if (m_.invalid == Invalid::none)
+    else if (m_.invalid == Invalid::none) {
+      // The generator built it valid by the documented rules: one of the two is wrong.
       out.unexpected_refusal = describe_fault(*f, r_.settings);
+      w_->fail("the configuration check refuses a machine the documented rules accept", out.unexpected_refusal);
+    }
   } else if (m_.invalid != Invalid::none) {
     w_->fail(std::string("the configuration check accepts a ") + invalid_name(m_.invalid));
   }

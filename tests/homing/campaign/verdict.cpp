@@ -1,15 +1,42 @@
 #include "verdict.hpp"
 
+#include <algorithm>
 #include <sstream>
 
 #include "homing/motion.hpp"
 
 namespace campaign {
 
-void Causes::sensor_fault() {
-  allow({AlarmCode::sensor_not_found, AlarmCode::overrun_during_stop, AlarmCode::stop_distance_exceeded,
-         AlarmCode::not_released, AlarmCode::reapproach_not_found, AlarmCode::index_not_found,
-         AlarmCode::misalignment, AlarmCode::slave_sensor_missing, AlarmCode::hard_limit});
+std::uint32_t code_bits(std::initializer_list<AlarmCode> codes) {
+  std::uint32_t bits = 0;
+  for (AlarmCode c : codes) bits |= 1u << static_cast<unsigned>(c);
+  return bits;
+}
+
+Cause& Causes::add(std::string what, std::initializer_list<AlarmCode> codes, AxisMask axes, bool must) {
+  Cause c;
+  c.what = std::move(what);
+  // "X's cam..." and "drive fault on X" are one class for every axis.
+  c.kind = c.what;
+  if (c.kind.size() > 3 && c.kind.compare(1, 3, "'s ") == 0) c.kind = "an axis's " + c.kind.substr(3);
+  if (const auto on = c.kind.find(" on "); on != std::string::npos && on + 5 == c.kind.size()) c.kind.resize(on);
+  c.codes = code_bits(codes);
+  c.axes = axes;
+  c.must = must;
+  list.push_back(std::move(c));
+  return list.back();
+}
+
+Cause& Causes::sensor_fault(std::string what, AxisMask axes, bool must) {
+  return add(std::move(what),
+             {AlarmCode::sensor_not_found, AlarmCode::overrun_during_stop, AlarmCode::stop_distance_exceeded,
+              AlarmCode::not_released, AlarmCode::reapproach_not_found, AlarmCode::index_not_found,
+              AlarmCode::misalignment, AlarmCode::slave_sensor_missing, AlarmCode::hard_limit},
+             axes, must);
+}
+
+bool Causes::any_must() const {
+  return std::any_of(list.begin(), list.end(), [](const Cause& c) { return c.must; });
 }
 
 std::string alarm_list(std::uint32_t bits) {
@@ -19,11 +46,54 @@ std::string alarm_list(std::uint32_t bits) {
   return out.empty() ? "none" : out;
 }
 
+std::string axis_letters(AxisMask m) {
+  std::string out;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (m & axis_bit(a)) out += kAxisUpper[a];
+  return out.empty() ? "-" : out;
+}
+
+namespace {
+
+std::string letter(std::size_t a) { return std::string(1, kAxisUpper[a]); }
+
+// The axis and its gantry partner: a cause on one side may stop the pair
+// with an alarm on the other (racking is the slave's alarm).
+AxisMask with_partner(const Settings& s, std::size_t a) {
+  const int p = partner_index(s, a);
+  return static_cast<AxisMask>(axis_bit(a) | (p >= 0 ? axis_bit(static_cast<std::size_t>(p)) : 0));
+}
+
+// Every axis linked to `a` by slave_of, either way (a refused group).
+AxisMask slave_of_group(const Settings& s, std::size_t a) {
+  AxisMask g = axis_bit(a);
+  for (int round = 0; round < 3; ++round)
+    for (std::size_t x = 0; x < kAxisCount; ++x) {
+      const int named = static_cast<int>(s.axes[x].slave_of) - 1;
+      if (named < 0 || named >= static_cast<int>(kAxisCount)) continue;
+      const std::size_t n = static_cast<std::size_t>(named);
+      if ((g & axis_bit(x)) || (g & axis_bit(n))) g |= static_cast<AxisMask>(axis_bit(x) | axis_bit(n));
+    }
+  return g;
+}
+
+std::string cause_list(const Causes& causes) {
+  std::string out;
+  for (const Cause& c : causes.list) {
+    out += (out.empty() ? "" : "; ") + c.what + ": " + alarm_list(c.codes) + " on " + axis_letters(c.axes);
+    if (c.global) out += ", global " + alarm_list(c.global);
+    if (c.must) out += " (must show)";
+  }
+  return out.empty() ? "none" : out;
+}
+
+}  // namespace
+
 Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, bool refused, AxisMask encoder_invalid) {
   Causes c;
   if (refused) {
-    c.allow({AlarmCode::settings_fault, AlarmCode::slave_sensor_missing});
-    c.must.push_back("the configuration check's refusal");
+    c.add(std::string("the configuration check's refusal (") + invalid_name(m.invalid) + " on " + letter(m.invalid_axis) + ")",
+          {AlarmCode::settings_fault, AlarmCode::slave_sensor_missing}, slave_of_group(r.settings, m.invalid_axis), true);
     return c;
   }
   for (std::size_t a = 0; a < kAxisCount; ++a) {
@@ -32,15 +102,11 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
     const bool mover = plan.movers & bit;
     const AxisSettings e = effective(r.settings, a);
     const sim::Fault f = r.sim().axis_config(a).fault;
-    if (f == sim::Fault::sensor_stuck_active || f == sim::Fault::sensor_stuck_inactive || f == sim::Fault::wire_break) {
-      c.sensor_fault();
-      if (mover && mode_uses_switch(e.mode)) c.must.push_back(std::string(1, kAxisUpper[a]) + "'s faulty sensor");
-    }
-    if (p.short_cam) {
-      c.allow({AlarmCode::overrun_during_stop, AlarmCode::sensor_not_found});
-      if (mover) c.must.push_back(std::string(1, kAxisUpper[a]) + "'s cam shorter than its stop");
-    }
-    if (p.rest_on_sensor) c.allow({AlarmCode::settings_fault, AlarmCode::not_released});
+    if (f == sim::Fault::sensor_stuck_active || f == sim::Fault::sensor_stuck_inactive || f == sim::Fault::wire_break)
+      c.sensor_fault(letter(a) + "'s faulty sensor", with_partner(r.settings, a), mover && mode_uses_switch(e.mode));
+    if (p.short_cam)
+      c.add(letter(a) + "'s cam shorter than its stop", {AlarmCode::overrun_during_stop, AlarmCode::sensor_not_found}, bit, mover);
+    if (p.rest_on_sensor) c.add(letter(a) + "'s shared limit resting on its sensor", {AlarmCode::settings_fault, AlarmCode::not_released}, bit);
     // A cycle that starts deeper in the cam than max_backoff can release (a
     // jog or move left it there) backs off straight away and must give up.
     if (mover && mode_uses_switch(e.mode) && f == sim::Fault::none) {
@@ -49,10 +115,11 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
       const double depth = dir_of(e) < 0 ? cfg.sensor_max_mm - x : x - cfg.sensor_min_mm;
       const bool inside = x >= cfg.sensor_min_mm && x <= cfg.sensor_max_mm;
       if (inside && depth + cfg.hysteresis_mm + 4 * cfg.noise_mm >= e.max_backoff_mm)
-        c.allow({AlarmCode::not_released});
+        c.add(letter(a) + " starting deeper in its cam than max_backoff releases", {AlarmCode::not_released}, with_partner(r.settings, a));
     }
     // An unsequenced shared-limit axis is assigned where it stands: on its sensor, that is a trip.
-    if ((plan.unsequenced & bit) && r.settings.axes[a].shared_limit) c.allow({AlarmCode::hard_limit});
+    if ((plan.unsequenced & bit) && r.settings.axes[a].shared_limit)
+      c.add(letter(a) + " unsequenced on its shared-limit sensor", {AlarmCode::hard_limit}, bit);
     if (p.role == Role::slave && mover) {
       // The skew from where this cycle starts (earlier cycles may have racked
       // the pair within its limit, squarer or less square).
@@ -60,38 +127,105 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
       const double skew = std::abs(p.rest_rel_mm - (r.actual(a) - r.actual(mi)));
       const double limit = r.settings.axes[a].max_misalignment_mm;
       if (p.bad_skew || skew > p.budget_mm + 1e-3)
-        c.allow({AlarmCode::misalignment, AlarmCode::not_released, AlarmCode::sensor_not_found,
-                 AlarmCode::slave_sensor_missing});
-      if (skew > limit + p.extras_mm)
-        c.must.push_back(std::string(1, kAxisUpper[a]) + "'s skew beyond its max misalignment");
+        c.add(letter(a) + "'s skew beyond its max misalignment",
+              {AlarmCode::misalignment, AlarmCode::not_released, AlarmCode::sensor_not_found, AlarmCode::slave_sensor_missing},
+              static_cast<AxisMask>(bit | axis_bit(mi)), skew > limit + p.extras_mm);
     }
-    if ((encoder_invalid & bit) && mode_is_absolute(e.mode)) {
-      c.allow({AlarmCode::encoder_fault});
-      if ((plan.covered & bit) || (plan.unsequenced & bit))
-        c.must.push_back(std::string(1, kAxisUpper[a]) + "'s invalid absolute encoder");
-    }
+    if ((encoder_invalid & bit) && mode_is_absolute(e.mode))
+      c.add(letter(a) + "'s invalid absolute encoder", {AlarmCode::encoder_fault}, bit,
+            (plan.covered & bit) || (plan.unsequenced & bit));
   }
   return c;
 }
 
-void event_cause(Causes& c, const Event& e, const Settings& s) {
-  const std::string who = std::string(event_name(e.kind)) + " on " + kAxisUpper[e.axis];
+void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st, const CyclePlan& plan) {
+  const std::string who = std::string(event_name(e.kind)) + " on " + letter(e.axis);
+  // Axes the cycle still runs, and those moving now.
+  AxisMask running = 0, moving = 0;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const AxisStatus& as = st.axes[a];
+    if ((plan.covered & axis_bit(a)) && as.phase != Phase::done) running |= axis_bit(a);
+    if (as.velocity_mm_per_s != 0 || as.phase == Phase::jog || as.phase == Phase::move) moving |= axis_bit(a);
+  }
   switch (e.kind) {
-    case EventKind::abort: c.allow({AlarmCode::aborted}); c.must.push_back("the abort"); break;
-    case EventKind::estop: c.allow({AlarmCode::emergency_stop}); c.must.push_back("the e-stop"); break;
-    case EventKind::drive_fault: c.allow({AlarmCode::drive_fault}); c.must.push_back(who); break;
+    case EventKind::abort: c.add("the abort", {AlarmCode::aborted}, running, running != 0); break;
+    case EventKind::estop: {
+      // Every axis of the running cycle (those done with it too) and every one moving.
+      Cause& k = c.add("the e-stop", {AlarmCode::emergency_stop}, static_cast<AxisMask>(plan.covered | moving), true);
+      k.global = code_bits({AlarmCode::emergency_stop});
+      break;
+    }
+    case EventKind::drive_fault: {
+      Cause& k = c.add(who, {AlarmCode::drive_fault}, axis_bit(e.axis), true);
+      k.phase_axis = e.axis;
+      k.phase = st.axes[e.axis].phase;
+      break;
+    }
     case EventKind::stuck_active:
     case EventKind::stuck_inactive:
-    case EventKind::wire_break: c.sensor_fault(); break;
-    case EventKind::comm_lost: c.allow({AlarmCode::communication_lost}); break;
+    case EventKind::wire_break: c.sensor_fault(who, with_partner(s, e.axis)); break;
+    case EventKind::comm_lost:
+      // It stops motion: a carriage moving when it came must show it (one
+      // arriving in that very period may end the cycle without it).
+      c.add("the communication loss", {AlarmCode::communication_lost}, static_cast<AxisMask>(running | moving),
+            moving != 0);
+      break;
     case EventKind::permit_off:
-      c.allow({AlarmCode::permit_withdrawn});
-      if (s.global.permit_required) c.must.push_back("the permit withdrawn");
+      c.add("the permit withdrawn", {AlarmCode::permit_withdrawn}, running, s.global.permit_required && running != 0);
       break;
     case EventKind::reset:
     case EventKind::home_again:
     case EventKind::count: break;
   }
+}
+
+std::optional<Unexplained> explain(const Watch& w, const Causes& causes, const Settings& s) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    for (unsigned code = 1; code < kAlarmCodeCount; ++code) {
+      const std::uint32_t bit = 1u << code;
+      if (!(w.axis_alarms[a] & bit)) continue;
+      const bool explained = std::any_of(causes.list.begin(), causes.list.end(), [&](const Cause& c) {
+        return (c.codes & bit) && (c.axes & axis_bit(a));
+      });
+      if (explained) continue;
+      std::ostringstream o;
+      o << describe_alarm(a, w.first_alarm[a], s) << " (phase " << phase_name(w.first_alarm[a].phase) << "); causes: " << cause_list(causes);
+      return Unexplained{"alarm " + alarm_list(bit) + " without a cause on its axis", letter(a) + ": " + o.str()};
+    }
+  }
+  if (const std::uint32_t stray = w.global_alarms & ~[&] {
+        std::uint32_t g = 0;
+        for (const Cause& c : causes.list) g |= c.global;
+        return g;
+      }())
+    return Unexplained{"global alarm " + alarm_list(stray) + " without a cause", "causes: " + cause_list(causes)};
+  for (const Cause& c : causes.list) {
+    if (!c.must) continue;
+    bool shown = (w.global_alarms & c.global) != 0;
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if ((c.axes & axis_bit(a)) && (w.axis_alarms[a] & c.codes)) shown = true;
+    // Another cause's alarm stopped the machine first (explained above):
+    // this one never got to act.
+    if (!shown && w.alarms_seen != 0) continue;
+    if (!shown) {
+      std::ostringstream o;
+      o << "expected " << alarm_list(c.codes) << " on " << axis_letters(c.axes) << "; seen:";
+      for (std::size_t a = 0; a < kAxisCount; ++a)
+        if (w.axis_alarms[a]) o << " " << letter(a) << " " << alarm_list(w.axis_alarms[a]) << ";";
+      if (w.global_alarms) o << " global " << alarm_list(w.global_alarms);
+      return Unexplained{(c.kind.empty() ? c.what : c.kind) + " raised no alarm of its own", c.what + ": " + o.str()};
+    }
+    if (c.phase_axis) {
+      const std::size_t a = *c.phase_axis;
+      const Alarm& first = w.first_alarm[a];
+      if ((c.codes & (1u << static_cast<unsigned>(first.code))) && first.phase != c.phase) {
+        std::ostringstream o;
+        o << c.what << " struck in phase " << phase_name(c.phase) << ", its alarm says phase " << phase_name(first.phase);
+        return Unexplained{"an alarm names another phase than the one its cause struck in", o.str()};
+      }
+    }
+  }
+  return std::nullopt;
 }
 
 double path_bound(rig::Rig& r, const Machine& m, std::size_t a, double x_start) {
@@ -140,14 +274,7 @@ void verdict(Watch& w, rig::Rig& r, const Machine& m, const Causes& causes, std:
   const CyclePlan& plan = w.plan;
   const Status& st = r.status();
   const std::uint32_t seen = w.alarms_seen;
-  if (const std::uint32_t stray = seen & ~causes.allowed) {
-    std::ostringstream o;
-    o << "alarms seen: " << alarm_list(seen) << "; allowed by the causes: " << alarm_list(causes.allowed);
-    for (std::size_t a = 0; a < kAxisCount; ++a)
-      if (st.axes[a].alarm) o << "; " << describe_alarm(a, st.axes[a].alarm, r.settings) << " (phase " << phase_name(st.axes[a].alarm.phase) << ")";
-    w.fail("alarm " + alarm_list(stray) + " without a cause", o.str());
-  }
-  if (!causes.must.empty() && seen == 0) w.fail(causes.must.front() + " raised no alarm");
+  if (auto u = explain(w, causes, r.settings)) w.fail(u->what, u->detail);
   if (w.refused) {
     const std::uint32_t settings_codes = (1u << static_cast<unsigned>(AlarmCode::settings_fault)) |
                                          (1u << static_cast<unsigned>(AlarmCode::slave_sensor_missing));

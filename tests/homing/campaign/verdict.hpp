@@ -1,8 +1,10 @@
 #pragma once
-// What may (and what must) come out of one cycle: alarms only from their
-// causes, a homed machine with the coordinates its modes define, within the
-// cycle's distance bounds.
+// What may (and what must) come out of one cycle: each alarm from a cause
+// that explains it on the axis it names, each cause that must show as its
+// own alarm on the axis it hits (or its gantry partner), a homed machine
+// with the coordinates its modes define, within the cycle's distance bounds.
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -11,19 +13,43 @@
 
 namespace campaign {
 
+// One thing wrong with the machine or done to it: the alarm codes it may
+// raise and on which axes; whether it must show as one of them; and, for a
+// cause that strikes one axis at one moment (a drive fault), the phase that
+// axis was in, which its alarm must carry.
+struct Cause {
+  std::string what;          // this instance, with its axis
+  std::string kind;          // the failure class when it does not show ("" = what)
+  std::uint32_t codes = 0;   // bit per AlarmCode, on `axes`
+  AxisMask axes = 0;
+  std::uint32_t global = 0;  // bit per AlarmCode, as the global alarm
+  bool must = false;
+  std::optional<std::size_t> phase_axis;
+  Phase phase = Phase::idle;
+};
+
+std::uint32_t code_bits(std::initializer_list<AlarmCode> codes);
+
 struct Causes {
-  std::uint32_t allowed = 0;        // bit per AlarmCode
-  std::vector<std::string> must;    // causes that must end the cycle in an alarm
-  void allow(std::initializer_list<AlarmCode> codes) {
-    for (AlarmCode c : codes) allowed |= 1u << static_cast<unsigned>(c);
-  }
-  void sensor_fault();  // a sensor that lies: every alarm of the edge search
+  std::vector<Cause> list;
+  Cause& add(std::string what, std::initializer_list<AlarmCode> codes, AxisMask axes, bool must = false);
+  // Every alarm a lying sensor can make the edge search raise.
+  Cause& sensor_fault(std::string what, AxisMask axes, bool must = false);
+  bool any_must() const;
 };
 
 // What is wrong with the machine as the cycle starts.
 Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, bool refused, AxisMask encoder_invalid);
-// An event applied while the cycle ran.
-void event_cause(Causes& c, const Event& e, const Settings& s);
+// An event applied while the cycle ran (the status as it stood when it was applied).
+void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st, const CyclePlan& plan);
+
+// Every alarm the watch saw is explained by a cause on its axis and every
+// cause that must show did: "" when so, else what is wrong.
+struct Unexplained {
+  std::string what;    // the failure's class
+  std::string detail;  // figures
+};
+std::optional<Unexplained> explain(const Watch& w, const Causes& causes, const Settings& s);
 
 // Longest carriage path an axis may travel in one cycle, alarm stop included.
 // x_start: the carriage where the cycle started.
@@ -35,5 +61,6 @@ double time_bound(rig::Rig& r, const Machine& m, const CyclePlan& plan);
 void verdict(Watch& w, rig::Rig& r, const Machine& m, const Causes& causes, std::uint32_t cycles_before);
 
 std::string alarm_list(std::uint32_t bits);
+std::string axis_letters(AxisMask m);
 
 }  // namespace campaign

@@ -56,6 +56,12 @@ void Watch::fail(const std::string& what, const std::string& detail) {
   if (failure_.what.empty() && !ignored(what)) failure_ = Failure{what, detail};
 }
 
+void Watch::clear_alarms_seen() {
+  alarms_seen = global_alarms = 0;
+  axis_alarms.fill(0);
+  first_alarm.fill(Alarm{});
+}
+
 double Watch::accel_limit(std::size_t a) const { return eff_[a].acceleration_mm_per_s2; }
 
 void Watch::begin_window(const CyclePlan& p, bool is_refused) {
@@ -103,9 +109,17 @@ void Watch::period() {
   const double engine_dt = ran_dt_prev_;  // the engine integrated the period before this one
   ran_dt_prev_ = r_.ran_dt_s;
   const Status& st = r_.status();
-  for (const AxisStatus& as : st.axes)
-    if (as.alarm.code != AlarmCode::none) alarms_seen |= 1u << static_cast<unsigned>(as.alarm.code);
-  if (st.global_alarm != AlarmCode::none) alarms_seen |= 1u << static_cast<unsigned>(st.global_alarm);
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const Alarm& al = st.axes[a].alarm;
+    if (!al) continue;
+    alarms_seen |= 1u << static_cast<unsigned>(al.code);
+    if (!axis_alarms[a]) first_alarm[a] = al;
+    axis_alarms[a] |= 1u << static_cast<unsigned>(al.code);
+  }
+  if (st.global_alarm != AlarmCode::none) {
+    alarms_seen |= 1u << static_cast<unsigned>(st.global_alarm);
+    global_alarms |= 1u << static_cast<unsigned>(st.global_alarm);
+  }
   if (st.alarm && !alarm_prev_) {
     alarm_periods_ = 0;
     for (std::size_t a = 0; a < kAxisCount; ++a) {
@@ -157,23 +171,26 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
   homed_prev_[a] = as.homed;
   if (in_window && (plan.covered & bit) && !(flipped & bit)) track_edges(a);
 
-  // Mechanical stops: touched only while pushing into them.
+  // Mechanical stops: touched only at reduced current (the push output on
+  // for the period that brought it there: a push, or a push cut short by an
+  // alarm braking on into the stop), or by a pushing axis whose dead sensor
+  // let the seek run into the stop just behind it. A commutator slave rides
+  // along with its master's output, into its stop too. Once at the stop it
+  // may rest there, but never drives on into it at full current.
   if (r_.sim().at_hard_stop(a)) {
     const bool pushing = mode_is_pushing(e.mode);
-    // A push stopped by an alarm brakes on into the stop it was pushing into.
-    const bool push_phase =
-        as.phase == Phase::push || (master >= 0 && st.axes[static_cast<std::size_t>(master)].phase == Phase::push) ||
-        (as.phase == Phase::stopping && braking_push_[a]);
-    // Pushing into it, or a pushing axis whose dead sensor let the seek run into
-    // the stop just behind it: allowed until the carriage leaves the stop.
-    // A commutator slave rides along with its master's output, into its stop too.
+    const bool reduced = r_.engine.outputs().axes[a].push_output ||
+                         (master >= 0 && r_.engine.outputs().axes[static_cast<std::size_t>(master)].push_output);
     const bool rides = master >= 0 && r_.settings.axes[a].slave_mode == SlaveMode::external_commutator &&
                        (dead_sensor & axis_bit(static_cast<std::size_t>(master)));
-    if (pushing && (push_phase || (dead_sensor & bit) || rides)) pushed_to_stop_[a] = true;
+    const bool excused = (dead_sensor & bit) || rides;
+    if (pushing && (reduced || excused)) pushed_to_stop_[a] = true;
     if (!(pushing && pushed_to_stop_[a]))
       fail(std::string("a carriage ran into a mechanical stop") +
                (m_.plan[a].differs ? " (a slave whose own inherited fields differ)" : ""),
            fmt_axis(a, r_, x));
+    else if (!reduced && !excused && v * dir_of(e) > 0)
+      fail("a carriage drove into its mechanical stop at full current (push output off)", fmt_axis(a, r_, x));
   } else {
     pushed_to_stop_[a] = false;
   }
@@ -261,8 +278,6 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
 
   x_prev_[a] = x;
   v_prev_[a] = v;
-  if (as.phase == Phase::stopping && phase_prev_[a] == Phase::push) braking_push_[a] = true;
-  if (as.phase != Phase::stopping) braking_push_[a] = false;
   phase_prev_[a] = as.phase;
 }
 
@@ -272,10 +287,9 @@ void Watch::racking() {
     const std::size_t mi = static_cast<std::size_t>(m_.plan[s].partner);
     const double rel = r_.actual(s) - r_.actual(mi);
     const double dev = std::abs(rel - rel_ref_[s]);
-    const AxisSettings& ms = r_.settings.axes[mi];
-    const double limit = in_window ? r_.settings.axes[s].max_misalignment_mm + 1e-3 +
-                                         mm_per_min_to_mm_per_s(ms.seek_feedrate_mm_per_min) * m_.max_dt_s
-                                   : 1e-6;
+    // The promise as written (README "Gantries: racking"): never beyond
+    // max_misalignment, late periods included; 1 µm for the arithmetic.
+    const double limit = in_window ? r_.settings.axes[s].max_misalignment_mm + kRackingTolerance_mm : 1e-6;
     // Locked and homed, both sides have the same machine position (each was
     // assigned the master's home position at its own rest point).
     const AxisStatus& ss = r_.status().axes[s];

@@ -11,6 +11,10 @@
 
 namespace campaign {
 
+// What the racking check allows beyond max_misalignment: the simulation's
+// floating-point arithmetic, not a velocity-scaled margin.
+inline constexpr double kRackingTolerance_mm = 1e-3;
+
 struct Failure {
   std::string what;    // short and stable: the failure's class
   std::string detail;  // figures of this instance
@@ -46,7 +50,11 @@ class Watch {
   std::array<Truth, kAxisCount> truth{};
   AxisMask dead_sensor = 0;     // a sensor that can no longer trigger (pushing seeks may hit the stop)
   AxisMask tampered = 0;        // a sensor fault during this window: its edges are not the cam's
-  std::uint32_t alarms_seen = 0;  // bit per AlarmCode, since the script last cleared it
+  std::uint32_t alarms_seen = 0;  // bit per AlarmCode, any axis or global, since clear_alarms_seen()
+  std::array<std::uint32_t, kAxisCount> axis_alarms{};  // ... per axis
+  std::uint32_t global_alarms = 0;                      // ... as the global alarm
+  std::array<Alarm, kAxisCount> first_alarm{};          // the first each axis latched, with its phase
+  void clear_alarms_seen();
   AxisMask flipped = 0;         // axes the engine marked homed during the window
   std::array<double, kAxisCount> path{};  // carriage path in the window
   bool in_window = false;
@@ -90,7 +98,6 @@ class Watch {
   std::array<bool, kAxisCount> has_release_{}, has_trigger_{};
   std::array<Phase, kAxisCount> traced_{};
   std::array<Phase, kAxisCount> phase_prev_{};
-  std::array<bool, kAxisCount> braking_push_{};  // stopping from a push cut short
 };
 
 }  // namespace campaign
