@@ -218,7 +218,7 @@ SCENARIO("a gantry master accelerates at the pair's lower acceleration while hom
       acc.start(r);
       acc.accel[0] = acc.accel[1] = 200;  // from the configuration, not from the engine's motion_settings
       REQUIRE(r.home_all());
-      INFO("worst change of X " << acc.worst_from[0] << " -> " << acc.worst_to[0] << " mm/s");
+      INFO(acc.describe(0) << "\n" << acc.describe(1));
       CHECK(acc.within(0));
       CHECK(acc.within(1));
       CHECK(r.actual(0) == Approx(1.05).margin(1e-3));
@@ -246,7 +246,7 @@ SCENARIO("a locked slave follows its master's jog and move within its own accele
       r.run_until([&] { return !r.any_moving(); }, 5);
       r.move(0, 3);
       r.run_until([&] { return !r.any_moving() && r.axis(0).phase == Phase::idle; }, 10);
-      INFO("worst change of Y " << acc.worst_from[1] << " -> " << acc.worst_to[1] << " mm/s");
+      INFO(acc.describe(1));
       CHECK(acc.worst_ratio[1] > 0.5);  // it did ramp, at the pair's rate
       CHECK(acc.within(1));
       CHECK(r.axis(0).position_mm == Approx(3).margin(1e-9));

@@ -151,6 +151,7 @@ SCENARIO("after an alarm the pair brakes with the lower of the two accelerations
   r.pending.abort = true;
   r.step();
   r.run_until([&] { return !r.any_moving(); }, 5);
+  INFO(acc.describe(0) << "\n" << acc.describe(1));
   CHECK(acc.within(0));
   CHECK(acc.within(1));
   CHECK(motion_settings(r.settings).axes[0].acceleration_mm_per_s2 == 100);
@@ -165,6 +166,7 @@ SCENARIO("the seek brakes in time and comes to rest at max_seek_travel", "[safet
   acc.start(r);
   r.home_all();
   CHECK(r.axis(0).alarm.code == AlarmCode::sensor_not_found);
+  INFO(acc.describe(0));
   CHECK(acc.within(0));
   CHECK(x0 - r.actual(0) == Approx(30).margin(1e-6));
 }
@@ -179,6 +181,7 @@ SCENARIO("the seek end stays within the acceleration when control periods come l
   acc.start(r);
   r.home_all();
   CHECK(r.axis(0).alarm.code == AlarmCode::sensor_not_found);
+  INFO(acc.describe(0));
   CHECK(acc.within(0));
 }
 
@@ -198,7 +201,7 @@ SCENARIO("the back-off brakes in time and comes to rest at max_backoff", "[safet
       r.home_all(30);
       CHECK(r.axis(0).alarm.code == AlarmCode::not_released);
       CHECK(r.axis(0).alarm.phase == Phase::back_off);
-      INFO("worst change " << acc.worst_from[0] << " -> " << acc.worst_to[0] << " mm/s");
+      INFO(acc.describe(0));
       CHECK(acc.within(0));
       CHECK(r.actual(0) - x0 == Approx(r.settings.axes[0].max_backoff_mm).margin(1e-6));
     }
@@ -227,8 +230,7 @@ SCENARIO("a pull-off that a late period reaches brakes onto its target within th
     AccelWatch acc;
     acc.start(r);
     const bool homed = r.home_all();
-    INFO("late period at pull-off period " << late_at << ": worst change " << acc.worst_from[0] << " -> "
-                                           << acc.worst_to[0] << " mm/s");
+    INFO("late period at pull-off period " << late_at << ", " << acc.describe(0));
     CHECK(was_late);
     CHECK(homed);
     CHECK(acc.within(0));
