@@ -37,8 +37,8 @@
 //   an unsequenced absolute axis is given its home position instead of the encoder's
 //     -> motion_safety_test "an absolute axis in no sequence step takes its coordinate from its encoder"
 //   a software-slaved gantry racks past its limit before braking
-//     -> motion_safety_test "a stuck-active slave sensor stops the pair within max_misalignment"
-//        and "a gantry with one side starting on its sensor and the other side's sensor dead stops within max_misalignment"
+//     -> motion_safety_test "a software-slaved gantry whose slave seeks on alone brakes in time to stay within
+//        max_misalignment"
 //   a commutator slave's sensor read with its master's polarity racks the gantry
 //     -> gantry_test "external commutator: the slave's sensor is read with its own polarity"
 #include "replay.hpp"
