@@ -2,6 +2,11 @@
 // squaring (slave_of, slave_mode 0) and an external commutator (slave_mode 1).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
+
+#include "accel_watch.hpp"
+#include "homing/settings_check.hpp"
 #include "rig.hpp"
 #include "truth.hpp"
 
@@ -198,4 +203,82 @@ SCENARIO("software-slaved slave whose sensor never triggers is caught by the mis
   // The slave went no further than max misalignment plus its stop (and a period each for seeing
   // the trigger and the bound) past the master's trigger.
   CHECK(r.actual(1) >= -2 - 0.4 - 2 * 0.02 - 1e-9);
+}
+
+SCENARIO("a gantry master accelerates at the pair's lower acceleration while homing", "[gantry][safety]") {
+  // The slave's drive can do 200 mm/s², the master's 500: every velocity
+  // change of either side in the cycle (the ramps of seek, back-off and
+  // pull-off, the stop after the trigger) stays within 200 mm/s².
+  for (const bool commutator : {false, true}) {
+    DYNAMIC_SECTION((commutator ? "external commutator" : "software-slaved")) {
+      Rig r = commutator ? commutator_gantry(100.8) : software_gantry(100.8);
+      r.settings.axes[1].acceleration_mm_per_s2 = 200;
+      REQUIRE_FALSE(check_axis(r.settings, 1));
+      AccelWatch acc;
+      acc.start(r);
+      acc.accel[0] = acc.accel[1] = 200;  // from the configuration, not from the engine's motion_settings
+      REQUIRE(r.home_all());
+      INFO(acc.describe(0) << "\n" << acc.describe(1));
+      CHECK(acc.worst_ratio[0] > 0.5);  // it did ramp, at the pair's rate
+      CHECK(acc.within(0));
+      CHECK(acc.within(1));
+      CHECK(r.actual(0) == Approx(1.05).margin(1e-3));
+      CHECK(r.actual(1) == Approx(1.05).margin(1e-3));
+    }
+  }
+}
+
+SCENARIO("a locked slave follows its master's jog and move within its own acceleration", "[gantry][safety]") {
+  // The master's drive could ramp at 500 mm/s²; the slave's can do 200.
+  for (const bool commutator : {false, true}) {
+    DYNAMIC_SECTION((commutator ? "external commutator" : "software-slaved")) {
+      Rig r = commutator ? commutator_gantry(100.8) : software_gantry(100.8);
+      r.settings.axes[1].acceleration_mm_per_s2 = 200;
+      r.settings.axes[0].jog_feedrate_mm_per_min = 1200;  // 20 mm/s: 1 mm to stop at 200 mm/s²
+      REQUIRE_FALSE(check_axis(r.settings, 1));
+      REQUIRE(r.home_all());
+      const double rel0 = r.actual(1) - r.actual(0);
+      AccelWatch acc;
+      acc.start(r);
+      acc.accel[1] = 200;  // the slave's own, from the configuration
+      r.jog(0, +1);
+      r.run_for(0.5);
+      r.release_jogs();
+      r.run_until([&] { return !r.any_moving(); }, 5);
+      r.move(0, 3);
+      r.run_until([&] { return !r.any_moving() && r.axis(0).phase == Phase::idle; }, 10);
+      INFO(acc.describe(1));
+      CHECK(acc.worst_ratio[1] > 0.5);  // it did ramp, at the pair's rate
+      CHECK(acc.within(1));
+      CHECK(r.axis(0).position_mm == Approx(3).margin(1e-9));
+      CHECK(r.actual(1) - r.actual(0) == Approx(rel0).margin(1e-9));
+    }
+  }
+}
+
+SCENARIO("external commutator: the slave's sensor is read with its own polarity", "[gantry][polarity]") {
+  // One NC switch and one NO switch on the pair: while the commutator puts
+  // the slave's switch on the master's input, that input means the slave's.
+  for (const bool slave_nc : {true, false}) {
+    DYNAMIC_SECTION((slave_nc ? "slave NC, master NO" : "slave NO, master NC")) {
+      Rig r = commutator_gantry(100.8);
+      const std::size_t nc_axis = slave_nc ? 1 : 0;
+      r.settings.axes[nc_axis].sensor_nc = true;
+      r.machine.axes[nc_axis].sensor_nc = true;
+      const double rel0 = r.actual(1) - r.actual(0);
+      double worst_rack = 0;
+      r.on_period = [&](Rig& rr) { worst_rack = std::max(worst_rack, std::abs(rr.actual(1) - rr.actual(0) - rel0)); };
+      const bool homed = r.home_all();
+      INFO("X alarm " << alarm_name(r.axis(0).alarm.code) << ", Y alarm " << alarm_name(r.axis(1).alarm.code)
+                      << ", worst rack " << worst_rack << " mm");
+      REQUIRE(homed);
+      const double tol = edge_tolerance_mm(r.settings.axes[0], r.dt_s);
+      CHECK(r.saw(1, Phase::align_slave));
+      CHECK(last_release_mm(r, 1) == Approx(0.05).margin(1e-9));
+      CHECK(r.actual(0) == Approx(1.05).margin(tol));
+      CHECK(r.actual(1) == Approx(1.05).margin(tol));  // square
+      CHECK(worst_rack <= r.settings.axes[1].max_misalignment_mm);
+      CHECK(r.axis(1).homed);
+    }
+  }
 }

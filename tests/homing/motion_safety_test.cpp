@@ -3,7 +3,11 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <functional>
+#include <string>
+#include <vector>
 
+#include "accel_watch.hpp"
 #include "homing/gantry.hpp"
 #include "homing/settings_check.hpp"
 #include "rig.hpp"
@@ -37,26 +41,38 @@ struct RackWatch {
   }
 };
 
-// Largest velocity change between two periods, relative to what the
-// acceleration allows in that period (1 = exactly at the limit).
-struct AccelWatch {
-  double prev_v = 0;
-  double engine_dt = 0;  // the period the engine integrated in the next step
-  double worst_ratio = 0;
-  std::size_t axis = 0;
-  void start(Rig& r, std::size_t a) {
-    axis = a;
-    prev_v = r.axis(a).velocity_mm_per_s;
-    engine_dt = r.ran_dt_s;
-    r.on_period = [this](Rig& rr) {
-      const double v = rr.axis(axis).velocity_mm_per_s;
-      const double allowed = motion_settings(rr.settings).axes[axis].acceleration_mm_per_s2 * engine_dt;
-      worst_ratio = std::max(worst_ratio, std::abs(v - prev_v) / allowed);
-      prev_v = v;
-      engine_dt = rr.ran_dt_s;
-    };
+// A slave the gantry rules refuse (`bad`, by `rule`) is no pair member: a
+// jog, a move and a home-all of X are refused for the settings fault, no
+// axis moves (no slave follows, X does not move alone) and X's output never
+// switches to a commutator slave.
+void refused_everywhere(Rig& r, std::size_t bad, CheckRule rule) {
+  r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+  r.step();
+  const auto fault = check_axis(r.settings, bad);
+  REQUIRE(fault);
+  CHECK(fault->rule == rule);
+  CHECK(gantry_master(r.settings, bad) < 0);
+  bool commutator = false;
+  r.on_period = [&](Rig& rr) { commutator = commutator || rr.engine.outputs().axes[0].commutator_output; };
+  r.clear_trace();
+  r.jog(0, +1);
+  r.run_for(0.5);
+  r.release_jogs();
+  CHECK(r.status().last_command_result == CommandResult::refused_settings_fault);
+  CHECK(r.trace[bad].path_mm == 0);  // it did not follow the jog
+  r.move(0, 50);
+  CHECK(r.status().last_command_result == CommandResult::refused_settings_fault);
+  r.pending.home_all = true;
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::refused_settings_fault);
+  r.run_for(0.2);
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    INFO(kAxisUpper[a] << " moved " << r.trace[a].path_mm << " mm");
+    CHECK(r.trace[a].path_mm == 0);
   }
-};
+  CHECK_FALSE(commutator);
+  r.on_period = nullptr;
+}
 
 }  // namespace
 
@@ -126,6 +142,28 @@ SCENARIO("a stuck-active slave sensor stops the pair within max_misalignment", "
   CHECK(rack.worst <= 2 + 0.05);
 }
 
+SCENARIO("a software-slaved gantry whose slave seeks on alone brakes in time to stay within max_misalignment",
+         "[gantry][safety]") {
+  // The slave's sensor is dead: the master stops on its own trigger while the
+  // slave seeks on at 20 mm/s. Stopping takes it 0.4 mm, so the guard must
+  // brake it before the skew is 2 mm, not when it is.
+  for (const bool late : {false, true}) {
+    DYNAMIC_SECTION((late ? "with periods 10 ms late" : "1 ms periods")) {
+      Rig r = software_pair();
+      r.machine.axes[1].fault = sim::Fault::sensor_stuck_inactive;
+      int n = 0;
+      if (late) r.next_dt = [&] { return (++n % 7 == 0) ? 0.011 : 0.001; };
+      RackWatch rack;
+      rack.start(r);
+      r.home_all();
+      r.run_until([&] { return !r.any_moving(); }, 5);
+      CHECK(r.axis(1).alarm.code == AlarmCode::misalignment);
+      CHECK(rack.worst > 1);  // the slave did run on past its master
+      CHECK(rack.worst <= r.settings.axes[1].max_misalignment_mm + 1e-9);
+    }
+  }
+}
+
 SCENARIO("after an alarm the pair brakes with the lower of the two accelerations", "[gantry][safety]") {
   Rig r = software_pair();
   r.settings.axes[1].acceleration_mm_per_s2 = 100;  // the slave's drive can do less
@@ -135,11 +173,13 @@ SCENARIO("after an alarm the pair brakes with the lower of the two accelerations
   r.step();
   r.run_until([&] { return r.axis(1).phase == Phase::seek && r.axis(1).velocity_mm_per_s < -9.9; }, 5);
   AccelWatch acc;
-  acc.start(r, 1);
+  acc.start(r);
   r.pending.abort = true;
   r.step();
   r.run_until([&] { return !r.any_moving(); }, 5);
-  CHECK(acc.worst_ratio <= 1.0 + 1e-6);
+  INFO(acc.describe(0) << "\n" << acc.describe(1));
+  CHECK(acc.within(0));
+  CHECK(acc.within(1));
   CHECK(motion_settings(r.settings).axes[0].acceleration_mm_per_s2 == 100);
 }
 
@@ -149,10 +189,11 @@ SCENARIO("the seek brakes in time and comes to rest at max_seek_travel", "[safet
   r.settings.axes[0].max_seek_travel_mm = 30;
   const double x0 = r.actual(0);
   AccelWatch acc;
-  acc.start(r, 0);
+  acc.start(r);
   r.home_all();
   CHECK(r.axis(0).alarm.code == AlarmCode::sensor_not_found);
-  CHECK(acc.worst_ratio <= 1.0 + 1e-6);
+  INFO(acc.describe(0));
+  CHECK(acc.within(0));
   CHECK(x0 - r.actual(0) == Approx(30).margin(1e-6));
 }
 
@@ -163,10 +204,64 @@ SCENARIO("the seek end stays within the acceleration when control periods come l
   int n = 0;
   r.next_dt = [&] { return (++n % 7 == 0) ? 0.009 : 0.001; };
   AccelWatch acc;
-  acc.start(r, 0);
+  acc.start(r);
   r.home_all();
   CHECK(r.axis(0).alarm.code == AlarmCode::sensor_not_found);
-  CHECK(acc.worst_ratio <= 1.0 + 1e-6);
+  INFO(acc.describe(0));
+  CHECK(acc.within(0));
+}
+
+SCENARIO("the back-off brakes in time and comes to rest at max_backoff", "[safety]") {
+  // A sensor that never releases: the back-off runs out at max_backoff
+  // (10 mm at the latch feedrate, 1 mm/s) and must brake into that end,
+  // not stop dead on it (1 mm/s in one 1 ms period would be twice the 500 mm/s²).
+  for (const bool late : {false, true}) {
+    DYNAMIC_SECTION((late ? "with late periods" : "1 ms periods")) {
+      Rig r;
+      r.machine.axes[0].fault = sim::Fault::sensor_stuck_active;
+      int n = 0;
+      if (late) r.next_dt = [&] { return (++n % 7 == 0) ? 0.009 : 0.001; };
+      const double x0 = r.actual(0);
+      AccelWatch acc;
+      acc.start(r);
+      r.home_all(30);
+      CHECK(r.axis(0).alarm.code == AlarmCode::not_released);
+      CHECK(r.axis(0).alarm.phase == Phase::back_off);
+      INFO(acc.describe(0));
+      CHECK(acc.within(0));
+      CHECK(r.actual(0) - x0 == Approx(r.settings.axes[0].max_backoff_mm).margin(1e-6));
+    }
+  }
+}
+
+SCENARIO("a pull-off that a late period reaches brakes onto its target within the acceleration", "[safety][late]") {
+  // How many periods the pull-off takes when every period is on time.
+  std::uint64_t pull_off_periods = 0;
+  {
+    Rig r;
+    r.on_period = [&](Rig& rr) { pull_off_periods += rr.axis(0).phase == Phase::pull_off; };
+    REQUIRE(r.home_all());
+    REQUIRE(pull_off_periods > 10);
+  }
+  // One period 10 ms late, at each moment of the pull-off in turn.
+  for (std::uint64_t late_at = 1; late_at < pull_off_periods; ++late_at) {
+    Rig r;
+    std::uint64_t in_pull_off = 0;
+    bool was_late = false;
+    r.next_dt = [&] {
+      if (r.axis(0).phase != Phase::pull_off || ++in_pull_off != late_at) return 0.001;
+      was_late = true;
+      return 0.011;
+    };
+    AccelWatch acc;
+    acc.start(r);
+    const bool homed = r.home_all();
+    INFO("late period at pull-off period " << late_at << ", " << acc.describe(0));
+    CHECK(was_late);
+    CHECK(homed);
+    CHECK(acc.within(0));
+    CHECK(r.actual(0) == Approx(1.05).margin(edge_tolerance_mm(r.settings.axes[0], 0.001)));
+  }
 }
 
 SCENARIO("an absolute axis in no sequence step takes its coordinate from its encoder", "[sequence][safety]") {
@@ -193,36 +288,57 @@ SCENARIO("an unsequenced absolute axis without a valid encoder ends the cycle in
 }
 
 SCENARIO("a disabled slave or a slave of a slave is refused everywhere and never follows its master", "[gantry][safety]") {
-  for (int variant = 0; variant < 2; ++variant) {
+  for (int variant = 0; variant < 3; ++variant) {
     Rig r;
-    r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
     if (variant == 0) {
       r.settings.axes[1].mode = HomingMode::disabled;  // Y disabled, yet named slave of X
       r.settings.axes[1].slave_of = 1;
-    } else {
+    } else if (variant == 1) {
       r.settings.axes[1] = typical_axis();
       r.settings.axes[1].slave_of = 1;  // Y slave of X
       r.settings.axes[2] = typical_axis();
       r.settings.axes[2].slave_of = 2;  // Z slave of Y
+    } else {
+      r.settings.axes[1] = typical_axis();  // every other gantry rule holds
+      r.settings.axes[1].mode = HomingMode::disabled;  // Y disabled, yet named X's commutator slave
+      r.settings.axes[1].slave_of = 1;
+      r.settings.axes[1].slave_mode = SlaveMode::external_commutator;
     }
-    const std::size_t bad = variant == 0 ? 1 : 2;
-    r.step();
-    const auto fault = check_axis(r.settings, bad);
-    REQUIRE(fault);
-    CHECK(fault->rule == (variant == 0 ? CheckRule::disabled_in_gantry : CheckRule::slave_of_slave));
-    CHECK(gantry_master(r.settings, bad) < 0);
-    r.clear_trace();
-    r.jog(0, +1);
-    r.run_for(0.5);
-    r.release_jogs();
-    CHECK(r.status().last_command_result == CommandResult::refused_settings_fault);
-    r.move(0, 50);
-    CHECK(r.status().last_command_result == CommandResult::refused_settings_fault);
-    r.pending.home_all = true;
-    r.step();
-    CHECK(r.status().last_command_result == CommandResult::refused_settings_fault);
-    r.run_for(0.2);
-    for (std::size_t a = 0; a < kAxisCount; ++a) CHECK(r.trace[a].path_mm == 0);
+    const std::size_t bad = variant == 1 ? 2 : 1;
+    INFO("variant " << variant);
+    refused_everywhere(r, bad, variant == 1 ? CheckRule::slave_of_slave : CheckRule::disabled_in_gantry);
+  }
+}
+
+SCENARIO("a slave of a disabled, manual or absolute axis, or a second slave on one master, is refused and never follows its master's jog",
+         "[gantry][safety]") {
+  struct Case {
+    const char* what;
+    HomingMode master_mode;
+    bool second_slave;
+    CheckRule rule;
+  };
+  const Case cases[] = {
+      {"slave of a disabled axis", HomingMode::disabled, false, CheckRule::disabled_in_gantry},
+      {"slave of a manual axis", HomingMode::manual, false, CheckRule::slave_invalid},
+      {"slave of an absolute axis", HomingMode::absolute, false, CheckRule::slave_invalid},
+      {"second slave of a switch-homing axis", HomingMode::switch_release, true, CheckRule::slave_invalid},
+  };
+  for (const Case& c : cases) {
+    DYNAMIC_SECTION(c.what) {
+      Rig r;
+      r.settings.axes[0].mode = c.master_mode;
+      r.settings.axes[1] = typical_axis();
+      r.settings.axes[1].slave_of = 1;  // Y slave of X
+      std::size_t bad = 1;
+      if (c.second_slave) {
+        r.settings.axes[2] = typical_axis();
+        r.settings.axes[2].slave_of = 1;  // Z too: X already has Y
+        bad = 2;
+        CHECK(gantry_master(r.settings, 1) == 0);
+      }
+      refused_everywhere(r, bad, c.rule);
+    }
   }
 }
 
@@ -322,6 +438,75 @@ SCENARIO("a gantry that could not stop within max_misalignment is refused", "[ga
   REQUIRE(f);
   CHECK(f->rule == CheckRule::gantry_stop_too_long);
   CHECK(describe_fault(*f, r.settings).find("max_misalignment") != std::string::npos);
+}
+
+SCENARIO("the check sizes a gantry's stop with the pair's lower acceleration", "[gantry][safety]") {
+  // The seek (20 mm/s) stops in 0.4 mm at 500 mm/s², in 4 mm at 50 mm/s²;
+  // max_misalignment is 2: refused whichever side has the weaker drive.
+  for (const std::size_t weak : {std::size_t{1}, std::size_t{0}}) {
+    DYNAMIC_SECTION((weak == 1 ? "the slave's drive is the weaker" : "the master's drive is the weaker")) {
+      Rig r = software_pair();
+      r.settings.axes[weak].acceleration_mm_per_s2 = 50;
+      const auto f = check_axis(r.settings, 1);
+      REQUIRE(f);
+      CHECK(f->rule == CheckRule::gantry_stop_too_long);
+      CHECK(f->value == Approx(4.0));
+      r.clear_trace();
+      CHECK_FALSE(r.home_all());
+      CHECK(r.status().last_command_result == CommandResult::refused_settings_fault);
+      CHECK(r.trace[0].path_mm == 0);
+      CHECK(r.trace[1].path_mm == 0);
+    }
+  }
+  GIVEN("both drives at 500 mm/s²") { CHECK_FALSE(check_axis(software_pair().settings, 1)); }
+}
+
+SCENARIO("the check accepts a slave whatever its own values of the settings it inherits from its master",
+         "[gantry][safety]") {
+  // Each value is refused on an axis of its own; on a slave the master's
+  // value is the one used, so the pair homes.
+  struct Case {
+    const char* what;
+    std::function<void(AxisSettings&)> spoil;
+  };
+  const std::vector<Case> cases{
+      {"no seek feedrate", [](AxisSettings& s) { s.seek_feedrate_mm_per_min = 0; }},
+      {"latch not slower than seek", [](AxisSettings& s) { s.latch_feedrate_mm_per_min = 1200; }},
+      {"no max seek travel", [](AxisSettings& s) { s.max_seek_travel_mm = 0; }},
+      {"a max stop distance the seek cannot keep", [](AxisSettings& s) { s.max_stop_distance_mm = 0.1; }},
+      {"no max back-off", [](AxisSettings& s) { s.max_backoff_mm = 0; }},
+      {"a pre-move without distance",
+       [](AxisSettings& s) {
+         s.pre_move_mode = PreMove::always;
+         s.pre_move_distance_mm = 0;
+       }},
+      {"inverted soft limits",
+       [](AxisSettings& s) {
+         s.soft_limits_enable = true;
+         s.soft_limit_min_mm = 600;
+       }},
+      {"a home position outside its soft limits",
+       [](AxisSettings& s) {
+         s.soft_limits_enable = true;
+         s.home_position_mm = -50;
+       }},
+  };
+  for (const Case& c : cases) {
+    DYNAMIC_SECTION(c.what) {
+      Settings lone;
+      lone.axes[0] = typical_axis();
+      c.spoil(lone.axes[0]);
+      REQUIRE(check_axis(lone, 0));
+      Rig r = software_pair(0.5);
+      c.spoil(r.settings.axes[1]);
+      const auto f = check_axis(r.settings, 1);
+      INFO((f ? describe_fault(*f, r.settings) : std::string("accepted")));
+      CHECK_FALSE(f);
+      REQUIRE(r.home_all());
+      CHECK(r.axis(1).homed);
+      CHECK(r.axis(1).position_mm == Approx(r.axis(0).position_mm).margin(1e-3));
+    }
+  }
 }
 
 SCENARIO("a jog held at power-up does not move until released and pressed again", "[safety]") {

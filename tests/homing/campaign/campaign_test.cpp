@@ -38,9 +38,8 @@
 // every phase change of a replayed run. HOMING_CAMPAIGN_SURVEY=1 runs on past
 // failures and prints each distinct failure with its first seeds, the
 // coverage (how many runs homed a gantry, recovered from a hard-limit trip...)
-// and the settings the check refused although generated valid;
-// HOMING_CAMPAIGN_IGNORE="class|class" leaves failures whose class contains
-// one of these uncounted, to see past a known bug.
+// and the settings the check refused although generated valid: the way to
+// see past a known bug, for every failure still counts and fails the run.
 //
 // Before a release, run a long campaign from a fresh seed (about 20 ms a
 // run: a million runs is some six hours on one core; split it over cores

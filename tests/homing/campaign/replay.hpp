@@ -1,12 +1,10 @@
 #pragma once
-// Replays one campaign seed as a named scenario. A failing run prints its
-// seed; paste it into a TEST_CASE that names the bug:
-//
-//   TEST_CASE("gantry racks when the slave's sensor is dead (seed 12345)", "[replay]") { replay_seed(12345); }
-//
-// A seed stands for a machine only as long as the generator draws the same
-// way: when machine_gen.cpp changes, re-pin the replays with the seeds the
-// campaign then prints.
+// Replays one campaign seed. A failing run prints its seed: add it to the
+// regression list in replays_test.cpp, and write the bug it found as a
+// hand-written scenario on the rig (tests/homing/*_test.cpp) named for the
+// behaviour it proves. A seed stands for a machine only as long as the
+// generator draws the same way: when machine_gen.cpp changes, the list is
+// re-pinned with the seeds the campaign then prints.
 #include <catch2/catch.hpp>
 
 #include <cstdio>

@@ -31,29 +31,8 @@ Watch::Watch(rig::Rig& r, const Machine& m) : r_(r), m_(m) {
   if (const char* t = std::getenv("HOMING_CAMPAIGN_TRACE")) trace_axes = *t ? 1 : 0;
 }
 
-namespace {
-
-// HOMING_CAMPAIGN_IGNORE="class|class...": failures whose class contains one
-// of these are not counted, so that a survey sees past a known bug.
-bool ignored(const std::string& what) {
-  static const std::string list = [] {
-    const char* v = std::getenv("HOMING_CAMPAIGN_IGNORE");
-    return std::string(v ? v : "");
-  }();
-  std::size_t start = 0;
-  while (start < list.size()) {
-    std::size_t end = list.find('|', start);
-    if (end == std::string::npos) end = list.size();
-    if (end > start && what.find(list.substr(start, end - start)) != std::string::npos) return true;
-    start = end + 1;
-  }
-  return false;
-}
-
-}  // namespace
-
 void Watch::fail(const std::string& what, const std::string& detail) {
-  if (failure_.what.empty() && !ignored(what)) failure_ = Failure{what, detail};
+  if (failure_.what.empty()) failure_ = Failure{what, detail};
 }
 
 void Watch::clear_alarms_seen() {
