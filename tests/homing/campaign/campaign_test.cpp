@@ -76,9 +76,11 @@ TEST_CASE(kName, "[campaign]") {
   std::map<std::string, std::string> more_seeds;                          // what -> a few more seeds
   std::map<std::string, std::uint64_t> refusals;
   std::array<std::uint64_t, campaign::act::kCount> acts{};
+  campaign::Coverage coverage;
   for (std::uint64_t i = 0; i < runs; ++i) {
     const campaign::Outcome o = campaign::run_seed(first + i);
     periods += o.periods;
+    coverage.add(o.coverage);
     for (int k = 0; k < campaign::act::kCount; ++k)
       if (o.acts & (1u << k)) ++acts[static_cast<std::size_t>(k)];
     if (o.ever_homed) ++homed;
@@ -118,8 +120,15 @@ TEST_CASE(kName, "[campaign]") {
     std::printf("\n");
     for (const auto& [why, seed] : refusals) std::printf("refused valid machine, seed %llu: %s\n", static_cast<unsigned long long>(seed), why.c_str());
   }
+  std::printf("\n%s", coverage.table().c_str());
   INFO(runs << " runs: " << homed << " homed at least once, " << refused << " refused by the check");
   CHECK(failures == 0);
-  // Coverage: most machines must home (a replay of one seed need not).
+  // Coverage: most machines must home, and every mode, topology and cause
+  // must be reached, homed and alarmed often enough (a replay of one seed need not).
   if (runs >= 100) CHECK(homed > runs / 4);
+  if (runs >= 1000) {
+    const std::string short_of = coverage.shortfalls(runs);
+    INFO("coverage below its floors:\n" << short_of);
+    CHECK(short_of.empty());
+  }
 }

@@ -212,11 +212,14 @@ void Gen::place_slave(std::size_t si, std::size_t mi, const PairDraw& pd, double
   }
   const double start_m_f = mirror(dir, mc.actual_position_mm);
   const double rest_m_f = reference_f(ms, mc, edge_m_f, master_index_r) + ms.pull_off_mm;
-  const double rest_f = reference_f(e, c, edge_f, index_r) + e.pull_off_mm + e.switch_compensation_mm;
+  // A commutator slave squares on its own edge (no index of its own).
+  AxisSettings sq = e;
+  sq.mode = squaring_mode(m.settings, si);
+  const double rest_f = reference_f(sq, c, edge_f, index_r) + e.pull_off_mm + e.switch_compensation_mm;
   p.skew_mm = p.bad_skew ? d.sign() * (1.3 * pd.misalignment + budget + d.u(0.3, 3)) : d.u(-1, 1) * budget;
   if (p.commutator && mode_is_pushing(ms.mode)) {
     // Trailing: the slave starts further from its edge than the master from its own.
-    const double lead = (reference_f(e, c, edge_f, index_r) - edge_f) - (reference_f(ms, mc, edge_m_f, master_index_r) - edge_m_f);
+    const double lead = (reference_f(sq, c, edge_f, index_r) - edge_f) - (reference_f(ms, mc, edge_m_f, master_index_r) - edge_m_f);
     p.skew_mm = std::min(0.0, lead) - std::abs(p.skew_mm);
   }
   const double start_f = start_m_f + (rest_f - rest_m_f) - p.skew_mm;
@@ -264,9 +267,7 @@ void Gen::gantry(std::size_t mi, std::size_t si, bool commutator) {
   AxisSettings& ss = m.settings.axes[si];
   // A gantry squares on its two sensors: no pushing master, with or without
   // a commutator (commutator_needs_switch_master).
-  ms.mode = commutator ? d.pick({HomingMode::switch_release, HomingMode::switch_reapproach})
-                       : d.pick({HomingMode::switch_release, HomingMode::switch_reapproach,
-                                 HomingMode::switch_index});
+  ms.mode = d.pick({HomingMode::switch_release, HomingMode::switch_reapproach, HomingMode::switch_index});
   const bool pushing = mode_is_pushing(ms.mode);
   ms.shared_limit = !pushing && d.chance(0.2);
   ss = AxisSettings{};

@@ -2,6 +2,7 @@
 // The rules the campaign holds the engine to, written once: what an axis homes
 // with (a slave: its master's motion settings, its own sensor settings), which
 // axes a cycle covers, in which step, and which may move.
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <optional>
@@ -32,13 +33,77 @@ inline int partner_index(const Settings& s, std::size_t a) {
   return m >= 0 ? m : slave_index(s, a);
 }
 
-// The settings an axis homes, jogs and moves with: the engine's one
-// definition (homing/gantry.hpp, documented in README "what a slave
-// inherits"): a slave of a valid pair takes its master's motion settings and
-// keeps its own sensor settings, pull-off (software-slaved only: a commutator
-// pair pulls off together on one output), compensation, misalignment and
-// shared limit; the pair moves with the lower acceleration.
-inline AxisSettings effective(const Settings& s, std::size_t a) { return motion_settings(s).axes[a]; }
+// The campaign's own reading of README "Gantries: what a slave inherits",
+// written here rather than taken from homing/gantry.hpp so that a wrong rule
+// in the engine shows as a failure instead of becoming the expectation.
+// A pair is one the rule set takes: the slave names another axis that is no
+// slave itself, both home on a sensor (switch or pushing mode), and no
+// earlier axis is already that master's slave.
+inline int pair_master(const Settings& s, std::size_t a) {
+  const int m = master_index(s, a);
+  if (m < 0) return -1;
+  const AxisSettings& ms = s.axes[static_cast<std::size_t>(m)];
+  if (!mode_uses_switch(s.axes[a].mode) || !mode_uses_switch(ms.mode) || master_index(s, static_cast<std::size_t>(m)) >= 0)
+    return -1;
+  for (std::size_t other = 0; other < a; ++other)
+    if (master_index(s, other) == m) return -1;
+  return m;
+}
+
+// The settings an axis homes, jogs and moves with. A slave takes its
+// master's motion settings (the phases of its mode, direction, feedrates,
+// max seek travel, max stop distance, max back-off, pre-move, push distance,
+// index pitch, home position, final position and move, jog feedrate, soft
+// limits) and keeps its own sensor_nc, debounce, shared_limit, pull_off
+// (software-slaved only: a commutator pair pulls off together),
+// switch_compensation and max_misalignment; both sides of a pair move with
+// the lower of the two accelerations.
+inline AxisSettings effective(const Settings& s, std::size_t a) {
+  const AxisSettings& own = s.axes[a];
+  int m = pair_master(s, a);
+  if (m < 0) {
+    // A master: its own settings, at the pair's acceleration.
+    AxisSettings out = own;
+    for (std::size_t x = 0; x < kAxisCount; ++x)
+      if (pair_master(s, x) == static_cast<int>(a))
+        out.acceleration_mm_per_s2 = std::min(own.acceleration_mm_per_s2, s.axes[x].acceleration_mm_per_s2);
+    return out;
+  }
+  const AxisSettings& ms = s.axes[static_cast<std::size_t>(m)];
+  AxisSettings out = own;
+  out.mode = ms.mode;
+  out.direction = ms.direction;
+  out.seek_feedrate_mm_per_min = ms.seek_feedrate_mm_per_min;
+  out.latch_feedrate_mm_per_min = ms.latch_feedrate_mm_per_min;
+  out.max_seek_travel_mm = ms.max_seek_travel_mm;
+  out.max_stop_distance_mm = ms.max_stop_distance_mm;
+  out.max_backoff_mm = ms.max_backoff_mm;
+  out.pre_move_mode = ms.pre_move_mode;
+  out.pre_move_distance_mm = ms.pre_move_distance_mm;
+  out.push_distance_mm = ms.push_distance_mm;
+  out.index_pitch_mm = ms.index_pitch_mm;
+  out.home_position_mm = ms.home_position_mm;
+  out.final_position_mm = ms.final_position_mm;
+  out.final_move_enable = ms.final_move_enable;
+  out.jog_feedrate_mm_per_min = ms.jog_feedrate_mm_per_min;
+  out.soft_limit_min_mm = ms.soft_limit_min_mm;
+  out.soft_limit_max_mm = ms.soft_limit_max_mm;
+  out.soft_limits_enable = ms.soft_limits_enable;
+  if (own.slave_mode == SlaveMode::external_commutator) out.pull_off_mm = ms.pull_off_mm;
+  out.acceleration_mm_per_s2 = std::min(own.acceleration_mm_per_s2, ms.acceleration_mm_per_s2);
+  return out;
+}
+
+// The mode whose edge a slave squares on: a commutator slave searches its
+// own edge alone at latch feedrate (README "Gantries: topologies") and has no
+// index input of its own, so an index master's slave squares on its release
+// edge; otherwise the mode it homes with.
+inline HomingMode squaring_mode(const Settings& s, std::size_t a) {
+  const AxisSettings e = effective(s, a);
+  if (pair_master(s, a) >= 0 && s.axes[a].slave_mode == SlaveMode::external_commutator && e.mode == HomingMode::switch_index)
+    return HomingMode::switch_release;
+  return e.mode;
+}
 
 using homing::final_move_wanted;
 

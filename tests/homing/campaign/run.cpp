@@ -204,6 +204,7 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
     say(o.str());
   }
   if (ok()) verdict(*w_, r_, m_, causes, cycles_before);
+  mark_cycle(plan, causes, ok() && w_->alarms_seen == 0 && !refused);
   if (r_.status().state == MachineState::homed && w_->alarms_seen == 0 && ok()) {
     ever_homed_ = true;
     acts_ |= act::homed;
@@ -217,6 +218,54 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
   if (w_->alarms_seen) alarm_seen_ = true;
   w_->tampered = 0;
   return ok() && !r_.status().alarm && w_->alarms_seen == 0;
+}
+
+namespace {
+
+std::string gantry_key(const Settings& s, std::size_t slave) {
+  return s.axes[slave].slave_mode == SlaveMode::external_commutator ? "gantry external commutator" : "gantry software-slaved";
+}
+
+}  // namespace
+
+// Every mode and gantry the machine has, as generated.
+void Run::mark_machine() {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (m_.plan[a].role == Role::slave) {
+      const std::size_t mi = static_cast<std::size_t>(m_.plan[a].partner);
+      const std::string k = gantry_key(m_.settings, a);
+      mark(k, seen::present);
+      mark(k + ", master " + std::string(mode_name(m_.settings.axes[mi].mode)), seen::present);
+    } else if (m_.settings.axes[a].mode != HomingMode::disabled) {
+      mark("mode " + std::string(mode_name(m_.settings.axes[a].mode)), seen::present);
+    }
+  }
+}
+
+// What a cycle reached: each cause present, and whether its own alarm showed;
+// each covered mode and gantry homed (a clean cycle) or alarmed.
+void Run::mark_cycle(const CyclePlan& plan, const Causes& causes, bool clean) {
+  for (const Cause& c : causes.list) {
+    bool shown = (w_->global_alarms & c.global) != 0;
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if ((c.axes & axis_bit(a)) && (w_->axis_alarms[a] & c.codes)) shown = true;
+    mark("cause " + (c.kind.empty() ? c.what : c.kind), static_cast<std::uint8_t>(seen::present | (shown ? seen::alarmed : 0)));
+  }
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (!(plan.covered & axis_bit(a))) continue;
+    const std::uint8_t bits = static_cast<std::uint8_t>((clean && r_.status().axes[a].homed ? seen::homed : 0) |
+                                                        (w_->axis_alarms[a] ? seen::alarmed : 0));
+    if (!bits) continue;
+    if (m_.plan[a].role == Role::slave) {
+      const std::size_t mi = static_cast<std::size_t>(m_.plan[a].partner);
+      const std::string k = gantry_key(m_.settings, a);
+      const std::uint8_t pair = static_cast<std::uint8_t>(bits | (w_->axis_alarms[mi] ? seen::alarmed : 0));
+      mark(k, pair);
+      mark(k + ", master " + std::string(mode_name(m_.settings.axes[mi].mode)), pair);
+    } else if (m_.settings.axes[a].mode != HomingMode::disabled) {
+      mark("mode " + std::string(mode_name(m_.settings.axes[a].mode)), bits);
+    }
+  }
 }
 
 // Clear every cause, then reset: the reset must be taken.
@@ -325,6 +374,7 @@ void Run::follow_ups() {
 Outcome Run::run() {
   Outcome out;
   out.seed = m_.seed;
+  mark_machine();
   if (auto f = first_fault(r_.settings)) {
     out.refused = true;
     const int p = f->axis < kAxisCount ? partner_index(r_.settings, f->axis) : -1;
@@ -352,6 +402,10 @@ Outcome Run::run() {
   out.ever_homed = ever_homed_;
   out.periods = r_.periods;
   out.acts = acts_;
+  if (out.refused)
+    for (auto& [key, bits] : coverage_)
+      if (key.rfind("cause ", 0) != 0) bits |= seen::refused;
+  out.coverage = coverage_;
   return out;
 }
 

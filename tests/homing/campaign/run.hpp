@@ -7,6 +7,7 @@
 #include <sstream>
 #include <string>
 
+#include "coverage.hpp"
 #include "dice.hpp"
 #include "machine.hpp"
 #include "verdict.hpp"
@@ -51,6 +52,7 @@ struct Outcome {
   std::string unexpected_refusal;  // the check refused a machine generated to be valid
   std::uint64_t periods = 0;
   std::uint32_t acts = 0;
+  RunCoverage coverage;
 };
 
 class Run {
@@ -75,6 +77,9 @@ class Run {
   std::vector<Event> random_events(const CyclePlan& plan, double estimate);
   void follow_ups();
   bool homed_axis(std::size_t a) const;
+  void mark(const std::string& key, std::uint8_t bits) { coverage_[key] |= bits; }
+  void mark_machine();
+  void mark_cycle(const CyclePlan& plan, const Causes& causes, bool clean);
 
   Machine m_;
   rig::Rig r_;
@@ -89,6 +94,7 @@ class Run {
   std::uint32_t acts_ = 0;
   int homed_cycles_ = 0;
   bool alarm_seen_ = false;
+  RunCoverage coverage_;
 };
 
 Outcome run_seed(std::uint64_t seed);

@@ -1,6 +1,7 @@
 #include "verdict.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <sstream>
 
 #include "homing/motion.hpp"
@@ -18,7 +19,9 @@ Cause& Causes::add(std::string what, std::initializer_list<AlarmCode> codes, Axi
   c.what = std::move(what);
   // "X's cam..." and "drive fault on X" are one class for every axis.
   c.kind = c.what;
-  if (c.kind.size() > 3 && c.kind.compare(1, 3, "'s ") == 0) c.kind = "an axis's " + c.kind.substr(3);
+  if (c.kind.size() > 4 && c.kind.compare(1, 3, "'s ") == 0) c.kind = "an axis's " + c.kind.substr(4);
+  else if (c.kind.size() > 2 && c.kind[1] == ' ' && std::isupper(static_cast<unsigned char>(c.kind[0])))
+    c.kind = "an axis " + c.kind.substr(2);
   if (const auto on = c.kind.find(" on "); on != std::string::npos && on + 5 == c.kind.size()) c.kind.resize(on);
   c.codes = code_bits(codes);
   c.axes = axes;
@@ -92,8 +95,9 @@ std::string cause_list(const Causes& causes) {
 Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, bool refused, AxisMask encoder_invalid) {
   Causes c;
   if (refused) {
-    c.add(std::string("the configuration check's refusal (") + invalid_name(m.invalid) + " on " + letter(m.invalid_axis) + ")",
-          {AlarmCode::settings_fault, AlarmCode::slave_sensor_missing}, slave_of_group(r.settings, m.invalid_axis), true);
+    Cause& k = c.add(std::string("the configuration check's refusal (") + invalid_name(m.invalid) + " on " + letter(m.invalid_axis) + ")",
+                     {AlarmCode::settings_fault, AlarmCode::slave_sensor_missing}, slave_of_group(r.settings, m.invalid_axis), true);
+    k.kind = "the configuration check's refusal";
     return c;
   }
   for (std::size_t a = 0; a < kAxisCount; ++a) {

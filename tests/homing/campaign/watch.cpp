@@ -310,7 +310,8 @@ void Watch::track_edges(std::size_t a) {
 }
 
 bool Watch::reference_edge(std::size_t a, double& ref) {
-  const AxisSettings e = effective(r_.settings, a);
+  AxisSettings e = effective(r_.settings, a);
+  e.mode = squaring_mode(r_.settings, a);
   if (mode_reapproaches(e.mode)) {
     ref = trigger_[a];
     return has_trigger_[a];

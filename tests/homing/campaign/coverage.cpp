@@ -1,0 +1,92 @@
+#include "coverage.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <vector>
+
+namespace campaign {
+
+void Coverage::add(const RunCoverage& run) {
+  for (const auto& [key, bits] : run) {
+    CoverageRow& row = rows_[key];
+    if (bits & seen::present) ++row.runs;
+    if (bits & seen::homed) ++row.homed;
+    if (bits & seen::alarmed) ++row.alarmed;
+    if (bits & seen::refused) ++row.refused;
+  }
+}
+
+std::string Coverage::table() const {
+  std::string out = "coverage (runs in which each was present / homed / alarmed / refused; a cause: present / -- / showed its own alarm / --)\n";
+  char line[256];
+  for (const auto& [key, r] : rows_) {
+    std::snprintf(line, sizeof line, "  %-78s %7llu %7llu %7llu %7llu\n", key.c_str(), static_cast<unsigned long long>(r.runs),
+                  static_cast<unsigned long long>(r.homed), static_cast<unsigned long long>(r.alarmed),
+                  static_cast<unsigned long long>(r.refused));
+    out += line;
+  }
+  return out;
+}
+
+namespace {
+
+// What every campaign of at least kFloorRuns runs must reach, as fractions of
+// its runs: well below what the generator draws (a third or less), so that
+// only a generator that stops drawing something, or an engine that stops
+// homing or alarming it, falls short.
+struct Floor {
+  const char* key;
+  double present, homed, alarmed, refused;
+};
+constexpr Floor kFloors[] = {
+    {"mode manual", 0.03, 0.02, 0, 0},
+    {"mode switch_release", 0.10, 0.06, 0.01, 0.005},
+    {"mode switch_reapproach", 0.10, 0.06, 0.01, 0.005},
+    {"mode switch_index", 0.05, 0.03, 0.005, 0.002},
+    {"mode absolute", 0.03, 0.02, 0, 0},
+    {"mode absolute_final", 0.03, 0.02, 0, 0},
+    {"mode pushing_release", 0.03, 0.02, 0.003, 0},
+    {"mode pushing_reapproach", 0.03, 0.02, 0.003, 0},
+    {"gantry software-slaved", 0.10, 0.05, 0.01, 0.005},
+    {"gantry external commutator", 0.08, 0.03, 0.01, 0.003},
+    {"gantry external commutator, master switch_index", 0.01, 0.004, 0, 0},
+    {"cause the abort", 0.005, 0, 0.004, 0},
+    {"cause the e-stop", 0.005, 0, 0.004, 0},
+    {"cause drive fault", 0.005, 0, 0.004, 0},
+    {"cause sensor stuck active", 0.005, 0, 0.001, 0},
+    {"cause sensor stuck inactive", 0.005, 0, 0.001, 0},
+    {"cause wire break", 0.005, 0, 0.001, 0},
+    {"cause the communication loss", 0.005, 0, 0.002, 0},
+    {"cause the permit withdrawn", 0.003, 0, 0.002, 0},
+    {"cause an axis's faulty sensor", 0.02, 0, 0.01, 0},
+    {"cause an axis's cam shorter than its stop", 0.01, 0, 0.005, 0},
+    {"cause an axis's skew beyond its max misalignment", 0.03, 0, 0.01, 0},
+    {"cause an axis's invalid absolute encoder", 0.005, 0, 0.003, 0},
+    {"cause the configuration check's refusal", 0.05, 0, 0.05, 0},
+};
+
+}  // namespace
+
+std::string Coverage::shortfalls(std::uint64_t runs) const {
+  std::string out;
+  const double n = static_cast<double>(runs);
+  for (const Floor& f : kFloors) {
+    const auto it = rows_.find(f.key);
+    const CoverageRow r = it == rows_.end() ? CoverageRow{} : it->second;
+    auto below = [&](const char* what, std::uint64_t got, double floor) {
+      if (static_cast<double>(got) < floor * n) {
+        char line[256];
+        std::snprintf(line, sizeof line, "%s: %s in %llu runs, floor %.0f of %llu\n", f.key, what,
+                      static_cast<unsigned long long>(got), floor * n, static_cast<unsigned long long>(runs));
+        out += line;
+      }
+    };
+    below("present", r.runs, f.present);
+    below("homed", r.homed, f.homed);
+    below("alarmed", r.alarmed, f.alarmed);
+    below("refused", r.refused, f.refused);
+  }
+  return out;
+}
+
+}  // namespace campaign
