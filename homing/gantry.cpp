@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "mutation.hpp"
+
 namespace homing {
 
 int gantry_master(const Settings& settings, std::size_t axis) {
@@ -49,6 +51,7 @@ Settings motion_settings(const Settings& settings) {
     slave.max_misalignment_mm = own.max_misalignment_mm;
     slave.slave_of = own.slave_of;
     slave.slave_mode = own.slave_mode;
+    if (planted(Mutant::slave_keeps_own_direction)) slave.direction = own.direction;
     const double pair_accel = std::min(own.acceleration_mm_per_s2, master.acceleration_mm_per_s2);
     slave.acceleration_mm_per_s2 = master.acceleration_mm_per_s2 = pair_accel;
   }

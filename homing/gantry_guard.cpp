@@ -6,6 +6,7 @@
 
 #include "engine.hpp"
 #include "gantry.hpp"
+#include "mutation.hpp"
 
 namespace homing {
 
@@ -40,7 +41,7 @@ void Engine::guard_gantries(const Settings& settings) {
     AxisRun& slave = axes_[sl];
     const AxisRun& master = axes_[m];
     if (!slave.in_cycle && !master.in_cycle) continue;  // locked together outside a cycle
-    const double limit = settings.axes[sl].max_misalignment_mm;
+    const double limit = settings.axes[sl].max_misalignment_mm + (planted(Mutant::racking_allowed_0_2_mm_past_limit) ? 0.2 : 0.0);
     auto rest = [&](const AxisRun& run, std::size_t axis, double h) {
       const MotionState at = integrate(run.motor, run.command, h);
       const double v = at.velocity_mm_per_s;

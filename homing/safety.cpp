@@ -2,6 +2,7 @@
 // drive faults, the watchdog, the homing permit, and the hard and soft limits
 // of a homed axis.
 #include "engine.hpp"
+#include "mutation.hpp"
 
 namespace homing {
 
@@ -26,6 +27,10 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
     // meanwhile is no longer where its coordinate says, whatever
     // global.alarm_clears_homed says (at rest it has lost nothing).
     if (axes_[a].motor.velocity_mm_per_s != 0 || axes_[a].period_start.velocity_mm_per_s != 0) axes_[a].homed = false;
+    if (planted(Mutant::drive_fault_as_sensor_alarm_elsewhere)) {
+      raise(settings, axis_bit((a + 1) % kAxisCount), Alarm{AlarmCode::sensor_not_found});
+      continue;
+    }
     raise(settings, axis_bit(a), Alarm{AlarmCode::drive_fault});
   }
 
