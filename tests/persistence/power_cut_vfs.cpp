@@ -17,7 +17,8 @@ namespace {
 constexpr std::int64_t kPiece = 512;  // what a torn write keeps or loses independently
 
 enum class Kind { db, wal, journal };
-const char* kind_name(Kind k) { return k == Kind::db ? "db" : k == Kind::wal ? "wal" : "journal"; }
+
+std::string base_name(const std::string& path) { return path.substr(path.find_last_of('/') + 1); }
 
 struct Op {
   bool truncate = false;
@@ -60,16 +61,17 @@ struct File {
   int inode;     // -1: not modelled (temporary files)
   Kind kind;
   bool dirsync;  // the first sync also makes the directory durable
+  const std::string* path;  // the key in g.kinds (stable: a map node)
 };
 File* F(sqlite3_file* f) { return reinterpret_cast<File*>(f); }
 sqlite3_file* R(sqlite3_file* f) { return F(f)->real; }
 
 // Requires g.mu. True when the operation must fail: the cut is now or was before.
-bool stopped(Kind k, const char* op) {
+bool stopped(const std::string& path, const char* op) {
   if (g.cut) return true;
   if (g.countdown > 0 && --g.countdown == 0) {
     g.cut = true;
-    g.point = {kind_name(k), op};
+    g.point = {base_name(path), op};
     return true;
   }
   return false;
@@ -171,7 +173,7 @@ int x_read(sqlite3_file* f, void* b, int n, sqlite3_int64 o) { return R(f)->pMet
 int x_write(sqlite3_file* f, const void* b, int n, sqlite3_int64 o) {
   std::lock_guard lock(g.mu);
   File* file = F(f);
-  if (file->inode < 0 ? g.cut : stopped(file->kind, "write")) return SQLITE_IOERR_WRITE;
+  if (file->inode < 0 ? g.cut : stopped(*file->path, "write")) return SQLITE_IOERR_WRITE;
   int rc = R(f)->pMethods->xWrite(R(f), b, n, o);
   if (rc == SQLITE_OK && file->inode >= 0)
     g.inodes[static_cast<std::size_t>(file->inode)].pending.push_back(
@@ -181,7 +183,7 @@ int x_write(sqlite3_file* f, const void* b, int n, sqlite3_int64 o) {
 int x_truncate(sqlite3_file* f, sqlite3_int64 size) {
   std::lock_guard lock(g.mu);
   File* file = F(f);
-  if (file->inode < 0 ? g.cut : stopped(file->kind, "truncate")) return SQLITE_IOERR_TRUNCATE;
+  if (file->inode < 0 ? g.cut : stopped(*file->path, "truncate")) return SQLITE_IOERR_TRUNCATE;
   int rc = R(f)->pMethods->xTruncate(R(f), size);
   if (rc == SQLITE_OK && file->inode >= 0)
     g.inodes[static_cast<std::size_t>(file->inode)].pending.push_back({true, size, {}});
@@ -192,7 +194,7 @@ int x_sync(sqlite3_file* f, int) {
   std::lock_guard lock(g.mu);
   File* file = F(f);
   if (file->inode < 0) return g.cut ? SQLITE_IOERR_FSYNC : SQLITE_OK;
-  if (stopped(file->kind, "sync")) return SQLITE_IOERR_FSYNC;
+  if (stopped(*file->path, "sync")) return SQLITE_IOERR_FSYNC;
   auto& ino = g.inodes[static_cast<std::size_t>(file->inode)];
   for (const auto& op : ino.pending) apply(ino.durable, op);
   ino.pending.clear();
@@ -248,6 +250,7 @@ int x_open(sqlite3_vfs*, sqlite3_filename name, sqlite3_file* f, int flags, int*
   file->real = reinterpret_cast<sqlite3_file*>(file + 1);
   std::memset(file->real, 0, static_cast<std::size_t>(g_real->szOsFile));
   file->inode = -1;
+  file->path = nullptr;
   file->kind = (flags & SQLITE_OPEN_WAL) ? Kind::wal : (flags & SQLITE_OPEN_MAIN_JOURNAL) ? Kind::journal : Kind::db;
   file->dirsync = (flags & SQLITE_OPEN_CREATE) && file->kind != Kind::db;
   const bool modelled = name && (flags & (SQLITE_OPEN_MAIN_DB | SQLITE_OPEN_WAL | SQLITE_OPEN_MAIN_JOURNAL));
@@ -272,6 +275,7 @@ int x_open(sqlite3_vfs*, sqlite3_filename name, sqlite3_file* f, int flags, int*
     g.dir_pending.push_back({path, file->inode});
     g.kinds.emplace(path, file->kind);
   }
+  file->path = &g.kinds.find(path)->first;
   return rc;
 }
 
@@ -279,7 +283,7 @@ int x_delete(sqlite3_vfs*, const char* name, int dir_sync) {
   std::lock_guard lock(g.mu);
   const std::string path = name;
   const Kind kind = path.ends_with("-wal") ? Kind::wal : path.ends_with("-journal") ? Kind::journal : Kind::db;
-  if (stopped(kind, "delete")) return SQLITE_IOERR_DELETE;
+  if (stopped(path, "delete")) return SQLITE_IOERR_DELETE;
   if (!g.live.contains(path)) {
     int exists = 0;
     g_real->xAccess(g_real, name, SQLITE_ACCESS_EXISTS, &exists);

@@ -46,7 +46,7 @@ bool cut_happened();
 
 // Where the cut came: the file and the operation it stopped.
 struct CutPoint {
-  std::string file;  // "db", "wal", "journal", "-" (between operations)
+  std::string file;  // the file's name without its directory, "-" between operations
   std::string op;    // "write", "truncate", "sync", "delete", "-"
 };
 CutPoint cut_point();
