@@ -406,7 +406,9 @@ Survivors apply_cut(std::mt19937_64& rng) {
     }
     const Inode& ino = g.inodes[static_cast<std::size_t>(d->second)];
     auto live = g.live.find(path);
-    const bool same = live != g.live.end() && live->second == d->second;
+    // A file renamed away outside the shim (a backup put in place) is not there to patch.
+    const bool same =
+        live != g.live.end() && live->second == d->second && ::access(path.c_str(), F_OK) == 0;
     if (same && ino.pending.empty()) continue;  // the disk holds exactly the durable image
     write_back(path, survivor(ino, keep, rng, s), same ? &ino : nullptr);
   }

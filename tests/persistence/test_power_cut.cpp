@@ -215,7 +215,7 @@ struct Storm {
     if (at_close) {
       write_storm(store, 1 + static_cast<int>(rng() % 30));
       power_cut_vfs::arm(1 + rng() % 40);
-      store.close();  // its checkpoint writes and syncs the database file, then deletes the WAL
+      store.close();  // writes the pending backup, checkpoints into the database file, deletes the WAL
       if (power_cut_vfs::cut_happened()) ++tally.during_close;
     } else {
       power_cut_vfs::arm(1 + rng() % 160);
