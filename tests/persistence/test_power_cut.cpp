@@ -89,15 +89,16 @@ struct Tally {
   std::uint64_t cuts = 0, acked_commits = 0, acked_register_writes = 0, acked_audit_rows = 0;
   std::uint64_t in_flight_applied = 0, in_flight_lost = 0;
   std::uint64_t at_write = 0, at_sync = 0, at_truncate = 0, at_delete = 0, between = 0;
-  std::uint64_t in_db_file = 0, in_wal = 0, in_backup = 0, during_close = 0, unsynced_writes = 0, pieces_lost = 0, pieces_torn = 0,
-                directory_changes_undone = 0;
+  std::uint64_t in_db_file = 0, in_wal = 0, in_backup = 0, during_close = 0;
+  std::uint64_t unsynced_writes = 0, pieces_lost = 0, pieces_torn = 0, directory_changes_undone = 0;
 };
 
 // Empty when the reopened store holds what it must; else what is wrong.
 std::string check_reopened(SettingsStore& store, const OpenReport& report, Expected& want, Tally& tally) {
   std::ostringstream why;
   if (report.outcome != OpenOutcome::opened || report.settings_lost || !report.restored_from.empty()) {
-    why << "open took the path '" << outcome_name(report.outcome) << "'" << (report.settings_lost ? ", settings lost" : "");
+    why << "open took the path '" << outcome_name(report.outcome) << "'"
+        << (report.settings_lost ? ", settings lost" : "");
     for (const auto& m : report.messages) why << "; " << m;
     return why.str();
   }
