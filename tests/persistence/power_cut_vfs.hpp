@@ -21,8 +21,10 @@
 //   - The -shm file is not data (SQLite rebuilds the WAL index from the WAL);
 //     the cut removes it.
 //   - Only files SQLite names as a main database, its journal or its WAL are
-//     modelled; xSync is not passed on (the model is the durability, so the
-//     test does not wait for a real disk).
+//     modelled (a backup's temporary file too); xSync is not passed on (the
+//     model is the durability, so the test does not wait for a real disk).
+//     What the store does beside SQLite (the backup's header write, fsync and
+//     rename in store_backup.cpp) is not modelled: it happens as it happens.
 // From the cut on, the machine is off: every write, truncate, sync, delete
 // and open fails with an I/O error and changes nothing.
 #include <cstdint>
