@@ -170,4 +170,20 @@ Status SettingsStore::check_integrity() const {
   return {};
 }
 
+Result<DurabilitySettings> SettingsStore::durability() const {
+  std::lock_guard lock(impl_->mu);
+  const auto& db = impl_->db;
+  if (!db) return fail(ErrorKind::internal, fmt::format("{}: durability of a closed settings store", impl_->path));
+  DurabilitySettings d;
+  auto mode = db.prepare("PRAGMA journal_mode");
+  if (!mode) return std::unexpected(mode.error());
+  auto row = mode->step("reading the journal mode");
+  if (!row) return std::unexpected(row.error());
+  if (*row) d.journal_mode = mode->text_at(0);
+  auto sync = db.query_int("PRAGMA synchronous", "reading the synchronous level");
+  if (!sync) return std::unexpected(sync.error());
+  d.synchronous = static_cast<int>(*sync);
+  return d;
+}
+
 }  // namespace persistence

@@ -142,6 +142,14 @@ struct Rejection {
 };
 using Validator = std::function<std::optional<Rejection>(const std::map<std::string, std::int64_t>&)>;
 
+// How the store's own connection is configured for durability, as SQLite
+// reports it (for diagnostics and tests: a connection default cannot
+// silently weaken what commit() promises).
+struct DurabilitySettings {
+  std::string journal_mode;  // "wal"
+  int synchronous = -1;      // PRAGMA synchronous: 0 OFF, 1 NORMAL, 2 FULL, 3 EXTRA
+};
+
 struct ImportReport {
   std::vector<Change> changes;          // what the import changed (also audited)
   std::vector<std::string> not_in_file; // registers the file does not mention (kept)
@@ -191,6 +199,7 @@ class SettingsStore {
 
   // Full integrity check of the open database.
   Status check_integrity() const;
+  Result<DurabilitySettings> durability() const;
 
   // Export/import (TOML, keys are register names; settings_file.hpp). Import
   // validates the whole merged set with `validate` and applies it in one

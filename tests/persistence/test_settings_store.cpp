@@ -38,13 +38,28 @@ TEST_CASE("a committed write is there after reopening", "[persistence]") {
 TEST_CASE("the database runs in WAL mode with synchronous FULL", "[persistence]") {
   test::TempDir dir;
   OpenReport report;
-  auto store = test::open_ok(dir.file("settings.db"), report);
+  // synchronous is per connection, so it is read on the store's own
+  // connection: FULL (2) makes every commit sync the WAL before it returns,
+  // which is what survives a power cut (test_power_cut.cpp); NORMAL would
+  // survive a kill only.
+  auto expect_full = [](const SettingsStore& store) {
+    auto d = store.durability();
+    REQUIRE(d);
+    CHECK(d->journal_mode == "wal");
+    CHECK(d->synchronous == 2);
+  };
+  {
+    auto store = test::open_ok(dir.file("settings.db"), report);
+    REQUIRE(report.outcome == OpenOutcome::created);
+    expect_full(store);
+    REQUIRE(store.commit({{"axis.y.mode", 2}}, test::kTcp));
+    CHECK(std::filesystem::exists(dir.file("settings.db-wal")));
+  }
+  auto store = test::open_ok(dir.file("settings.db"), report);  // the path that opens an existing file
+  REQUIRE(report.outcome == OpenOutcome::opened);
+  expect_full(store);
   CHECK(test::sql_int(dir.file("settings.db"), "SELECT count(*) FROM pragma_journal_mode WHERE journal_mode='wal'") ==
         1);
-  // synchronous is per connection; the store sets it on every open (checked by reading the code path's effect:
-  // the WAL file exists after a commit, i.e. commits go through the WAL).
-  REQUIRE(store.commit({{"axis.y.mode", 2}}, test::kTcp));
-  CHECK(std::filesystem::exists(dir.file("settings.db-wal")));
 }
 
 TEST_CASE("a multi-register write is one transaction with one audit row per change", "[persistence]") {
