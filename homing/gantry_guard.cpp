@@ -30,7 +30,7 @@ void Engine::follow_masters(const Settings& settings) {
 // included, whatever the phase or the cause (a side on its sensor, a dead or
 // stuck sensor, a squaring beyond the limit): each period, where both sides
 // would come to rest if braked now, or after running this period's commands
-// for up to two periods (at least kBrakingHorizon_s), is compared with their relative position at the
+// for up to two periods, is compared with their relative position at the
 // start of the cycle. Before that could pass the limit, the pair is stopped
 // with a misalignment alarm.
 void Engine::guard_gantries(const Settings& settings) {
@@ -48,10 +48,11 @@ void Engine::guard_gantries(const Settings& settings) {
       const double d = stop_distance_mm(std::abs(v), settings.axes[axis].acceleration_mm_per_s2);
       return at.position_mm + (v > 0 ? d : (v < 0 ? -d : 0.0));
     };
-    // As far ahead as a move's braking looks (a control period up to
-    // kBrakingHorizon_s late), or two periods if they run longer: a late
-    // period must not carry the pair past the limit before it is braked.
-    const double horizon = std::max(2 * last_dt_s_, kBrakingHorizon_s);
+    // Two periods ahead: looking as far as a move's braking does (20 ms)
+    // would stop square-able pairs at slow accelerations. A period later
+    // than that can carry the pair past the limit by what it travels in the
+    // extra time (README "Gantries: racking").
+    const double horizon = 2 * last_dt_s_;
     double worst = 0;
     for (int k = 0; k <= 4; ++k) {
       const double h = horizon * k / 4;

@@ -17,9 +17,12 @@ double Gen::overshoot(const AxisSettings& s) const {
 
 void Gen::draw_motion(AxisSettings& s, sim::AxisConfig& c, const PairDraw& pd) {
   s.direction = d.chance(0.5) ? Direction::negative : Direction::positive;
-  double seek_v = d.u(5, 40);
-  double jog_v = d.u(2, 20);
-  s.acceleration_mm_per_s2 = d.u(100, 2000);
+  // Mostly a router's speeds; one axis in ten up to the registers' maxima
+  // (seek and jog 60,000 mm/min, acceleration 60,000 mm/s²).
+  const bool fast = d.chance(0.1);
+  double seek_v = fast ? d.u(40, 1000) : d.u(5, 40);
+  double jog_v = fast ? d.u(20, 1000) : d.u(2, 20);
+  s.acceleration_mm_per_s2 = fast ? d.u(2000, 60000) : d.u(100, 2000);
   const double a_pair = std::min(s.acceleration_mm_per_s2, pd.accel);
   if (pd.pair) {
     // A gantry stops from seek and jog feedrate within its misalignment.
@@ -362,7 +365,8 @@ void Gen::sequence() {
 }
 
 Machine Gen::build() {
-  m.max_dt_s = d.chance(0.3) ? 0.002 : d.u(0.005, 0.010);
+  // One period in ten comes late, by up to the 20 ms the README promises.
+  m.max_dt_s = d.chance(0.3) ? 0.002 : d.u(0.005, 0.020);
   for (auto& c : m.sim.axes) c = sim::AxisConfig{};
   roles_and_modes();
   sequence();

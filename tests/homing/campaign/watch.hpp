@@ -11,8 +11,9 @@
 
 namespace campaign {
 
-// What the racking check allows beyond max_misalignment: the simulation's
-// floating-point arithmetic, not a velocity-scaled margin.
+// What the racking check allows beyond max_misalignment besides the travel
+// of periods later than the guard looks ahead (README "Gantries: racking"):
+// the simulation's floating-point arithmetic.
 inline constexpr double kRackingTolerance_mm = 1e-3;
 
 struct Failure {
@@ -70,7 +71,7 @@ class Watch {
 
  private:
   void axis_period(std::size_t a, double engine_dt);
-  void racking();
+  void racking(double engine_dt);
   void on_flip(std::size_t a, double x);
   bool reference_edge(std::size_t a, double& ref);
   void track_edges(std::size_t a);
@@ -93,6 +94,7 @@ class Watch {
   std::array<double, kAxisCount> rest_x_{};
   // Gantry racking.
   std::array<double, kAxisCount> rel_ref_{};   // per slave
+  std::array<double, kAxisCount> late_allowance_{};  // per slave: travel in periods later than the guard looks
   // Sensor edges as they stood before this period (the reference of an axis assigned now).
   std::array<double, kAxisCount> release_{}, trigger_{};
   std::array<bool, kAxisCount> has_release_{}, has_trigger_{};
