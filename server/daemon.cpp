@@ -199,7 +199,10 @@ int run_daemon(const Options& opt, const Wiring& wiring) {
   if (!machine) return fail_start(machine.error());
 
   ControlLoop loop(*settings, std::move(*machine), opt.period_us, opt.time_scale);
-  if (store->settings_lost()) loop.raise_settings_lost();
+  if (store->settings_lost()) {
+    loop.raise_settings_lost();
+    loop.run_period(0);  // latched in the snapshot before the first client can read it
+  }
   ModbusService service(service_config(opt, loop, wiring), loop, &*store, *settings);
   auto transports = open_transports(opt, service);
   if (!transports) return fail_start(transports.error());
