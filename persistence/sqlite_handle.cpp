@@ -63,7 +63,7 @@ std::string_view hint(ErrorKind kind) {
     case ErrorKind::read_only:
       return "the storage is read-only or write-protected; check the mount and file permissions";
     case ErrorKind::corrupt:
-      return "the database is damaged; restart the module to restore the last good backup";
+      return "the database is damaged; the module restores its last good backup when it starts";
     case ErrorKind::busy: return "another program holds the database locked; close it and retry";
     case ErrorKind::io: return "the storage device reported an error; check it and retry";
     default: return "";

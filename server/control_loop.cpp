@@ -288,6 +288,27 @@ AxisTrace ControlLoop::trace(std::size_t axis) const {
   return published_trace_[axis];
 }
 
+// The engine's own state, not the snapshot: a reader holding the snapshot
+// lock may have kept the last period from being published.
+void ControlLoop::begin_stop_report() {
+  stop_report_ = StopReport{};
+  stop_report_.machine_s = machine_time_s_;
+  const homing::Status& st = engine_.status();
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    StopReport::Axis& r = stop_report_.axes[a];
+    r.velocity_mm_per_s = st.axes[a].velocity_mm_per_s;
+    r.moving = r.velocity_mm_per_s != 0;
+    r.from_mm = st.axes[a].position_mm;
+  }
+}
+
+void ControlLoop::end_stop_report(bool still_moving) {
+  stop_report_.machine_s = machine_time_s_ - stop_report_.machine_s;
+  stop_report_.at_rest = !still_moving;
+  const homing::Status& st = engine_.status();
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) stop_report_.axes[a].rest_mm = st.axes[a].position_mm;
+}
+
 void ControlLoop::thread_main() {
   const std::int64_t period_ns = std::int64_t{period_us_} * 1000;
   std::int64_t last = monotonic_ns();
@@ -308,11 +329,16 @@ void ControlLoop::thread_main() {
       homing::Commands abort{};
       abort.abort = true;
       submit(abort, false);
-      {
-        std::lock_guard lock(mailbox_mutex_);
-        jog_dir_.fill(0);
-      }
       stop_started = now;
+      begin_stop_report();
+    }
+    if (stop_started != 0) {
+      // Nothing starts moving again while the stop runs.
+      std::lock_guard lock(mailbox_mutex_);
+      jog_dir_.fill(0);
+      pending_.home_all = false;
+      pending_.home_axes = 0;
+      pending_.move_axes = 0;
     }
     run_period((now - last) * 1e-9);
     last = now;
@@ -320,7 +346,10 @@ void ControlLoop::thread_main() {
       const Snapshot s = snapshot();
       bool moving = false;
       for (const auto& a : s.status.axes) moving = moving || a.velocity_mm_per_s != 0;
-      if (!moving || now - stop_started > 10'000'000'000LL) break;
+      if (!moving || now - stop_started > 10'000'000'000LL) {
+        end_stop_report(moving);
+        break;
+      }
     }
     deadline += period_ns;
     if (now - deadline > period_ns) deadline = now + period_ns;  // far behind: do not burst

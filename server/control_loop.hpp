@@ -46,6 +46,20 @@ struct LoopStats {
   double lateness_percentile_us(double q) const;
 };
 
+// How the motion that ran when stop() was called came to rest: the log's
+// account of a SIGTERM (README: "stops all motion (controlled deceleration)").
+struct StopReport {
+  struct Axis {
+    bool moving = false;        // it moved when the stop began
+    double velocity_mm_per_s = 0;  // then
+    double from_mm = 0;         // machine coordinates, then
+    double rest_mm = 0;         // where it came to rest
+  };
+  std::array<Axis, homing::kAxisCount> axes{};
+  double machine_s = 0;  // machine time the stop took
+  bool at_rest = true;   // false: still moving when the 10 s bound ended the wait
+};
+
 // Nanoseconds since an arbitrary point (CLOCK_MONOTONIC).
 std::int64_t monotonic_ns();
 
@@ -71,8 +85,13 @@ class ControlLoop {
   // rt_priority > 0: SCHED_FIFO at that priority for the control thread
   // (a warning and normal scheduling when the system refuses).
   void start(int rt_priority = 0);
+  // Begins the stop without waiting: motion decelerates (abort) and no new
+  // motion command is taken from now on.
+  void request_stop() { stop_requested_ = true; }
   // Stops motion (abort, decelerate) and joins the thread.
   void stop();
+  // After stop(): how the axes that moved came to rest.
+  const StopReport& stop_report() const { return stop_report_; }
 
   // One-shot commands; merged until the loop takes them.
   void submit(const homing::Commands& commands, bool from_modbus);
@@ -103,6 +122,8 @@ class ControlLoop {
 
  private:
   void thread_main();
+  void begin_stop_report();
+  void end_stop_report(bool still_moving);
   struct Mailbox {
     homing::Commands commands{};
     bool settings_lost = false;
@@ -162,6 +183,8 @@ class ControlLoop {
   std::uint64_t stats_publish_tick_ = 0;
   double engine_us_ = 0;
   std::uint64_t engine_steps_ = 0;
+
+  StopReport stop_report_{};  // written by the loop thread before it ends, read after join
 
   std::atomic<bool> running_{false};
   std::atomic<bool> stop_requested_{false};

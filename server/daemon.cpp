@@ -4,6 +4,7 @@
 #include <signal.h>
 #include <spdlog/spdlog.h>
 
+#include <cmath>
 #include <cstdio>
 #include <expected>
 #include <memory>
@@ -154,9 +155,28 @@ std::string announce(const Options& opt, const Transports& t, bool has_sim) {
   return where;
 }
 
+// What the stop did to the axes that moved: where each was, how fast, and
+// where it came to rest (a stop at the axis's acceleration travels v²/2a).
+void log_stop(const StopReport& r) {
+  bool any = false;
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    const StopReport::Axis& x = r.axes[a];
+    if (!x.moving) continue;
+    any = true;
+    const auto unit = homing::axis_unit(a);
+    spdlog::info("stop: {} decelerated from {:.3f} {}/s at {:.3f} {} to rest at {:.3f} {} ({:.3f} {} in {:.3f} s)",
+                 homing::kAxisUpper[a], x.velocity_mm_per_s, unit, x.from_mm, unit, x.rest_mm, unit,
+                 std::abs(x.rest_mm - x.from_mm), unit, r.machine_s);
+  }
+  if (!r.at_rest) spdlog::error("stop: axes still moving {:.1f} s after the stop began; leaving anyway", r.machine_s);
+  else if (!any) spdlog::info("stop: no axis was moving");
+}
+
 // Runs the loop, the monitor and the transports until SIGINT or SIGTERM (a
-// SIGHUP reloads the TLS files), then stops them: the transports first (no
-// new commands), motion last.
+// SIGHUP reloads the TLS files), then stops them: motion begins to brake at
+// once (the loop takes no new motion command from then on, so a client
+// served while the transports close cannot start one), the transports close,
+// and the loop ends once every axis is at rest.
 void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, ModbusService& service,
            persistence::SettingsStore& store, Transports& t) {
   loop.start(opt.rt_priority);
@@ -175,6 +195,7 @@ void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, Modbu
   while (sigwait(&signals, &sig) == 0 && sig == SIGHUP) reload_tls(opt, t);
   systemd.stopping();
   spdlog::info("{} received: stopping motion and shutting down", sig == SIGINT ? "SIGINT" : "SIGTERM");
+  loop.request_stop();
   if (t.tcp) t.tcp->stop();
   if (t.tls) t.tls->stop();
   if (t.rtu) t.rtu->stop();
@@ -182,6 +203,7 @@ void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, Modbu
   if (tls_thread.joinable()) tls_thread.join();
   if (rtu_thread.joinable()) rtu_thread.join();
   loop.stop();
+  log_stop(loop.stop_report());
   monitor.stop();
   t.tcp.reset();
   t.tls.reset();
@@ -199,7 +221,10 @@ int run_daemon(const Options& opt, const Wiring& wiring) {
   if (!machine) return fail_start(machine.error());
 
   ControlLoop loop(*settings, std::move(*machine), opt.period_us, opt.time_scale);
-  if (store->settings_lost()) loop.raise_settings_lost();
+  if (store->settings_lost()) {
+    loop.raise_settings_lost();
+    loop.run_period(0);  // latched in the snapshot before the first client can read it
+  }
   ModbusService service(service_config(opt, loop, wiring), loop, &*store, *settings);
   auto transports = open_transports(opt, service);
   if (!transports) return fail_start(transports.error());

@@ -100,9 +100,12 @@ void Monitor::poll(std::int64_t now_ms) {
   const Snapshot snap = loop_.snapshot();
   const homing::Status& st = snap.status;
   if (first_) {
+    // Nothing to report of the state at start, except an alarm already
+    // latched (settings_lost, an e-stop pressed): it is logged like any other.
     last_ = st;
+    last_.global_alarm = homing::AlarmCode::none;
+    for (auto& axis : last_.axes) axis.alarm = homing::Alarm{};
     first_ = false;
-    return;
   }
   const homing::Settings settings = service_.settings();
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {

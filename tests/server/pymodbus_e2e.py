@@ -8,7 +8,8 @@ axes, runs a home-all (default sequence: Z, then X+Y), checks positions
 against the simulator unit's truth, and checks device identification
 (FC 43/14), an unknown unit (0x0B), an unknown function (01), quantity (03),
 half of a 32-bit value (02), all-or-nothing FC 16 and exception 06 during a
-cycle. Exits non-zero on the first failure. Every wait is bounded.
+cycle, and reads Z's homing trace with function 20 (read file record; layout
+in hmi_maps/README.md). Exits non-zero on the first failure. Every wait is bounded.
 """
 import argparse
 import csv
@@ -23,6 +24,7 @@ from homingd_py import Daemon, check, failures  # noqa: E402  (also stubs serial
 
 try:
     from pymodbus.client import ModbusTcpClient
+    from pymodbus.file_message import FileRecord, ReadFileRecordRequest
     from pymodbus.mei_message import ReadDeviceInformationRequest
     from pymodbus.pdu import ExceptionResponse
 except ImportError as e:  # a missing tool fails the test, never skips it
@@ -215,7 +217,56 @@ def run(d, rows, version):
         actual = r.mm(f"sim.{a}.actual_position")
         check(abs(actual - expected) < 0.02, f"sim.{a}.actual_position {actual:.4f} ~ {expected:.4f}")
     check(r.read("status.homing_cycles") == 1, "status.homing_cycles == 1")
+    check_trace(c, r)
     c.close()
+
+
+def read_file_words(c, file_number, first, count):
+    req = ReadFileRecordRequest(records=[FileRecord(file_number=file_number, record_number=first,
+                                                    record_length=count)])
+    req.unit_id = MODULE   # pymodbus 3.0's name; later versions call it slave_id
+    req.slave_id = MODULE
+    rsp = c.execute(req)
+    if rsp.isError() or len(rsp.records) != 1:
+        return None
+    data = rsp.records[0].record_data
+    return [int.from_bytes(data[i:i + 2], "big") for i in range(0, len(data), 2)]
+
+
+def s32(hi, lo):
+    v = hi << 16 | lo
+    return v - (1 << 32) if v & 0x80000000 else v
+
+
+# Z's trace of the cycle just run: function 20, file 3, 10 header words then
+# 8 words per control period (time ms, phase, position um, velocity um/s, sensor).
+def check_trace(c, r):
+    head = read_file_words(c, 3, 0, 10)
+    if not check(head is not None and len(head) == 10, f"FC 20 header of Z ({head})"):
+        return
+    count = head[0]
+    words = []
+    for first in range(0, 8 * count, 120):
+        chunk = read_file_words(c, 3, 10 + first, min(120, 8 * count - first))
+        if chunk is None:
+            check(False, f"FC 20 records {10 + first}.. of Z")
+            return
+        words += chunk
+    samples = [(words[i] << 16 | words[i + 1], words[i + 2], s32(words[i + 3], words[i + 4]),
+                s32(words[i + 5], words[i + 6]), words[i + 7]) for i in range(0, len(words), 8)]
+    check(count > 10 and len(samples) == count, f"Z trace has {count} samples")
+    check(head[6] == 0, "Z trace: no alarm")
+    times = [t for t, *_ in samples]
+    check(times[0] == 0 and times == sorted(times), "Z trace: times from 0, in order")
+    position = r.read("axis.z.position")
+    check(abs(samples[-1][2] - position) <= 1, f"Z trace ends at axis.z.position ({samples[-1][2]} vs {position})")
+    seek = [v for _, phase, _, v, _ in samples if phase == 3]
+    fastest = -r.read("axis.z.seek_feedrate") * 1000 / 60
+    check(seek and abs(min(seek) - fastest) <= 2, f"Z sought at seek_feedrate ({min(seek or [0])} um/s)")
+    check(any(sensor for *_, sensor in samples) and samples[-1][4] == 0, "Z trace: sensor on, then off")
+    edge = s32(head[4], head[5])
+    check(s32(head[2], head[3]) != -1 and abs(edge - (position - r.read("axis.z.pull_off"))) <= 1,
+          f"Z reference edge {edge} um is pull_off below the rest point")
 
 
 if __name__ == "__main__":

@@ -27,6 +27,8 @@ class TlsModbusClient {
       int port, tls::SslCtx ctx, std::chrono::milliseconds timeout = std::chrono::seconds(5));
   // The protocol version agreed: TLS1_2_VERSION, TLS1_3_VERSION.
   int protocol_version() const { return SSL_version(client_.session().ssl()); }
+  // The session, for what the test inspects (the suite agreed).
+  SSL* ssl() const { return client_.session().ssl(); }
 
   // One request: the reply PDU, or why none came (the TLS alert the module
   // sent, a closed connection, a timeout).
