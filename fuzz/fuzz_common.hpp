@@ -91,17 +91,44 @@ inline bool contains_code(std::span<const std::uint8_t> pdu, std::uint16_t code)
   return false;
 }
 
-// Whether an accepted write may start motion: a coil write (commands, the
-// simulator's start button) or a holding write that covers cmd.home_axes
-// (one cycle homes the axes it names). The PDU as the service decodes it.
-inline bool commands_motion(std::span<const std::uint8_t> pdu) {
+// Whether a coil starts motion when 1 is written to it: home, jog, move and
+// the simulator's start button (home all on a press). cmd.abort,
+// cmd.reset_alarm, cmd.lock_settings, the permit and the e-stop start nothing.
+inline bool starts_motion(const registers::Register& coil) {
+  using registers::Key;
+  switch (coil.key) {
+    case Key::cmd_home_all:
+    case Key::cmd_home:
+    case Key::cmd_jog_plus:
+    case Key::cmd_jog_minus:
+    case Key::cmd_move:
+    case Key::sim_start_button: return true;
+    default: return false;
+  }
+}
+
+// Whether an accepted write may start motion: a 1 written to a coil that
+// starts motion (above) on the unit it went to, or a holding write that covers
+// cmd.home_axes (one cycle homes the axes it names). The PDU as the service
+// decodes it; every unit but the simulator's addresses the module (unit 0 is
+// the RTU broadcast, and 0 and 0xFF address the module over TCP).
+inline bool commands_motion(std::uint8_t unit, std::span<const std::uint8_t> pdu) {
   if (pdu.empty()) return false;
   const auto request = server::decode_request(pdu);
   if (!request) return false;
   const server::WriteRequest* w = std::get_if<server::WriteRequest>(&request->body);
   if (const auto* rw = std::get_if<server::ReadWriteRequest>(&request->body)) w = &rw->write;
   if (!w) return false;
-  if (w->table == registers::Table::coil) return true;
+  if (w->table == registers::Table::coil) {
+    const auto target = unit == kSimUnit ? registers::Unit::simulator : registers::Unit::module;
+    for (std::size_t i = 0; i < w->values.size(); ++i) {
+      if (w->values[i] == 0) continue;
+      const registers::Register* r =
+          registers::find_register(target, registers::Table::coil, static_cast<std::uint16_t>(w->start + i));
+      if (r && starts_motion(*r)) return true;
+    }
+    return false;
+  }
   static const std::uint16_t home_axes = registers::find_register("cmd.home_axes")->address;
   return w->table == registers::Table::holding_register && w->start <= home_axes &&
          home_axes < std::size_t{w->start} + w->values.size();
@@ -230,7 +257,7 @@ struct Harness {
     }
     if (access == Access::locked && accepted && contains_code(pdu, kUnlockCode)) maybe_unlocked = true;
     // Motion only after an accepted write that commands it.
-    if (accepted && commands_motion(pdu)) motion_allowed = true;
+    if (accepted && commands_motion(unit, pdu)) motion_allowed = true;
     if (!motion_allowed && moving()) {
       print_motion();
       violated("an axis moves but no write that commands motion was accepted", unit, pdu);

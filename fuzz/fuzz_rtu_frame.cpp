@@ -73,7 +73,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (unit == 0 && reply.send) fuzz::violated("a broadcast was answered", unit, pdu);
       const server::Reply unicast = twin.request(fuzz::kModuleUnit, pdu);
       (void)locked.request(fuzz::kModuleUnit, pdu);
-      if (unit == 0 && fuzz::accepted_write(pdu.empty() ? 0 : pdu[0], unicast) && fuzz::commands_motion(pdu))
+      if (unit == 0 && fuzz::accepted_write(pdu.empty() ? 0 : pdu[0], unicast) && fuzz::commands_motion(unit, pdu))
         bus.motion_allowed = true;
       if (bus.settings_now != twin.settings_now) fuzz::violated("a broadcast and a unicast changed different settings", unit, pdu);
       if (bus.moving() != twin.moving()) fuzz::violated("a broadcast and a unicast moved differently", unit, pdu);

@@ -4,8 +4,9 @@
 // engineering values and registers::validate_settings_map as the validator,
 // as server/settings_file_mode.cpp does. Besides "no crash": a refused import
 // leaves load() exactly as before; an accepted one leaves only values the
-// daemon accepts at start (settings_from_raw rejects none) that pass the
-// validator again. After an accepted import the previous values are committed
+// daemon accepts at start (settings_from_raw rejects none), and exactly the
+// file's values: each setting the file names as the file says, every other
+// one as before (the file read again here, apart from the import). After an accepted import the previous values are committed
 // back, so every input starts from the defaults. The database is opened once
 // and reused (on tmpfs when there is one); its settings at the start of every
 // input are the defaults read once at start, which each input's checks
@@ -102,7 +103,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   const auto from_raw = registers::settings_from_raw(after);
   check(from_raw.rejected.empty(), "an accepted import stored a value the daemon rejects at start");
-  check(!validate(after).has_value(), "an accepted import stored settings the validator refuses");
+  // What is stored is what the file says, read here on its own: every setting
+  // it names has the file's value, every other one kept its value.
+  const auto parsed = persistence::read_settings_file(f.file);
+  check(parsed.has_value(), "an accepted import of a file that does not parse");
+  const auto in_file = persistence::raw_values(f.file, *parsed, &kCodec);
+  check(in_file.has_value(), "an accepted import of a value that does not read");
+  auto expected = before;
+  for (const auto& [name, value] : *in_file) expected[name] = value;
+  check(after == expected, "an accepted import stored other values than the file's, or changed a setting it does not name");
   for (const auto& c : imported->changes) {
     auto it = after.find(c.name);
     check(it != after.end() && it->second == c.new_value, "a reported change is not what is stored");

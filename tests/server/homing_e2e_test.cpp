@@ -28,6 +28,35 @@ int phase_of(Client& c, const char* axis) { return static_cast<int>(c.read(ax(ax
 int state_of(Client& c) { return static_cast<int>(c.read("status.state")); }
 int result_of(Client& c) { return static_cast<int>(c.read("status.last_command_result")); }
 
+// The watchdog of the tests that let it expire: long enough that a Modbus
+// round trip on a loaded machine does not outlast it while the host beats.
+constexpr int kWatchdogMs = 500;
+
+// The host's heartbeat, written every 20 ms until done() holds (10 s at most);
+// alarm says whether status.alarm was seen meanwhile. Whether done() held.
+bool beat_until(Client& c, std::uint16_t& beat, bool& alarm, const std::function<bool()>& done) {
+  return wait_until(
+      [&] {
+        c.set("host.heartbeat", beat++);
+        alarm = alarm || c.read("status.alarm") != 0;
+        return done();
+      },
+      10s, 20ms);
+}
+
+// These registers watched over the next `periods` control periods (10 s at
+// most): "nothing moved" across the whole window.
+SteadyWatch watch_still(Client& c, const std::vector<std::string>& names, std::int64_t periods) {
+  const auto from = c.read("diag.loop_periods");
+  return watch_steady(
+      [&] {
+        std::vector<std::int64_t> v;
+        for (const auto& n : names) v.push_back(c.read(n));
+        return v;
+      },
+      [&] { return c.read("diag.loop_periods") >= from + periods; }, 10s);
+}
+
 bool active(int phase) {
   return phase >= static_cast<int>(Phase::pre_move) && phase <= static_cast<int>(Phase::align_slave);
 }
@@ -162,10 +191,11 @@ TEST_CASE("commands in the wrong state are refused with their code and move noth
   CHECK((c.read("status.interlocks") & homing::interlock::estop) != 0);
   REQUIRE(c.write("cmd.home_all", 1) == 0);
   REQUIRE(wait_until([&] { return result_of(c) == static_cast<int>(homing::CommandResult::refused_estop); }, 2s));
-  std::this_thread::sleep_for(200ms);
-  CHECK(c.read("status.homing") == 0);
-  CHECK(c.read("sim.x.actual_position") == actual_x);
-  CHECK(c.read("sim.z.actual_position") == actual_z);
+  // Nothing starts: watched over 200 control periods (2 s of machine time).
+  const SteadyWatch refused_home = watch_still(c, {"status.homing", "sim.x.actual_position", "sim.z.actual_position"}, 200);
+  CHECK(refused_home.window_ended);
+  CHECK(refused_home.steady);
+  CHECK(refused_home.first == std::vector<std::int64_t>{0, actual_x, actual_z});
 
   // Released, the e-stop alarm stays latched: a jog is refused (refused_alarm = 3).
   c.set("sim.estop", 0);
@@ -174,9 +204,10 @@ TEST_CASE("commands in the wrong state are refused with their code and move noth
   CHECK((c.read("status.interlocks") & homing::interlock::alarm_latched) != 0);
   REQUIRE(c.write("cmd.jog_plus.x", 1) == 0);
   REQUIRE(wait_until([&] { return result_of(c) == static_cast<int>(homing::CommandResult::refused_alarm); }, 2s));
-  std::this_thread::sleep_for(200ms);
-  CHECK(c.read("axis.x.velocity") == 0);
-  CHECK(c.read("sim.x.actual_position") == actual_x);
+  const SteadyWatch refused_jog = watch_still(c, {"axis.x.velocity", "sim.x.actual_position"}, 200);
+  CHECK(refused_jog.window_ended);
+  CHECK(refused_jog.steady);
+  CHECK(refused_jog.first == std::vector<std::int64_t>{0, actual_x});
   REQUIRE(c.write("cmd.jog_plus.x", 0) == 0);
 
   // Reset: the alarm clears, nothing blocks but homing itself.
@@ -212,49 +243,49 @@ TEST_CASE("a jog whose client disconnects stops") {
     CHECK(jogger.read("cmd.jog_plus.x") == 1);  // reads back the held state
     CHECK(phase_of(watcher, "x") == static_cast<int>(Phase::jog));
     const auto p0 = watcher.read("axis.x.position");
-    std::this_thread::sleep_for(100ms);
-    CHECK(watcher.read("axis.x.position") > p0);
+    CHECK(wait_until([&] { return watcher.read("axis.x.position") > p0; }, 5s));
     jogger.close();  // the connection goes, without writing 0
   }
-  REQUIRE(wait_until([&] { return watcher.read("axis.x.velocity") == 0; }, 3s));
-  std::this_thread::sleep_for(100ms);
-  const auto p1 = watcher.read("axis.x.position");
-  const auto a1 = watcher.read("sim.x.actual_position");
-  std::this_thread::sleep_for(300ms);
-  CHECK(watcher.read("axis.x.position") == p1);
-  CHECK(watcher.read("sim.x.actual_position") == a1);
+  REQUIRE(wait_until([&] { return watcher.read("axis.x.velocity") == 0 && watcher.read("axis.x.busy") == 0; }, 3s));
+  // At rest for good: watched over 300 control periods (3 s of machine time).
+  const SteadyWatch still = watch_still(watcher, {"axis.x.position", "sim.x.actual_position"}, 300);
+  INFO("samples " << still.samples);
+  CHECK(still.window_ended);
+  CHECK(still.steady);
   CHECK(watcher.read("axis.x.busy") == 0);
   CHECK(watcher.read("status.alarm") == 0);
 }
 
 TEST_CASE("an expired watchdog stops a homing cycle with communication lost on the moving axis") {
-  Daemon d({.time_scale = 5});
+  Daemon d({.time_scale = 2});
   Client c = Client::tcp(d.port());
-  c.set("global.watchdog_ms", 200);
+  c.set("global.watchdog_ms", kWatchdogMs);
   std::uint16_t beat = 1;
   c.set("host.heartbeat", beat++);
   REQUIRE(c.write("cmd.home_all", 1) == 0);
-  // The host keeps its heartbeat for a while: Z seeks (6 s of machine time, about 1.2 s here).
-  for (int i = 0; i < 6; ++i) {
-    std::this_thread::sleep_for(50ms);
-    c.set("host.heartbeat", beat++);
-  }
+  // The host beats while Z seeks (6 s of machine time, 3000 control periods
+  // here) for twice the watchdog's time: the cycle goes on, no alarm.
+  const auto periods = c.read("diag.loop_periods");
+  bool alarm = false;
+  REQUIRE(beat_until(c, beat, alarm, [&] { return c.read("diag.loop_periods") > periods + 2 * kWatchdogMs; }));
+  CHECK_FALSE(alarm);
   REQUIRE(c.read("status.homing") == 1);
   REQUIRE(phase_of(c, "z") == static_cast<int>(Phase::seek));
-  CHECK(c.read("status.alarm") == 0);
-  const auto stopped_at = Clock::now();
-  // Now the host goes silent.
-  REQUIRE(wait_until([&] { return c.read("status.alarm") == 1; }, 3s));
-  const auto after = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - stopped_at);
-  CHECK(after >= 150ms);
-  CHECK(after < 1500ms);
+  // Now the host goes silent after one last beat. The alarm never comes
+  // before watchdog_ms after that beat was sent (it can only come later).
+  const auto last_beat = Clock::now();
+  c.set("host.heartbeat", beat++);
+  REQUIRE(wait_until([&] { return c.read("status.alarm") == 1; }, 10s));
+  CHECK(Clock::now() - last_beat >= std::chrono::milliseconds(kWatchdogMs));
   CHECK(c.read("axis.z.alarm") == static_cast<int>(homing::AlarmCode::communication_lost));
   CHECK(c.read("axis.z.alarm_phase") == static_cast<int>(Phase::seek));
   CHECK(c.read("status.homing") == 0);
-  REQUIRE(wait_until([&] { return c.read("axis.z.velocity") == 0; }, 2s));
-  const auto z = c.read("sim.z.actual_position");
-  std::this_thread::sleep_for(200ms);
-  CHECK(c.read("sim.z.actual_position") == z);
+  REQUIRE(wait_until([&] { return c.read("axis.z.velocity") == 0; }, 5s));
+  // Stopped for good: watched over 500 control periods (1 s of machine time).
+  const SteadyWatch still = watch_still(c, {"sim.z.actual_position", "axis.z.position"}, 500);
+  INFO("samples " << still.samples);
+  CHECK(still.window_ended);
+  CHECK(still.steady);
   CHECK(c.read("axis.z.homed") == 0);
 
   // With the heartbeat kept alive, the same cycle completes. The host's beat
@@ -404,18 +435,16 @@ TEST_CASE("SIGTERM during motion stops the motion and exits 0, SIGINT at rest ex
 // The alarm names the phase the moving axis was in; axes waiting for a later
 // sequence step were not moving and get no alarm of their own.
 TEST_CASE("communication lost records the phase the moving axis was in") {
-  Daemon d({.time_scale = 5});
+  Daemon d({.time_scale = 2});
   Client c = Client::tcp(d.port());
-  c.set("global.watchdog_ms", 200);
+  c.set("global.watchdog_ms", kWatchdogMs);
   std::uint16_t beat = 1;
   c.set("host.heartbeat", beat++);
   REQUIRE(c.write("cmd.home_all", 1) == 0);
-  for (int i = 0; i < 6; ++i) {
-    std::this_thread::sleep_for(50ms);
-    c.set("host.heartbeat", beat++);
-  }
-  REQUIRE(phase_of(c, "z") == static_cast<int>(Phase::seek));
-  REQUIRE(wait_until([&] { return c.read("status.alarm") == 1; }, 3s));
+  bool alarm = false;
+  REQUIRE(beat_until(c, beat, alarm, [&] { return phase_of(c, "z") == static_cast<int>(Phase::seek); }));
+  REQUIRE_FALSE(alarm);
+  REQUIRE(wait_until([&] { return c.read("status.alarm") == 1; }, 10s));
   CHECK(c.read("axis.z.alarm") == static_cast<int>(homing::AlarmCode::communication_lost));
   CHECK(c.read("axis.z.alarm_phase") == static_cast<int>(Phase::seek));
   CHECK(c.read("axis.x.alarm") == 0);

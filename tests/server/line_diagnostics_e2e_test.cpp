@@ -130,7 +130,8 @@ TEST_CASE("function 17 reports the unit id, run indicator ON and the product, ve
 
 TEST_CASE("over RTU function 08 counts bad CRCs, other units' frames and broadcasts apart from TCP") {
   PtyPair pty;
-  Daemon d({.extra = {"--rtu", pty.server_end(), "--baud", "19200", "--parity", "E"}});
+  // Debug logging: the module logs the bad frame it drops, which the test waits for.
+  Daemon d({.extra = {"--rtu", pty.server_end(), "--baud", "19200", "--parity", "E", "--log-level", "debug"}});
   Client rtu = Client::rtu(pty.client_end(), 19200, 'E');
   REQUIRE(rtu.read("status.map_version") == registers::kMapVersion);
   // Both transports start from zero here.
@@ -141,7 +142,15 @@ TEST_CASE("over RTU function 08 counts bad CRCs, other units' frames and broadca
   const int fd = modbus_get_socket(rtu.ctx());
   const std::uint8_t bad_crc[] = {0x01, 0x03, 0x00, 0x00, 0x00, 0x01, 0xDE, 0xAD};
   REQUIRE(::write(fd, bad_crc, sizeof bad_crc) == static_cast<ssize_t>(sizeof bad_crc));
-  std::this_thread::sleep_for(300ms);
+  // Taken off the line before the next request (whose flush would drop its
+  // bytes from the pty unread).
+  REQUIRE(wait_until([&] { return d.log().find("rtu: bad frame (CRC), 1 so far") != std::string::npos; }, 10s));
+  // After a bad frame the module ignores the line until 100 ms of silence: a
+  // request before that gets no answer and counts nowhere. The first one it
+  // answers again (the communication-error count) says the line is its own again.
+  Bytes comm_errors;
+  REQUIRE(wait_until([&] { return !(comm_errors = rtu_exchange(rtu, 1, diag_pdu(0x0C))).empty(); }, 20s, 0ms));
+  CHECK(counter_of(comm_errors, 0x0C) == 1);
   // A read for unit 5 (another device on the bus): silence from the module.
   CHECK(rtu_exchange(rtu, 5, {0x03, 0x00, 0x00, 0x00, 0x01}, false).empty());
   // A broadcast write: applied, never answered.
@@ -151,9 +160,9 @@ TEST_CASE("over RTU function 08 counts bad CRCs, other units' frames and broadca
                      false)
             .empty());
 
-  CHECK(rtu_counter(rtu, 0x0B) == 4);  // bus: bad CRC, unit 5, broadcast, this request
+  CHECK(rtu_counter(rtu, 0x0B) == 5);  // bus: bad CRC, the first 0C, unit 5, broadcast, this request
   CHECK(rtu_counter(rtu, 0x0C) == 1);  // the bad CRC
-  CHECK(rtu_counter(rtu, 0x0E) == 4);  // for this module: broadcast, 0B, 0C, this request
+  CHECK(rtu_counter(rtu, 0x0E) == 5);  // for this module: the first 0C, broadcast, 0B, 0C, this request
   CHECK(rtu_counter(rtu, 0x0F) == 1);  // the broadcast went unanswered
   CHECK(rtu_counter(rtu, 0x0D) == 0);
   // TCP saw none of it: only its own request.

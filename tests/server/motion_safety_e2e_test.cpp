@@ -135,13 +135,16 @@ TEST_CASE("over Modbus a hard-limit trip is recovered by reset and a jog away, w
   while (Clock::now() < trip && c.read("axis.x.alarm") == 0) std::this_thread::sleep_for(5ms);
   REQUIRE(c.write("cmd.jog_minus.x", 0) == 0);
   REQUIRE(c.read("axis.x.alarm") == static_cast<int>(homing::AlarmCode::hard_limit));
-  std::this_thread::sleep_for(300ms);
+  // The trip stops the axis at its deceleration; the reset waits for rest.
+  REQUIRE(wait_until([&] { return c.read("axis.x.velocity") == 0 && c.read("axis.x.busy") == 0; }, 10s));
+  // Each command's result is read once the control loop took it (status.command_count).
+  const auto commands = c.read("status.command_count");
   REQUIRE(c.write("cmd.reset_alarm", 1) == 0);
-  std::this_thread::sleep_for(100ms);
+  REQUIRE(wait_until([&] { return c.read("status.command_count") >= commands + 1; }, 5s));
   CHECK(c.read("axis.x.alarm") == 0);
   CHECK(result_of(c) == static_cast<int>(homing::CommandResult::accepted));
   REQUIRE(c.write("cmd.jog_minus.x", 1) == 0);
-  std::this_thread::sleep_for(100ms);
+  REQUIRE(wait_until([&] { return c.read("status.command_count") >= commands + 2; }, 5s));
   CHECK(result_of(c) == static_cast<int>(homing::CommandResult::refused_hard_limit));
   REQUIRE(c.write("cmd.jog_minus.x", 0) == 0);
   const double x = c.read_mm("sim.x.actual_position");

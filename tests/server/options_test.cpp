@@ -1,7 +1,8 @@
 // homingd's command line, as a tool or a technician meets it: --help lists
-// every option of the spec; a wrong option exits non-zero with one line that
-// names it; a start-up resource at fault (port taken, serial device missing)
-// is named too.
+// every option of the spec; a wrong option exits 2 with one line that names
+// it; a start-up resource at fault (port taken, serial device missing) exits 1
+// and is named too (README, "homingd options": scripts and systemd tell the two
+// apart by the code).
 #include <catch2/catch.hpp>
 
 #include "daemon.hpp"
@@ -33,7 +34,7 @@ TEST_CASE("homingd --help lists every option of the spec and exits 0") {
   }
 }
 
-TEST_CASE("homingd exits non-zero with one line naming a wrong option") {
+TEST_CASE("homingd exits 2 with one line naming a wrong option") {
   TempDir dir;
   const std::string db = dir.file("never.db");
   struct Case {
@@ -59,14 +60,14 @@ TEST_CASE("homingd exits non-zero with one line naming a wrong option") {
     const RunResult r = run_program(argv, 10s);
     INFO("args: " << c.args[0] << (c.args.size() > 1 ? " " + c.args[1] : "") << "\nstderr: " << r.err);
     REQUIRE(r.exited());
-    CHECK(r.code() != 0);
+    CHECK(r.code() == 2);  // a usage error
     CHECK(first_line(r.err).find(c.names) != std::string::npos);
     CHECK(r.out.find("listening") == std::string::npos);
   }
   CHECK_FALSE(std::filesystem::exists(db));  // nothing was created by a refused start
 }
 
-TEST_CASE("homingd names the resource at fault when it cannot start") {
+TEST_CASE("homingd exits 1 naming the resource at fault when it cannot start") {
   Daemon first;
   TempDir dir;
   SECTION("the TCP port is taken") {
@@ -75,7 +76,7 @@ TEST_CASE("homingd names the resource at fault when it cannot start") {
                                     10s);
     INFO("stderr: " << r.err);
     REQUIRE(r.exited());
-    CHECK(r.code() != 0);
+    CHECK(r.code() == 1);  // a resource that cannot be used
     CHECK(last_line(r.err).find("--tcp") != std::string::npos);
     CHECK(last_line(r.err).find("in use") != std::string::npos);
   }
@@ -85,7 +86,7 @@ TEST_CASE("homingd names the resource at fault when it cannot start") {
                                     10s);
     INFO("stderr: " << r.err);
     REQUIRE(r.exited());
-    CHECK(r.code() != 0);
+    CHECK(r.code() == 1);  // a resource that cannot be used
     CHECK(last_line(r.err).find("--rtu") != std::string::npos);
   }
   // The first daemon is unharmed and still answers.
