@@ -135,10 +135,14 @@ MotionCommand move_to_command(const MotionState& now, double target, double vmax
     if (needed > a * (1 + 1e-9)) return MotionCommand{0, a, false, 0};
     return MotionCommand{0, std::max(needed, 1e-9), true, target};
   }
+  // Cruise no faster than lets a whole horizon at that speed still leave
+  // the stop distance: v·h + v²/2a ≤ dist. (Half a horizon, as this once
+  // said, let a late period at 60,000 mm/min carry a jog past its soft limit:
+  // campaign seed 2109 after the feedrates reached the registers' maxima.)
   double v = std::abs(vmax);
   if (a > 0) {
     const double ad = a * horizon;
-    v = std::min(v, std::max(0.0, -0.5 * ad + std::sqrt(0.25 * ad * ad + 2.0 * a * dist)));
+    v = std::min(v, std::max(0.0, -ad + std::sqrt(ad * ad + 2.0 * a * dist)));
   }
   // Never stall short of the target: creep the last micrometres.
   if (v < 1e-3) v = std::min(std::abs(vmax), 1e-3 + dist / std::max(dt, 1e-6));

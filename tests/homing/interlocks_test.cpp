@@ -86,6 +86,39 @@ SCENARIO("before homing, allowed_without_homing = none: jog and move refused", "
   CHECK((r.status().interlocks & interlock::not_homed) != 0);
 }
 
+SCENARIO("a jog at the registers' maximum feedrate stops at its soft limit when control periods come late",
+         "[interlocks][limits][late]") {
+  // Campaign seed 2109: a jog at 52,000 mm/min and 43,000 mm/s² cruised at a
+  // speed whose stop only fitted half a late period, passed its soft limit
+  // and raised soft_limit. Each start of the jog is tried against a late
+  // period (up to 20 ms) coming at each of its first periods in turn.
+  for (int late_at = 1; late_at <= 12; ++late_at) {
+    DYNAMIC_SECTION("the period after " << late_at << " is 19.9 ms long") {
+      Rig r;
+      AxisSettings& s = r.settings.axes[0];
+      s.soft_limits_enable = true;
+      s.soft_limit_min_mm = -1;
+      s.soft_limit_max_mm = 15;
+      REQUIRE(r.home_all());
+      s.jog_feedrate_mm_per_min = 52'000;
+      s.acceleration_mm_per_s2 = 43'000;
+      int period = 0;
+      r.next_dt = [&] { return ++period == late_at ? 0.0199 : 0.001; };
+      double highest = r.axis(0).position_mm;
+      r.jog(0, +1);
+      for (int i = 0; i < 400; ++i) {
+        r.step();
+        highest = std::max(highest, r.axis(0).position_mm);
+      }
+      r.release_jogs();
+      r.run_for(0.1);
+      CHECK_FALSE(r.status().alarm);
+      CHECK(highest <= 15 + 1e-9);
+      CHECK(r.axis(0).position_mm == Approx(15).margin(1e-9));
+    }
+  }
+}
+
 SCENARIO("after homing, soft limits are enforced", "[interlocks][limits]") {
   Rig r;
   AxisSettings& s = r.settings.axes[0];
