@@ -296,7 +296,10 @@ void Gen::gantry(std::size_t mi, std::size_t si, bool commutator) {
   // master's pull-off past its own edge and its stop.
   const double seek_v = mm_per_min_to_mm_per_s(ms.seek_feedrate_mm_per_min);
   const double a_pair = std::min(ms.acceleration_mm_per_s2, pd.accel);
-  double extras = 2 * 0.2 + 0.05 + std::abs(ss.pull_off_mm + ss.switch_compensation_mm - ms.pull_off_mm);
+  // A side whose trigger falls in a late period is seen that period's travel
+  // later: one side may stop that much further than the other.
+  double extras = 2 * 0.2 + 0.05 + std::abs(ss.pull_off_mm + ss.switch_compensation_mm - ms.pull_off_mm) +
+                  mm_per_min_to_mm_per_s(ms.seek_feedrate_mm_per_min) * m.max_dt_s;
   if (commutator) extras += ms.pull_off_mm + stop_distance_mm(seek_v, a_pair) + seek_v * m.max_dt_s + 0.2;
   // Widen the limit rather than squeeze the geometry.
   if (extras > 0.5 * pd.misalignment) pd.misalignment = extras / 0.5 * d.u(1.0, 1.5);

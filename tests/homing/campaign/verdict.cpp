@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <sstream>
 
 #include "homing/motion.hpp"
@@ -108,8 +109,18 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
     const sim::Fault f = r.sim().axis_config(a).fault;
     if (f == sim::Fault::sensor_stuck_active || f == sim::Fault::sensor_stuck_inactive || f == sim::Fault::wire_break)
       c.sensor_fault(letter(a) + "'s faulty sensor", with_partner(r.settings, a), mover && mode_uses_switch(e.mode));
-    if (p.short_cam)
-      c.add(letter(a) + "'s cam shorter than its stop", {AlarmCode::overrun_during_stop, AlarmCode::sensor_not_found}, bit, mover);
+    if (p.short_cam) {
+      // It must overrun only if the seek meets the cam fast enough: a seek
+      // that starts close to it may still be accelerating (seed 1935).
+      const auto& cfg = r.sim().axis_config(a);
+      const double edge = dir_of(e) < 0 ? cfg.sensor_max_mm : cfg.sensor_min_mm;
+      const double run_up = std::abs(edge - r.actual(a)) + (e.pre_move_mode == PreMove::always ? e.pre_move_distance_mm : 0);
+      const double v_cam = std::min(mm_per_min_to_mm_per_s(e.seek_feedrate_mm_per_min),
+                                    std::sqrt(2 * e.acceleration_mm_per_s2 * run_up));
+      const bool overruns = stop_distance_mm(v_cam, e.acceleration_mm_per_s2) > cfg.sensor_max_mm - cfg.sensor_min_mm + cfg.hysteresis_mm;
+      c.add(letter(a) + "'s cam shorter than its stop", {AlarmCode::overrun_during_stop, AlarmCode::sensor_not_found}, bit,
+            mover && overruns);
+    }
     if (p.rest_on_sensor) c.add(letter(a) + "'s shared limit resting on its sensor", {AlarmCode::settings_fault, AlarmCode::not_released}, bit);
     // A cycle that starts deeper in the cam than max_backoff can release (a
     // jog or move left it there) backs off straight away and must give up.
