@@ -31,9 +31,24 @@ void Run::exercise_motion() {
   const int dir = d_.chance(0.5) ? 1 : -1;
   say(std::string("jog ") + kAxisUpper[a] + (dir > 0 ? " +" : " -"));
   r_.jog(a, dir);
-  r_.run_for(d_.u(0.05, 1.0));
+  const double jog_s = d_.u(0.05, 1.0);
+  bool interrupted = false;
+  if (const auto ev = motion_event(a)) {
+    r_.run_for(d_.u(0.0, jog_s));
+    apply(*ev, causes, CyclePlan{});
+    acts_ |= act::event_in_jog_or_move;
+    interrupted = true;
+  }
+  r_.run_for(interrupted ? 0.05 : jog_s);
   r_.release_jogs();
   settle(10);
+  if (interrupted) {
+    w_->set_outside_movers(0);
+    mark("jog interrupted", static_cast<std::uint8_t>(seen::present | (w_->alarms_seen ? seen::alarmed : 0)));
+    if (auto u = explain(*w_, causes, r_.settings)) w_->fail(u->what + " during jogs and moves", u->detail);
+    return;
+  }
+  bool stopped_short_any = false;
   if (!r_.status().alarm && homed_axis(a)) {
     const double target = r_.axis(a).position_mm + d_.u(-40, 40);
     const bool outside = target < e.soft_limit_min_mm || target > e.soft_limit_max_mm;
@@ -42,9 +57,18 @@ void Run::exercise_motion() {
     const CommandResult res = r_.status().last_command_result;
     if (outside && res != CommandResult::refused_soft_limit) w_->fail("a move outside the soft limits was not refused", std::string(command_result_name(res)));
     if (!outside && res != CommandResult::accepted) w_->fail("a move inside the soft limits was refused", std::string(command_result_name(res)));
+    bool stopped_short = false;
+    if (!outside && res == CommandResult::accepted)
+      if (const auto ev = motion_event(a)) {
+        r_.run_until([&] { return r_.axis(a).velocity_mm_per_s != 0 || !ok(); }, 1);
+        r_.run_for(d_.u(0.0, 0.2));
+        apply(*ev, causes, CyclePlan{});
+        acts_ |= act::event_in_jog_or_move;
+        stopped_short = stopped_short_any = true;
+      }
     r_.run_until([&] { return (!r_.any_moving() && r_.axis(a).phase != Phase::move) || !ok(); }, 120);
     settle(10);
-    if (!outside && !r_.status().alarm && ok() && std::abs(r_.axis(a).position_mm - target) > 1e-9)
+    if (!outside && !stopped_short && !r_.status().alarm && ok() && std::abs(r_.axis(a).position_mm - target) > 1e-9)
       w_->fail("a move did not arrive", std::to_string(r_.axis(a).position_mm) + " for " + std::to_string(target));
     if (ok()) acts_ |= act::jog_and_move;
   }
@@ -55,7 +79,90 @@ void Run::exercise_motion() {
     settle(10);
   }
   w_->set_outside_movers(0);
+  if (stopped_short_any) mark("move interrupted", static_cast<std::uint8_t>(seen::present | (w_->alarms_seen ? seen::alarmed : 0)));
   if (auto u = explain(*w_, causes, r_.settings)) w_->fail(u->what + " during jogs and moves", u->detail);
+}
+
+// Before the first cycle, a short jog and a move of an unhomed axis, away
+// from its sensor, as global.allowed_without_homing says (README): `all`
+// lets both run at jog feedrate; `jog_reduced` only the jog, at 100 mm/min
+// at most; `none` neither. A refused command moves nothing.
+void Run::motion_before_homing() {
+  std::vector<std::size_t> cand;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (master_index(r_.settings, a) < 0 && r_.settings.axes[a].mode != HomingMode::disabled && !r_.axis(a).homed &&
+        !r_.axis(a).sensor && r_.sim().axis_config(a).fault == sim::Fault::none)
+      cand.push_back(a);
+  if (cand.empty() || r_.status().alarm) return;
+  const std::size_t a = cand[static_cast<std::size_t>(d_.integer(0, static_cast<int>(cand.size()) - 1))];
+  const int slave = slave_index(r_.settings, a);
+  const AxisMask movers = static_cast<AxisMask>(axis_bit(a) | (slave >= 0 ? axis_bit(static_cast<std::size_t>(slave)) : 0));
+  const AxisSettings e = effective(r_.settings, a);
+  const AllowedWithoutHoming allowed = r_.settings.global.allowed_without_homing;
+  const int away = dir_of(e) > 0 ? -1 : 1;
+  const double reduced_v = mm_per_min_to_mm_per_s(100.0);
+  const double jog_v = allowed == AllowedWithoutHoming::all ? mm_per_min_to_mm_per_s(e.jog_feedrate_mm_per_min)
+                                                            : std::min(reduced_v, mm_per_min_to_mm_per_s(e.jog_feedrate_mm_per_min));
+  // At most 2 mm away: the seek's travel allows 3 mm beyond where a cycle may start.
+  const double hold_s = std::min(0.3, 1.0 / jog_v);
+  w_->clear_alarms_seen();
+  const bool jog_allowed = allowed != AllowedWithoutHoming::none;
+  if (jog_allowed) w_->set_outside_movers(movers);
+  say(std::string("jog unhomed ") + kAxisUpper[a] + (away > 0 ? " +" : " -") + " (allowed without homing: " +
+      std::string(name_of(allowed)) + ")");
+  const double x0 = r_.actual(a);
+  r_.jog(a, away);
+  step();
+  const CommandResult jog_res = r_.status().last_command_result;
+  double fastest = 0;
+  const double end = r_.sim().time_s() + hold_s;
+  while (r_.sim().time_s() < end && ok()) {
+    step();
+    fastest = std::max(fastest, std::abs(r_.axis(a).velocity_mm_per_s));
+  }
+  r_.release_jogs();
+  settle(10);
+  if (jog_allowed && jog_res != CommandResult::accepted)
+    w_->fail("a jog before homing that allowed_without_homing allows was refused", std::string(command_result_name(jog_res)));
+  if (!jog_allowed && jog_res != CommandResult::refused_not_homed)
+    w_->fail("a jog before homing with allowed_without_homing none was not refused as not homed",
+             std::string(command_result_name(jog_res)));
+  if (jog_allowed && std::abs(r_.actual(a) - x0) == 0 && ok()) w_->fail("a jog before homing that was accepted did not move");
+  if (fastest > jog_v * (1 + 1e-9) + 1e-9)
+    w_->fail("a jog before homing ran faster than allowed_without_homing lets it",
+             std::to_string(fastest) + " mm/s, at most " + std::to_string(jog_v));
+  w_->set_outside_movers(0);
+  if (!ok() || r_.status().alarm) return;
+  // A move of 1 mm further away.
+  const bool move_allowed = allowed == AllowedWithoutHoming::all;
+  const double target = r_.axis(a).position_mm + away * 1.0;
+  if (move_allowed) w_->set_outside_movers(movers);
+  say(std::string("move unhomed ") + kAxisUpper[a] + " to " + std::to_string(target));
+  r_.move(a, target);
+  const CommandResult move_res = r_.status().last_command_result;
+  r_.run_until([&] { return (!r_.any_moving() && r_.axis(a).phase != Phase::move) || !ok(); }, 30);
+  settle(10);
+  if (move_allowed && move_res != CommandResult::accepted)
+    w_->fail("a move before homing with allowed_without_homing all was refused", std::string(command_result_name(move_res)));
+  if (!move_allowed && move_res != CommandResult::refused_not_homed)
+    w_->fail("a move before homing that allowed_without_homing forbids was not refused as not homed",
+             std::string(command_result_name(move_res)));
+  if (move_allowed && ok() && std::abs(r_.axis(a).position_mm - target) > 1e-9)
+    w_->fail("a move before homing did not arrive", std::to_string(r_.axis(a).position_mm) + " for " + std::to_string(target));
+  w_->set_outside_movers(0);
+  if (w_->alarms_seen) w_->fail("an alarm during jogs and moves before homing", alarm_list(w_->alarms_seen));
+  if (ok()) acts_ |= act::motion_before_homing;
+  mark("jog and move before homing, allowed_without_homing " + std::string(name_of(allowed)), seen::present);
+}
+
+// Something happening while a jog or a move runs: an abort (stops it, no
+// alarm), an e-stop, a drive fault on the moving axis or a communication loss.
+std::optional<Event> Run::motion_event(std::size_t a) {
+  if (!d_.chance(0.3)) return std::nullopt;
+  Event e;
+  e.kind = d_.pick({EventKind::abort, EventKind::estop, EventKind::drive_fault, EventKind::comm_lost});
+  e.axis = a;
+  return e;
 }
 
 // A shared-limit axis jogged into its own sensor: the trip must be recoverable.

@@ -63,6 +63,11 @@ constexpr Floor kFloors[] = {
     {"cause an axis's skew beyond its max misalignment", 0.03, 0, 0.01, 0},
     {"cause an axis's invalid absolute encoder", 0.005, 0, 0.003, 0},
     {"cause the configuration check's refusal", 0.05, 0, 0.05, 0},
+    {"jog and move before homing, allowed_without_homing all", 0.05, 0, 0, 0},
+    {"jog and move before homing, allowed_without_homing jog_reduced", 0.01, 0, 0, 0},
+    {"jog and move before homing, allowed_without_homing none", 0.01, 0, 0, 0},
+    {"jog interrupted", 0.02, 0, 0.01, 0},
+    {"move interrupted", 0.01, 0, 0.005, 0},
 };
 
 }  // namespace

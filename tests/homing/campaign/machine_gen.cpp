@@ -375,7 +375,9 @@ Machine Gen::build() {
   sequence();
   GlobalSettings& g = m.settings.global;
   g.alarm_clears_homed = d.chance(0.5);
-  g.allowed_without_homing = d.chance(0.85) ? AllowedWithoutHoming::all : AllowedWithoutHoming::jog_reduced;
+  g.allowed_without_homing = d.chance(0.6) ? AllowedWithoutHoming::all
+                             : d.chance(0.5) ? AllowedWithoutHoming::jog_reduced
+                                             : AllowedWithoutHoming::none;
   g.permit_required = d.chance(0.2);
   m.sim.seed = m.seed;
   causes();

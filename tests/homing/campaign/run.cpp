@@ -80,7 +80,7 @@ std::vector<Event> Run::random_events(const CyclePlan& plan, double estimate) {
   return out;
 }
 
-void Run::apply(const Event& e, Causes& causes) {
+void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
   say(std::string(event_name(e.kind)) + " on " + kAxisUpper[e.axis]);
   auto set_fault = [&](sim::Fault f) {
     auto c = r_.sim().axis_config(e.axis);
@@ -93,6 +93,7 @@ void Run::apply(const Event& e, Causes& causes) {
     case EventKind::drive_fault:
       set_fault(sim::Fault::drive_fault);
       w_->carriage_jumped(e.axis);  // the motor runs on without the carriage
+      if (!w_->in_window) w_->pair_slipped(e.axis);
       break;
     case EventKind::stuck_active:
       set_fault(sim::Fault::sensor_stuck_active);
@@ -114,7 +115,7 @@ void Run::apply(const Event& e, Causes& causes) {
     case EventKind::home_again: r_.pending.home_all = true; break;
     case EventKind::count: break;
   }
-  event_cause(causes, e, r_.settings, r_.status(), w_->plan);
+  event_cause(causes, e, r_.settings, r_.status(), plan);
   // What no engine can see, named: a slave's sensor blinded (stuck inactive,
   // an open NO circuit) while the slave searches off it looks exactly like
   // its release edge, so the engine squares there, short of a skew it can no
@@ -172,16 +173,21 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
   std::vector<bool> done(events.size(), false);
   while (r_.status().homing && r_.sim().time_s() - t0 < limit && ok()) {
     bool comm_lost_now = false;
+    const std::size_t applied_from = causes.list.size();
     for (std::size_t i = 0; i < events.size(); ++i)
       if (!done[i] && r_.sim().time_s() - t0 >= events[i].at_s) {
         done[i] = true;
-        apply(events[i], causes);
+        apply(events[i], causes, plan);
         comm_lost_now = comm_lost_now || events[i].kind == EventKind::comm_lost;
         acts_ |= act::event_in_cycle;
       }
     if (button_periods > 0 && --button_periods == 0) r_.sim().set_start_button(false);
     const bool home_again = r_.pending.home_all;
     step();
+    // An input the simulator changed is read by the engine in the next
+    // period: the phase it then runs is the one its alarm may carry too.
+    for (std::size_t i = applied_from; i < causes.list.size(); ++i)
+      if (causes.list[i].phase_axis) causes.list[i].phase_seen = r_.axis(*causes.list[i].phase_axis).phase;
     // The last carriage arrived at rest in the very period the link was lost
     // and the cycle ended: nothing moved after the engine saw it, so nothing to stop.
     if (comm_lost_now && !r_.status().homing && !r_.any_moving())
@@ -390,6 +396,7 @@ Outcome Run::run() {
     w_->fail(std::string("the configuration check accepts a ") + invalid_name(m_.invalid));
   }
   if (ok()) power_up();
+  if (ok() && !out.refused && d_.chance(0.3)) motion_before_homing();
   if (ok()) {
     cycle(true, 0, m_.events, m_.start_by_button);
     if (out.refused && ok()) jog_invalid_slave();

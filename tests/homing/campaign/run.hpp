@@ -4,6 +4,7 @@
 // steps, a hard-limit trip), every period checked by the Watch.
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -31,12 +32,15 @@ inline constexpr std::uint32_t lost_steps_corrected = 1u << 6;
 inline constexpr std::uint32_t start_button_cycle = 1u << 7;
 inline constexpr std::uint32_t rehomed = 1u << 8;
 inline constexpr std::uint32_t alarm_then_homed = 1u << 9;
-inline constexpr int kCount = 10;
+inline constexpr std::uint32_t motion_before_homing = 1u << 10;
+inline constexpr std::uint32_t event_in_jog_or_move = 1u << 11;
+inline constexpr int kCount = 12;
 inline const char* name(int i) {
   static const char* names[] = {"homed",           "homed a software-slaved gantry", "homed a commutator gantry",
                                 "event in a cycle", "jogged and moved",             "recovered from a hard-limit trip",
                                 "lost steps corrected", "cycle started by the button", "homed again",
-                                "homed after an alarm"};
+                                "homed after an alarm", "jogged or moved before homing",
+                                "event in a jog or move"};
   return names[i];
 }
 }  // namespace act
@@ -67,7 +71,9 @@ class Run {
   void say(const std::string& what);
   void power_up();
   bool cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_button);
-  void apply(const Event& e, Causes& causes);
+  void apply(const Event& e, Causes& causes, const CyclePlan& plan);
+  void motion_before_homing();
+  std::optional<Event> motion_event(std::size_t a);
   void recover();
   void jog_invalid_slave();
   void put_back(AxisMask mask);

@@ -173,7 +173,7 @@ void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st,
     case EventKind::drive_fault: {
       Cause& k = c.add(who, {AlarmCode::drive_fault}, axis_bit(e.axis), true);
       k.phase_axis = e.axis;
-      k.phase = st.axes[e.axis].phase;
+      k.phase = k.phase_seen = st.axes[e.axis].phase;
       break;
     }
     case EventKind::stuck_active:
@@ -233,9 +233,10 @@ std::optional<Unexplained> explain(const Watch& w, const Causes& causes, const S
     if (c.phase_axis) {
       const std::size_t a = *c.phase_axis;
       const Alarm& first = w.first_alarm[a];
-      if ((c.codes & (1u << static_cast<unsigned>(first.code))) && first.phase != c.phase) {
+      if ((c.codes & (1u << static_cast<unsigned>(first.code))) && first.phase != c.phase && first.phase != c.phase_seen) {
         std::ostringstream o;
-        o << c.what << " struck in phase " << phase_name(c.phase) << ", its alarm says phase " << phase_name(first.phase);
+        o << c.what << " struck in phase " << phase_name(c.phase) << " (" << phase_name(c.phase_seen)
+          << " when the engine read it), its alarm says phase " << phase_name(first.phase);
         return Unexplained{"an alarm names another phase than the one its cause struck in", o.str()};
       }
     }

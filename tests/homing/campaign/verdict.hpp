@@ -25,7 +25,8 @@ struct Cause {
   std::uint32_t global = 0;  // bit per AlarmCode, as the global alarm
   bool must = false;
   std::optional<std::size_t> phase_axis;
-  Phase phase = Phase::idle;
+  Phase phase = Phase::idle;       // the axis's phase when it struck
+  Phase phase_seen = Phase::idle;  // ... and in the period the engine first read it
 };
 
 std::uint32_t code_bits(std::initializer_list<AlarmCode> codes);

@@ -60,6 +60,7 @@ void Watch::begin_window(const CyclePlan& p, bool is_refused) {
   for (std::size_t s = 0; s < kAxisCount; ++s)
     if (m_.plan[s].role == Role::slave) rel_ref_[s] = r_.actual(s) - r_.actual(static_cast<std::size_t>(m_.plan[s].partner));
   late_allowance_.fill(0);
+  slipped_.fill(false);
 }
 
 void Watch::end_window() {
@@ -78,6 +79,11 @@ void Watch::carriages_placed() {
   }
   for (std::size_t s = 0; s < kAxisCount; ++s)
     if (m_.plan[s].role == Role::slave) rel_ref_[s] = r_.actual(s) - r_.actual(static_cast<std::size_t>(m_.plan[s].partner));
+}
+
+void Watch::pair_slipped(std::size_t a) {
+  for (std::size_t s = 0; s < kAxisCount; ++s)
+    if (m_.plan[s].role == Role::slave && (s == a || static_cast<std::size_t>(m_.plan[s].partner) == a)) slipped_[s] = true;
 }
 
 void Watch::carriage_jumped(std::size_t a) {
@@ -275,8 +281,12 @@ void Watch::racking(double engine_dt) {
     const double dev = std::abs(rel - rel_ref_[s]);
     // The promise as written (README "Gantries: racking"): never beyond
     // max_misalignment, late periods included; 1 µm for the arithmetic.
+    // Locked outside a cycle the pair stays locked, unless a side's drive
+    // faulted while it moved: the other side brakes on, within the limit the
+    // rule set sizes for exactly that (a gantry's stop below max_misalignment).
+    const double locked = slipped_[s] ? r_.settings.axes[s].max_misalignment_mm + kRackingTolerance_mm : 1e-6;
     const double limit =
-        in_window ? r_.settings.axes[s].max_misalignment_mm + kRackingTolerance_mm + late_allowance_[s] : 1e-6;
+        in_window ? r_.settings.axes[s].max_misalignment_mm + kRackingTolerance_mm + late_allowance_[s] : locked;
     // Locked and homed, both sides have the same machine position (each was
     // assigned the master's home position at its own rest point).
     const AxisStatus& ss = r_.status().axes[s];

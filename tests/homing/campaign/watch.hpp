@@ -43,6 +43,7 @@ class Watch {
   void carriage_jumped(std::size_t a);   // lost steps: coordinates no longer known
   void assign_unsequenced();             // a home-all ended: unsequenced axes now hold their home position
   void carriages_placed();               // put back by hand: gantries locked where they stand now
+  void pair_slipped(std::size_t a);      // a drive fault on a locked side: the pair may rack up to its limit
 
   void fail(const std::string& what, const std::string& detail = "");
   bool failed() const { return !failure_.what.empty(); }
@@ -94,7 +95,8 @@ class Watch {
   std::array<double, kAxisCount> rest_x_{};
   // Gantry racking.
   std::array<double, kAxisCount> rel_ref_{};   // per slave
-  std::array<double, kAxisCount> late_allowance_{};  // per slave: travel in periods later than the guard looks
+  std::array<double, kAxisCount> late_allowance_{};
+  std::array<bool, kAxisCount> slipped_{};      // per slave: a side's drive faulted outside a cycle  // per slave: travel in periods later than the guard looks
   // Sensor edges as they stood before this period (the reference of an axis assigned now).
   std::array<double, kAxisCount> release_{}, trigger_{};
   std::array<bool, kAxisCount> has_release_{}, has_trigger_{};
