@@ -58,6 +58,11 @@ struct Event {
   EventKind kind = EventKind::abort;
   std::size_t axis = 0;
   double at_s = 0;  // machine time into the cycle
+  // Or aimed at a phase: applied `after_periods` periods after `axis` enters
+  // `phase` (not at all if it never does).
+  bool aimed = false;
+  Phase phase = Phase::idle;
+  int after_periods = 0;
 };
 
 struct AxisPlan {

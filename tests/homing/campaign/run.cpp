@@ -76,8 +76,34 @@ std::vector<Event> Run::random_events(const CyclePlan& plan, double estimate) {
   const bool sensor = e.kind == EventKind::stuck_active || e.kind == EventKind::stuck_inactive || e.kind == EventKind::wire_break;
   if (sensor && !mode_uses_switch(effective(r_.settings, e.axis).mode)) return out;
   if (e.kind == EventKind::permit_off && !r_.settings.global.permit_required) return out;
+  // Half of them aimed at a phase the axis runs (a slave's pair phases too).
+  const std::vector<Phase> phases = phases_run(e.axis);
+  if (!phases.empty() && d_.chance(0.5)) {
+    e.aimed = true;
+    e.phase = phases[static_cast<std::size_t>(d_.integer(0, static_cast<int>(phases.size()) - 1))];
+    e.after_periods = d_.chance(0.5) ? 0 : d_.integer(1, 20);
+  }
   out.push_back(e);
   return out;
+}
+
+// The phases an axis runs in a cycle, as README describes its mode (a
+// commutator slave also aligns; every gantry side may wait for the other).
+std::vector<Phase> Run::phases_run(std::size_t a) const {
+  const AxisSettings e = effective(r_.settings, a);
+  std::vector<Phase> p;
+  if (mode_uses_switch(e.mode)) {
+    p = {Phase::seek, Phase::stop, Phase::back_off, Phase::pull_off};
+    if (e.pre_move_mode != PreMove::none) p.push_back(Phase::pre_move);
+    if (mode_reapproaches(e.mode)) p.push_back(Phase::reapproach);
+    if (e.mode == HomingMode::switch_index) p.push_back(Phase::index);
+    if (mode_is_pushing(e.mode)) p.push_back(Phase::push);
+    if (partner_index(r_.settings, a) >= 0) p.push_back(Phase::waiting);
+    if (pair_master(r_.settings, a) >= 0 && r_.settings.axes[a].slave_mode == SlaveMode::external_commutator)
+      p.push_back(Phase::align_slave);
+  }
+  if (final_move_wanted(e)) p.push_back(Phase::final_move);
+  return p;
 }
 
 void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
@@ -171,16 +197,27 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
   }
   const double limit = time_bound(r_, m_, plan);
   std::vector<bool> done(events.size(), false);
+  std::vector<int> in_phase(events.size(), 0);
   while (r_.status().homing && r_.sim().time_s() - t0 < limit && ok()) {
     bool comm_lost_now = false;
     const std::size_t applied_from = causes.list.size();
-    for (std::size_t i = 0; i < events.size(); ++i)
-      if (!done[i] && r_.sim().time_s() - t0 >= events[i].at_s) {
-        done[i] = true;
-        apply(events[i], causes, plan);
-        comm_lost_now = comm_lost_now || events[i].kind == EventKind::comm_lost;
-        acts_ |= act::event_in_cycle;
+    for (std::size_t i = 0; i < events.size(); ++i) {
+      const Event& ev = events[i];
+      if (done[i]) continue;
+      // Aimed: counted from the first period the axis is seen in its phase.
+      if (ev.aimed && (in_phase[i] > 0 || r_.axis(ev.axis).phase == ev.phase)) ++in_phase[i];
+      const bool due = ev.aimed ? in_phase[i] > ev.after_periods : r_.sim().time_s() - t0 >= ev.at_s;
+      if (!due) continue;
+      done[i] = true;
+      if (ev.aimed) {
+        say(std::string("aimed at ") + kAxisUpper[ev.axis] + "'s " + std::string(phase_name(ev.phase)) + " + " +
+            std::to_string(ev.after_periods) + " periods:");
+        mark("event aimed at phase " + std::string(phase_name(ev.phase)), seen::present);
       }
+      apply(ev, causes, plan);
+      comm_lost_now = comm_lost_now || ev.kind == EventKind::comm_lost;
+      acts_ |= act::event_in_cycle;
+    }
     if (button_periods > 0 && --button_periods == 0) r_.sim().set_start_button(false);
     const bool home_again = r_.pending.home_all;
     step();

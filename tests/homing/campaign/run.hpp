@@ -81,6 +81,7 @@ class Run {
   void hard_limit_recovery();
   void lost_steps();
   std::vector<Event> random_events(const CyclePlan& plan, double estimate);
+  std::vector<Phase> phases_run(std::size_t a) const;
   void follow_ups();
   bool homed_axis(std::size_t a) const;
   void mark(const std::string& key, std::uint8_t bits) { coverage_[key] |= bits; }
