@@ -165,6 +165,53 @@ std::optional<Event> Run::motion_event(std::size_t a) {
   return e;
 }
 
+// Settings written between cycles, as an HMI would, each valid by the
+// documented rules: a lower seek feedrate (the axis stays homed: README
+// "an axis is homed only in the frame it was homed in" keeps it for a
+// feedrate), or the machine's origin moved (home position, soft limits and
+// final position shifted together: the axis and its slave are unhomed before
+// anything moves, and the next cycle homes them in the new coordinates).
+void Run::change_settings() {
+  if (r_.status().alarm || r_.any_moving()) return;
+  std::vector<std::size_t> cand;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (master_index(r_.settings, a) < 0 && r_.settings.axes[a].mode != HomingMode::disabled) cand.push_back(a);
+  if (cand.empty()) return;
+  const std::size_t a = cand[static_cast<std::size_t>(d_.integer(0, static_cast<int>(cand.size()) - 1))];
+  AxisSettings& s = r_.settings.axes[a];
+  const int slave = slave_index(r_.settings, a);
+  const bool was_homed = r_.axis(a).homed;
+  if (mode_uses_switch(s.mode) && d_.chance(0.5)) {
+    const double floor = s.latch_feedrate_mm_per_min * 1.5;
+    if (s.seek_feedrate_mm_per_min * 0.5 <= floor) return;
+    s.seek_feedrate_mm_per_min = d_.u(floor, s.seek_feedrate_mm_per_min);
+    say(std::string("write ") + kAxisUpper[a] + ".seek_feedrate = " + std::to_string(s.seek_feedrate_mm_per_min));
+    w_->settings_changed();
+    for (int i = 0; i < 3; ++i) step();
+    if (was_homed && !r_.axis(a).homed) w_->fail("a feedrate written between cycles unhomed its axis", std::string(1, kAxisUpper[a]));
+    mark("settings written: seek feedrate", seen::present);
+  } else {
+    const double shift = d_.u(-5, 5);
+    s.home_position_mm += shift;
+    s.soft_limit_min_mm += shift;
+    s.soft_limit_max_mm += shift;
+    s.final_position_mm += shift;
+    say(std::string("write ") + kAxisUpper[a] + ".home_position (and its soft limits, final position) shifted by " +
+        std::to_string(shift));
+    w_->settings_changed();
+    step();
+    const bool absolute = mode_is_absolute(s.mode);
+    // Absolute axes take their coordinate from the encoder: the next cycle re-assigns them.
+    if (was_homed && r_.axis(a).homed && !absolute)
+      w_->fail("a home position written between cycles left its axis homed in the old coordinates", std::string(1, kAxisUpper[a]));
+    if (slave >= 0 && r_.axis(static_cast<std::size_t>(slave)).homed && was_homed)
+      w_->fail("a master's home position written between cycles left its slave homed", std::string(1, kAxisUpper[static_cast<std::size_t>(slave)]));
+    for (int i = 0; i < 2; ++i) step();
+    mark("settings written: origin moved", seen::present);
+  }
+  if (ok()) acts_ |= act::settings_changed;
+}
+
 // A shared-limit axis jogged into its own sensor: the trip must be recoverable.
 void Run::hard_limit_recovery() {
   std::vector<std::size_t> cand;

@@ -75,6 +75,8 @@ constexpr Floor kFloors[] = {
     {"event aimed at phase index", 0.001, 0, 0, 0},
     {"event aimed at phase waiting", 0.002, 0, 0, 0},
     {"event aimed at phase final_move", 0.002, 0, 0, 0},
+    {"settings written: seek feedrate", 0.01, 0, 0, 0},
+    {"settings written: origin moved", 0.02, 0, 0, 0},
     {"jog interrupted", 0.02, 0, 0.01, 0},
     {"move interrupted", 0.01, 0, 0.005, 0},
 };

@@ -391,7 +391,8 @@ void Run::follow_ups() {
       }
       continue;
     }
-    switch (d_.integer(0, 4)) {
+    switch (d_.integer(0, 5)) {
+      case 5: change_settings(); break;
       case 0: exercise_motion(); break;
       case 1: hard_limit_recovery(); break;
       case 2: lost_steps(); break;

@@ -34,13 +34,14 @@ inline constexpr std::uint32_t rehomed = 1u << 8;
 inline constexpr std::uint32_t alarm_then_homed = 1u << 9;
 inline constexpr std::uint32_t motion_before_homing = 1u << 10;
 inline constexpr std::uint32_t event_in_jog_or_move = 1u << 11;
-inline constexpr int kCount = 12;
+inline constexpr std::uint32_t settings_changed = 1u << 12;
+inline constexpr int kCount = 13;
 inline const char* name(int i) {
   static const char* names[] = {"homed",           "homed a software-slaved gantry", "homed a commutator gantry",
                                 "event in a cycle", "jogged and moved",             "recovered from a hard-limit trip",
                                 "lost steps corrected", "cycle started by the button", "homed again",
                                 "homed after an alarm", "jogged or moved before homing",
-                                "event in a jog or move"};
+                                "event in a jog or move", "settings written between cycles"};
   return names[i];
 }
 }  // namespace act
@@ -80,6 +81,7 @@ class Run {
   void exercise_motion();
   void hard_limit_recovery();
   void lost_steps();
+  void change_settings();
   std::vector<Event> random_events(const CyclePlan& plan, double estimate);
   std::vector<Phase> phases_run(std::size_t a) const;
   void follow_ups();

@@ -81,6 +81,10 @@ void Watch::carriages_placed() {
     if (m_.plan[s].role == Role::slave) rel_ref_[s] = r_.actual(s) - r_.actual(static_cast<std::size_t>(m_.plan[s].partner));
 }
 
+void Watch::settings_changed() {
+  for (std::size_t a = 0; a < kAxisCount; ++a) eff_[a] = effective(r_.settings, a);
+}
+
 void Watch::pair_slipped(std::size_t a) {
   for (std::size_t s = 0; s < kAxisCount; ++s)
     if (m_.plan[s].role == Role::slave && (s == a || static_cast<std::size_t>(m_.plan[s].partner) == a)) slipped_[s] = true;

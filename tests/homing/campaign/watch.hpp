@@ -43,7 +43,8 @@ class Watch {
   void carriage_jumped(std::size_t a);   // lost steps: coordinates no longer known
   void assign_unsequenced();             // a home-all ended: unsequenced axes now hold their home position
   void carriages_placed();               // put back by hand: gantries locked where they stand now
-  void pair_slipped(std::size_t a);      // a drive fault on a locked side: the pair may rack up to its limit
+  void pair_slipped(std::size_t a);
+  void settings_changed();               // written between cycles: what each axis moves with now      // a drive fault on a locked side: the pair may rack up to its limit
 
   void fail(const std::string& what, const std::string& detail = "");
   bool failed() const { return !failure_.what.empty(); }
