@@ -1,40 +1,54 @@
-// The seeded random campaign over the whole configuration space (issue 13).
+// The seeded random campaign over the whole configuration space (issues 13, 21).
 //
 // Each run builds a random machine from its seed (machine_gen.cpp): all six
 // axes, every homing mode, random directions and sensor polarities, sequences
 // of 1-6 steps with several axes per step, unsequenced axes, software-slaved
-// and external-commutator gantries (slaves whose inherited settings differ
-// from their master's), random cams, hysteresis, noise, bounce and skews,
-// starts on and off the sensors, settings the configuration check must
-// refuse, faults (dead or stuck sensors, wire breaks, drive faults, e-stop,
-// lost steps, an invalid absolute encoder) at random moments, aborts, resets,
-// re-homes, jogs, moves, a hard-limit trip, a start button held at power-up,
-// and control periods up to 10 ms late. Every period (watch.cpp) and at the
-// end of every cycle (verdict.cpp) it checks against the simulator's truth:
-//   - no gantry racks beyond its max misalignment (plus one late period of
-//     seek travel) from where its cycle started, and a locked pair stays locked;
-//   - no carriage touches a mechanical stop except while pushing into it, and
-//     no homed carriage passes an enforced soft limit;
+// and external-commutator gantries (switch, re-approach and index masters;
+// slaves whose inherited settings differ from their master's), random cams,
+// hysteresis, noise, bounce and skews, starts on and off the sensors,
+// feedrates and accelerations up to the registers' maxima, every
+// allowed_without_homing, settings the configuration check must refuse,
+// faults (dead or stuck sensors, wire breaks, drive faults, e-stop, lost
+// steps, an invalid absolute encoder) at random moments or aimed at a phase,
+// aborts, resets, re-homes, jogs and moves (before homing too, and cut short
+// by aborts, e-stops, drive faults and communication losses), settings written
+// between cycles, a hard-limit trip, a start button held at power-up, and
+// control periods up to 20 ms late. Every period (watch.cpp) and at the end
+// of every cycle (verdict.cpp) it checks against the simulator's truth:
+//   - no gantry racks beyond its max misalignment (1 um for the arithmetic,
+//     plus exactly what periods later than the guard looks ahead can add:
+//     README "Gantries: racking") from where its cycle started, and a locked
+//     pair stays locked (up to its limit when one side's drive faults);
+//   - no carriage touches a mechanical stop except at reduced current (the
+//     push output on), and no homed carriage passes an enforced soft limit;
 //   - nothing moves that its configuration or the script does not move
 //     (disabled, unsequenced, manual and absolute axes outside their final
 //     move, axes outside the cycle or outside their sequence step, anything
-//     when the check refuses the cycle);
+//     when the check refuses the cycle, a refused jog or move);
 //   - no velocity change beyond the axis's (the pair's lower) acceleration;
 //   - while an alarm is latched, speeds only fall, each axis stops within its
 //     stop distance and stays there;
 //   - every cycle ends homed or in a named alarm, within its distance and
-//     time bounds; an alarm only from a cause in the table of verdict.cpp;
+//     time bounds; each alarm is explained by a cause on the axis it names
+//     (or that axis's gantry partner), and each cause that must show raises
+//     its own alarm there (verdict.cpp), a drive fault's in the phase it
+//     struck; a machine built valid and refused by the rule set fails;
 //   - a homed axis has the coordinate its mode defines (switch modes: edge
 //     and pull-off, a slave with its own pull-off and compensation; absolute:
 //     the encoder; manual and unsequenced: the home position where it stood);
 //   - a reset after a hard-limit trip is taken and only a jog away moves.
+// What a slave inherits (rules.hpp) is the campaign's own reading of the
+// README, not the engine's motion_settings. After every campaign a coverage
+// table (coverage.cpp) says per mode, topology and cause in how many runs it
+// was present, homed, alarmed or refused; with 1,000 runs or more each row is
+// held to a floor. tests/mutants shows the campaign failing on planted bugs.
 //
-// Run count: HOMING_CAMPAIGN_RUNS (default 2000: some 40 s in a
-// RelWithDebInfo build on the 2-core machine); first seed: HOMING_CAMPAIGN_SEED
+// Run count: HOMING_CAMPAIGN_RUNS (default 2000: some 25 s of one core in a
+// RelWithDebInfo build); first seed: HOMING_CAMPAIGN_SEED
 // (default 1); run i uses seed first + i. The first failure stops the
 // campaign and prints its seed, the machine as a story, what the script did,
-// and the command that replays it; replay_seed(seed) (replay.hpp) turns it
-// into a named scenario (replays_test.cpp). HOMING_CAMPAIGN_TRACE=1 prints
+// and the command that replays it; its seed joins the regression list
+// (replays_test.cpp) and the bug becomes a hand-written scenario. HOMING_CAMPAIGN_TRACE=1 prints
 // every phase change of a replayed run. HOMING_CAMPAIGN_SURVEY=1 runs on past
 // failures and prints each distinct failure with its first seeds, the
 // coverage (how many runs homed a gantry, recovered from a hard-limit trip...)

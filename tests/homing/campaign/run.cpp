@@ -465,8 +465,8 @@ std::string report(const Outcome& o, const char* test_name) {
   r << "FAILED: " << o.failure.what << "\n";
   if (!o.failure.detail.empty()) r << "  " << o.failure.detail << "\n";
   r << "replay: HOMING_CAMPAIGN_SEED=" << o.seed << " HOMING_CAMPAIGN_RUNS=1 build/bin/homing_tests \"" << test_name
-    << "\"  (HOMING_CAMPAIGN_TRACE=1 prints every phase change), or as a named scenario: replay_seed(" << o.seed
-    << ")\nthe machine:\n"
+    << "\"  (HOMING_CAMPAIGN_TRACE=1 prints every phase change); add the seed to replays_test.cpp's list"
+    << " and write the bug as a named scenario\nthe machine:\n"
     << o.story << "what happened:\n"
     << o.log;
   return r.str();
