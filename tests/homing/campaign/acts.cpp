@@ -1,6 +1,7 @@
 // The acts of a run between cycles: jogs and moves, a hard-limit trip and
 // its recovery, lost steps, and a jog that must not carry an invalid slave.
 #include "../truth.hpp"
+#include "homing/motion.hpp"
 #include "run.hpp"
 
 namespace campaign {
@@ -219,8 +220,14 @@ void Run::hard_limit_recovery() {
     const AxisSettings e = effective(r_.settings, a);
     // A sensor the simulator has blinded (stuck inactive, an open NO circuit)
     // cannot trip: the jog would run into the stop with nothing to tell the engine.
+    // And a cam long enough to hold the jog's stop: a limit switch a jog
+    // overruns entirely (seed 8005639: 56,000 mm/min) releases again and
+    // guards nothing, on any machine.
+    const auto& c = r_.sim().axis_config(a);
+    const double jog_v = mm_per_min_to_mm_per_s(e.jog_feedrate_mm_per_min);
+    const bool holds = stop_distance_mm(jog_v, e.acceleration_mm_per_s2) + jog_v * m_.max_dt_s < c.sensor_max_mm - c.sensor_min_mm - c.hysteresis_mm;
     if (master_index(r_.settings, a) < 0 && homed_axis(a) && r_.settings.axes[a].shared_limit && !mode_is_pushing(e.mode) &&
-        !r_.axis(a).sensor && r_.sim().axis_config(a).fault == sim::Fault::none)
+        !r_.axis(a).sensor && c.fault == sim::Fault::none && holds)
       cand.push_back(a);
   }
   if (cand.empty() || r_.status().alarm) return;

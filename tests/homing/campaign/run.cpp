@@ -124,6 +124,7 @@ void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
     case EventKind::stuck_active:
       set_fault(sim::Fault::sensor_stuck_active);
       w_->tampered |= axis_bit(e.axis);
+      w_->stuck_on |= axis_bit(e.axis);
       break;
     case EventKind::stuck_inactive:
       set_fault(sim::Fault::sensor_stuck_inactive);
@@ -134,6 +135,7 @@ void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
       set_fault(sim::Fault::wire_break);
       w_->tampered |= axis_bit(e.axis);
       if (!r_.settings.axes[e.axis].sensor_nc) w_->dead_sensor |= axis_bit(e.axis);
+      else w_->stuck_on |= axis_bit(e.axis);
       break;
     case EventKind::comm_lost: comm_lost_ = true; break;
     case EventKind::permit_off: r_.sim().set_homing_permit(false); break;
@@ -356,6 +358,7 @@ void Run::recover() {
   }
   put_back(faulted);
   w_->dead_sensor = 0;
+  w_->stuck_on = 0;
   if (d_.chance(0.5)) encoder_invalid_ = 0;
   for (int i = 0; i < 3; ++i) step();
   settle(10);

@@ -160,7 +160,7 @@ void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st,
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const AxisStatus& as = st.axes[a];
     if ((plan.covered & axis_bit(a)) && as.phase != Phase::done) running |= axis_bit(a);
-    if (as.velocity_mm_per_s != 0 || as.phase == Phase::jog || as.phase == Phase::move) moving |= axis_bit(a);
+    if (as.velocity_mm_per_s != 0 || as.phase == Phase::jog || as.phase == Phase::move) moving |= with_partner(s, a);
   }
   switch (e.kind) {
     case EventKind::abort: c.add("the abort", {AlarmCode::aborted}, running, running != 0); break;

@@ -376,7 +376,16 @@ void Watch::on_flip(std::size_t a, double x) {
   } else if (e.mode == HomingMode::manual) {
     t.offset = e.home_position_mm - window_start_x[a];
   } else {
-    if (tampered & bit) return;  // its sensor lied: no truth to hold it to
+    // A sensor forced to a level during the cycle makes exactly the edge
+    // some phase looks for: dead (stuck inactive, an open NO circuit) looks
+    // like a release edge, stuck on (stuck active, an open NC circuit) like
+    // a trigger. Where the fault forces the kind of edge this mode homes on,
+    // no engine can tell it from the cam: no truth to hold it to. Otherwise
+    // a homed axis must be right whatever happened.
+    AxisSettings sq = e;
+    sq.mode = squaring_mode(r_.settings, a);
+    const bool homes_on_trigger = mode_reapproaches(sq.mode);
+    if ((tampered & bit) && (homes_on_trigger ? (stuck_on & bit) : (dead_sensor & bit))) return;
     double ref = 0;
     if (!reference_edge(a, ref)) {
       fail("homed without the sensor edge its mode uses", fmt_axis(a, r_, x));
