@@ -9,9 +9,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <catch2/catch.hpp>
+
 #include <chrono>
 #include <cstdint>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -50,9 +53,22 @@ using namespace std::chrono_literals;
 inline std::string homingd_path() { return HOMINGD_PATH; }
 
 // A homingd started for one test: this build's unless options.program names another.
+// When the test is done with it, it is stopped with SIGTERM and must exit 0
+// with no sanitizer report in its stderr, or the test fails: a leak or a
+// use-after-free on disconnect or shutdown fails the sanitized build's run of
+// the test that caused it. A test that means to kill it says so with
+// stop(SIGKILL); the sanitizer reports still count then.
 class Daemon : public Homingd {
  public:
   explicit Daemon(DaemonOptions options = {}) : Homingd(with_program(std::move(options))) {}
+  // Not while an exception unwinds the test: it has failed already, and
+  // Homingd's destructor still ends homingd with SIGTERM.
+  ~Daemon() noexcept(false) {  // FAIL_CHECK throws once Catch2 aborts the run (-a, -x)
+    if (std::uncaught_exceptions() > 0) return;
+    if (const std::string problems = shutdown_problems(); !problems.empty()) FAIL_CHECK(problems);
+  }
+  Daemon(const Daemon&) = delete;
+  Daemon& operator=(const Daemon&) = delete;
 
  private:
   static DaemonOptions with_program(DaemonOptions options) {

@@ -129,8 +129,7 @@ def main():
         try:
             run(d, rows, args.version)
         finally:
-            code = d.stop()
-            check(code == 0, f"SIGTERM: homingd exited {code}")
+            d.finish()
     if failures:
         print(f"{len(failures)} failure(s)", file=sys.stderr)
         return 1

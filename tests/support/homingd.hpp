@@ -1,7 +1,9 @@
 #pragma once
 // A homingd this process starts: on a free loopback port with a database in
 // its own temporary directory, ready once it printed its `listening` line,
-// stopped by PID (SIGKILL at the latest when the object goes).
+// stopped by PID with SIGTERM (at the latest when the object goes), as a
+// service manager stops it: so that its exit runs, and with it LeakSanitizer
+// in a sanitized build. Its stderr, where sanitizer reports go, is the log.
 #include <signal.h>
 #include <sys/types.h>
 
@@ -29,6 +31,12 @@ struct DaemonOptions {
   std::string temp_prefix = "homingd";  // name of its temporary directory
 };
 
+// Long enough for a sanitized homingd to exit and run its leak check.
+inline constexpr std::chrono::milliseconds kStopTimeout = std::chrono::seconds(20);
+
+// The lines of a log that begin a sanitizer report (ASan, LSan, UBSan).
+std::vector<std::string> sanitizer_reports(const std::string& log);
+
 class Homingd {
  public:
   // Throws with homingd's output and log when it does not start (five tries:
@@ -50,7 +58,13 @@ class Homingd {
   void keep_files() { dir_.keep(); }
 
   // Stops it by PID; the waitpid status, or nullopt if it had to be killed.
-  std::optional<int> stop(int sig = SIGTERM, std::chrono::milliseconds timeout = std::chrono::seconds(15));
+  // Stopping it with SIGKILL is how a test says it means to kill it.
+  std::optional<int> stop(int sig = SIGTERM, std::chrono::milliseconds timeout = kStopTimeout);
+
+  // Stops it with SIGTERM if it still runs, then says what was wrong with its
+  // end: an exit other than 0 (not checked after stop(SIGKILL)) or a
+  // sanitizer report in its log, with the log's relevant part. Empty: none.
+  std::string shutdown_problems();
 
  private:
   bool try_start(std::string& error);
@@ -60,6 +74,9 @@ class Homingd {
   int port_ = 0;
   int tls_port_ = 0;
   pid_t pid_ = -1;
+  bool stopped_ = false;
+  int stop_signal_ = 0;
+  std::optional<int> status_;  // waitpid status after stop(); nullopt: killed or lost
   int out_fd_ = -1;  // kept open: homingd's stdout never sees a closed pipe
   std::string line_;
 };

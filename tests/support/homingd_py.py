@@ -22,6 +22,10 @@ except ImportError:
 
 failures = []
 
+# How each sanitizer's report begins (the same as tests/support/homingd.cpp).
+SANITIZER_MARKS = ("ERROR: AddressSanitizer", "ERROR: LeakSanitizer", "SUMMARY: AddressSanitizer",
+                   "SUMMARY: LeakSanitizer", "SUMMARY: UndefinedBehaviorSanitizer", "runtime error:")
+
 
 def check(cond, what):
     print(f"{'ok  ' if cond else 'FAIL'} {what}")
@@ -80,7 +84,22 @@ class Daemon:
             time.sleep(0.05)
         return False
 
-    def stop(self, sig=signal.SIGTERM, timeout=15):
+    def finish(self):
+        """Stops it as a service manager does (SIGTERM) and checks its end:
+        exit 0 and no sanitizer report in its stderr (the log), so that a leak
+        or a use-after-free at shutdown fails the sanitized build's run.
+        Prints the log when something is wrong."""
+        code = self.stop()
+        ok = check(code == 0, f"SIGTERM: homingd exited {code}")
+        with open(self.log_path, errors="replace") as f:
+            log = f.read()
+        reports = [line for line in log.splitlines() if any(m in line for m in SANITIZER_MARKS)]
+        ok = check(not reports, f"no sanitizer report in homingd's stderr: {reports[:5]}") and ok
+        if not ok:
+            print("--- homingd log ---\n" + log)
+        return ok
+
+    def stop(self, sig=signal.SIGTERM, timeout=20):
         self.proc.send_signal(sig)
         try:
             return self.proc.wait(timeout)
