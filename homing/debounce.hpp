@@ -19,6 +19,8 @@ class Debouncer {
   bool settle(double now_s, double debounce_s, AcceptedEdge& out);
   bool stable() const { return stable_; }
   bool raw() const { return raw_; }
+  // Engine time of the last raw transition (or of the reset).
+  double last_change_s() const { return last_change_t_; }
 
  private:
   bool stable_ = false;

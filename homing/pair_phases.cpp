@@ -48,13 +48,19 @@ void PhaseRunner::waiting() {
 
 void PhaseRunner::align_slave() {
   // The master's output now drives only this motor, and this slave's
-  // sensor is on the master's input: let the input settle for one period.
+  // sensor is on the master's input: let the input settle, for this
+  // slave's debounce time at least. The slave rode with its master and may
+  // have left its own edge just before: a switch still bouncing when the
+  // input was taken over would otherwise be taken at a bounce's level, and
+  // its true edge lost (campaign seed 8001884).
   if (entry()) {
     partner_run().commutator_output = true;
     e.filter_reset_[static_cast<std::size_t>(channel)] = true;
     run.command = stop_command(accel);
     return;
   }
+  const Debouncer& filter = e.sensor_filter_[static_cast<std::size_t>(channel)];
+  if (filter.raw() != filter.stable() || e.time_s_ - filter.last_change_s() + 1e-9 < s.debounce_ms / 1000.0) return;
   enter(Phase::seek);
 }
 

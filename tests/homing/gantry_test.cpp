@@ -178,6 +178,34 @@ SCENARIO("external commutator: the master is held while the slave finds its own 
   }
 }
 
+SCENARIO("external commutator: a slave switch still bouncing when the commutator takes it over keeps its true edge",
+         "[gantry][bounce]") {
+  // Campaign seed 8001884: the slave rode off its own edge with its master a
+  // moment before the commutator switched; the input, taken over mid-bounce,
+  // was taken at a bounce's level and the slave squared on a bounce, not on
+  // its edge. The master homes on an index pulse whose place is swept so
+  // that the commutator switches before, during and after the slave's bounce.
+  for (int k = 0; k < 200; ++k) {
+    const double index_at = 0.20 + 0.0005 * k;  // master carriage, just past its release at 0.05
+    DYNAMIC_SECTION("master's index at " << index_at) {
+      Rig r = commutator_gantry(99.8);  // the slave trails by 0.2: it releases during the index search
+      r.settings.axes[0].mode = HomingMode::switch_index;
+      r.settings.axes[0].index_pitch_mm = 5;
+      r.machine.axes[0].index_pitch_mm = 5;
+      r.machine.axes[0].index_offset_mm = index_at;
+      r.settings.axes[1].debounce_ms = 4;
+      r.machine.axes[1].bounce_ms = 3;
+      r.machine.seed = static_cast<std::uint64_t>(k);  // a different bounce each time
+      REQUIRE(r.home_all());
+      const double tol = edge_tolerance_mm(r.settings.axes[0], r.dt_s);
+      // Each side at the master's pull-off from its own reference: the
+      // master's index, the slave's release edge (0.05 past its cam).
+      CHECK(r.actual(0) == Approx(index_at + 1).margin(tol));
+      CHECK(r.actual(1) == Approx(1.05).margin(tol));
+    }
+  }
+}
+
 SCENARIO("external commutator: the switch compensation is applied by the slave", "[gantry]") {
   Rig r = commutator_gantry(100, 0.2);
   REQUIRE(r.home_all());
