@@ -73,7 +73,7 @@ void Run::exercise_motion() {
       w_->fail("a move did not arrive", std::to_string(r_.axis(a).position_mm) + " for " + std::to_string(target));
     if (ok()) acts_ |= act::jog_and_move;
   }
-  if (slave >= 0 && d_.chance(0.3) && !r_.status().alarm) {
+  if (slave >= 0 && !stopped_short_any && d_.chance(0.3) && !r_.status().alarm) {
     r_.move(static_cast<std::size_t>(slave), r_.axis(static_cast<std::size_t>(slave)).position_mm + 1);
     if (r_.status().last_command_result != CommandResult::refused_slave_axis)
       w_->fail("a move commanded to a slave was not refused", std::string(command_result_name(r_.status().last_command_result)));

@@ -159,7 +159,7 @@ void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st,
   AxisMask running = 0, moving = 0;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const AxisStatus& as = st.axes[a];
-    if ((plan.covered & axis_bit(a)) && as.phase != Phase::done) running |= axis_bit(a);
+    if ((plan.covered & axis_bit(a)) && as.phase != Phase::done) running |= with_partner(s, a);
     if (as.velocity_mm_per_s != 0 || as.phase == Phase::jog || as.phase == Phase::move) moving |= with_partner(s, a);
   }
   switch (e.kind) {
