@@ -11,6 +11,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "vfs_passthrough.hpp"
+
 namespace power_cut_vfs {
 namespace {
 
@@ -299,17 +301,6 @@ int x_delete(sqlite3_vfs*, const char* name, int dir_sync) {
   }
   return rc;
 }
-int x_access(sqlite3_vfs*, const char* n, int fl, int* out) { return g_real->xAccess(g_real, n, fl, out); }
-int x_fullpath(sqlite3_vfs*, const char* n, int sz, char* out) { return g_real->xFullPathname(g_real, n, sz, out); }
-void* x_dlopen(sqlite3_vfs*, const char* n) { return g_real->xDlOpen(g_real, n); }
-void x_dlerror(sqlite3_vfs*, int n, char* m) { g_real->xDlError(g_real, n, m); }
-void (*x_dlsym(sqlite3_vfs*, void* h, const char* s))(void) { return g_real->xDlSym(g_real, h, s); }
-void x_dlclose(sqlite3_vfs*, void* h) { g_real->xDlClose(g_real, h); }
-int x_random(sqlite3_vfs*, int n, char* out) { return g_real->xRandomness(g_real, n, out); }
-int x_sleep(sqlite3_vfs*, int us) { return g_real->xSleep(g_real, us); }
-int x_time(sqlite3_vfs*, double* t) { return g_real->xCurrentTime(g_real, t); }
-int x_lasterror(sqlite3_vfs*, int n, char* m) { return g_real->xGetLastError(g_real, n, m); }
-int x_time64(sqlite3_vfs*, sqlite3_int64* t) { return g_real->xCurrentTimeInt64(g_real, t); }
 
 }  // namespace
 
@@ -317,23 +308,9 @@ void install() {
   static std::once_flag once;
   std::call_once(once, [] {
     g_real = sqlite3_vfs_find(nullptr);
-    g_vfs.iVersion = 2;
-    g_vfs.szOsFile = static_cast<int>(sizeof(File)) + g_real->szOsFile;
-    g_vfs.mxPathname = g_real->mxPathname;
-    g_vfs.zName = kName;
+    vfs_passthrough::fill(g_vfs, kName, static_cast<int>(sizeof(File)));
     g_vfs.xOpen = x_open;
     g_vfs.xDelete = x_delete;
-    g_vfs.xAccess = x_access;
-    g_vfs.xFullPathname = x_fullpath;
-    g_vfs.xDlOpen = x_dlopen;
-    g_vfs.xDlError = x_dlerror;
-    g_vfs.xDlSym = x_dlsym;
-    g_vfs.xDlClose = x_dlclose;
-    g_vfs.xRandomness = x_random;
-    g_vfs.xSleep = x_sleep;
-    g_vfs.xCurrentTime = x_time;
-    g_vfs.xGetLastError = x_lasterror;
-    g_vfs.xCurrentTimeInt64 = x_time64;
     sqlite3_vfs_register(&g_vfs, 0);
   });
 }

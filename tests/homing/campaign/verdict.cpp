@@ -163,7 +163,10 @@ void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st,
     if (as.velocity_mm_per_s != 0 || as.phase == Phase::jog || as.phase == Phase::move) moving |= with_partner(s, a);
   }
   switch (e.kind) {
-    case EventKind::abort: c.add("the abort", {AlarmCode::aborted}, running, running != 0); break;
+    case EventKind::abort:
+      c.add("the abort", {AlarmCode::aborted}, running, running != 0);
+      if (running == 0) c.aborted_quietly = true;
+      break;
     case EventKind::estop: {
       // Every axis of the running cycle (those done with it too) and every one moving.
       Cause& k = c.add("the e-stop", {AlarmCode::emergency_stop}, static_cast<AxisMask>(plan.covered | moving), true);
@@ -307,7 +310,10 @@ void verdict(Watch& w, rig::Rig& r, const Machine& m, const Causes& causes, std:
     }
   }
   if (seen != 0 || w.refused) return;
-  if (st.homing_cycles != cycles_before + 1) w.fail("a cycle ended without an alarm but was not counted as completed");
+  if (st.homing_cycles != cycles_before + 1) {
+    if (causes.aborted_quietly) return;
+    w.fail("a cycle ended without an alarm but was not counted as completed");
+  }
   if (plan.all) w.assign_unsequenced();
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const AxisMask bit = axis_bit(a);

@@ -33,6 +33,9 @@ std::uint32_t code_bits(std::initializer_list<AlarmCode> codes);
 
 struct Causes {
   std::vector<Cause> list;
+  // An abort that found no axis still homing (all done, between two steps)
+  // stops the cycle with no alarm to raise: it ends uncounted.
+  bool aborted_quietly = false;
   Cause& add(std::string what, std::initializer_list<AlarmCode> codes, AxisMask axes, bool must = false);
   // Every alarm a lying sensor can make the edge search raise.
   Cause& sensor_fault(std::string what, AxisMask axes, bool must = false);

@@ -1,0 +1,47 @@
+#pragma once
+// What the test VFS shims (fault_vfs, power_cut_vfs) hand on unchanged to
+// the default VFS: everything but opening and deleting files. A shim fills
+// its sqlite3_vfs with these, then sets its own xOpen, xDelete (and any
+// method it changes) before registering it.
+#include <sqlite3.h>
+
+namespace vfs_passthrough {
+
+// The default VFS the shim wraps: its pAppData.
+inline sqlite3_vfs* real(sqlite3_vfs* shim) { return static_cast<sqlite3_vfs*>(shim->pAppData); }
+
+inline int access(sqlite3_vfs* v, const char* n, int fl, int* out) { return real(v)->xAccess(real(v), n, fl, out); }
+inline int fullpath(sqlite3_vfs* v, const char* n, int sz, char* out) { return real(v)->xFullPathname(real(v), n, sz, out); }
+inline void* dlopen(sqlite3_vfs* v, const char* n) { return real(v)->xDlOpen(real(v), n); }
+inline void dlerror(sqlite3_vfs* v, int n, char* m) { real(v)->xDlError(real(v), n, m); }
+inline void (*dlsym(sqlite3_vfs* v, void* h, const char* s))(void) { return real(v)->xDlSym(real(v), h, s); }
+inline void dlclose(sqlite3_vfs* v, void* h) { real(v)->xDlClose(real(v), h); }
+inline int randomness(sqlite3_vfs* v, int n, char* out) { return real(v)->xRandomness(real(v), n, out); }
+inline int sleep(sqlite3_vfs* v, int us) { return real(v)->xSleep(real(v), us); }
+inline int current_time(sqlite3_vfs* v, double* t) { return real(v)->xCurrentTime(real(v), t); }
+inline int last_error(sqlite3_vfs* v, int n, char* m) { return real(v)->xGetLastError(real(v), n, m); }
+inline int current_time64(sqlite3_vfs* v, sqlite3_int64* t) { return real(v)->xCurrentTimeInt64(real(v), t); }
+
+// A shim named `name` over the default VFS whose files are `file_size`
+// bytes of its own followed by the default VFS's file.
+inline void fill(sqlite3_vfs& shim, const char* name, int file_size) {
+  sqlite3_vfs* r = sqlite3_vfs_find(nullptr);
+  shim.iVersion = 2;
+  shim.szOsFile = file_size + r->szOsFile;
+  shim.mxPathname = r->mxPathname;
+  shim.zName = name;
+  shim.pAppData = r;
+  shim.xAccess = access;
+  shim.xFullPathname = fullpath;
+  shim.xDlOpen = dlopen;
+  shim.xDlError = dlerror;
+  shim.xDlSym = dlsym;
+  shim.xDlClose = dlclose;
+  shim.xRandomness = randomness;
+  shim.xSleep = sleep;
+  shim.xCurrentTime = current_time;
+  shim.xGetLastError = last_error;
+  shim.xCurrentTimeInt64 = current_time64;
+}
+
+}  // namespace vfs_passthrough
