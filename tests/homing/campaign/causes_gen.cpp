@@ -162,8 +162,10 @@ void Gen::causes() {
   if (d.chance(0.03)) {
     std::size_t a = 0;
     if (pick_axis(axes_where([&](std::size_t x) {
+          // Not the axis made invalid on purpose: a pull-off here would make it valid again (seed 8032843).
           return m.plan[x].role == Role::plain && is_switch_axis(x) && mode_reapproaches(m.settings.axes[x].mode) &&
-                 !mode_is_pushing(m.settings.axes[x].mode) && m.sim.axes[x].hysteresis_mm > 0.02;
+                 !mode_is_pushing(m.settings.axes[x].mode) && m.sim.axes[x].hysteresis_mm > 0.02 &&
+                 (m.invalid == Invalid::none || x != m.invalid_axis);
         }), a)) {
       AxisSettings& s = m.settings.axes[a];
       s.shared_limit = true;

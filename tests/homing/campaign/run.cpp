@@ -367,6 +367,22 @@ void Run::recover() {
   if (r_.status().last_command_result != CommandResult::accepted)
     w_->fail("a reset with no cause left was refused", std::string(command_result_name(r_.status().last_command_result)));
   for (int i = 0; i < 3; ++i) step();
+  // An alarm's braking may have left a homed shared-limit axis standing on
+  // its sensor (no trip is raised while an alarm is latched): once reset, it
+  // trips, as it must; a second reset is then taken and only a jog away
+  // moves it (seed 7028705).
+  if (r_.status().alarm && ok()) {
+    bool on_limit = true;
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if (r_.axis(a).alarm && !(r_.axis(a).alarm.code == AlarmCode::hard_limit && r_.settings.axes[a].shared_limit &&
+                                r_.axis(a).sensor))
+        on_limit = false;
+    if (on_limit) {
+      say("a shared-limit axis stands on its sensor: hard limit; reset again");
+      r_.reset_alarm();
+      for (int i = 0; i < 3; ++i) step();
+    }
+  }
   if (r_.status().alarm && ok()) {
     std::string codes;
     bool hard = false;
