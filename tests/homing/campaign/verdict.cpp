@@ -132,6 +132,24 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
       if (inside && depth + cfg.hysteresis_mm + 4 * cfg.noise_mm >= e.max_backoff_mm)
         c.add(letter(a) + " starting deeper in its cam than max_backoff releases", {AlarmCode::not_released}, with_partner(r.settings, a));
     }
+    // A cycle that starts further from the cam than the seek reaches (each
+    // cycle an alarm cut short after a pre-move "always" leaves it that much
+    // further away: seed 8040760) must end in sensor_not_found, as README
+    // says; near the end of the reach the trigger's detection delay decides.
+    if (mover && mode_uses_switch(e.mode) && f == sim::Fault::none && p.role != Role::slave) {
+      const auto& cfg = r.sim().axis_config(a);
+      const double x = r.actual(a);
+      const bool inside = x >= cfg.sensor_min_mm && x <= cfg.sensor_max_mm;
+      const double gap = dir_of(e) > 0 ? cfg.sensor_min_mm - x : x - cfg.sensor_max_mm;
+      if (!inside && gap > 0) {
+        const double seek_v = mm_per_min_to_mm_per_s(e.seek_feedrate_mm_per_min);
+        const double reach = gap + (e.pre_move_mode == PreMove::always ? e.pre_move_distance_mm : 0.0);
+        const double delay = seek_v * (e.debounce_ms / 1000.0 + m.max_dt_s) + 4 * cfg.noise_mm;
+        if (reach > e.max_seek_travel_mm - delay)
+          c.add(letter(a) + " starting beyond its seek's reach", {AlarmCode::sensor_not_found}, with_partner(r.settings, a),
+                reach > e.max_seek_travel_mm + 1e-3);
+      }
+    }
     // An unsequenced shared-limit axis is assigned where it stands: on its sensor, that is a trip.
     if ((plan.unsequenced & bit) && r.settings.axes[a].shared_limit)
       c.add(letter(a) + " unsequenced on its shared-limit sensor", {AlarmCode::hard_limit}, bit);
