@@ -27,6 +27,7 @@ void Run::exercise_motion() {
   Causes causes;
   if (e.shared_limit || (slave >= 0 && r_.settings.axes[static_cast<std::size_t>(slave)].shared_limit))
     causes.add("the jogged pair's shared-limit sensor", {AlarmCode::hard_limit}, movers);
+  limit_sensor_faults(causes);
   w_->clear_alarms_seen();
   w_->set_outside_movers(movers);
   const int dir = d_.chance(0.5) ? 1 : -1;
@@ -82,6 +83,18 @@ void Run::exercise_motion() {
   w_->set_outside_movers(0);
   if (stopped_short_any) mark("move interrupted", static_cast<std::uint8_t>(seen::present | (w_->alarms_seen ? seen::alarmed : 0)));
   if (auto u = explain(*w_, causes, r_.settings)) w_->fail(u->what + " during jogs and moves", u->detail);
+}
+
+// A shared-limit sensor a fault holds active (stuck active, an open NC
+// circuit) trips its homed axis as soon as no cycle runs (seed 8049361: it
+// stuck during the last periods of a cycle that then ended homed).
+void Run::limit_sensor_faults(Causes& causes) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const sim::Fault f = r_.sim().axis_config(a).fault;
+    const bool held_active = f == sim::Fault::sensor_stuck_active || (f == sim::Fault::wire_break && r_.settings.axes[a].sensor_nc);
+    if (held_active && r_.settings.axes[a].shared_limit)
+      causes.add(std::string(1, kAxisUpper[a]) + "'s shared-limit sensor held active by a fault", {AlarmCode::hard_limit}, axis_bit(a));
+  }
 }
 
 // Before the first cycle, a short jog and a move of an unhomed axis, away
@@ -244,6 +257,7 @@ void Run::hard_limit_recovery() {
   settle(10);
   {
     Causes causes;
+    limit_sensor_faults(causes);
     // The jogged axis, or its slave riding along, meets its sensor first.
     causes.add(std::string(1, kAxisUpper[a]) + "'s shared-limit sensor or its slave's", {AlarmCode::hard_limit}, movers);
     if (auto u = explain(*w_, causes, r_.settings)) w_->fail(u->what + " jogging into a shared-limit sensor", u->detail);

@@ -82,6 +82,7 @@ class Run {
   void hard_limit_recovery();
   void lost_steps();
   void change_settings();
+  void limit_sensor_faults(Causes& causes);
   std::vector<Event> random_events(const CyclePlan& plan, double estimate);
   std::vector<Phase> phases_run(std::size_t a) const;
   void follow_ups();
