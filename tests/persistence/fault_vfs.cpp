@@ -58,33 +58,15 @@ int x_sync(sqlite3_file* f, int flags) {
   }
   return R(f)->pMethods->xSync(R(f), flags);
 }
-int x_size(sqlite3_file* f, sqlite3_int64* s) { return R(f)->pMethods->xFileSize(R(f), s); }
-int x_lock(sqlite3_file* f, int l) { return R(f)->pMethods->xLock(R(f), l); }
-int x_unlock(sqlite3_file* f, int l) { return R(f)->pMethods->xUnlock(R(f), l); }
-int x_check(sqlite3_file* f, int* o) { return R(f)->pMethods->xCheckReservedLock(R(f), o); }
 int x_fcntl(sqlite3_file* f, int op, void* a) {
   if (op == SQLITE_FCNTL_LAST_ERRNO && g_errno.load() != 0) {
     *static_cast<int*>(a) = g_errno.load();
     return SQLITE_OK;
   }
-  return R(f)->pMethods->xFileControl(R(f), op, a);
+  return vfs_passthrough::FileMethods<R>::fcntl(f, op, a);
 }
-int x_sector(sqlite3_file* f) { return R(f)->pMethods->xSectorSize(R(f)); }
-int x_devchar(sqlite3_file* f) { return R(f)->pMethods->xDeviceCharacteristics(R(f)); }
-int x_shmmap(sqlite3_file* f, int i, int sz, int ext, void volatile** pp) {
-  return R(f)->pMethods->xShmMap(R(f), i, sz, ext, pp);
-}
-int x_shmlock(sqlite3_file* f, int o, int n, int fl) { return R(f)->pMethods->xShmLock(R(f), o, n, fl); }
-void x_shmbarrier(sqlite3_file* f) { R(f)->pMethods->xShmBarrier(R(f)); }
-int x_shmunmap(sqlite3_file* f, int d) { return R(f)->pMethods->xShmUnmap(R(f), d); }
-int x_fetch(sqlite3_file* f, sqlite3_int64 o, int n, void** pp) { return R(f)->pMethods->xFetch(R(f), o, n, pp); }
-int x_unfetch(sqlite3_file* f, sqlite3_int64 o, void* p) { return R(f)->pMethods->xUnfetch(R(f), o, p); }
 
-const sqlite3_io_methods kMethods = {
-    3,        x_close,    x_read,     x_write,    x_truncate,   x_sync,     x_size,
-    x_lock,   x_unlock,   x_check,    x_fcntl,    x_sector,     x_devchar,  x_shmmap,
-    x_shmlock, x_shmbarrier, x_shmunmap, x_fetch, x_unfetch,
-};
+const sqlite3_io_methods kMethods = vfs_passthrough::FileMethods<R>::with(x_close, x_read, x_write, x_truncate, x_sync, x_fcntl);
 
 int x_open(sqlite3_vfs*, sqlite3_filename name, sqlite3_file* f, int flags, int* out_flags) {
   auto* file = reinterpret_cast<File*>(f);
