@@ -151,9 +151,12 @@ TEST_CASE("diagnostics show the control loop running and the daemon's memory") {
   const auto late = c.read_together(
       {"diag.loop_late_p50_us", "diag.loop_late_p99_us", "diag.loop_late_p999_us", "diag.loop_late_max_us"});
   INFO("p50 " << late[0] << " p99 " << late[1] << " p99.9 " << late[2] << " max " << late[3] << " us");
-  // Less one period (1 ms): the period due just before the stop began.
-  CHECK(late[3] >= kStallUs - 1'000);
-  CHECK(late[0] < kStallUs - 1'000);
+  // Less what passes before the stop takes hold of a loaded machine's threads
+  // (1.5 ms was seen on a fresh clone under ctest -j2) and the period due
+  // just before it: 20 ms, still some 2,000 times the normal p99.
+  constexpr std::int64_t kMarginUs = 20'000;
+  CHECK(late[3] >= kStallUs - kMarginUs);
+  CHECK(late[0] < kStallUs - kMarginUs);
 }
 
 TEST_CASE("status.command_count moves with every command, so a result is matched to its command") {
