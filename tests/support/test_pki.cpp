@@ -33,9 +33,7 @@ std::string make_pki() {
   fs::create_directories(root);
   const fs::path making = root / ("making-" + std::to_string(::getpid()));
   fs::remove_all(making);
-  const RunResult r = run_program({"bash", MAKE_CERTS_SCRIPT, "init", making.string(), "--test-set"}, 120s);
-  if (!r.exited() || r.code() != 0)
-    throw std::runtime_error("make-certs.sh init --test-set failed: " + r.out + r.err);
+  make_certs({"init", making.string(), "--test-set"});
   std::error_code ec;
   fs::rename(making, done, ec);
   if (ec) fs::remove_all(making);  // another process put its set there first
@@ -44,6 +42,13 @@ std::string make_pki() {
 }
 
 }  // namespace
+
+void make_certs(std::vector<std::string> args) {
+  const std::string what = "make-certs.sh " + (args.empty() ? std::string() : args.front());
+  args.insert(args.begin(), {"bash", MAKE_CERTS_SCRIPT});
+  const RunResult r = run_program(args, 120s);
+  if (!r.exited() || r.code() != 0) throw std::runtime_error(what + " failed: " + r.out + r.err);
+}
 
 const std::string& test_pki() {
   static const std::string dir = make_pki();

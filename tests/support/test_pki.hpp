@@ -13,6 +13,10 @@ namespace test_support {
 // (.crt/.key) and crl.pem. Throws with the script's output when it fails.
 const std::string& test_pki();
 
+// Runs tools/tls/make-certs.sh with `args` (a PKI of a test's own: init,
+// revoke, crl...); throws with the script's output when it fails.
+void make_certs(std::vector<std::string> args);
+
 // What a client shows: its certificate and key (empty: none) and the CA it
 // checks the module's certificate against.
 struct TlsIdentity {

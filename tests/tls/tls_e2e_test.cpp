@@ -271,12 +271,6 @@ TEST_CASE("plain Modbus TCP on the TLS port is refused and the log says what it 
 TEST_CASE("SIGHUP reloads the TLS files: a certificate revoked meanwhile is refused, a broken file changes nothing") {
   TempDir dir;
   const std::string pki = dir.file("pki");
-  const auto make_certs = [&](std::vector<std::string> args) {
-    args.insert(args.begin(), {"bash", MAKE_CERTS_SCRIPT});
-    const RunResult r = run_program(args, 120s);
-    INFO(r.out << r.err);
-    REQUIRE(r.code() == 0);
-  };
   make_certs({"init", pki});
   const auto file = [&](const std::string& name) { return pki + "/" + name; };
   const auto identity = [&](const std::string& name) {

@@ -198,12 +198,6 @@ TEST_CASE("no TLS session is resumed: every connection makes a full handshake wi
 TEST_CASE("a CRL past its next update refuses every client until a fresh one is installed") {
   TempDir dir;
   const std::string pki = dir.file("pki");
-  const auto make_certs = [&](std::vector<std::string> args) {
-    args.insert(args.begin(), {"bash", MAKE_CERTS_SCRIPT});
-    const RunResult r = run_program(args, 120s);
-    INFO(r.out << r.err);
-    REQUIRE(r.code() == 0);
-  };
   make_certs({"init", pki});
   const auto file = [&](const std::string& name) { return pki + "/" + name; };
   const std::string crl = file("installed-crl.pem");

@@ -20,9 +20,9 @@ void Run::exercise_motion() {
       cand.push_back(a);
   }
   if (cand.empty() || r_.status().alarm) return;
-  const std::size_t a = cand[static_cast<std::size_t>(d_.integer(0, static_cast<int>(cand.size()) - 1))];
+  const std::size_t a = pick(cand);
   const int slave = slave_index(r_.settings, a);
-  const AxisMask movers = static_cast<AxisMask>(axis_bit(a) | (slave >= 0 ? axis_bit(static_cast<std::size_t>(slave)) : 0));
+  const AxisMask movers = with_slave(a);
   const AxisSettings e = effective(r_.settings, a);
   Causes causes;
   if (e.shared_limit || (slave >= 0 && r_.settings.axes[static_cast<std::size_t>(slave)].shared_limit))
@@ -85,6 +85,16 @@ void Run::exercise_motion() {
   if (auto u = explain(*w_, causes, r_.settings)) w_->fail(u->what + " during jogs and moves", u->detail);
 }
 
+std::size_t Run::pick(const std::vector<std::size_t>& cand) {
+  return cand[static_cast<std::size_t>(d_.integer(0, static_cast<int>(cand.size()) - 1))];
+}
+
+// The axis and the slave that moves with it.
+AxisMask Run::with_slave(std::size_t a) const {
+  const int slave = slave_index(r_.settings, a);
+  return static_cast<AxisMask>(axis_bit(a) | (slave >= 0 ? axis_bit(static_cast<std::size_t>(slave)) : 0));
+}
+
 // A shared-limit sensor a fault holds active (stuck active, an open NC
 // circuit) trips its homed axis as soon as no cycle runs (seed 8049361: it
 // stuck during the last periods of a cycle that then ended homed).
@@ -108,9 +118,8 @@ void Run::motion_before_homing() {
         !r_.axis(a).sensor && r_.sim().axis_config(a).fault == sim::Fault::none)
       cand.push_back(a);
   if (cand.empty() || r_.status().alarm) return;
-  const std::size_t a = cand[static_cast<std::size_t>(d_.integer(0, static_cast<int>(cand.size()) - 1))];
-  const int slave = slave_index(r_.settings, a);
-  const AxisMask movers = static_cast<AxisMask>(axis_bit(a) | (slave >= 0 ? axis_bit(static_cast<std::size_t>(slave)) : 0));
+  const std::size_t a = pick(cand);
+  const AxisMask movers = with_slave(a);
   const AxisSettings e = effective(r_.settings, a);
   const AllowedWithoutHoming allowed = r_.settings.global.allowed_without_homing;
   const int away = dir_of(e) > 0 ? -1 : 1;
@@ -191,7 +200,7 @@ void Run::change_settings() {
   for (std::size_t a = 0; a < kAxisCount; ++a)
     if (master_index(r_.settings, a) < 0 && r_.settings.axes[a].mode != HomingMode::disabled) cand.push_back(a);
   if (cand.empty()) return;
-  const std::size_t a = cand[static_cast<std::size_t>(d_.integer(0, static_cast<int>(cand.size()) - 1))];
+  const std::size_t a = pick(cand);
   AxisSettings& s = r_.settings.axes[a];
   const int slave = slave_index(r_.settings, a);
   const bool was_homed = r_.axis(a).homed;
@@ -244,9 +253,8 @@ void Run::hard_limit_recovery() {
       cand.push_back(a);
   }
   if (cand.empty() || r_.status().alarm) return;
-  const std::size_t a = cand[static_cast<std::size_t>(d_.integer(0, static_cast<int>(cand.size()) - 1))];
-  const int slave = slave_index(r_.settings, a);
-  const AxisMask movers = static_cast<AxisMask>(axis_bit(a) | (slave >= 0 ? axis_bit(static_cast<std::size_t>(slave)) : 0));
+  const std::size_t a = pick(cand);
+  const AxisMask movers = with_slave(a);
   const int toward = dir_of(effective(r_.settings, a)) > 0 ? 1 : -1;
   w_->clear_alarms_seen();
   w_->set_outside_movers(movers);
@@ -315,7 +323,7 @@ void Run::lost_steps() {
       cand.push_back(a);
   }
   if (cand.empty() || r_.status().alarm) return;
-  const std::size_t a = cand[static_cast<std::size_t>(d_.integer(0, static_cast<int>(cand.size()) - 1))];
+  const std::size_t a = pick(cand);
   const AxisSettings& s = r_.settings.axes[a];
   const double dir = dir_of(s);
   // Never across the cam's edge: a carriage that jumps over it would show the

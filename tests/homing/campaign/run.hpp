@@ -83,6 +83,8 @@ class Run {
   void lost_steps();
   void change_settings();
   void limit_sensor_faults(Causes& causes);
+  std::size_t pick(const std::vector<std::size_t>& cand);  // one of them, at random
+  AxisMask with_slave(std::size_t a) const;
   std::vector<Event> random_events(const CyclePlan& plan, double estimate);
   std::vector<Phase> phases_run(std::size_t a) const;
   void follow_ups();
