@@ -33,7 +33,7 @@ void Engine::raise_global(const Settings& settings, AlarmCode code) {
 
 void Engine::halt(const Settings& settings) {
   if (settings.global.alarm_clears_homed) {
-    for (AxisRun& run : axes_) run.homed = false;
+    for (AxisRun& run : axes_) run.home.reset();
   }
   stop_all(settings);
 }
@@ -80,8 +80,7 @@ void Engine::abort_command(const Settings& settings) {
 // Reset is refused while its cause is still present.
 void Engine::reset_command() {
   ++command_count_;
-  const bool fault = std::any_of(drive_fault_.begin(), drive_fault_.end(), [](bool f) { return f; });
-  if (estop_ || fault || comm_lost_) {
+  if (estop_ || any_drive_fault() || comm_lost_) {
     last_result_ = CommandResult::refused_cause_present;
   } else {
     clear_alarms();

@@ -1,14 +1,14 @@
-// One axis in a homing cycle: how it begins (by its mode), which phase
+// One axis in a homing cycle: how it begins (its mode's first phase), which phase
 // function runs, and the period loop that runs a new phase's entry at once.
+#include "engine.hpp"
 #include "phase_runner.hpp"
 
 namespace homing {
 
-PhaseRunner::PhaseRunner(Engine& engine, const Settings& st, std::size_t a)
-    : e(engine), settings(st), axis(a), run(engine.axes_[a]), s(st.axes[a]) {
+PhaseRunner::PhaseRunner(const PhaseContext& context, const Settings& st, std::size_t a)
+    : ctx(context), settings(st), axis(a), run(context.run), s(st.axes[a]) {
   is_slave = gantry_master(st, a) >= 0;
   partner = gantry_partner(st, a);
-  channel = e.sensor_channel(st, a);
   // The slave motor alone only corrects the gantry's skew (the gantry guard
   // stops it before the pair could rack beyond max_misalignment).
   if (commutator_slave()) s = commutator_slave_homing(s);
@@ -25,29 +25,21 @@ void PhaseRunner::begin() {
     run.follow_master = true;
     return wait_for(Wait::master_at_reference, Phase::align_slave);
   }
-  switch (s.mode) {
-    case HomingMode::disabled:
-      run.homed = true;
-      run.set_phase(Phase::done);
-      return;
-    case HomingMode::manual:
-      set_home(run.motor.position_mm, s.home_position_mm);
-      return enter(Phase::final_move);
-    case HomingMode::absolute:
-    case HomingMode::absolute_final: {
-      if (!e.absolute_valid_[axis]) return fail(AlarmCode::encoder_fault);
-      const double machine_now = e.absolute_mm_[axis] - s.home_position_mm;
-      set_home(run.motor.position_mm, machine_now);
-      return enter(Phase::final_move);
-    }
-    default:
-      return enter(Phase::pre_move);
+  const Phase first = row().first();
+  if (first == Phase::done) {  // a method that does not home counts as homed
+    run.home = home_frame(settings.axes[axis]);
+    run.set_phase(Phase::done);
+    return;
   }
+  // A method that only assigns moves nothing: its coordinate is given at once.
+  if (first == Phase::assign) return assign();
+  enter(first);
 }
 
 void PhaseRunner::dispatch() {
   switch (run.phase) {
     case Phase::pre_move: return pre_move();
+    case Phase::clear_sensors: return clear_sensors();
     case Phase::seek: return seek();
     case Phase::stop: return stop();
     case Phase::push: return push();
@@ -71,17 +63,30 @@ void PhaseRunner::dispatch() {
   }
 }
 
+PhaseContext Engine::make_context(const Settings& settings, std::size_t axis, Alarms& alarms) {
+  const int partner = gantry_partner(settings, axis);
+  const auto p = static_cast<std::size_t>(partner);
+  return PhaseContext{axes_[axis],
+                      partner >= 0 ? &axes_[p] : nullptr,
+                      inputs_[static_cast<std::size_t>(sensor_channel(settings, axis))],
+                      partner >= 0 ? &inputs_[static_cast<std::size_t>(sensor_channel(settings, p))] : nullptr,
+                      time_s_,
+                      last_dt_s_,
+                      alarms};
+}
+
 void Engine::begin_axis(const Settings& settings, std::size_t axis) {
-  PhaseRunner(*this, settings, axis).begin();
+  Alarms alarms(*this, settings);
+  PhaseRunner(make_context(settings, axis, alarms), settings, axis).begin();
 }
 
 void Engine::run_axis(const Settings& settings, std::size_t axis) {
   // A phase change runs the next phase's entry in the same period, so no
   // period is lost between phases. Bounded: a period hands over a few times.
+  Alarms alarms(*this, settings);
   for (int i = 0; i < 8; ++i) {
-    PhaseRunner runner(*this, settings, axis);
-    runner.dispatch();
-    if (!cycle_active_ || !axes_[axis].in_cycle || axes_[axis].entered) return;
+    PhaseRunner(make_context(settings, axis, alarms), settings, axis).dispatch();
+    if (!cycle_runs(axis) || axes_[axis].entered) return;
   }
 }
 

@@ -27,7 +27,6 @@ enum class Wait : std::uint8_t {
 
 // Data of one phase, born when the phase is entered.
 namespace phase_data {
-struct Clearing {};        // pre_move: a gantry moves off both sensors before its seek
 struct Seek {
   bool at_latch = false;   // just off both sensors: the pair meets them again slowly
 };
@@ -51,7 +50,7 @@ struct Jog {
 };
 }  // namespace phase_data
 
-using PhaseData = std::variant<std::monostate, phase_data::Clearing, phase_data::Seek, phase_data::Stop,
+using PhaseData = std::variant<std::monostate, phase_data::Seek, phase_data::Stop,
                                phase_data::BackOff, phase_data::Index, phase_data::Waiting, phase_data::Jog>;
 
 // How far this axis has come in the running homing cycle, in order. The
@@ -63,6 +62,13 @@ enum class Reached : std::uint8_t {
   reference,           // the reference edge is located (reference_mm)
   aligned,             // commutator slave: on its own edge, locked to its master again
   assigned,            // home position assigned
+};
+
+// What this period's inputs say of the axis's drive and encoder.
+struct AxisReadings {
+  bool drive_fault = false;
+  bool absolute_valid = false;
+  double absolute_mm = 0;  // absolute encoder reading
 };
 
 struct AxisRun {
@@ -78,11 +84,13 @@ struct AxisRun {
   MotionCommand command{};      // what runs until the next period
   MotionCommand last_command{}; // what ran during the period that just ended
   double offset_mm = 0;         // machine position = motor + offset
-  bool homed = false;
-  std::optional<HomeFrame> homed_in;  // the frame `homed` holds for (home_frame.hpp)
-  bool sensor_active = false;   // debounced, polarity applied
+  std::optional<HomeFrame> home;  // while homed: the frame it was homed in (home_frame.hpp)
+  AxisReadings readings{};      // this period's
   bool push_output = false;
   bool commutator_output = false;
+  std::int8_t prev_jog_request = 0;  // the jog input of the last period (a jog starts on a change)
+  bool limit_tripped = false;   // shared limit tripped: jog away until it releases
+  double pair_rel0_mm = 0;      // gantry slave: slave - master motor position at cycle start
 
   // The homing cycle.
   bool in_cycle = false;
@@ -94,6 +102,26 @@ struct AxisRun {
   double home_correction_mm = 0;   // reported: assigned - believed at the reference edge
   bool homed_at_cycle_start = false;  // reported: homed when its last cycle started
 
+  bool homed() const { return home.has_value(); }
+  // Homed, or its method does not home (disabled): what jogs, moves and the
+  // homed status go by.
+  bool counts_as_homed(HomingMode mode) const { return homed() || !mode_homes(mode); }
+  bool moving() const { return motor.velocity_mm_per_s != 0; }
+  // Homing, jogging, moving, braking, or still in motion: what the status
+  // register axis.<a>.busy shows.
+  bool busy() const {
+    return in_cycle || phase == Phase::jog || phase == Phase::move || phase == Phase::stopping || moving();
+  }
+  double machine_position_mm() const { return motor.position_mm + offset_mm; }
+  // The coordinate the axis is given where it stands, without a reference
+  // edge (manual, absolute, an axis in no sequence step): its home position,
+  // or the absolute encoder's reading less home_position (nullopt while the
+  // reading is not valid).
+  std::optional<double> coordinate_where_it_stands(const AxisSettings& s) const {
+    if (mode_row(s.mode).coordinate != Coordinate::absolute_encoder) return s.home_position_mm;
+    if (!readings.absolute_valid) return std::nullopt;
+    return readings.absolute_mm - s.home_position_mm;
+  }
   // A new phase starts with no data.
   void set_phase(Phase p) {
     phase = p;

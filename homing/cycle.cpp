@@ -22,8 +22,7 @@ CommandResult homing_refusal_of(std::uint16_t interlocks) {
 CommandResult Engine::homing_refusal(const Settings& settings) const {
   std::uint16_t blocking = 0;
   if (estop_) blocking |= interlock::estop;
-  if (std::any_of(drive_fault_.begin(), drive_fault_.end(), [](bool f) { return f; }))
-    blocking |= interlock::drive_fault;
+  if (any_drive_fault()) blocking |= interlock::drive_fault;
   if (any_alarm()) blocking |= interlock::alarm_latched;
   if (comm_lost_) blocking |= interlock::communication_lost;
   if (settings.global.permit_required && !permit_) blocking |= interlock::permit_missing;
@@ -83,10 +82,10 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
     AxisRun& run = axes_[a];
     if (!((covered | unsequenced) & axis_bit(a))) continue;
     // Whether this cycle's home correction can be trusted as a measurement.
-    run.homed_at_cycle_start = run.homed;
+    run.homed_at_cycle_start = run.homed();
     if (!(covered & axis_bit(a))) continue;
     run.in_cycle = true;
-    run.homed = false;
+    run.home.reset();
     run.set_phase(Phase::waiting);  // for its step
     run.entered = false;
     run.reached = Reached::nothing;
@@ -95,7 +94,7 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
   }
   for (std::size_t sl = 0; sl < kAxisCount; ++sl)
     if (const int m = gantry_master(settings, sl); m >= 0)
-      pair_rel0_[sl] = axes_[sl].motor.position_mm - axes_[static_cast<std::size_t>(m)].motor.position_mm;
+      axes_[sl].pair_rel0_mm = axes_[sl].motor.position_mm - axes_[static_cast<std::size_t>(m)].motor.position_mm;
   start_step(settings);
 }
 
@@ -127,17 +126,13 @@ void Engine::run_cycle(const Settings& settings) {
 // an absolute axis always takes it from its encoder.
 void Engine::assign_unsequenced(const Settings& settings, std::size_t a) {
   AxisRun& run = axes_[a];
-  const AxisSettings& s = settings.axes[a];
-  double machine_now = s.home_position_mm;
-  if (mode_is_absolute(s.mode)) {
-    if (!absolute_valid_[a]) return raise(settings, axis_bit(a), Alarm{AlarmCode::encoder_fault});
-    machine_now = absolute_mm_[a] - s.home_position_mm;
-  }
-  const double new_offset = machine_now - run.motor.position_mm;
+  const std::optional<double> machine_now = run.coordinate_where_it_stands(settings.axes[a]);
+  if (!machine_now) return raise(settings, axis_bit(a), Alarm{AlarmCode::encoder_fault});
+  const double new_offset = *machine_now - run.motor.position_mm;
   run.home_correction_mm = new_offset - run.offset_mm;
   run.trigger_position_mm = run.motor.position_mm + run.offset_mm;
   run.offset_mm = new_offset;
-  run.homed = true;
+  run.home = home_frame(settings.axes[a]);
   run.set_phase(Phase::done);
 }
 

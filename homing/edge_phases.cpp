@@ -15,7 +15,8 @@ void PhaseRunner::back_off() {
   if (edge_to(false)) {
     const double release_mm = edge_mm();
     run.reach(Reached::released);
-    if (mode_reapproaches(s.mode)) {
+    const Phase next = row().after(Phase::back_off);
+    if (next == Phase::reapproach) {
       // A gantry turns back toward its sensors together, or one side would
       // run toward its sensor while the other still backs off.
       if (software_pair() && !partner_run().has_reached(Reached::released)) {
@@ -24,7 +25,7 @@ void PhaseRunner::back_off() {
       }
       return enter(Phase::reapproach);
     }
-    if (s.mode == HomingMode::switch_index) {
+    if (next == Phase::index) {
       // The release is accepted only after the debounce time: an index pulse
       // may already have passed beyond the release edge. It is the next one.
       if (seen.index_seen && beyond(release_mm, seen.index_seen_mm)) return reference_found(seen.index_seen_mm);

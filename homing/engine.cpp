@@ -33,7 +33,6 @@ StepResult Engine::step(const Settings& configured, const Inputs& inputs, double
   follow_masters(settings);
   guard_gantries(settings);
   release_commutators(settings);
-  keep_home_frames(settings);
   publish(settings, inputs);
   route_outputs(settings);
   first_step_ = false;
@@ -54,6 +53,10 @@ const SettingsFaults& Engine::faults() const {
     faults_checked_ = true;
   }
   return faults_;
+}
+
+bool Engine::any_drive_fault() const {
+  return std::any_of(axes_.begin(), axes_.end(), [](const AxisRun& r) { return r.readings.drive_fault; });
 }
 
 bool Engine::any_alarm() const {

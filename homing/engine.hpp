@@ -5,9 +5,11 @@
 // sleeps, I/O or allocation in here: the runtime owns all of that.
 #include <array>
 #include <cstdint>
+#include <optional>
 
+#include "alarm_sink.hpp"
 #include "axis_run.hpp"
-#include "debounce.hpp"
+#include "input_channel.hpp"
 #include "io.hpp"
 #include "settings.hpp"
 #include "sequence.hpp"
@@ -15,6 +17,8 @@
 #include "status.hpp"
 
 namespace homing {
+
+struct PhaseContext;
 
 struct StepResult {
   const Outputs& outputs;
@@ -29,13 +33,6 @@ class Engine {
   const Status& status() const { return status_; }
 
  private:
-  struct SensorEvent {
-    bool edge = false;
-    AcceptedEdge accepted{};
-    bool index = false;
-    double index_mm = 0;
-  };
-
   // One period, in this order (engine.cpp).
   void advance_motion(double dt_s);
   void read_inputs(const Settings& settings, const Inputs& inputs, double dt_s);  // sensor_inputs.cpp
@@ -68,6 +65,7 @@ class Engine {
   void finish_cycle(const Settings& settings);
   void begin_axis(const Settings& settings, std::size_t axis);
   void run_axis(const Settings& settings, std::size_t axis);
+  bool cycle_runs(std::size_t axis) const { return cycle_active_ && axes_[axis].in_cycle; }
 
   // Jog and move (jog_move.cpp).
   CommandResult motion_refusal(const Settings& settings, std::size_t axis) const;
@@ -81,24 +79,34 @@ class Engine {
   int sensor_channel(const Settings& settings, std::size_t axis) const;
   int channel_owner(const Settings& settings, std::size_t channel) const;
 
+  bool any_drive_fault() const;
+  // The phases of one axis run over this context (phase_runner.hpp).
+  class Alarms final : public AlarmSink {
+   public:
+    Alarms(Engine& engine, const Settings& settings) : engine_(engine), settings_(settings) {}
+    void raise(AxisMask axes, Alarm alarm) override { engine_.raise(settings_, axes, alarm); }
+
+   private:
+    Engine& engine_;
+    const Settings& settings_;
+  };
+  PhaseContext make_context(const Settings& settings, std::size_t axis, Alarms& alarms);
+
   std::array<AxisRun, kAxisCount> axes_{};
-  std::array<Debouncer, kAxisCount> sensor_filter_{};
-  std::array<bool, kAxisCount> filter_reset_{};
-  std::array<SensorEvent, kAxisCount> events_{};  // per input channel, this period
-  std::array<bool, kAxisCount> drive_fault_{};
-  std::array<bool, kAxisCount> absolute_valid_{};
-  std::array<std::int8_t, kAxisCount> prev_jog_request_{};
+  std::array<InputChannel, kAxisCount> inputs_{};  // home-sensor inputs, one per axis's channel
+  // Each output channel's source: the axis whose motor it drives now, and
+  // its position less that motor's (output_routing.cpp).
+  struct OutputChannel {
+    std::size_t source = 0;
+    double offset_mm = 0;
+  };
+  std::array<OutputChannel, kAxisCount> out_channels_{{{0}, {1}, {2}, {3}, {4}, {5}}};
   double last_dt_s_ = 0.001;
-  std::array<double, kAxisCount> absolute_mm_{};
   // The rule set on this period's settings (as configured), computed on first use.
   const SettingsFaults& faults() const;
   const Settings* configured_ = nullptr;  // valid during step() only
   mutable SettingsFaults faults_{};
   mutable bool faults_checked_ = false;
-  std::array<double, kAxisCount> pair_rel0_{};    // per slave: slave - master motor at cycle start
-  std::array<bool, kAxisCount> limit_tripped_{};  // shared limit tripped: jog away until released
-  std::array<std::size_t, kAxisCount> channel_source_{0, 1, 2, 3, 4, 5};  // axis driving each output
-  std::array<double, kAxisCount> channel_offset_{};  // output position - source motor position
 
   double time_s_ = 0;
   bool first_step_ = true;
@@ -119,8 +127,6 @@ class Engine {
 
   Outputs outputs_{};
   Status status_{};
-
-  friend struct PhaseRunner;
 };
 
 }  // namespace homing

@@ -11,8 +11,9 @@ int gantry_master(const Settings& settings, std::size_t axis) {
   const int m = master_of(s);
   if (m < 0 || m >= static_cast<int>(kAxisCount) || m == static_cast<int>(axis)) return -1;
   const AxisSettings& master = settings.axes[static_cast<std::size_t>(m)];
-  if (s.mode == HomingMode::disabled || !mode_uses_switch(s.mode)) return -1;
-  if (master_of(master) >= 0 || !mode_uses_switch(master.mode)) return -1;
+  // A pushing master still pairs here; the rule set refuses it (check_slave).
+  if (!mode_row(s.mode).gantry_slave) return -1;
+  if (master_of(master) >= 0 || !mode_row(master.mode).needs_signal(Signal::home_sensor)) return -1;
   for (std::size_t other = 0; other < axis; ++other)  // one slave per master: the first
     if (master_of(settings.axes[other]) == m) return -1;
   return m;
@@ -62,8 +63,10 @@ AxisSettings commutator_slave_homing(AxisSettings s) {
   s.max_seek_travel_mm = s.max_misalignment_mm;
   s.pre_move_mode = PreMove::none;
   s.final_move_enable = false;
-  if (mode_is_pushing(s.mode) || s.mode == HomingMode::switch_index)
-    s.mode = mode_reapproaches(s.mode) ? HomingMode::switch_reapproach : HomingMode::switch_release;
+  // On its own switch edge: the edge of its master's method, without push or index.
+  const ModeRow& row = mode_row(s.mode);
+  if (row.runs(Phase::push) || row.runs(Phase::index))
+    s.mode = row.runs(Phase::reapproach) ? HomingMode::switch_reapproach : HomingMode::switch_release;
   s.seek_feedrate_mm_per_min = s.latch_feedrate_mm_per_min;
   return s;
 }

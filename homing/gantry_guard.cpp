@@ -56,7 +56,7 @@ void Engine::guard_gantries(const Settings& settings) {
     double worst = 0;
     for (int k = 0; k <= 4; ++k) {
       const double h = horizon * k / 4;
-      const double dev = (rest(slave, sl, h) - rest(master, m, h)) - pair_rel0_[sl];
+      const double dev = (rest(slave, sl, h) - rest(master, m, h)) - slave.pair_rel0_mm;
       worst = std::max(worst, std::abs(dev));
     }
     if (worst > limit) {
@@ -78,7 +78,7 @@ void Engine::release_commutators(const Settings& settings) {
     const bool moving = slave && slave->motor.velocity_mm_per_s != 0;
     if (busy || moving) continue;
     master.commutator_output = false;
-    filter_reset_[m] = true;
+    inputs_[m].reset = true;
   }
 }
 

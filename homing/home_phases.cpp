@@ -23,31 +23,38 @@ void PhaseRunner::pull_off() {
   move_to(run.target_mm, commutator_slave() ? latch_v : seek_v);
   if (!arrived()) return;
   if (commutator_slave()) return aligned();
-  enter(Phase::assign);
+  enter(row().after(Phase::pull_off));
 }
 
-void PhaseRunner::set_home(Run& r, double reference_motor_mm, double machine_mm_at_rest) {
+void PhaseRunner::set_home(Run& r, std::size_t of_axis, double reference_motor_mm, double machine_mm_at_rest) {
   const double new_offset = machine_mm_at_rest - r.motor.position_mm;
   r.trigger_position_mm = reference_motor_mm + r.offset_mm;
   r.home_correction_mm = new_offset - r.offset_mm;
   r.offset_mm = new_offset;
-  r.homed = true;
+  r.home = home_frame(settings.axes[of_axis]);
   r.reach(Reached::assigned);
 }
 
 void PhaseRunner::set_home(double reference_motor_mm, double machine_mm_at_rest) {
-  set_home(run, reference_motor_mm, machine_mm_at_rest);
+  set_home(run, axis, reference_motor_mm, machine_mm_at_rest);
 }
 
 void PhaseRunner::assign() {
+  if (row().coordinate != Coordinate::reference_edge) {
+    const std::optional<double> here = run.coordinate_where_it_stands(s);
+    if (!here) return fail(AlarmCode::encoder_fault);
+    set_home(run.motor.position_mm, *here);
+    return after_assign();
+  }
   // A shared home/limit sensor must be left behind, or it trips at once.
-  if (s.shared_limit && channel == static_cast<int>(axis) && active())
+  if (s.shared_limit && !commutator_slave() && active())
     return fail(AlarmCode::not_released, s.pull_off_mm);
   set_home(run.reference_mm, s.home_position_mm);
   if (commutator_master()) {
     // The slave motor rests at the same distance from its own edge.
     Run& sl = partner_run();
-    set_home(sl, sl.reference_mm, settings.axes[static_cast<std::size_t>(partner)].home_position_mm);
+    const auto p = static_cast<std::size_t>(partner);
+    set_home(sl, p, sl.reference_mm, settings.axes[p].home_position_mm);
   }
   after_assign();
 }

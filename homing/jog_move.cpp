@@ -12,7 +12,7 @@ namespace homing {
 CommandResult Engine::motion_refusal(const Settings& settings, std::size_t axis) const {
   if (estop_) return CommandResult::refused_estop;
   if (any_alarm()) return CommandResult::refused_alarm;
-  if (drive_fault_[axis]) return CommandResult::refused_drive_fault;
+  if (axes_[axis].readings.drive_fault) return CommandResult::refused_drive_fault;
   if (comm_lost_) return CommandResult::refused_communication_lost;
   if (cycle_active_) return CommandResult::refused_busy;
   if (master_of(settings.axes[axis]) >= 0) return CommandResult::refused_slave_axis;
@@ -30,7 +30,7 @@ CommandResult Engine::motion_refusal(const Settings& settings, std::size_t axis)
   for (std::size_t a = 0; a < kAxisCount; ++a)
     if ((group & axis_bit(a)) && faults()[a]) return CommandResult::refused_settings_fault;
   const int partner = gantry_partner(settings, axis);
-  if (limit_tripped_[axis] || (partner >= 0 && limit_tripped_[static_cast<std::size_t>(partner)]))
+  if (axes_[axis].limit_tripped || (partner >= 0 && axes_[static_cast<std::size_t>(partner)].limit_tripped))
     return CommandResult::refused_hard_limit;
   return CommandResult::accepted;
 }
@@ -52,20 +52,20 @@ void Engine::jog_commands(const Settings& settings, const Commands& c) {
     const std::int8_t req = c.jog[a] > 0 ? 1 : (c.jog[a] < 0 ? -1 : 0);
     AxisRun& run = axes_[a];
     if (first_step_) {  // a jog held at power-up waits for its release and a new press
-      prev_jog_request_[a] = req;
+      run.prev_jog_request = req;
       continue;
     }
     if (req == 0) {
       if (run.phase == Phase::jog) run.set_phase(Phase::stopping);
-    } else if (req != prev_jog_request_[a] || (run.phase != Phase::jog && run.phase != Phase::stopping)) {
+    } else if (req != run.prev_jog_request || (run.phase != Phase::jog && run.phase != Phase::stopping)) {
       if (run.phase == Phase::jog && run.jog_dir() == req) {
         // still held
-      } else if (req != prev_jog_request_[a]) {
+      } else if (req != run.prev_jog_request) {
         ++command_count_;
         CommandResult r = jog_refusal(settings, a, req);
-        const bool homed = run.homed || settings.axes[a].mode == HomingMode::disabled;
+        const bool homed = run.counts_as_homed(settings.axes[a].mode);
         const int p = gantry_partner(settings, a);
-        const bool recovering = limit_tripped_[a] || (p >= 0 && limit_tripped_[static_cast<std::size_t>(p)]);
+        const bool recovering = run.limit_tripped || (p >= 0 && axes_[static_cast<std::size_t>(p)].limit_tripped);
         if (r == CommandResult::accepted && !homed && !recovering &&
             settings.global.allowed_without_homing == AllowedWithoutHoming::none)
           r = CommandResult::refused_not_homed;
@@ -78,7 +78,7 @@ void Engine::jog_commands(const Settings& settings, const Commands& c) {
         }
       }
     }
-    prev_jog_request_[a] = req;
+    run.prev_jog_request = req;
   }
 }
 
@@ -90,7 +90,7 @@ void Engine::move_commands(const Settings& settings, const Commands& c) {
     const AxisSettings& s = settings.axes[a];
     const double target = c.move_target_mm[a];
     CommandResult r = motion_refusal(settings, a);
-    const bool homed = run.homed || s.mode == HomingMode::disabled;
+    const bool homed = run.counts_as_homed(s.mode);
     if (r == CommandResult::accepted && !std::isfinite(target)) r = CommandResult::refused_invalid;
     if (r == CommandResult::accepted && !homed &&
         settings.global.allowed_without_homing != AllowedWithoutHoming::all)
@@ -114,7 +114,7 @@ void Engine::run_motion(const Settings& settings) {
     AxisRun& run = axes_[a];
     const AxisSettings& s = settings.axes[a];
     const double accel = s.acceleration_mm_per_s2;
-    const bool homed = run.homed || s.mode == HomingMode::disabled;
+    const bool homed = run.counts_as_homed(s.mode);
     switch (run.phase) {
       case Phase::jog: {
         double v = mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min);

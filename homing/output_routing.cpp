@@ -16,16 +16,17 @@ void Engine::route_outputs(const Settings& settings) {
     std::size_t source = a;
     if (run.commutator_output)
       if (const int sl = gantry_slave(settings, a); sl >= 0) source = static_cast<std::size_t>(sl);
-    if (source != channel_source_[a]) {
-      const double channel_mm = axes_[channel_source_[a]].motor.position_mm + channel_offset_[a];
-      channel_offset_[a] = channel_mm - axes_[source].motor.position_mm;
-      channel_source_[a] = source;
+    OutputChannel& channel = out_channels_[a];
+    if (source != channel.source) {
+      const double channel_mm = axes_[channel.source].motor.position_mm + channel.offset_mm;
+      channel.offset_mm = channel_mm - axes_[source].motor.position_mm;
+      channel.source = source;
     }
     const AxisRun& src = axes_[source];
     out.motion = src.command;
-    if (out.motion.has_limit) out.motion.limit_mm += channel_offset_[a];
+    if (out.motion.has_limit) out.motion.limit_mm += channel.offset_mm;
     out.motor = src.motor;
-    out.motor.position_mm += channel_offset_[a];
+    out.motor.position_mm += channel.offset_mm;
     out.enable = !estop_;
     out.push_output = run.push_output;
     out.commutator_output = run.commutator_output;

@@ -55,12 +55,12 @@ void PhaseRunner::align_slave() {
   // its true edge lost (campaign seed 8001884).
   if (entry()) {
     partner_run().commutator_output = true;
-    e.filter_reset_[static_cast<std::size_t>(channel)] = true;
+    ctx.input.reset = true;
     run.command = stop_command(accel);
     return;
   }
-  const Debouncer& filter = e.sensor_filter_[static_cast<std::size_t>(channel)];
-  if (filter.raw() != filter.stable() || e.time_s_ - filter.last_change_s() + 1e-9 < s.debounce_ms / 1000.0) return;
+  const Debouncer& filter = ctx.input.filter;
+  if (filter.raw() != filter.stable() || ctx.time_s - filter.last_change_s() + 1e-9 < s.debounce_ms / 1000.0) return;
   enter(Phase::seek);
 }
 

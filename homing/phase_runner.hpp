@@ -1,30 +1,47 @@
 #pragma once
 // Runs one axis's homing phases for one period: one small function per
 // phase, an entry action on each phase change. Distances are motor
-// positions (mm) unless named otherwise. Internal to the engine.
+// positions (mm) unless named otherwise. Internal to the engine: the phases
+// see only their context (this axis, its gantry partner, the input carrying
+// its sensor, the time, the alarm path), never the engine itself.
 #include <cmath>
 
-#include "engine.hpp"
+#include "alarm_sink.hpp"
+#include "axis_run.hpp"
 #include "gantry.hpp"
+#include "input_channel.hpp"
+#include "settings.hpp"
 
 namespace homing {
+
+// What one axis's phases may see and change in one period.
+struct PhaseContext {
+  AxisRun& run;
+  AxisRun* partner_run;                 // the gantry partner, nullptr if none
+  InputChannel& input;                  // the input carrying this axis's home sensor
+  const InputChannel* partner_input;    // the partner's, nullptr if none
+  double time_s;                        // engine time now
+  double dt_s;                          // length of the period that just ended
+  AlarmSink& alarms;
+};
 
 struct PhaseRunner {
   using Run = AxisRun;
 
-  Engine& e;
+  PhaseContext ctx;
   const Settings& settings;
   std::size_t axis;
   Run& run;
   AxisSettings s;             // the settings this axis homes with (a slave inherits its master's: gantry.hpp)
-  int channel;                // input carrying this axis's home sensor
   int partner;                // gantry partner, -1 if none
   bool is_slave;
   double dir;                 // +1 / -1: toward the sensor
   double seek_v, latch_v, accel;
 
-  PhaseRunner(Engine& engine, const Settings& st, std::size_t a);  // axis_phases.cpp
+  PhaseRunner(const PhaseContext& context, const Settings& st, std::size_t a);  // axis_phases.cpp
 
+  // What this axis's homing method does (modes.hpp).
+  const ModeRow& row() const { return mode_row(s.mode); }
   bool commutator_slave() const {
     return is_slave && settings.axes[axis].slave_mode == SlaveMode::external_commutator;
   }
@@ -37,18 +54,16 @@ struct PhaseRunner {
     return settings.axes[slave].slave_mode == SlaveMode::own_output;
   }
   // The partner's home sensor (software-slaved pairs decide on both sensors).
-  bool partner_active() const {
-    return software_pair() && e.axes_[static_cast<std::size_t>(e.sensor_channel(settings, static_cast<std::size_t>(partner)))].sensor_active;
-  }
-  Run& partner_run() const { return e.axes_[static_cast<std::size_t>(partner)]; }
-  const Engine::SensorEvent& event() const { return e.events_[static_cast<std::size_t>(channel)]; }
-  bool active() const { return e.axes_[static_cast<std::size_t>(channel)].sensor_active; }
+  bool partner_active() const { return software_pair() && ctx.partner_input && ctx.partner_input->sensor_active; }
+  Run& partner_run() const { return *ctx.partner_run; }
+  const SensorEvent& event() const { return ctx.input.event; }
+  bool active() const { return ctx.input.sensor_active; }
   bool edge_to(bool to_active) const { return event().edge && event().accepted.to_level == to_active; }
   double edge_mm() const { return event().accepted.position_mm; }
   double travelled() const { return std::abs(run.motor.position_mm - run.phase_start_mm); }
   bool at_rest() const { return run.motor.velocity_mm_per_s == 0; }
   bool arrived() const { return at_rest() && std::abs(run.motor.position_mm - run.target_mm) <= 1e-9; }
-  double dt() const { return e.last_dt_s_; }
+  double dt() const { return ctx.dt_s; }
 
   void enter(Phase p) {
     run.set_phase(p);
@@ -61,7 +76,7 @@ struct PhaseRunner {
     return true;
   }
   void fail(AlarmCode code, double value = 0) {
-    e.raise(settings, axis_bit(axis), Alarm{code, run.phase, AxisField::none, value, 0});
+    ctx.alarms.raise(axis_bit(axis), Alarm{code, run.phase, AxisField::none, value, 0});
   }
   void move_to(double target_mm, double v) {
     run.target_mm = target_mm;
@@ -74,7 +89,7 @@ struct PhaseRunner {
 
   // -- phases (search_phases, edge_phases, home_phases, pair_phases.cpp) ----
   void pre_move();
-  void clear_sensors();
+  void clear_sensors();  // a gantry on its sensors
   void seek();
   void stop();
   void after_stop();
@@ -88,7 +103,7 @@ struct PhaseRunner {
   double rest_offset_mm() const;
   void pull_off();
   void aligned();
-  void set_home(Run& r, double reference_motor_mm, double machine_mm_at_rest);
+  void set_home(Run& r, std::size_t of_axis, double reference_motor_mm, double machine_mm_at_rest);
   void set_home(double reference_motor_mm, double machine_mm_at_rest);
   void assign();
   void after_assign();

@@ -26,6 +26,7 @@ enum class Phase : std::uint8_t {
   jog = 14,
   move = 15,
   stopping = 16,      // decelerating after an alarm or abort
+  clear_sensors = 17, // gantry: both sides move off their sensors together before the seek
 };
 
 inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
@@ -46,8 +47,10 @@ inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
     {Phase::jog, "jog", "jogging"},
     {Phase::move, "move", "moving to a commanded target"},
     {Phase::stopping, "stopping", "decelerating after an alarm or abort"},
+    {Phase::clear_sensors, "clear_sensors",
+     "gantry: both sides move off their sensors together (latch feedrate) before the seek"},
 };
-static_assert(lists_every_value(kPhaseInfo, Phase::stopping));
+static_assert(lists_every_value(kPhaseInfo, Phase::clear_sensors));
 constexpr std::span<const EnumInfo<Phase>> enum_table(Phase) { return kPhaseInfo; }
 
 std::string_view phase_name(Phase phase);

@@ -18,12 +18,11 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
     AxisStatus& as = st.axes[a];
     as.phase = run.phase;
     as.alarm = run.alarm;
-    as.position_mm = run.motor.position_mm + run.offset_mm;
+    as.position_mm = run.machine_position_mm();
     as.velocity_mm_per_s = run.motor.velocity_mm_per_s;
-    as.homed = run.homed || s.mode == HomingMode::disabled;
-    as.sensor = run.sensor_active;
-    as.busy = run.in_cycle || run.phase == Phase::jog || run.phase == Phase::move ||
-              run.phase == Phase::stopping || run.motor.velocity_mm_per_s != 0;
+    as.homed = run.counts_as_homed(s.mode);
+    as.sensor = inputs_[a].sensor_active;
+    as.busy = run.busy();
     as.trigger_position_mm = run.trigger_position_mm;
     as.home_correction_mm = run.home_correction_mm;
     as.homed_at_cycle_start = run.homed_at_cycle_start;
@@ -51,7 +50,7 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
 
   std::uint16_t il = 0;
   if (estop_) il |= interlock::estop;
-  if (std::any_of(drive_fault_.begin(), drive_fault_.end(), [](bool f) { return f; })) il |= interlock::drive_fault;
+  if (any_drive_fault()) il |= interlock::drive_fault;
   if (alarm) il |= interlock::alarm_latched;
   if (global_alarm_ == AlarmCode::settings_lost) il |= interlock::settings_lost;
   if (comm_lost_) il |= interlock::communication_lost;

@@ -11,8 +11,7 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
     AxisMask busy = 0;
     for (std::size_t a = 0; a < kAxisCount; ++a) {
       const AxisRun& run = axes_[a];
-      if (run.in_cycle || run.motor.velocity_mm_per_s != 0 || run.phase == Phase::jog || run.phase == Phase::move)
-        busy |= axis_bit(a);
+      if (run.in_cycle || run.moving() || run.phase == Phase::jog || run.phase == Phase::move) busy |= axis_bit(a);
     }
     raise(settings, busy, Alarm{AlarmCode::emergency_stop});
     raise_global(settings, AlarmCode::emergency_stop);
@@ -22,11 +21,11 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
   if (inputs.settings_lost) raise_global(settings, AlarmCode::settings_lost);
 
   for (std::size_t a = 0; a < kAxisCount; ++a) {
-    if (!drive_fault_[a]) continue;
+    if (!axes_[a].readings.drive_fault) continue;
     // A drive in fault does not follow its steps: an axis commanded to move
     // meanwhile is no longer where its coordinate says, whatever
     // global.alarm_clears_homed says (at rest it has lost nothing).
-    if (axes_[a].motor.velocity_mm_per_s != 0 || axes_[a].period_start.velocity_mm_per_s != 0) axes_[a].homed = false;
+    if (axes_[a].moving() || axes_[a].period_start.velocity_mm_per_s != 0) axes_[a].home.reset();
     if (planted(Mutant::drive_fault_as_sensor_alarm_elsewhere)) {
       raise(settings, axis_bit((a + 1) % kAxisCount), Alarm{AlarmCode::sensor_not_found});
       continue;
@@ -60,13 +59,13 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
     const AxisSettings& s = settings.axes[a];
     // A tripped shared limit stays "tripped" until its sensor releases: the
     // reset is taken and the jog away from it allowed without re-latching.
-    if (limit_tripped_[a] && !run.sensor_active) limit_tripped_[a] = false;
-    if (run.alarm || run.in_cycle || !run.homed) continue;
-    const double pos = run.motor.position_mm + run.offset_mm;
-    if (s.shared_limit && run.sensor_active && !limit_tripped_[a] &&
-        sensor_channel(settings, a) == static_cast<int>(a)) {
+    const bool sensor_active = inputs_[a].sensor_active;
+    if (run.limit_tripped && !sensor_active) run.limit_tripped = false;
+    if (run.alarm || run.in_cycle || !run.homed()) continue;
+    const double pos = run.machine_position_mm();
+    if (s.shared_limit && sensor_active && !run.limit_tripped && sensor_channel(settings, a) == static_cast<int>(a)) {
       raise(settings, axis_bit(a), Alarm{AlarmCode::hard_limit, Phase::idle, AxisField::shared_limit, pos, 0});
-      limit_tripped_[a] = true;
+      run.limit_tripped = true;
       continue;
     }
     const double tol = 1e-6;

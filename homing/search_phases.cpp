@@ -1,5 +1,4 @@
-// Finding the sensor: the pre-move (or, for a gantry on its sensors, moving
-// off them together), the seek, the stop after the trigger and the push
+// Finding the sensor: the pre-move, a gantry's clearing of its sensors, the seek, the stop after the trigger and the push
 // into the mechanical stop.
 #include <cmath>
 
@@ -8,16 +7,15 @@
 namespace homing {
 
 void PhaseRunner::pre_move() {
-  if (run.phase_data_if<phase_data::Clearing>()) return clear_sensors();
   if (entry()) {
     // A gantry decides for the pair: either side on its sensor counts.
     const bool needed = s.pre_move_mode == PreMove::always ||
                         (s.pre_move_mode == PreMove::if_sensor_active && (active() || partner_active()));
-    if (!needed) return enter(Phase::seek);
+    if (!needed) return enter(row().after(Phase::pre_move));
     run.target_mm = run.motor.position_mm - dir * s.pre_move_distance_mm;
   }
   move_to(run.target_mm, seek_v);
-  if (arrived()) enter(Phase::seek);
+  if (arrived()) enter(row().after(Phase::pre_move));
 }
 
 // A gantry with either side on its sensor at the start of the seek first
@@ -37,11 +35,7 @@ void PhaseRunner::clear_sensors() {
 
 void PhaseRunner::seek() {
   if (entry()) {
-    if (software_pair() && (active() || partner_active())) {
-      enter(Phase::pre_move);
-      run.phase_data<phase_data::Clearing>();
-      return;
-    }
+    if (software_pair() && (active() || partner_active())) return enter(Phase::clear_sensors);
     if (active()) {
       // Already on the sensor (MASSO): no seek, no stop; find the edge.
       run.reach(Reached::stopped_on_sensor);
@@ -74,7 +68,7 @@ void PhaseRunner::stop() {
   // A release during the stop may still be in its debounce time when the
   // axis comes to rest: wait for the verdict, or back-off would take that
   // release (inside the stop) for its reference edge.
-  const Debouncer& filter = e.sensor_filter_[static_cast<std::size_t>(channel)];
+  const Debouncer& filter = ctx.input.filter;
   if (filter.raw() != filter.stable()) return;
   // One control period of travel is allowed on top: the trigger cannot be
   // seen before the period in which it happened has ended. That is the
@@ -88,7 +82,7 @@ void PhaseRunner::stop() {
 }
 
 void PhaseRunner::after_stop() {
-  const Phase next = mode_is_pushing(s.mode) ? Phase::push : Phase::back_off;
+  const Phase next = row().after(Phase::stop);
   if (partner >= 0 && software_pair() && !partner_run().has_reached(Reached::stopped_on_sensor))
     return wait_for(Wait::partner_stopped, next);
   enter(next);
@@ -102,7 +96,7 @@ void PhaseRunner::push() {
   move_to(run.target_mm, latch_v);
   if (arrived()) {
     run.push_output = false;
-    enter(Phase::back_off);
+    enter(row().after(Phase::push));
   }
 }
 

@@ -27,18 +27,19 @@ void Engine::read_inputs(const Settings& settings, const Inputs& inputs, double 
   const double period_start_s = time_s_ - dt_s;
   for (std::size_t c = 0; c < kAxisCount; ++c) {
     const AxisInputs& in = inputs.axes[c];
-    SensorEvent& ev = events_[c];
+    InputChannel& channel = inputs_[c];
+    SensorEvent& ev = channel.event;
     ev = SensorEvent{};
     const std::size_t owner_axis = static_cast<std::size_t>(channel_owner(settings, c));
     const AxisRun& owner = axes_[owner_axis];
     // With the commutator on, the master's input carries the slave's switch.
     const bool nc = settings.axes[owner_axis].sensor_nc;
-    Debouncer& filter = sensor_filter_[c];
-    if (first_step_ || filter_reset_[c]) {
+    Debouncer& filter = channel.filter;
+    if (first_step_ || channel.reset) {
       // A new source on this input (start-up, commutator switched): take its
       // level as it is, without inventing an edge.
       filter.reset(in.sensor_level, time_s_);
-      filter_reset_[c] = false;
+      channel.reset = false;
     } else {
       auto position_at_offset = [&](double tau) {
         return position_at(owner.period_start, owner.last_command, std::clamp(tau, 0.0, dt_s));
@@ -61,10 +62,8 @@ void Engine::read_inputs(const Settings& settings, const Inputs& inputs, double 
         ev.index_mm = position_at_offset(in.index_edges.time_s[0]);
       }
     }
-    axes_[c].sensor_active = filter.stable() != nc;
-    drive_fault_[c] = in.drive_fault;
-    absolute_valid_[c] = in.absolute_valid;
-    absolute_mm_[c] = in.absolute_position_mm;
+    channel.sensor_active = filter.stable() != nc;
+    axes_[c].readings = AxisReadings{in.drive_fault, in.absolute_valid, in.absolute_position_mm};
   }
 }
 

@@ -52,7 +52,7 @@ CyclePlan plan_cycle(const Settings& settings, AxisMask requested, bool all) {
   }
   if (!all) return named_axes(plan, with_partners(requested, false));
   for (std::size_t a = 0; a < kAxisCount; ++a)
-    if (!(covered & axis_bit(a)) && master_of(settings.axes[a]) < 0 && settings.axes[a].mode != HomingMode::disabled)
+    if (!(covered & axis_bit(a)) && master_of(settings.axes[a]) < 0 && mode_homes(settings.axes[a].mode))
       plan.unsequenced |= axis_bit(a);
   // A slave is assigned with its master, whatever its own mode.
   for (std::size_t a = 0; a < kAxisCount; ++a) {

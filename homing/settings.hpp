@@ -10,37 +10,9 @@
 
 #include "axes.hpp"
 #include "enum_info.hpp"
+#include "modes.hpp"
 
 namespace homing {
-
-// Numeric values are register values: never renumber.
-enum class HomingMode : std::uint8_t {
-  disabled = 0,
-  manual = 1,
-  switch_release = 2,
-  switch_reapproach = 3,
-  switch_index = 4,
-  absolute = 5,
-  absolute_final = 6,
-  pushing_release = 7,
-  pushing_reapproach = 8,
-};
-inline constexpr std::uint8_t kHomingModeCount = 9;
-inline constexpr EnumInfo<HomingMode> kHomingModeInfo[] = {
-    {HomingMode::disabled, "disabled", "does not home; counts as homed"},
-    {HomingMode::manual, "manual", "no movement: the current position becomes the home position"},
-    {HomingMode::switch_release, "switch_release", "seek the switch, back off; the release edge is the reference"},
-    {HomingMode::switch_reapproach, "switch_reapproach",
-     "as 2, then approach again at latch feedrate; that edge is the reference"},
-    {HomingMode::switch_index, "switch_index", "release edge, then the next encoder index pulse"},
-    {HomingMode::absolute, "absolute", "position from the absolute encoder, no movement"},
-    {HomingMode::absolute_final, "absolute_final", "absolute, then move to final_position"},
-    {HomingMode::pushing_release, "pushing_release", "seek, push into the mechanical stop, release edge"},
-    {HomingMode::pushing_reapproach, "pushing_reapproach", "seek, push into the mechanical stop, re-approach edge"},
-};
-static_assert(lists_every_value(kHomingModeInfo, HomingMode::pushing_reapproach));
-static_assert(std::size(kHomingModeInfo) == kHomingModeCount);
-constexpr std::span<const EnumInfo<HomingMode>> enum_table(HomingMode) { return kHomingModeInfo; }
 
 enum class Direction : std::uint8_t { negative = 0, positive = 1 };
 inline constexpr EnumInfo<Direction> kDirectionInfo[] = {
@@ -200,22 +172,6 @@ static_assert(lists_every_value(kAxisFieldInfo, AxisField::jog_feedrate));
 constexpr std::span<const AxisFieldInfo> enum_table(AxisField) { return kAxisFieldInfo; }
 
 std::string_view field_name(AxisField field);
-std::string_view mode_name(HomingMode mode);
-
-constexpr bool mode_uses_switch(HomingMode m) {
-  return m == HomingMode::switch_release || m == HomingMode::switch_reapproach ||
-         m == HomingMode::switch_index || m == HomingMode::pushing_release ||
-         m == HomingMode::pushing_reapproach;
-}
-constexpr bool mode_is_pushing(HomingMode m) {
-  return m == HomingMode::pushing_release || m == HomingMode::pushing_reapproach;
-}
-constexpr bool mode_reapproaches(HomingMode m) {
-  return m == HomingMode::switch_reapproach || m == HomingMode::pushing_reapproach;
-}
-constexpr bool mode_is_absolute(HomingMode m) {
-  return m == HomingMode::absolute || m == HomingMode::absolute_final;
-}
 
 // -1 when the axis is not a slave, else the master's index.
 constexpr int master_of(const AxisSettings& s) {

@@ -35,12 +35,13 @@ std::optional<SettingsFault> check_motion(const AxisSettings& s, std::size_t axi
   if (s.pull_off_mm < 0) return fault(axis, AxisField::pull_off, CheckRule::negative, s.pull_off_mm);
   if (s.pre_move_mode != PreMove::none && s.pre_move_distance_mm <= 0)
     return fault(axis, AxisField::pre_move_distance, CheckRule::missing_distance, s.pre_move_distance_mm);
-  if (mode_is_pushing(s.mode) && s.push_distance_mm <= 0)
+  const ModeRow& row = mode_row(s.mode);
+  if (row.runs(Phase::push) && s.push_distance_mm <= 0)
     return fault(axis, AxisField::push_distance, CheckRule::missing_distance, s.push_distance_mm);
-  if (s.mode == HomingMode::switch_index && s.index_pitch_mm <= 0)
+  if (row.runs(Phase::index) && s.index_pitch_mm <= 0)
     return fault(axis, AxisField::index_pitch, CheckRule::missing_distance, s.index_pitch_mm);
   if (const double needed = backoff_needed_mm(s); needed >= s.max_backoff_mm)
-    return fault(axis, mode_is_pushing(s.mode) ? AxisField::push_distance : AxisField::max_backoff,
+    return fault(axis, row.runs(Phase::push) ? AxisField::push_distance : AxisField::max_backoff,
                  CheckRule::backoff_too_short, needed);
   // A slave rests pull-off + compensation away from its edge.
   const double rest = s.pull_off_mm + (master_of(s) >= 0 ? s.switch_compensation_mm : 0.0);
@@ -54,7 +55,10 @@ std::optional<SettingsFault> check_limits(const AxisSettings& s, std::size_t axi
   if (s.soft_limit_min_mm >= s.soft_limit_max_mm)
     return fault(axis, AxisField::soft_limit_max, CheckRule::soft_limits_inverted, s.soft_limit_max_mm);
   auto outside = [&](double x) { return x < s.soft_limit_min_mm || x > s.soft_limit_max_mm; };
-  if (s.mode != HomingMode::disabled && outside(s.home_position_mm) && !mode_is_absolute(s.mode))
+  // home_position is a place on the axis, except for an absolute encoder (its offset).
+  const Coordinate c = mode_row(s.mode).coordinate;
+  const bool home_is_a_place = c == Coordinate::here || c == Coordinate::reference_edge;
+  if (home_is_a_place && outside(s.home_position_mm))
     return fault(axis, AxisField::home_position, CheckRule::outside_soft_limits, s.home_position_mm);
   if (final_move_wanted(s) && outside(s.final_position_mm))
     return fault(axis, AxisField::final_position, CheckRule::outside_soft_limits, s.final_position_mm);
@@ -69,25 +73,26 @@ std::optional<SettingsFault> check_slave(const Settings& settings, const Setting
   if (m < 0) return std::nullopt;
   if (m == static_cast<int>(axis) || m >= static_cast<int>(kAxisCount))
     return fault(axis, AxisField::slave_of, CheckRule::slave_invalid, s.slave_of);
-  if (s.mode == HomingMode::disabled)
+  if (!mode_homes(s.mode))
     return fault(axis, AxisField::mode, CheckRule::disabled_in_gantry, s.slave_of);
   const AxisSettings& master = settings.axes[static_cast<std::size_t>(m)];
-  if (master.mode == HomingMode::disabled)
+  if (!mode_homes(master.mode))
     return fault(axis, AxisField::slave_of, CheckRule::disabled_in_gantry, s.slave_of);
   if (master_of(master) >= 0)
     return fault(axis, AxisField::slave_of, CheckRule::slave_of_slave, s.slave_of);
-  if (!mode_uses_switch(master.mode))
+  // A master squares on its sensor: a mode without one is no master at all.
+  if (!mode_row(master.mode).needs_signal(Signal::home_sensor))
     return fault(axis, AxisField::slave_of, CheckRule::slave_invalid, s.slave_of);
   for (std::size_t other = 0; other < axis; ++other)  // one slave per master
     if (master_of(settings.axes[other]) == m)
       return fault(axis, AxisField::slave_of, CheckRule::slave_invalid, s.slave_of);
-  if (!mode_uses_switch(s.mode))
+  if (!mode_row(s.mode).gantry_slave)
     return fault(axis, AxisField::mode, CheckRule::slave_needs_sensor, static_cast<double>(s.mode));
   // Pushing into the stops makes the motors lose steps by different amounts
   // with no sensor watching: the pair would rack unseen. A gantry squares on
   // its two sensors instead (pushing modes are for one axis with two drives
   // on one output, the hardware-slaved gantry).
-  if (mode_is_pushing(master.mode))
+  if (!mode_row(master.mode).gantry_master)
     return fault(axis, AxisField::slave_of, CheckRule::commutator_needs_switch_master, s.slave_of);
   if (s.max_misalignment_mm <= 0)
     return fault(axis, AxisField::max_misalignment, CheckRule::not_positive, s.max_misalignment_mm);
@@ -107,8 +112,8 @@ std::optional<SettingsFault> check_axis_in(const Settings& settings, const Setti
   if (auto f = check_slave(settings, pair, axis)) return f;
   const AxisSettings& s = pair.axes[axis];
   if (auto f = check_limits(s, axis)) return f;
-  if (mode_uses_switch(s.mode)) return check_motion(s, axis);
-  if (s.mode == HomingMode::absolute_final || (s.final_move_enable && s.mode == HomingMode::manual)) {
+  if (mode_row(s.mode).runs(Phase::seek)) return check_motion(s, axis);
+  if (final_move_wanted(s)) {
     if (s.seek_feedrate_mm_per_min <= 0)
       return fault(axis, AxisField::seek_feedrate, CheckRule::not_positive, s.seek_feedrate_mm_per_min);
     if (s.acceleration_mm_per_s2 <= 0)
@@ -125,7 +130,7 @@ double seek_stop_distance_mm(const AxisSettings& s) {
 }
 
 double backoff_needed_mm(const AxisSettings& s) {
-  return seek_stop_distance_mm(s) + (mode_is_pushing(s.mode) ? s.push_distance_mm : 0.0);
+  return seek_stop_distance_mm(s) + (mode_row(s.mode).runs(Phase::push) ? s.push_distance_mm : 0.0);
 }
 
 double gantry_stop_distance_mm(const AxisSettings& s) {
@@ -134,8 +139,12 @@ double gantry_stop_distance_mm(const AxisSettings& s) {
 }
 
 bool final_move_wanted(const AxisSettings& s) {
-  return s.mode == HomingMode::absolute_final ||
-         (s.final_move_enable && s.mode != HomingMode::absolute && s.mode != HomingMode::disabled);
+  switch (mode_row(s.mode).final_move) {
+    case FinalMove::never: return false;
+    case FinalMove::if_enabled: return s.final_move_enable;
+    case FinalMove::always: return true;
+  }
+  return false;
 }
 
 double index_search_mm(const AxisSettings& s) {

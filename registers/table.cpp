@@ -69,6 +69,11 @@ constexpr std::array<EnumValue, N> values_of(const Entry (&table)[N]) {
     out[i] = {static_cast<std::int64_t>(table[i].value), table[i].name, table[i].text};
   return out;
 }
+// The highest value of an enum register: its range follows the engine's table.
+template <std::size_t N>
+constexpr std::int64_t last_value(const std::array<EnumValue, N>& values) {
+  return values[N - 1].value;
+}
 // Bitmask registers: the value of a bit is its number.
 template <std::size_t N>
 constexpr std::array<EnumValue, N> bits_of(const homing::interlock::BitInfo (&table)[N]) {
@@ -76,7 +81,7 @@ constexpr std::array<EnumValue, N> bits_of(const homing::interlock::BitInfo (&ta
   for (std::size_t i = 0; i < N; ++i) out[i] = {table[i].bit, table[i].name, table[i].text};
   return out;
 }
-constexpr auto kModes = values_of(homing::kHomingModeInfo);
+constexpr auto kModes = values_of(homing::kModeTable);  // homing/modes.hpp: one row per method
 constexpr auto kDirections = values_of(homing::kDirectionInfo);
 constexpr auto kPreMoves = values_of(homing::kPreMoveInfo);
 constexpr auto kSlaveModes = values_of(homing::kSlaveModeInfo);
@@ -185,7 +190,7 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
 
 constexpr auto kModuleAxisRows = std::to_array<Row>({
     // holding: per-axis settings
-    {.pattern = "axis.<a>.mode", .type = Type::enumeration, .max = 8, .def = Def{{2, 2, 2, 0, 0, 0}}, .fills = fills<&A::mode>, .values = kModes, .description = "homing mode"},
+    {.pattern = "axis.<a>.mode", .type = Type::enumeration, .max = last_value(kModes), .def = Def{{2, 2, 2, 0, 0, 0}}, .fills = fills<&A::mode>, .values = kModes, .description = "homing mode"},
     {.pattern = "axis.<a>.direction", .offset = 1, .type = Type::enumeration, .max = 1, .fills = fills<&A::direction>, .values = kDirections, .description = "seek direction"},
     {.pattern = "axis.<a>.seek_feedrate", .offset = 2, .quantity = Quantity::feedrate_per_min, .min = 1, .max = kFeedMax, .def = 1000, .fills = fills<&A::seek_feedrate_mm_per_min>, .description = "speed while searching for the sensor"},
     {.pattern = "axis.<a>.latch_feedrate", .offset = 3, .quantity = Quantity::feedrate_per_min, .min = 1, .max = kFeedMax, .def = 100, .fills = fills<&A::latch_feedrate_mm_per_min>, .description = "slow speed for locating the edge; must be below seek_feedrate"},
@@ -214,9 +219,9 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     {.pattern = "axis.<a>.soft_limit_max", .offset = 44, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = 1'000'000, .fills = fills<&A::soft_limit_max_mm>, .description = "highest position allowed once homed"},
     {.pattern = "axis.<a>.target", .offset = 60, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::host_target, .description = "target of cmd.move.<a> (not persisted)"},
     // input registers: per-axis status
-    {.pattern = "axis.<a>.phase", .table = IR, .type = Type::enumeration, .access = Access::r, .max = 16, .key = Key::axis_phase, .values = kPhases, .description = "what the axis is doing"},
+    {.pattern = "axis.<a>.phase", .table = IR, .type = Type::enumeration, .access = Access::r, .max = last_value(kPhases), .key = Key::axis_phase, .values = kPhases, .description = "what the axis is doing"},
     {.pattern = "axis.<a>.alarm", .table = IR, .offset = 1, .type = Type::enumeration, .access = Access::r, .max = 18, .key = Key::axis_alarm, .values = kAlarms, .description = "latched alarm code, 0 none"},
-    {.pattern = "axis.<a>.alarm_phase", .table = IR, .offset = 2, .type = Type::enumeration, .access = Access::r, .max = 16, .key = Key::axis_alarm_phase, .values = kPhases, .description = "phase in which the alarm was raised"},
+    {.pattern = "axis.<a>.alarm_phase", .table = IR, .offset = 2, .type = Type::enumeration, .access = Access::r, .max = last_value(kPhases), .key = Key::axis_alarm_phase, .values = kPhases, .description = "phase in which the alarm was raised"},
     {.pattern = "axis.<a>.position", .table = IR, .offset = 4, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_position, .description = "position in machine coordinates"},
     {.pattern = "axis.<a>.velocity", .table = IR, .offset = 6, .type = Type::i32, .access = Access::r, .quantity = Quantity::velocity_um_per_s, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_velocity, .description = "velocity now"},
     {.pattern = "axis.<a>.home_correction", .table = IR, .offset = 8, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_home_correction, .description = "assigned minus believed position at the reference edge, last homing"},

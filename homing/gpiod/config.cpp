@@ -221,6 +221,19 @@ std::expected<BackendConfig, std::string> parse_config(const toml::table& root, 
   return c;
 }
 
+namespace {
+bool has_line(const AxisLines& lines, homing::Signal signal) {
+  switch (signal) {
+    case homing::Signal::step_output: return lines.has_output();
+    case homing::Signal::home_sensor: return lines.home.has_value();
+    case homing::Signal::index: return lines.index.has_value();
+    case homing::Signal::push_output: return lines.push.has_value();
+    case homing::Signal::absolute_encoder: return false;  // no GPIO line carries it
+  }
+  return false;
+}
+}  // namespace
+
 std::optional<std::string> check_wiring(const BackendConfig& config, const homing::Settings& settings) {
   using homing::HomingMode;
   auto letter = [](std::size_t a) { return std::string(1, kAxisUpper[a]); };
@@ -245,16 +258,17 @@ std::optional<std::string> check_wiring(const BackendConfig& config, const homin
                            letter(a), letter(mi), lower(a));
       continue;  // moved by the master's output; its switch is read on the master's home line
     }
-    if (!lines.has_output())
-      return fmt::format("axis.{0}.mode is {1} (the axis can move) but [gpiod.axes.{2}] has no step/dir output; "
-                         "wire {2} or set axis.{0}.mode = 0 (disabled)",
-                         lower(a), static_cast<int>(s.mode), letter(a));
-    if (homing::mode_uses_switch(s.mode) && !lines.home)
-      return fmt::format("axis.{0}.mode {1} homes on a switch but [gpiod.axes.{2}] has no 'home' line", lower(a),
-                         static_cast<int>(s.mode), letter(a));
-    if (s.mode == HomingMode::switch_index && !lines.index)
-      return fmt::format("axis.{0}.mode 4 (switch + index) but [gpiod.axes.{1}] has no 'index' line", lower(a),
-                         letter(a));
+    // Every line the axis's method needs (modes.hpp), in the table's order.
+    const homing::ModeRow& row = homing::mode_row(s.mode);
+    for (const homing::SignalInfo& sig : homing::kSignalInfo) {
+      if (!sig.gpio_line_required || !row.needs_signal(sig.signal) || has_line(lines, sig.signal)) continue;
+      if (sig.signal == homing::Signal::step_output)
+        return fmt::format("axis.{0}.mode is {1} (the axis can move) but [gpiod.axes.{2}] has no step/dir output; "
+                           "wire {2} or set axis.{0}.mode = 0 (disabled)",
+                           lower(a), static_cast<int>(s.mode), letter(a));
+      return fmt::format("axis.{0}.mode {1} {2} but [gpiod.axes.{3}] has no '{4}' line", lower(a),
+                         static_cast<int>(s.mode), sig.use, letter(a), sig.name);
+    }
   }
   return std::nullopt;
 }

@@ -33,7 +33,7 @@ void check_named_and_explained(const Table& table, const char* what) {
 }  // namespace
 
 TEST_CASE("every value of the engine's enums has a unique name and a text") {
-  check_named_and_explained(kHomingModeInfo, "mode");
+  check_named_and_explained(kModeTable, "mode");
   check_named_and_explained(kDirectionInfo, "direction");
   check_named_and_explained(kPreMoveInfo, "pre-move");
   check_named_and_explained(kSlaveModeInfo, "slave mode");

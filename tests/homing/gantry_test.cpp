@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "accel_watch.hpp"
 #include "homing/settings_check.hpp"
@@ -70,6 +71,33 @@ SCENARIO("software-slaved gantry with a skewed slave ends square", "[gantry]") {
       }
     }
   }
+}
+
+SCENARIO("a software-slaved gantry starting on a sensor shows its own clearing phase before the seek", "[gantry]") {
+  // The slave starts on its cam (which spans [-1000, 0]), the master just off
+  // its own: 1.3 mm of skew, within max_misalignment (2 mm).
+  Rig r = software_gantry(-0.5);
+  r.machine.axes[0].actual_position_mm = 0.8;
+  r.step();
+  REQUIRE(r.axis(1).sensor);
+  std::vector<Phase> master_phases;
+  r.on_period = [&](Rig& rig) {
+    const Phase p = rig.axis(0).phase;
+    if (master_phases.empty() || master_phases.back() != p) master_phases.push_back(p);
+  };
+  r.clear_trace();
+  REQUIRE(r.home_all());
+  CHECK(r.saw(0, Phase::clear_sensors));
+  CHECK(r.saw(1, Phase::clear_sensors));
+  CHECK_FALSE(r.saw(0, Phase::pre_move));  // pre_move_mode none: the clearing is not a pre-move
+  // Clearing comes first, then the seek.
+  const auto clearing = std::find(master_phases.begin(), master_phases.end(), Phase::clear_sensors);
+  const auto seek = std::find(master_phases.begin(), master_phases.end(), Phase::seek);
+  REQUIRE(clearing != master_phases.end());
+  REQUIRE(seek != master_phases.end());
+  CHECK(clearing < seek);
+  CHECK(r.axis(0).position_mm == Approx(0).margin(1e-9));
+  CHECK(r.axis(1).position_mm == Approx(0).margin(1e-9));
 }
 
 SCENARIO("software-slaved gantry: the switch compensation squares a misplaced slave sensor", "[gantry]") {

@@ -59,18 +59,31 @@ CheckReport check_settings(const homing::Settings& settings,
       if (t > 0) c.phases.emplace_back(std::string(homing::phase_name(p)), t);
     };
     const bool final_move = homing::final_move_wanted(s);
-    if (homing::mode_uses_switch(s.mode)) {
-      if (s.pre_move_mode == homing::PreMove::always) phase(homing::Phase::pre_move, move_time(s.pre_move_distance_mm, seek_v, a));
-      c.seek_worst_s = move_time(s.max_seek_travel_mm, seek_v, a);
-      phase(homing::Phase::seek, c.seek_worst_s);
-      phase(homing::Phase::stop, a > 0 ? seek_v / a + s.debounce_ms / 1000.0 : 0);
-      if (homing::mode_is_pushing(s.mode)) phase(homing::Phase::push, move_time(s.push_distance_mm, latch_v, a));
-      phase(homing::Phase::back_off, move_time(c.stop_distance_mm + latch_stop, latch_v, a) + s.debounce_ms / 1000.0);
-      if (homing::mode_reapproaches(s.mode)) phase(homing::Phase::reapproach, move_time(2 * latch_stop + 0.1, latch_v, a));
-      if (s.mode == HomingMode::switch_index) phase(homing::Phase::index, move_time(homing::index_search_mm(s), latch_v, a));
-      phase(homing::Phase::pull_off, move_time(s.pull_off_mm + latch_stop, seek_v, a));
+    // The worst-case time of each phase the axis's method runs (modes.hpp).
+    using homing::Phase;
+    for (const Phase p : homing::mode_row(s.mode).phase_list()) {
+      switch (p) {
+        case Phase::pre_move:
+          if (s.pre_move_mode == homing::PreMove::always) phase(p, move_time(s.pre_move_distance_mm, seek_v, a));
+          break;
+        case Phase::seek:
+          c.seek_worst_s = move_time(s.max_seek_travel_mm, seek_v, a);
+          phase(p, c.seek_worst_s);
+          break;
+        case Phase::stop: phase(p, a > 0 ? seek_v / a + s.debounce_ms / 1000.0 : 0); break;
+        case Phase::push: phase(p, move_time(s.push_distance_mm, latch_v, a)); break;
+        case Phase::back_off:
+          phase(p, move_time(c.stop_distance_mm + latch_stop, latch_v, a) + s.debounce_ms / 1000.0);
+          break;
+        case Phase::reapproach: phase(p, move_time(2 * latch_stop + 0.1, latch_v, a)); break;
+        case Phase::index: phase(p, move_time(homing::index_search_mm(s), latch_v, a)); break;
+        case Phase::pull_off: phase(p, move_time(s.pull_off_mm + latch_stop, seek_v, a)); break;
+        case Phase::final_move:
+          if (final_move) phase(p, move_time(s.final_position_mm - s.home_position_mm, seek_v, a));
+          break;
+        default: break;  // no motion of its own (assign) or not a phase of a method
+      }
     }
-    if (final_move) phase(homing::Phase::final_move, move_time(s.final_position_mm - s.home_position_mm, seek_v, a));
     for (const auto& [name, t] : c.phases)
       if (name != "seek") c.after_trigger_s += t;
 

@@ -1,0 +1,203 @@
+#pragma once
+// The homing methods, one row each: what a method needs wired, the phases it
+// runs in order, the coordinate it defines and where it may stand in a
+// gantry. The phase runner, the rule set, homingctl's check, the GPIO wiring
+// check, the mode register's value list and the generated maps all read this
+// table; nothing else decides what a mode does. Adding a method is its row
+// here plus its phase functions (and the simulator's model of a new input).
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string_view>
+
+#include "enum_info.hpp"
+#include "phases.hpp"
+
+namespace homing {
+
+// Numeric values are register values (axis.<a>.mode): never renumber.
+enum class HomingMode : std::uint8_t {
+  disabled = 0,
+  manual = 1,
+  switch_release = 2,
+  switch_reapproach = 3,
+  switch_index = 4,
+  absolute = 5,
+  absolute_final = 6,
+  pushing_release = 7,
+  pushing_reapproach = 8,
+};
+
+// What a method needs wired to the axis, one bit each.
+enum class Signal : std::uint16_t {
+  step_output = 1u << 0,       // the axis moves: step/dir (or a drive's motion input)
+  home_sensor = 1u << 1,       // the home switch or sensor
+  index = 1u << 2,             // the encoder's index pulse
+  push_output = 1u << 3,       // reduces the motor current while pushing into the stop
+  absolute_encoder = 1u << 4,  // the absolute position (and its valid flag)
+};
+using Signals = std::uint16_t;
+constexpr Signals operator|(Signal a, Signal b) {
+  return static_cast<Signals>(static_cast<Signals>(a) | static_cast<Signals>(b));
+}
+constexpr Signals operator|(Signals a, Signal b) { return static_cast<Signals>(a | static_cast<Signals>(b)); }
+
+struct SignalInfo {
+  Signal signal;
+  std::string_view name;  // the line's name in the [gpiod] table, where it is a GPIO line
+  std::string_view text;
+  std::string_view use;     // what a mode that needs it does: "axis.x.mode 2 <use>"
+  bool gpio_line_required;  // the GPIO backend refuses a mode that needs it without its line
+};
+inline constexpr SignalInfo kSignalInfo[] = {
+    {Signal::step_output, "step", "step/dir output (the axis moves)", "can move", true},
+    {Signal::home_sensor, "home", "home switch or sensor input", "homes on a switch", true},
+    {Signal::index, "index", "encoder index pulse input", "homes on the encoder's index pulse", true},
+    // Without a push line the push runs at full current: allowed, as it was.
+    {Signal::push_output, "push", "reduced-current output while pushing", "pushes into a stop", false},
+    // Not a GPIO line: read from the drive or encoder interface.
+    {Signal::absolute_encoder, "absolute", "absolute encoder position", "reads an absolute encoder", false},
+};
+
+// The coordinate a method gives the axis once homed.
+enum class Coordinate : std::uint8_t {
+  none,              // does not home: counts as homed where it stands, keeps its coordinate
+  here,              // home_position where the axis stands, without moving
+  reference_edge,    // home_position at the reference edge, pull-off (and a slave's compensation) away
+  absolute_encoder,  // the encoder's reading minus home_position (home_position is the encoder's offset)
+};
+
+enum class FinalMove : std::uint8_t {
+  never,
+  if_enabled,  // when axis.<a>.final_move_enable is set
+  always,
+};
+
+inline constexpr std::size_t kMaxModePhases = 9;
+
+struct ModeRow {
+  HomingMode value;
+  std::string_view name;  // register value name, logs, exports
+  std::string_view text;
+  Signals needs;
+  // The homing phases of the axis on its own, in order. A gantry partner may
+  // wait between them (Phase::waiting) and a gantry on its sensors clears
+  // them first (Phase::clear_sensors, in place of the pre-move).
+  std::array<Phase, kMaxModePhases> phases;
+  std::uint8_t phase_count;
+  Coordinate coordinate;
+  FinalMove final_move;
+  bool gantry_master;  // may be the master of a gantry pair
+  bool gantry_slave;   // may be a gantry slave (it squares on its own sensor)
+  bool shares_limit;   // its home sensor may double as a hard limit (axis.<a>.shared_limit)
+
+  constexpr std::span<const Phase> phase_list() const { return {phases.data(), phase_count}; }
+  constexpr bool runs(Phase p) const {
+    for (std::size_t i = 0; i < phase_count; ++i)
+      if (phases[i] == p) return true;
+    return false;
+  }
+  // The phase after `p` in this method, Phase::done after the last.
+  constexpr Phase after(Phase p) const {
+    for (std::size_t i = 0; i + 1 < phase_count; ++i)
+      if (phases[i] == p) return phases[i + 1];
+    return Phase::done;
+  }
+  constexpr Phase first() const { return phase_count > 0 ? phases[0] : Phase::done; }
+  constexpr bool needs_signal(Signal s) const { return (needs & static_cast<Signals>(s)) != 0; }
+};
+
+namespace mode_phases {
+using P = Phase;
+inline constexpr std::array<Phase, kMaxModePhases> none{};
+inline constexpr std::array<Phase, kMaxModePhases> manual{P::assign, P::final_move};
+inline constexpr std::array<Phase, kMaxModePhases> absolute{P::assign};
+inline constexpr std::array<Phase, kMaxModePhases> release{P::pre_move, P::seek,     P::stop,   P::back_off,
+                                                           P::pull_off, P::assign,   P::final_move};
+inline constexpr std::array<Phase, kMaxModePhases> reapproach{P::pre_move,   P::seek,     P::stop,
+                                                              P::back_off,   P::reapproach, P::pull_off,
+                                                              P::assign,     P::final_move};
+inline constexpr std::array<Phase, kMaxModePhases> index{P::pre_move, P::seek,     P::stop,   P::back_off,
+                                                         P::index,    P::pull_off, P::assign, P::final_move};
+inline constexpr std::array<Phase, kMaxModePhases> push_release{P::pre_move, P::seek,     P::stop,
+                                                                P::push,     P::back_off, P::pull_off,
+                                                                P::assign,   P::final_move};
+inline constexpr std::array<Phase, kMaxModePhases> push_reapproach{P::pre_move,   P::seek,     P::stop,
+                                                                   P::push,       P::back_off, P::reapproach,
+                                                                   P::pull_off,   P::assign,   P::final_move};
+}  // namespace mode_phases
+
+inline constexpr ModeRow kModeTable[] = {
+    // clang-format off
+    {HomingMode::disabled, "disabled", "does not home; counts as homed",
+     0, mode_phases::none, 0, Coordinate::none, FinalMove::never, false, false, true},
+    {HomingMode::manual, "manual", "no movement: the current position becomes the home position",
+     static_cast<Signals>(Signal::step_output), mode_phases::manual, 2, Coordinate::here, FinalMove::if_enabled,
+     false, false, true},
+    {HomingMode::switch_release, "switch_release", "seek the switch, back off; the release edge is the reference",
+     Signal::step_output | Signal::home_sensor, mode_phases::release, 7, Coordinate::reference_edge,
+     FinalMove::if_enabled, true, true, true},
+    {HomingMode::switch_reapproach, "switch_reapproach",
+     "as 2, then approach again at latch feedrate; that edge is the reference",
+     Signal::step_output | Signal::home_sensor, mode_phases::reapproach, 8, Coordinate::reference_edge,
+     FinalMove::if_enabled, true, true, true},
+    {HomingMode::switch_index, "switch_index", "release edge, then the next encoder index pulse",
+     Signal::step_output | Signal::home_sensor | Signal::index, mode_phases::index, 8, Coordinate::reference_edge,
+     FinalMove::if_enabled, true, true, true},
+    {HomingMode::absolute, "absolute", "position from the absolute encoder, no movement",
+     Signal::step_output | Signal::absolute_encoder, mode_phases::absolute, 1, Coordinate::absolute_encoder,
+     FinalMove::never, false, false, true},
+    {HomingMode::absolute_final, "absolute_final", "absolute, then move to final_position",
+     Signal::step_output | Signal::absolute_encoder, mode_phases::manual, 2, Coordinate::absolute_encoder,
+     FinalMove::always, false, false, true},
+    {HomingMode::pushing_release, "pushing_release", "seek, push into the mechanical stop, release edge",
+     Signal::step_output | Signal::home_sensor | Signal::push_output, mode_phases::push_release, 8,
+     Coordinate::reference_edge, FinalMove::if_enabled, false, true, true},
+    {HomingMode::pushing_reapproach, "pushing_reapproach", "seek, push into the mechanical stop, re-approach edge",
+     Signal::step_output | Signal::home_sensor | Signal::push_output, mode_phases::push_reapproach, 9,
+     Coordinate::reference_edge, FinalMove::if_enabled, false, true, true},
+    // clang-format on
+};
+inline constexpr std::uint8_t kHomingModeCount = std::size(kModeTable);
+static_assert(lists_every_value(kModeTable, HomingMode::pushing_reapproach));
+constexpr std::span<const ModeRow> enum_table(HomingMode) { return kModeTable; }
+
+// Each row's phase count matches its list, and every method that moves to
+// find an edge starts with the pre-move and ends on assign (and the final move).
+constexpr bool rows_are_consistent() {
+  for (const ModeRow& r : kModeTable) {
+    for (std::size_t i = 0; i < kMaxModePhases; ++i)
+      if ((i < r.phase_count) != (r.phases[i] != Phase::idle)) return false;
+    if (r.coordinate == Coordinate::none && r.phase_count != 0) return false;
+    if (r.coordinate != Coordinate::none && !r.runs(Phase::assign)) return false;
+    if (r.runs(Phase::final_move) != (r.final_move != FinalMove::never)) return false;
+    if (r.coordinate == Coordinate::reference_edge &&
+        !(r.needs_signal(Signal::home_sensor) && r.runs(Phase::seek) && r.runs(Phase::pull_off)))
+      return false;
+    if (r.runs(Phase::index) != r.needs_signal(Signal::index)) return false;
+    if (r.runs(Phase::push) != r.needs_signal(Signal::push_output)) return false;
+    if ((r.gantry_master || r.gantry_slave) && !r.needs_signal(Signal::home_sensor)) return false;
+  }
+  return true;
+}
+static_assert(rows_are_consistent());
+
+// The row of a mode; a number outside the table (an old or corrupt register
+// value) reads as disabled, which the register validation refuses anyway.
+constexpr const ModeRow& mode_row(HomingMode m) {
+  const auto i = static_cast<std::size_t>(m);
+  return i < std::size(kModeTable) ? kModeTable[i] : kModeTable[0];
+}
+
+std::string_view mode_name(HomingMode mode);
+
+// Named questions over a mode's row, for code that asks one of them.
+constexpr bool mode_uses_switch(HomingMode m) { return mode_row(m).needs_signal(Signal::home_sensor); }
+constexpr bool mode_is_pushing(HomingMode m) { return mode_row(m).runs(Phase::push); }
+constexpr bool mode_reapproaches(HomingMode m) { return mode_row(m).runs(Phase::reapproach); }
+constexpr bool mode_is_absolute(HomingMode m) { return mode_row(m).coordinate == Coordinate::absolute_encoder; }
+// The mode gives the axis a coordinate (disabled does not home).
+constexpr bool mode_homes(HomingMode m) { return mode_row(m).coordinate != Coordinate::none; }
+
+}  // namespace homing

@@ -1,0 +1,149 @@
+// The mode table (homing/modes.hpp) says what each homing method does; these
+// tests hold every row to what its phases really do on the simulator: the
+// phases shown, the inputs it cannot home without, the outputs it drives and
+// the coordinate it gives the axis.
+#include <catch2/catch.hpp>
+
+#include <vector>
+
+#include "rig.hpp"
+#include "truth.hpp"
+
+using namespace rig;
+
+namespace {
+
+// X on the typical switch (release edge at 0.05 mm, trigger edge at 0), an
+// index pulse every 5 mm at 0.3 mm, an absolute encoder reading carriage + 7,
+// a pre-move and a final move wherever the method allows them.
+Rig rig_for(const ModeRow& row) {
+  Rig r;
+  AxisSettings& s = r.settings.axes[0];
+  s.mode = row.value;
+  s.pre_move_mode = PreMove::always;
+  s.final_move_enable = true;
+  s.final_position_mm = 5;
+  s.home_position_mm = 2;
+  r.machine.axes[0].index_pitch_mm = 5;
+  r.machine.axes[0].index_offset_mm = 0.3;
+  r.machine.axes[0].absolute_offset_mm = 7;
+  r.machine.axes[0].actual_position_mm = 40;
+  return r;
+}
+
+// The phases the axis showed during its cycle, each once in the order first seen.
+struct Watched {
+  std::vector<Phase> phases;
+  bool push_output = false;
+};
+
+Watched home_and_watch(Rig& r) {
+  Watched w;
+  r.on_period = [&](Rig& rig) {
+    const Phase p = rig.axis(0).phase;
+    const bool homing_phase = p != Phase::idle && p != Phase::waiting && p != Phase::done && p != Phase::stopping;
+    if (homing_phase && (w.phases.empty() || w.phases.back() != p)) w.phases.push_back(p);
+    w.push_output = w.push_output || rig.engine.outputs().axes[0].push_output;
+  };
+  r.home_all();
+  r.on_period = nullptr;
+  return w;
+}
+
+// The row's phases that take at least one period: assign is over in the
+// period its predecessor ends (it only sets the coordinate).
+std::vector<Phase> timed_phases(const ModeRow& row) {
+  std::vector<Phase> out;
+  for (const Phase p : row.phase_list())
+    if (p != Phase::assign) out.push_back(p);
+  return out;
+}
+
+// The reference edge of a reference-edge method, from the simulated machine:
+// the release at 0.05 (cam edge + hysteresis), the trigger at 0 when the
+// method re-approaches, the next index pulse (0.3) when it runs the index phase.
+double reference_edge_mm(const ModeRow& row) {
+  if (row.runs(Phase::index)) return 0.3;
+  if (row.runs(Phase::reapproach)) return 0.0;
+  return 0.05;
+}
+
+}  // namespace
+
+TEST_CASE("every mode shows the phases of its row in order and drives the outputs its row names", "[modes][table]") {
+  for (const ModeRow& row : kModeTable) {
+    DYNAMIC_SECTION("mode " << row.name) {
+      Rig r = rig_for(row);
+      r.step();
+      const Watched w = home_and_watch(r);
+      CHECK(r.axis(0).homed);
+      CHECK_FALSE(r.status().alarm);
+      CHECK(w.phases == timed_phases(row));
+      CHECK(w.push_output == row.needs_signal(Signal::push_output));
+    }
+  }
+}
+
+TEST_CASE("a mode cannot home without an input its row names, and homes without those it does not", "[modes][table]") {
+  struct Missing {
+    Signal signal;
+    const char* what;
+    std::function<void(Rig&)> take_away;
+  };
+  const Missing inputs[] = {
+      {Signal::home_sensor, "home sensor", [](Rig& r) { r.machine.axes[0].fault = sim::Fault::sensor_stuck_inactive; }},
+      {Signal::index, "index pulse", [](Rig& r) { r.machine.axes[0].index_pitch_mm = 0; }},
+      {Signal::absolute_encoder, "absolute encoder",
+       [](Rig& r) { r.tweak_inputs = [](Inputs& in) { in.axes[0].absolute_valid = false; }; }},
+  };
+  for (const ModeRow& row : kModeTable) {
+    for (const Missing& m : inputs) {
+      DYNAMIC_SECTION("mode " << row.name << " without its " << m.what) {
+        Rig r = rig_for(row);
+        m.take_away(r);
+        r.step();
+        r.home_all();
+        if (row.needs_signal(m.signal)) {
+          CHECK(r.status().alarm);
+          CHECK_FALSE(r.axis(0).homed);
+        } else {
+          CHECK_FALSE(r.status().alarm);
+          CHECK(r.axis(0).homed);
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("every mode gives the axis the coordinate its row defines", "[modes][table]") {
+  for (const ModeRow& row : kModeTable) {
+    DYNAMIC_SECTION("mode " << row.name) {
+      Rig r = rig_for(row);
+      r.step();
+      const double start = r.actual(0);
+      const double believed_before = r.axis(0).position_mm;
+      REQUIRE(r.home_all());
+      const AxisSettings& s = r.settings.axes[0];
+      // Machine coordinate minus carriage position: where the method put zero.
+      const double offset = r.axis(0).position_mm - r.actual(0);
+      switch (row.coordinate) {
+        case Coordinate::none:
+          CHECK(r.actual(0) == start);
+          CHECK(r.axis(0).position_mm == believed_before);
+          break;
+        case Coordinate::here:
+          CHECK(offset == Approx(s.home_position_mm - start).margin(1e-9));
+          break;
+        case Coordinate::absolute_encoder:
+          CHECK(offset == Approx(r.machine.axes[0].absolute_offset_mm - s.home_position_mm).margin(1e-9));
+          break;
+        case Coordinate::reference_edge: {
+          // Negative homing: home_position lies pull_off above the reference edge.
+          const double rest = rest_point_mm(s, reference_edge_mm(row));
+          CHECK(offset == Approx(s.home_position_mm - rest).margin(edge_tolerance_mm(s, r.dt_s)));
+          break;
+        }
+      }
+    }
+  }
+}
