@@ -69,6 +69,14 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
       return fmt::format("{}: homing permit went off during {}", X, ph);
     case AlarmCode::encoder_fault:
       return fmt::format("{}: absolute encoder gives no valid position", X);
+    case AlarmCode::drive_no_answer:
+      return fmt::format("{}: the drive did not report home done within {:g} s of the home request", X,
+                         s.drive_home_timeout_s);
+    case AlarmCode::drive_answered_at_once:
+      return fmt::format("{}: the drive reported home done {:.3f} s after the home request, sooner than any "
+                         "homing ({:g} s): it did not home", X, a.value, kDriveMinHomingTime_s);
+    case AlarmCode::drive_reference_lost:
+      return fmt::format("{}: the drive's home done went off at {:.3f} {} while the axis was homed", X, a.value, u);
   }
   return "?";
 }

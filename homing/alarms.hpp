@@ -32,8 +32,11 @@ enum class AlarmCode : std::uint8_t {
   reapproach_not_found = 16,   // re-approach travelled max_backoff without a trigger
   permit_withdrawn = 17,       // homing permit went off during a cycle
   encoder_fault = 18,          // absolute mode without a valid encoder position
+  drive_no_answer = 19,        // drive mode: no home done within drive_home_timeout
+  drive_answered_at_once = 20, // drive mode: home done too soon after the request (the drive did not home)
+  drive_reference_lost = 21,   // drive mode: home done went off while the axis was homed
 };
-inline constexpr std::uint8_t kAlarmCodeCount = 19;
+inline constexpr std::uint8_t kAlarmCodeCount = 22;
 
 // The alarm table: per code its name, what happened (text) and what a
 // maintenance technician checks (what_to_check). describe_alarm() says what
@@ -83,8 +86,17 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
      "close the guard / give the permit, reset and home again"},
     {AlarmCode::encoder_fault, "encoder_fault", "no valid absolute encoder position",
      "check the encoder cable, its power and the drive's encoder alarm, then reset and home again"},
+    {AlarmCode::drive_no_answer, "drive_no_answer", "the drive did not report home done within drive_home_timeout",
+     "check the home request and home done wiring, that the drive's homing function is enabled and set up "
+     "(its own home sensor, speeds), the drive's display, or raise drive_home_timeout_s"},
+    {AlarmCode::drive_answered_at_once, "drive_answered_at_once",
+     "the drive reported home done at once: it did not home",
+     "check that home done is the drive's home-end output (not ready or in-position), that it drops when a "
+     "homing starts, and that the home request reaches the drive"},
+    {AlarmCode::drive_reference_lost, "drive_reference_lost", "the drive's home done went off while the axis was homed",
+     "check the drive's alarm history and the home done wiring; the axis is no longer homed: reset and home again"},
 };
-static_assert(lists_every_value(kAlarmInfo, AlarmCode::encoder_fault));
+static_assert(lists_every_value(kAlarmInfo, AlarmCode::drive_reference_lost));
 static_assert(std::size(kAlarmInfo) == kAlarmCodeCount);
 constexpr std::span<const AlarmInfo> enum_table(AlarmCode) { return kAlarmInfo; }
 

@@ -51,6 +51,7 @@ void PhaseRunner::dispatch() {
     case Phase::final_move: return final_move();
     case Phase::waiting: return waiting();
     case Phase::align_slave: return align_slave();
+    case Phase::drive_homing: return drive_homing();
     case Phase::done:
       run.entered = true;
       return;

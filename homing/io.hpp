@@ -30,6 +30,7 @@ struct AxisInputs {
   bool absolute_valid = false;
   double absolute_position_mm = 0;  // absolute encoder reading
   bool drive_fault = false;
+  bool drive_done = false;      // the drive's home done: its own homing finished, its reference valid
 };
 
 // Commands arrive as one-period requests (the runtime turns a coil write into
@@ -60,6 +61,7 @@ struct AxisOutputs {
   bool enable = false;
   bool push_output = false;      // lowers motor current while pushing into the stop
   bool commutator_output = false;  // master axis only: route the output to the slave
+  bool drive_request = false;    // asks the drive to home itself (drive mode, phase drive_homing)
 };
 
 struct Outputs {

@@ -1,6 +1,6 @@
 // Each axis's output channel: the motion of the motor it drives now (a
 // commutator master's channel drives its slave's motor while it aligns),
-// the enable, push and commutator outputs.
+// the enable, push, commutator and drive home-request outputs.
 #include "engine.hpp"
 #include "gantry.hpp"
 
@@ -30,6 +30,9 @@ void Engine::route_outputs(const Settings& settings) {
     out.enable = !estop_;
     out.push_output = run.push_output;
     out.commutator_output = run.commutator_output;
+    // On exactly while the drive homes: an alarm, abort or e-stop that ends
+    // the phase drops it in the same period.
+    out.drive_request = run.phase == Phase::drive_homing && !estop_;
   }
 }
 

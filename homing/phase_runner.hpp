@@ -110,6 +110,7 @@ struct PhaseRunner {
   void final_move();
   void waiting();
   void align_slave();
+  void drive_homing();  // drive_phases.cpp
   void begin();
   void dispatch();
 };

@@ -27,6 +27,7 @@ enum class Phase : std::uint8_t {
   move = 15,
   stopping = 16,      // decelerating after an alarm or abort
   clear_sensors = 17, // gantry: both sides move off their sensors together before the seek
+  drive_homing = 18,  // the drive homes itself: home request on, waiting for its home done
 };
 
 inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
@@ -49,8 +50,10 @@ inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
     {Phase::stopping, "stopping", "decelerating after an alarm or abort"},
     {Phase::clear_sensors, "clear_sensors",
      "gantry: both sides move off their sensors together (latch feedrate) before the seek"},
+    {Phase::drive_homing, "drive_homing",
+     "the drive homes itself: home request on, waiting for its home done within drive_home_timeout"},
 };
-static_assert(lists_every_value(kPhaseInfo, Phase::clear_sensors));
+static_assert(lists_every_value(kPhaseInfo, Phase::drive_homing));
 constexpr std::span<const EnumInfo<Phase>> enum_table(Phase) { return kPhaseInfo; }
 
 std::string_view phase_name(Phase phase);

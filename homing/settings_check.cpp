@@ -57,7 +57,7 @@ std::optional<SettingsFault> check_limits(const AxisSettings& s, std::size_t axi
   auto outside = [&](double x) { return x < s.soft_limit_min_mm || x > s.soft_limit_max_mm; };
   // home_position is a place on the axis, except for an absolute encoder (its offset).
   const Coordinate c = mode_row(s.mode).coordinate;
-  const bool home_is_a_place = c == Coordinate::here || c == Coordinate::reference_edge;
+  const bool home_is_a_place = c == Coordinate::here || c == Coordinate::reference_edge || c == Coordinate::drive_reference;
   if (home_is_a_place && outside(s.home_position_mm))
     return fault(axis, AxisField::home_position, CheckRule::outside_soft_limits, s.home_position_mm);
   if (final_move_wanted(s) && outside(s.final_position_mm))
@@ -113,6 +113,8 @@ std::optional<SettingsFault> check_axis_in(const Settings& settings, const Setti
   const AxisSettings& s = pair.axes[axis];
   if (auto f = check_limits(s, axis)) return f;
   if (mode_row(s.mode).runs(Phase::seek)) return check_motion(s, axis);
+  if (mode_row(s.mode).runs(Phase::drive_homing) && !(s.drive_home_timeout_s > 0))
+    return fault(axis, AxisField::drive_home_timeout, CheckRule::missing_time_limit, s.drive_home_timeout_s);
   if (final_move_wanted(s)) {
     if (s.seek_feedrate_mm_per_min <= 0)
       return fault(axis, AxisField::seek_feedrate, CheckRule::not_positive, s.seek_feedrate_mm_per_min);
@@ -240,6 +242,10 @@ std::string describe_fault(const SettingsFault& f, const Settings& settings) {
       return fmt::format("{}: the axis would rest {:g} {} from its edge (pull-off, plus a slave's "
                          "switch_compensation); a shared home/limit sensor needs more than 0 so the axis "
                          "comes to rest off its sensor", name, f.value, unit);
+    case CheckRule::missing_time_limit:
+      return fmt::format("{} is {:g} s; mode {} waits for the drive's home done at most this long and needs "
+                         "it greater than 0 (longer than the drive's own homing takes)", name, f.value,
+                         mode_name(s.mode));
   }
   return "?";
 }

@@ -160,7 +160,7 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "status.heartbeat", .table = IR, .offset = 5, .access = Access::r, .max = 65535, .key = Key::status_heartbeat, .description = "increments every control period (wraps at 65535)"},
     {.pattern = "status.last_command_result", .table = IR, .offset = 6, .type = Type::enumeration, .access = Access::r, .max = 15, .key = Key::status_last_command_result, .values = kCommandResults, .description = "result of the last command coil written"},
     {.pattern = "status.interlocks", .table = IR, .offset = 7, .type = Type::bitmask, .access = Access::r, .max = 511, .key = Key::status_interlocks, .values = kInterlocks, .description = "what now blocks homing or motion; 0 = free to move"},
-    {.pattern = "status.global_alarm", .table = IR, .offset = 8, .type = Type::enumeration, .access = Access::r, .max = 18, .key = Key::status_global_alarm, .values = kAlarms, .description = "alarm not tied to one axis (e-stop at rest, settings lost)"},
+    {.pattern = "status.global_alarm", .table = IR, .offset = 8, .type = Type::enumeration, .access = Access::r, .max = last_value(kAlarms), .key = Key::status_global_alarm, .values = kAlarms, .description = "alarm not tied to one axis (e-stop at rest, settings lost)"},
     {.pattern = "status.alarm_axis", .table = IR, .offset = 9, .type = Type::enumeration, .access = Access::r, .max = 6, .key = Key::status_alarm_axis, .values = kAlarmAxis, .description = "first axis with a latched alarm (1 = X ... 6 = C), 0 none"},
     {.pattern = "status.command_count", .table = IR, .offset = 11, .access = Access::r, .max = 65535, .key = Key::status_command_count, .description = "commands judged so far (wraps): status.last_command_result is the result of the command that moved it"},
     {.pattern = "status.settings_locked", .table = IR, .offset = 10, .access = Access::r, .max = 1, .key = Key::status_settings_locked, .description = "1 while settings writes are locked (write the unlock code to security.unlock)"},
@@ -204,6 +204,7 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     {.pattern = "axis.<a>.soft_limits_enable", .offset = 11, .max = 1, .fills = fills<&A::soft_limits_enable>, .description = "flag (0/1): enforce soft_limit_min/max once homed"},
     {.pattern = "axis.<a>.shared_limit", .offset = 12, .max = 1, .fills = fills<&A::shared_limit>, .description = "flag (0/1): after homing the home sensor acts as a hard limit"},
     {.pattern = "axis.<a>.jog_feedrate", .offset = 13, .quantity = Quantity::feedrate_per_min, .min = 1, .max = kFeedMax, .def = 1000, .fills = fills<&A::jog_feedrate_mm_per_min>, .description = "speed of jog and move commands"},
+    {.pattern = "axis.<a>.drive_home_timeout_s", .offset = 15, .quantity = Quantity::time_s, .max = 3600, .def = 60, .fills = fills<&A::drive_home_timeout_s>, .description = "drive mode: the drive must report home done within this time after the home request (the longest homing of the drive, with margin)"},
     {.pattern = "axis.<a>.max_seek_travel", .offset = 20, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 500'000, .fills = fills<&A::max_seek_travel_mm>, .description = "sensor not found within this travel: alarm"},
     {.pattern = "axis.<a>.max_stop_distance", .offset = 22, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 10'000, .fills = fills<&A::max_stop_distance_mm>, .description = "the axis must stop within this distance after the trigger"},
     {.pattern = "axis.<a>.max_backoff", .offset = 24, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 10'000, .fills = fills<&A::max_backoff_mm>, .description = "the sensor must release within this back-off travel"},
@@ -220,7 +221,7 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     {.pattern = "axis.<a>.target", .offset = 60, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::host_target, .description = "target of cmd.move.<a> (not persisted)"},
     // input registers: per-axis status
     {.pattern = "axis.<a>.phase", .table = IR, .type = Type::enumeration, .access = Access::r, .max = last_value(kPhases), .key = Key::axis_phase, .values = kPhases, .description = "what the axis is doing"},
-    {.pattern = "axis.<a>.alarm", .table = IR, .offset = 1, .type = Type::enumeration, .access = Access::r, .max = 18, .key = Key::axis_alarm, .values = kAlarms, .description = "latched alarm code, 0 none"},
+    {.pattern = "axis.<a>.alarm", .table = IR, .offset = 1, .type = Type::enumeration, .access = Access::r, .max = last_value(kAlarms), .key = Key::axis_alarm, .values = kAlarms, .description = "latched alarm code, 0 none"},
     {.pattern = "axis.<a>.alarm_phase", .table = IR, .offset = 2, .type = Type::enumeration, .access = Access::r, .max = last_value(kPhases), .key = Key::axis_alarm_phase, .values = kPhases, .description = "phase in which the alarm was raised"},
     {.pattern = "axis.<a>.position", .table = IR, .offset = 4, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_position, .description = "position in machine coordinates"},
     {.pattern = "axis.<a>.velocity", .table = IR, .offset = 6, .type = Type::i32, .access = Access::r, .quantity = Quantity::velocity_um_per_s, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_velocity, .description = "velocity now"},
@@ -262,8 +263,11 @@ constexpr auto kSimAxisRows = std::to_array<Row>({
     {.pattern = "sim.<a>.index_pitch", .offset = 14, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 0, .key = Key::sim_index_pitch, .description = "travel between encoder index pulses; 0 = no index"},
     {.pattern = "sim.<a>.index_offset", .offset = 16, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::sim_index_offset, .description = "position of one index pulse"},
     {.pattern = "sim.<a>.absolute_offset", .offset = 18, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::sim_absolute_offset, .description = "the absolute encoder reads actual_position + this"},
-    {.pattern = "sim.<a>.fault", .offset = 20, .type = Type::enumeration, .max = 4, .key = Key::sim_fault, .values = kSimFaults, .description = "injected fault"},
+    {.pattern = "sim.<a>.fault", .offset = 20, .type = Type::enumeration, .max = last_value(kSimFaults), .key = Key::sim_fault, .values = kSimFaults, .description = "injected fault"},
     {.pattern = "sim.<a>.lose_steps", .offset = 22, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::sim_lose_steps, .description = "writing N shifts the carriage by N without the controller knowing; reads back 0"},
+    {.pattern = "sim.<a>.drive_home_position", .offset = 24, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::sim_drive_home_position, .description = "drive mode: where the drive's own homing ends (its own home sensor), in carriage position"},
+    {.pattern = "sim.<a>.drive_speed", .offset = 26, .quantity = Quantity::feedrate_per_min, .min = 1, .max = kFeedMax, .def = 600, .key = Key::sim_drive_speed, .description = "drive mode: the speed at which the drive moves the carriage to its home"},
+    {.pattern = "sim.<a>.drive_answer_ms", .offset = 27, .quantity = Quantity::time_ms, .max = 60'000, .def = 100, .key = Key::sim_drive_answer_ms, .description = "drive mode: time the drive takes after reaching its home before it reports home done"},
     {.pattern = "sim.<a>.sensor", .table = DI, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::sim_sensor, .description = "the simulated switch is active (raw, before polarity and debounce)"},
     {.pattern = "sim.<a>.at_hard_stop", .table = DI, .offset = 1, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::sim_at_hard_stop, .description = "the carriage rests against a mechanical stop"},
     {.pattern = "sim.<a>.driven_by", .table = IR, .access = Access::r, .max = 6, .key = Key::sim_driven_by, .description = "the step output that moves this carriage: 0 its own; 1..6 that of master X..C, through an external commutator (from axis.<a>.slave_of and slave_mode)"},
@@ -444,6 +448,7 @@ std::string_view Register::unit_text() const {
     case Quantity::feedrate_per_min: return rotary ? "deg/min" : "mm/min";
     case Quantity::acceleration_per_s2: return rotary ? "deg/s²" : "mm/s²";
     case Quantity::time_ms: return "ms";
+    case Quantity::time_s: return "s";
   }
   return "";
 }

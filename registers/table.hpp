@@ -39,6 +39,7 @@ enum class Quantity : std::uint8_t {
   feedrate_per_min,  // raw mm/min (deg/min), scale 1
   acceleration_per_s2,  // raw mm/s² (deg/s²), scale 1
   time_ms,           // raw milliseconds, scale 1
+  time_s,            // raw seconds, scale 1
 };
 
 // What a register that is not a setting is bound to (status, host values,
@@ -71,6 +72,7 @@ enum class Key : std::uint8_t {
   sim_bounce_ms, sim_sensor_nc, sim_hard_stop_min, sim_hard_stop_max, sim_index_pitch,
   sim_index_offset, sim_absolute_offset, sim_fault, sim_lose_steps, sim_estop, sim_start_button,
   sim_sensor, sim_at_hard_stop, sim_driven_by,
+  sim_drive_home_position, sim_drive_speed, sim_drive_answer_ms,
 };
 
 struct Register;

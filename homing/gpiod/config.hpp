@@ -25,6 +25,9 @@ struct AxisLines {
   std::optional<LineSpec> step, dir, enable;            // outputs
   std::optional<LineSpec> push, commutator;             // outputs (pushing modes, gantry commutator)
   std::optional<LineSpec> home, index, drive_fault;     // inputs
+  // Drive-performed homing (axis.<a>.mode = drive): the request to the drive
+  // (output) and its home done (input, a level).
+  std::optional<LineSpec> home_request, home_done;
   // A step/dir output of its own. Without one the axis can only be an
   // external-commutator slave (moved by its master's output) or never move.
   bool has_output() const { return step.has_value(); }

@@ -17,6 +17,9 @@ enum class Fault : std::uint8_t {
   sensor_stuck_inactive = 2,
   wire_break = 3,
   drive_fault = 4,
+  drive_never_answers = 5,     // drive mode: on the home request the drive drops home done and never finishes
+  drive_answers_at_once = 6,   // drive mode: home done on at once on the request, without homing
+  drive_done_lost = 7,         // drive mode: home done held off (lost reference, broken wire)
 };
 inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::none, "none", "no fault"},
@@ -24,8 +27,13 @@ inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::sensor_stuck_inactive, "sensor_stuck_inactive", "sensor never turns active"},
     {Fault::wire_break, "wire_break", "sensor wire broken (NC reads active, NO never)"},
     {Fault::drive_fault, "drive_fault", "the drive reports a fault"},
+    {Fault::drive_never_answers, "drive_never_answers",
+     "the drive starts homing on the home request (drops home done) but never finishes"},
+    {Fault::drive_answers_at_once, "drive_answers_at_once", "the drive reports home done at once, without homing"},
+    {Fault::drive_done_lost, "drive_done_lost",
+     "the drive's home done goes off and stays off (lost reference, broken wire)"},
 };
-static_assert(lists_every_value(kFaultInfo, Fault::drive_fault));
+static_assert(lists_every_value(kFaultInfo, Fault::drive_done_lost));
 constexpr std::span<const EnumInfo<Fault>> enum_table(Fault) { return kFaultInfo; }
 
 struct AxisConfig {
@@ -39,6 +47,11 @@ struct AxisConfig {
   double index_pitch_mm = 0;      // 0 = no index
   double index_offset_mm = 0;
   double absolute_offset_mm = 0;  // absolute encoder reads actual + offset
+  // The drive's own homing (drive mode): on the home request it moves the
+  // carriage itself to its home at its own speed, waits, then reports done.
+  double drive_home_position_mm = 0;       // where its homing ends (its own home sensor)
+  double drive_speed_mm_per_min = 600;
+  double drive_answer_ms = 100;            // after arriving, before home done
   Fault fault = Fault::none;
 };
 

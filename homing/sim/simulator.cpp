@@ -36,6 +36,7 @@ Simulator::Simulator(const MachineConfig& config) : config_(config) {
     own_[i].absolute_valid = true;
     own_[i].absolute_position_mm = ax.actual_mm + c.absolute_offset_mm;
     own_[i].drive_fault = c.fault == Fault::drive_fault;
+    own_[i].drive_done = ax.drive.done(c);
   }
   route_sensors(Outputs{});
 }
@@ -104,14 +105,17 @@ bool Simulator::electrical_level(std::size_t axis) const {
     case Fault::sensor_stuck_inactive: contact = false; break;
     case Fault::wire_break: return false;  // NO then reads inactive, NC reads active
     case Fault::none:
-    case Fault::drive_fault: break;
+    case Fault::drive_fault:
+    case Fault::drive_never_answers:
+    case Fault::drive_answers_at_once:
+    case Fault::drive_done_lost: break;
   }
   return c.sensor_nc ? !contact : contact;
 }
 
 bool Simulator::reports_edges(std::size_t axis) const {
   const Fault f = config_.axes[axis].fault;
-  return f == Fault::none || f == Fault::drive_fault;
+  return f != Fault::sensor_stuck_active && f != Fault::sensor_stuck_inactive && f != Fault::wire_break;
 }
 
 void Simulator::advance(const Outputs& outputs, double dt_s) {
@@ -182,6 +186,11 @@ void Simulator::advance_axis(std::size_t i, std::size_t output, const AxisOutput
   }
   ax.moving = linked && motor.end.velocity_mm_per_s != 0;
   ax.actual_mm = carriage.count ? carriage.end_mm : ax.actual_mm;
+  // A drive homing itself moves the carriage without steps (the slip
+  // changes); the sensor takes the new place at the next period's start.
+  const Stops stops = stops_of(c);
+  if (ax.drive.advance(out_request(i, output, out), c, stops.min_mm, stops.max_mm, ax.actual_mm, dt_s))
+    ax.moving = true;
   c.actual_position_mm = ax.actual_mm;
 
   // True edges and bounce toggles in time order; each one flips the contact.
@@ -209,6 +218,13 @@ void Simulator::advance_axis(std::size_t i, std::size_t output, const AxisOutput
   in.absolute_valid = true;
   in.absolute_position_mm = ax.actual_mm + c.absolute_offset_mm;
   in.drive_fault = c.fault == Fault::drive_fault;
+  in.drive_done = ax.drive.done(c);
+}
+
+// The home request reaches the carriage's own drive only (a commutator slave
+// has none of its own on the master's output).
+bool Simulator::out_request(std::size_t axis, std::size_t output, const AxisOutputs& out) const {
+  return output == axis && out.drive_request;
 }
 
 void Simulator::route_sensors(const Outputs& outputs) {

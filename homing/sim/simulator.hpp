@@ -15,6 +15,7 @@
 #include "config.hpp"
 #include "edge_ring.hpp"
 #include "home_sensor.hpp"
+#include "homing_drive.hpp"
 #include "homing/io.hpp"
 
 namespace homing::sim {
@@ -69,8 +70,12 @@ class Simulator {
   bool sensor_active(std::size_t axis) const { return axes_[axis].sensor.active(); }
   bool at_hard_stop(std::size_t axis) const;
   // The output driving this carriage is still running at the end of the last
-  // period and is connected to it (a drive fault does not count: the motor runs).
+  // period and is connected to it (a drive fault does not count: the motor runs),
+  // or a drive homing itself moved it in the last period.
   bool moving(std::size_t axis) const { return axes_[axis].moving; }
+  // Drive mode: the drive reports home done / runs its own homing now.
+  bool drive_done(std::size_t axis) const { return axes_[axis].drive.done(config_.axes[axis]); }
+  bool drive_homing(std::size_t axis) const { return axes_[axis].drive.homing(); }
   double time_s() const { return time_s_; }
   const MachineConfig& config() const { return config_; }
 
@@ -92,7 +97,9 @@ class Simulator {
     bool bounce_odd = false;       // an odd number of bounce toggles so far: contact is flipped
     bool reported_level = false;   // electrical level at the end of the last period
     EdgeRing ring{};
+    HomingDrive drive{};           // drive mode: the drive's own homing
   };
+  bool out_request(std::size_t axis, std::size_t output, const AxisOutputs& out) const;
 
   void reseed();
   // The commutator slave wired to master's output, or -1.

@@ -81,6 +81,8 @@ CheckReport check_settings(const homing::Settings& settings,
         case Phase::final_move:
           if (final_move) phase(p, move_time(s.final_position_mm - s.home_position_mm, seek_v, a));
           break;
+        // The drive's own homing takes what it takes: its time limit is the worst case.
+        case Phase::drive_homing: phase(p, s.drive_home_timeout_s); break;
         default: break;  // no motion of its own (assign) or not a phase of a method
       }
     }
