@@ -30,9 +30,10 @@ void Engine::route_outputs(const Settings& settings) {
     out.enable = !estop_;
     out.push_output = run.push_output;
     out.commutator_output = run.commutator_output;
-    // On exactly while the drive homes: an alarm, abort or e-stop that ends
-    // the phase drops it in the same period.
-    out.drive_request = run.phase == Phase::drive_homing && !estop_;
+    // On exactly while the drive homes in a running cycle: an alarm, abort or
+    // e-stop drops it in the same period (an alarm raised while a step
+    // begins may leave a later axis showing its first phase, out of the cycle).
+    out.drive_request = run.phase == Phase::drive_homing && run.in_cycle && !estop_;
   }
 }
 

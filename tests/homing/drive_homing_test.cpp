@@ -159,3 +159,25 @@ SCENARIO("drive mode: the rule set wants a time limit and keeps the mode out of 
   REQUIRE(as_master);
   CHECK(as_master->rule == CheckRule::slave_invalid);
 }
+
+SCENARIO("drive mode: an alarm raised as its step begins leaves the home request off", "[drive]") {
+  // X (absolute, invalid encoder) and Y (drive) begin together: X's
+  // encoder_fault stops the cycle as Y's step begins.
+  Rig r;
+  r.settings.axes[0].mode = HomingMode::absolute;
+  r.add_axis(1, 1);
+  r.settings.axes[1].mode = HomingMode::drive;
+  r.tweak_inputs = [](Inputs& in) { in.axes[0].absolute_valid = false; };
+  r.step();
+  const double y = r.actual(1);
+  bool requested = false;
+  r.on_period = [&](Rig& rig) { requested = requested || rig.engine.outputs().axes[1].drive_request; };
+  r.pending.home_all = true;
+  r.step();
+  r.run_for(1);
+  r.on_period = nullptr;
+  CHECK(r.axis(0).alarm.code == AlarmCode::encoder_fault);
+  CHECK_FALSE(requested);
+  CHECK(r.actual(1) == y);
+  CHECK_FALSE(r.axis(1).homed);
+}

@@ -50,6 +50,7 @@ struct Gen {
   // An axis homed without a search: manual, absolute, disabled. Its cam lies
   // out of the way; stops far from where it may move.
   void still_axis(std::size_t a);
+  void drive_axis(std::size_t a);  // drive mode: a still axis whose drive homes itself
 
   // The slave of master mi: its own sensor, placed so that the beam starts
   // square to within the skew drawn (or beyond the limit: a bad-skew run).

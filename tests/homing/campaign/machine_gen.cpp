@@ -152,7 +152,7 @@ void Gen::still_axis(std::size_t a) {
   c.absolute_offset_mm = 2 * s.home_position_mm - start + d.u(-5, 5);
   s.final_move_enable = d.chance(0.3);
   s.final_position_mm = s.home_position_mm + d.u(-20, 20);
-  s.soft_limits_enable = s.mode == HomingMode::manual && d.chance(0.5);
+  s.soft_limits_enable = (s.mode == HomingMode::manual || s.mode == HomingMode::drive) && d.chance(0.5);
   s.soft_limit_min_mm = std::min(s.home_position_mm, s.final_position_mm) - d.u(0.5, 30);
   s.soft_limit_max_mm = std::max(s.home_position_mm, s.final_position_mm) + d.u(0.5, 30);
   if (s.mode == HomingMode::absolute_final) {
@@ -160,6 +160,23 @@ void Gen::still_axis(std::size_t a) {
     const double machine_now = start + c.absolute_offset_mm - s.home_position_mm;
     s.final_position_mm = machine_now + d.u(-20, 20);
   }
+}
+
+// The drive's own home lies near the start, well inside the stops and off the
+// cam; it answers within its time limit (late, up to most of the margin, one
+// time in four), at its own speed.
+void Gen::drive_axis(std::size_t a) {
+  still_axis(a);
+  AxisSettings& s = m.settings.axes[a];
+  sim::AxisConfig& c = m.sim.axes[a];
+  c.drive_home_position_mm = c.actual_position_mm + d.u(-40, 40);
+  c.drive_speed_mm_per_min = d.u(300, 6000);
+  // Wherever jogs, moves and lost steps leave the carriage, within its stops.
+  const double reach_s = (c.hard_stop_max_mm - c.hard_stop_min_mm) / (c.drive_speed_mm_per_min / 60);
+  const double margin_s = d.u(0.5, 3);
+  // Never sooner than a homing can be (kDriveMinHomingTime_s), even from its own home.
+  c.drive_answer_ms = 1000 * (d.chance(0.25) ? d.u(0.5, 0.9) * margin_s : d.u(kDriveMinHomingTime_s + 0.02, 0.3));
+  s.drive_home_timeout_s = std::ceil(reach_s + c.drive_answer_ms / 1000 + margin_s);
 }
 
 void Gen::place_slave(std::size_t si, std::size_t mi, const PairDraw& pd, double budget, double slack,
@@ -327,8 +344,10 @@ void Gen::roles_and_modes() {
     s.mode = d.pick({HomingMode::disabled, HomingMode::manual, HomingMode::switch_release,
                      HomingMode::switch_release, HomingMode::switch_reapproach, HomingMode::switch_reapproach,
                      HomingMode::switch_index, HomingMode::absolute, HomingMode::absolute_final,
-                     HomingMode::pushing_release, HomingMode::pushing_reapproach});
-    if (mode_uses_switch(s.mode)) {
+                     HomingMode::pushing_release, HomingMode::pushing_reapproach, HomingMode::drive});
+    if (s.mode == HomingMode::drive) {
+      drive_axis(a);
+    } else if (mode_uses_switch(s.mode)) {
       s.shared_limit = !mode_is_pushing(s.mode) && d.chance(0.25);
       draw_motion(s, m.sim.axes[a], PairDraw{});
       if (s.shared_limit && mode_reapproaches(s.mode)) {

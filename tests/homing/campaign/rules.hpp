@@ -156,7 +156,8 @@ struct CyclePlan {
 
 inline bool moves_when_homing(const Settings& s, std::size_t a) {
   const AxisSettings e = effective(s, a);
-  return mode_uses_switch(e.mode) || final_move_wanted(e);
+  // A drive homing itself moves the carriage without steps.
+  return mode_uses_switch(e.mode) || e.mode == HomingMode::drive || final_move_wanted(e);
 }
 
 inline CyclePlan plan_cycle(const Settings& s, bool all, AxisMask requested) {

@@ -76,6 +76,7 @@ std::vector<Event> Run::random_events(const CyclePlan& plan, double estimate) {
   const bool sensor = e.kind == EventKind::stuck_active || e.kind == EventKind::stuck_inactive || e.kind == EventKind::wire_break;
   if (sensor && !mode_uses_switch(effective(r_.settings, e.axis).mode)) return out;
   if (e.kind == EventKind::permit_off && !r_.settings.global.permit_required) return out;
+  if (e.kind == EventKind::drive_done_lost && effective(r_.settings, e.axis).mode != HomingMode::drive) return out;
   // Half of them aimed at a phase the axis runs (a slave's pair phases too).
   const std::vector<Phase> phases = phases_run(e.axis);
   if (!phases.empty() && d_.chance(0.5)) {
@@ -102,6 +103,7 @@ std::vector<Phase> Run::phases_run(std::size_t a) const {
     if (pair_master(r_.settings, a) >= 0 && r_.settings.axes[a].slave_mode == SlaveMode::external_commutator)
       p.push_back(Phase::align_slave);
   }
+  if (e.mode == HomingMode::drive) p.push_back(Phase::drive_homing);
   if (final_move_wanted(e)) p.push_back(Phase::final_move);
   return p;
 }
@@ -141,6 +143,7 @@ void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
     case EventKind::permit_off: r_.sim().set_homing_permit(false); break;
     case EventKind::reset: r_.pending.reset_alarm = true; break;
     case EventKind::home_again: r_.pending.home_all = true; break;
+    case EventKind::drive_done_lost: set_fault(sim::Fault::drive_done_lost); break;
     case EventKind::count: break;
   }
   event_cause(causes, e, r_.settings, r_.status(), plan);

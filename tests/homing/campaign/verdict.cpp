@@ -164,6 +164,23 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
               {AlarmCode::misalignment, AlarmCode::not_released, AlarmCode::sensor_not_found, AlarmCode::slave_sensor_missing},
               static_cast<AxisMask>(bit | axis_bit(mi)), skew > limit + p.extras_mm);
     }
+    // A drive that homes itself: what its fault, or an answer after its
+    // time limit, must raise when its step comes.
+    if (e.mode == HomingMode::drive && (plan.covered & bit)) {
+      const auto& cfg = r.sim().axis_config(a);
+      if (f == sim::Fault::drive_never_answers || f == sim::Fault::drive_done_lost)
+        c.add(letter(a) + "'s drive never reporting home done", {AlarmCode::drive_no_answer}, bit, true);
+      if (f == sim::Fault::drive_answers_at_once)
+        c.add(letter(a) + "'s drive answering at once", {AlarmCode::drive_answered_at_once}, bit, true);
+      if (f == sim::Fault::none || f == sim::Fault::drive_fault) {
+        const double takes = std::abs(cfg.drive_home_position_mm - r.actual(a)) / (cfg.drive_speed_mm_per_min / 60) +
+                             cfg.drive_answer_ms / 1000;
+        // Within a few late periods of the limit either may happen.
+        if (takes > e.drive_home_timeout_s - 0.1)
+          c.add(letter(a) + "'s drive answering after its time limit", {AlarmCode::drive_no_answer}, bit,
+                takes > e.drive_home_timeout_s + 0.1);
+      }
+    }
     if ((encoder_invalid & bit) && mode_is_absolute(e.mode))
       c.add(letter(a) + "'s invalid absolute encoder", {AlarmCode::encoder_fault}, bit,
             (plan.covered & bit) || (plan.unsequenced & bit));
@@ -209,6 +226,14 @@ void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st,
     case EventKind::permit_off:
       c.add("the permit withdrawn", {AlarmCode::permit_withdrawn}, running, s.global.permit_required && running != 0);
       break;
+    case EventKind::drive_done_lost: {
+      // Done already given (homed by its drive): the reference is lost;
+      // still to come: the drive never answers. Must show only for an axis
+      // this cycle homes by its drive.
+      const bool mine = (plan.covered & axis_bit(e.axis)) && s.axes[e.axis].mode == HomingMode::drive;
+      c.add(who, {AlarmCode::drive_reference_lost, AlarmCode::drive_no_answer}, axis_bit(e.axis), mine);
+      break;
+    }
     case EventKind::reset:
     case EventKind::home_again:
     case EventKind::count: break;
@@ -279,6 +304,11 @@ double path_bound(rig::Rig& r, const Machine& m, std::size_t a, double x_start) 
       final_d = std::abs(e.final_position_mm - (x_start + c.absolute_offset_mm - e.home_position_mm));
     }
   }
+  if (e.mode == HomingMode::drive) {
+    // The drive's own travel to its home (from where the cycle started), then the final move.
+    const auto& c = r.sim().axis_config(a);
+    return std::abs(c.drive_home_position_mm - x_start) + final_d + stop + 1e-6;
+  }
   if (!mode_uses_switch(e.mode)) return final_d + stop + 1e-6;
   const double over = e.max_stop_distance_mm + seek_v * m.max_dt_s + 1e-3;
   const double index = e.mode == HomingMode::switch_index ? e.index_pitch_mm * 1.1 + stop_distance_mm(latch_v, acc) : 0;
@@ -303,6 +333,7 @@ double time_bound(rig::Rig& r, const Machine& m, const CyclePlan& plan) {
     const AxisSettings e = effective(r.settings, a);
     const double v = mm_per_min_to_mm_per_s(mode_uses_switch(e.mode) ? e.latch_feedrate_mm_per_min : e.seek_feedrate_mm_per_min);
     if (v > 0) t += 2 * path_bound(r, m, a, r.actual(a)) / v;
+    if (e.mode == HomingMode::drive) t += e.drive_home_timeout_s;  // at most, whatever the drive does
   }
   return t;
 }
