@@ -48,10 +48,15 @@ struct Waiting {
 struct Jog {
   std::int8_t dir = 0;
 };
+struct PushToStop {
+  double start_s = 0;           // engine time the push began
+  bool stalled = false;         // the drive reported the stall: braking at the stop
+};
 }  // namespace phase_data
 
 using PhaseData = std::variant<std::monostate, phase_data::Seek, phase_data::Stop,
-                               phase_data::BackOff, phase_data::Index, phase_data::Waiting, phase_data::Jog>;
+                               phase_data::BackOff, phase_data::Index, phase_data::Waiting, phase_data::Jog,
+                               phase_data::PushToStop>;
 
 // How far this axis has come in the running homing cycle, in order. The
 // gantry partner waits on it.
@@ -69,6 +74,7 @@ struct AxisReadings {
   bool drive_fault = false;
   bool absolute_valid = false;
   double absolute_mm = 0;  // absolute encoder reading
+  bool stall = false;      // the drive reports a stall (torque limit reached)
 };
 
 struct AxisRun {

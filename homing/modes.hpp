@@ -27,6 +27,7 @@ enum class HomingMode : std::uint8_t {
   absolute_final = 6,
   pushing_release = 7,
   pushing_reapproach = 8,
+  hard_stop = 9,
 };
 
 // What a method needs wired to the axis, one bit each.
@@ -36,6 +37,7 @@ enum class Signal : std::uint16_t {
   index = 1u << 2,             // the encoder's index pulse
   push_output = 1u << 3,       // reduces the motor current while pushing into the stop
   absolute_encoder = 1u << 4,  // the absolute position (and its valid flag)
+  stall = 1u << 5,             // the drive's stall / torque-limit output
 };
 using Signals = std::uint16_t;
 constexpr Signals operator|(Signal a, Signal b) {
@@ -58,6 +60,7 @@ inline constexpr SignalInfo kSignalInfo[] = {
     {Signal::push_output, "push", "reduced-current output while pushing", "pushes into a stop", false},
     // Not a GPIO line: read from the drive or encoder interface.
     {Signal::absolute_encoder, "absolute", "absolute encoder position", "reads an absolute encoder", false},
+    {Signal::stall, "stall", "the drive's stall or torque-limit output", "homes on the drive's stall output", true},
 };
 
 // The coordinate a method gives the axis once homed.
@@ -66,6 +69,7 @@ enum class Coordinate : std::uint8_t {
   here,              // home_position where the axis stands, without moving
   reference_edge,    // home_position at the reference edge, pull-off (and a slave's compensation) away
   absolute_encoder,  // the encoder's reading minus home_position (home_position is the encoder's offset)
+  mechanical_stop,   // home_position pull-off away from the mechanical stop the carriage was pushed against
 };
 
 enum class FinalMove : std::uint8_t {
@@ -123,6 +127,8 @@ inline constexpr std::array<Phase, kMaxModePhases> index{P::pre_move, P::seek,  
 inline constexpr std::array<Phase, kMaxModePhases> push_release{P::pre_move, P::seek,     P::stop,
                                                                 P::push,     P::back_off, P::pull_off,
                                                                 P::assign,   P::final_move};
+inline constexpr std::array<Phase, kMaxModePhases> hard_stop{P::pre_move, P::push_to_stop, P::pull_off, P::assign,
+                                                             P::final_move};
 inline constexpr std::array<Phase, kMaxModePhases> push_reapproach{P::pre_move,   P::seek,     P::stop,
                                                                    P::push,       P::back_off, P::reapproach,
                                                                    P::pull_off,   P::assign,   P::final_move};
@@ -157,10 +163,15 @@ inline constexpr ModeRow kModeTable[] = {
     {HomingMode::pushing_reapproach, "pushing_reapproach", "seek, push into the mechanical stop, re-approach edge",
      Signal::step_output | Signal::home_sensor | Signal::push_output, mode_phases::push_reapproach, 9,
      Coordinate::reference_edge, FinalMove::if_enabled, false, true, true},
+    {HomingMode::hard_stop, "hard_stop",
+     "no switch: push into the mechanical stop at latch feedrate and reduced current until the drive reports a "
+     "stall; the stop is the reference",
+     Signal::step_output | Signal::push_output | Signal::stall, mode_phases::hard_stop, 5,
+     Coordinate::mechanical_stop, FinalMove::if_enabled, false, false, false},
     // clang-format on
 };
 inline constexpr std::uint8_t kHomingModeCount = std::size(kModeTable);
-static_assert(lists_every_value(kModeTable, HomingMode::pushing_reapproach));
+static_assert(lists_every_value(kModeTable, HomingMode::hard_stop));
 constexpr std::span<const ModeRow> enum_table(HomingMode) { return kModeTable; }
 
 // Each row's phase count matches its list, and every method that moves to
@@ -176,7 +187,9 @@ constexpr bool rows_are_consistent() {
         !(r.needs_signal(Signal::home_sensor) && r.runs(Phase::seek) && r.runs(Phase::pull_off)))
       return false;
     if (r.runs(Phase::index) != r.needs_signal(Signal::index)) return false;
-    if (r.runs(Phase::push) != r.needs_signal(Signal::push_output)) return false;
+    if (r.runs(Phase::push) && !r.needs_signal(Signal::push_output)) return false;
+    if (r.runs(Phase::push_to_stop) != r.needs_signal(Signal::stall)) return false;
+    if ((r.coordinate == Coordinate::mechanical_stop) != r.runs(Phase::push_to_stop)) return false;
     if ((r.gantry_master || r.gantry_slave) && !r.needs_signal(Signal::home_sensor)) return false;
   }
   return true;

@@ -27,6 +27,7 @@ enum class Phase : std::uint8_t {
   move = 15,
   stopping = 16,      // decelerating after an alarm or abort
   clear_sensors = 17, // gantry: both sides move off their sensors together before the seek
+  push_to_stop = 18,  // hard-stop homing: pushing toward the mechanical stop until the drive stalls
 };
 
 inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
@@ -49,8 +50,10 @@ inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
     {Phase::stopping, "stopping", "decelerating after an alarm or abort"},
     {Phase::clear_sensors, "clear_sensors",
      "gantry: both sides move off their sensors together (latch feedrate) before the seek"},
+    {Phase::push_to_stop, "push_to_stop",
+     "hard-stop homing: moving into the mechanical stop at reduced current until the drive reports a stall"},
 };
-static_assert(lists_every_value(kPhaseInfo, Phase::clear_sensors));
+static_assert(lists_every_value(kPhaseInfo, Phase::push_to_stop));
 constexpr std::span<const EnumInfo<Phase>> enum_table(Phase) { return kPhaseInfo; }
 
 std::string_view phase_name(Phase phase);

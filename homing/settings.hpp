@@ -79,6 +79,7 @@ struct AxisSettings {
   bool soft_limits_enable = false;
   bool shared_limit = false;
   double jog_feedrate_mm_per_min = 0;
+  double stall_timeout_ms = 0;  // hard-stop homing: longest push toward the stop before stall_timeout
   friend bool operator==(const AxisSettings&, const AxisSettings&) = default;
 };
 
@@ -132,6 +133,7 @@ enum class AxisField : std::uint8_t {
   soft_limits_enable,
   shared_limit,
   jog_feedrate,
+  stall_timeout_ms,
 };
 // The name of each: the suffix of its register name (axis.<a>.<name>).
 struct AxisFieldInfo {
@@ -167,8 +169,9 @@ inline constexpr AxisFieldInfo kAxisFieldInfo[] = {
     {AxisField::soft_limits_enable, "soft_limits_enable"},
     {AxisField::shared_limit, "shared_limit"},
     {AxisField::jog_feedrate, "jog_feedrate"},
+    {AxisField::stall_timeout_ms, "stall_timeout_ms"},
 };
-static_assert(lists_every_value(kAxisFieldInfo, AxisField::jog_feedrate));
+static_assert(lists_every_value(kAxisFieldInfo, AxisField::stall_timeout_ms));
 constexpr std::span<const AxisFieldInfo> enum_table(AxisField) { return kAxisFieldInfo; }
 
 std::string_view field_name(AxisField field);

@@ -50,6 +50,25 @@ std::optional<SettingsFault> check_motion(const AxisSettings& s, std::size_t axi
   return std::nullopt;
 }
 
+// Hard-stop homing: the push toward the stop at latch feedrate, bounded in
+// travel and time, and the pull-off and pre-move at seek feedrate.
+std::optional<SettingsFault> check_stop_search(const AxisSettings& s, std::size_t axis) {
+  if (s.seek_feedrate_mm_per_min <= 0)
+    return fault(axis, AxisField::seek_feedrate, CheckRule::not_positive, s.seek_feedrate_mm_per_min);
+  if (s.latch_feedrate_mm_per_min <= 0)
+    return fault(axis, AxisField::latch_feedrate, CheckRule::not_positive, s.latch_feedrate_mm_per_min);
+  if (s.acceleration_mm_per_s2 <= 0)
+    return fault(axis, AxisField::acceleration, CheckRule::not_positive, s.acceleration_mm_per_s2);
+  if (s.max_seek_travel_mm <= 0)
+    return fault(axis, AxisField::max_seek_travel, CheckRule::not_positive, s.max_seek_travel_mm);
+  if (s.stall_timeout_ms <= 0)
+    return fault(axis, AxisField::stall_timeout_ms, CheckRule::not_positive, s.stall_timeout_ms);
+  if (s.pull_off_mm < 0) return fault(axis, AxisField::pull_off, CheckRule::negative, s.pull_off_mm);
+  if (s.pre_move_mode != PreMove::none && s.pre_move_distance_mm <= 0)
+    return fault(axis, AxisField::pre_move_distance, CheckRule::missing_distance, s.pre_move_distance_mm);
+  return std::nullopt;
+}
+
 std::optional<SettingsFault> check_limits(const AxisSettings& s, std::size_t axis) {
   if (!s.soft_limits_enable) return std::nullopt;
   if (s.soft_limit_min_mm >= s.soft_limit_max_mm)
@@ -57,7 +76,7 @@ std::optional<SettingsFault> check_limits(const AxisSettings& s, std::size_t axi
   auto outside = [&](double x) { return x < s.soft_limit_min_mm || x > s.soft_limit_max_mm; };
   // home_position is a place on the axis, except for an absolute encoder (its offset).
   const Coordinate c = mode_row(s.mode).coordinate;
-  const bool home_is_a_place = c == Coordinate::here || c == Coordinate::reference_edge;
+  const bool home_is_a_place = c == Coordinate::here || c == Coordinate::reference_edge || c == Coordinate::mechanical_stop;
   if (home_is_a_place && outside(s.home_position_mm))
     return fault(axis, AxisField::home_position, CheckRule::outside_soft_limits, s.home_position_mm);
   if (final_move_wanted(s) && outside(s.final_position_mm))
@@ -112,7 +131,11 @@ std::optional<SettingsFault> check_axis_in(const Settings& settings, const Setti
   if (auto f = check_slave(settings, pair, axis)) return f;
   const AxisSettings& s = pair.axes[axis];
   if (auto f = check_limits(s, axis)) return f;
-  if (mode_row(s.mode).runs(Phase::seek)) return check_motion(s, axis);
+  const ModeRow& row = mode_row(s.mode);
+  if (s.shared_limit && !row.shares_limit)
+    return fault(axis, AxisField::shared_limit, CheckRule::shared_limit_without_sensor, 1);
+  if (row.runs(Phase::seek)) return check_motion(s, axis);
+  if (row.runs(Phase::push_to_stop)) return check_stop_search(s, axis);
   if (final_move_wanted(s)) {
     if (s.seek_feedrate_mm_per_min <= 0)
       return fault(axis, AxisField::seek_feedrate, CheckRule::not_positive, s.seek_feedrate_mm_per_min);
@@ -236,6 +259,9 @@ std::string describe_fault(const SettingsFault& f, const Settings& settings) {
                          letter, s.max_backoff_mm, unit, f.value, unit,
                          mode_is_pushing(s.mode) ? " plus push_distance" : "",
                          mode_is_pushing(s.mode) ? " or lower push_distance" : "");
+    case CheckRule::shared_limit_without_sensor:
+      return fmt::format("{}: mode {} homes without a home sensor, so there is none to share with a hard "
+                         "limit; set {} = 0", name, mode_name(s.mode), name);
     case CheckRule::shared_limit_rests_on_sensor:
       return fmt::format("{}: the axis would rest {:g} {} from its edge (pull-off, plus a slave's "
                          "switch_compensation); a shared home/limit sensor needs more than 0 so the axis "

@@ -86,7 +86,8 @@ std::expected<void, std::string> parse_axis(const Ctx& ctx, std::size_t a, const
       {"step", &AxisLines::step},       {"dir", &AxisLines::dir},
       {"enable", &AxisLines::enable},   {"push", &AxisLines::push},
       {"commutator", &AxisLines::commutator}, {"home", &AxisLines::home},
-      {"index", &AxisLines::index},     {"drive_fault", &AxisLines::drive_fault}};
+      {"index", &AxisLines::index},     {"drive_fault", &AxisLines::drive_fault},
+      {"stall", &AxisLines::stall}};
   for (const auto& [k, v] : t) {
     const std::string key(k.str());
     if (key == "steps_per_unit") {
@@ -108,7 +109,7 @@ std::expected<void, std::string> parse_axis(const Ctx& ctx, std::size_t a, const
     }
     if (!known)
       return Error(fmt::format("{}: [{}] unknown key '{}' (known: steps_per_unit, step, dir, enable, push, "
-                               "commutator, home, index, drive_fault)",
+                               "commutator, home, index, drive_fault, stall)",
                                ctx.origin, section, key));
   }
   // Neither: an axis with no output of its own (an external-commutator slave,
@@ -137,7 +138,7 @@ std::expected<void, std::string> check_unique(const BackendConfig& c, const std:
   for (const auto* o : {&c.estop, &c.drive_fault, &c.start_button, &c.homing_permit, &c.homing_done_lamp})
     if (*o) all.push_back(&**o);
   for (const AxisLines& a : c.axes)
-    for (const auto* o : {&a.step, &a.dir, &a.enable, &a.push, &a.commutator, &a.home, &a.index, &a.drive_fault})
+    for (const auto* o : {&a.step, &a.dir, &a.enable, &a.push, &a.commutator, &a.home, &a.index, &a.drive_fault, &a.stall})
       if (*o) all.push_back(&**o);
   for (std::size_t i = 0; i < all.size(); ++i)
     for (std::size_t j = i + 1; j < all.size(); ++j)
@@ -229,6 +230,7 @@ bool has_line(const AxisLines& lines, homing::Signal signal) {
     case homing::Signal::index: return lines.index.has_value();
     case homing::Signal::push_output: return lines.push.has_value();
     case homing::Signal::absolute_encoder: return false;  // no GPIO line carries it
+    case homing::Signal::stall: return lines.stall.has_value();
   }
   return false;
 }

@@ -25,6 +25,7 @@ struct AxisLines {
   std::optional<LineSpec> step, dir, enable;            // outputs
   std::optional<LineSpec> push, commutator;             // outputs (pushing modes, gantry commutator)
   std::optional<LineSpec> home, index, drive_fault;     // inputs
+  std::optional<LineSpec> stall;                        // input: the drive's stall output (hard-stop homing)
   // A step/dir output of its own. Without one the axis can only be an
   // external-commutator slave (moved by its master's output) or never move.
   bool has_output() const { return step.has_value(); }

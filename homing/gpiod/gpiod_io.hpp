@@ -68,7 +68,7 @@ class GpiodIo final : public MachineIo {
     std::unique_ptr<StepGenerator> generator;
     OutputLine enable, push, commutator;
     std::unique_ptr<EdgeInput> home, index;
-    std::unique_ptr<LevelInput> drive_fault;
+    std::unique_ptr<LevelInput> drive_fault, stall;
     std::string reported_failure;
   };
 

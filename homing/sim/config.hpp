@@ -17,6 +17,8 @@ enum class Fault : std::uint8_t {
   sensor_stuck_inactive = 2,
   wire_break = 3,
   drive_fault = 4,
+  stall_dead = 5,     // the drive's stall output never turns on
+  stall_stuck = 6,    // the drive's stall output is on all the time
 };
 inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::none, "none", "no fault"},
@@ -24,8 +26,10 @@ inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::sensor_stuck_inactive, "sensor_stuck_inactive", "sensor never turns active"},
     {Fault::wire_break, "wire_break", "sensor wire broken (NC reads active, NO never)"},
     {Fault::drive_fault, "drive_fault", "the drive reports a fault"},
+    {Fault::stall_dead, "stall_dead", "the drive's stall output never turns on"},
+    {Fault::stall_stuck, "stall_stuck", "the drive's stall output is on all the time"},
 };
-static_assert(lists_every_value(kFaultInfo, Fault::drive_fault));
+static_assert(lists_every_value(kFaultInfo, Fault::stall_stuck));
 constexpr std::span<const EnumInfo<Fault>> enum_table(Fault) { return kFaultInfo; }
 
 struct AxisConfig {
@@ -39,6 +43,12 @@ struct AxisConfig {
   double index_pitch_mm = 0;      // 0 = no index
   double index_offset_mm = 0;
   double absolute_offset_mm = 0;  // absolute encoder reads actual + offset
+  // The drive's stall output: on once the carriage has been held by a
+  // mechanical stop, with the motor driving into it, for the detection time
+  // plus a random share of the spread (drawn per contact); off when the
+  // motor no longer drives into the stop.
+  double stall_detect_ms = 20;
+  double stall_spread_ms = 10;
   Fault fault = Fault::none;
 };
 

@@ -7,6 +7,8 @@
 #include <map>
 
 #include "daemon.hpp"
+#include "homing/modes.hpp"
+#include "homing/sim/config.hpp"
 #include "homing/status.hpp"
 
 using namespace e2e;
@@ -256,7 +258,8 @@ TEST_CASE("exception 03: a value out of range, nothing changes") {
   Client c = Client::tcp(d.port());
   const auto before = holding_snapshot(c);
   const std::vector<std::pair<const char*, std::int64_t>> bad{
-      {"axis.x.mode", 9},          {"axis.x.direction", 2},          {"axis.y.seek_feedrate", 0},
+      {"axis.x.mode", homing::kHomingModeCount},  // the first number past the mode table
+      {"axis.x.direction", 2},          {"axis.y.seek_feedrate", 0},
       {"axis.z.debounce_ms", 1001}, {"global.watchdog_ms", 60001},    {"sequence.step1", 64},
       {"axis.x.max_seek_travel", 100000001}, {"axis.x.pull_off", -1}, {"axis.x.home_position", -100000001},
       {"global.allowed_without_homing", 3},
@@ -266,7 +269,8 @@ TEST_CASE("exception 03: a value out of range, nothing changes") {
     CHECK(c.write(name, raw) == MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
   }
   // The simulator unit validates too.
-  CHECK(c.write("sim.x.fault", 5) == MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+  CHECK(c.write("sim.x.fault", static_cast<std::int64_t>(std::size(homing::sim::kFaultInfo))) ==
+        MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
   CHECK(c.read("sim.x.fault") == 0);
   // A coil written with a value other than 0x0000 / 0xFF00.
   const auto reply = c.raw(pdu16(1, 0x05, reg("host.homing_permit").address, 0x1234));

@@ -72,6 +72,11 @@ CheckReport check_settings(const homing::Settings& settings,
           break;
         case Phase::stop: phase(p, a > 0 ? seek_v / a + s.debounce_ms / 1000.0 : 0); break;
         case Phase::push: phase(p, move_time(s.push_distance_mm, latch_v, a)); break;
+        case Phase::push_to_stop:
+          // Bounded twice: the travel at latch feedrate, and stall_timeout_ms.
+          c.seek_worst_s = std::min(move_time(s.max_seek_travel_mm, latch_v, a), s.stall_timeout_ms / 1000.0);
+          phase(p, c.seek_worst_s);
+          break;
         case Phase::back_off:
           phase(p, move_time(c.stop_distance_mm + latch_stop, latch_v, a) + s.debounce_ms / 1000.0);
           break;
@@ -85,7 +90,7 @@ CheckReport check_settings(const homing::Settings& settings,
       }
     }
     for (const auto& [name, t] : c.phases)
-      if (name != "seek") c.after_trigger_s += t;
+      if (name != "seek" && name != "push_to_stop") c.after_trigger_s += t;
 
     // Warnings the engine's check does not refuse.
     if (homing::mode_uses_switch(s.mode)) {

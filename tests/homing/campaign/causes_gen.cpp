@@ -184,6 +184,14 @@ void Gen::causes() {
       m.sim.axes[a].fault = m.plan[a].start_fault;
     }
   }
+  // A drive's stall output dead or stuck on from power-up (hard-stop homing).
+  if (d.chance(0.15)) {
+    std::size_t a = 0;
+    if (pick_axis(axes_where([&](std::size_t x) { return m.settings.axes[x].mode == HomingMode::hard_stop; }), a)) {
+      m.plan[a].start_fault = d.pick({sim::Fault::stall_dead, sim::Fault::stall_stuck});
+      m.sim.axes[a].fault = m.plan[a].start_fault;
+    }
+  }
   // An absolute encoder that reports no valid position.
   if (d.chance(0.05)) {
     std::size_t a = 0;
@@ -194,6 +202,13 @@ void Gen::causes() {
 
 double Gen::axis_time_estimate(std::size_t a) const {
   const AxisSettings e = effective(m.settings, a);
+  if (e.mode == HomingMode::hard_stop) {
+    const sim::AxisConfig& c = m.sim.axes[a];
+    const double stop = e.direction == Direction::negative ? c.hard_stop_min_mm : c.hard_stop_max_mm;
+    const double latch_v = mm_per_min_to_mm_per_s(e.latch_feedrate_mm_per_min);
+    return (std::abs(c.actual_position_mm - stop) + e.pre_move_distance_mm) / latch_v + 1.0 +
+           (final_move_wanted(e) ? 2.0 : 0.0);
+  }
   if (!mode_uses_switch(e.mode)) return final_move_wanted(e) ? 2.0 : 0.0;
   const double seek_v = mm_per_min_to_mm_per_s(e.seek_feedrate_mm_per_min);
   const double latch_v = mm_per_min_to_mm_per_s(e.latch_feedrate_mm_per_min);
