@@ -19,7 +19,7 @@ struct Lines {
   RefusalLog log{"writes", 10s, [this](spdlog::level::level_enum, const std::string& l) { lines.push_back(l); }};
 };
 
-const std::string kReason = "reason 9 (wrong_unlock_code)";
+const std::string kReason = "reason 8 (wrong_unlock_code)";
 
 }  // namespace
 
@@ -33,7 +33,7 @@ TEST_CASE("a flood of refusals of one client for one reason is one whole line, t
   CHECK(l.lines.size() == 1);  // the interval has not passed
   l.log.flush(t + 10s);
   REQUIRE(l.lines.size() == 2);
-  CHECK(l.lines[1] == "tcp 10.0.0.9: 999 more writes refused, reason 9 (wrong_unlock_code), in the last 10 s "
+  CHECK(l.lines[1] == "tcp 10.0.0.9: 999 more writes refused, reason 8 (wrong_unlock_code), in the last 10 s "
                       "(one line per client and reason every 10 s)");
   // Still flooding in the next interval: counts only.
   for (int i = 0; i < 500; ++i) l.log.refused("tcp 10.0.0.9", kReason, spdlog::level::warn, "whole", t + 11s);
