@@ -20,7 +20,7 @@ std::expected<server::ParseOutcome, std::string> parse(std::vector<std::string> 
 
 }  // namespace
 
-TEST_CASE("--unlock-code takes a 32-bit code and refuses 0 and anything larger") {
+TEST_CASE("the unlock code option takes a 32-bit code and refuses 0 and anything larger") {
   auto p = parse({"--unlock-code", "4294967295"});
   REQUIRE(p);
   CHECK(p->options.unlock_code == 4294967295LL);
@@ -51,7 +51,7 @@ TEST_CASE("the unlock lockout defaults to 10 s doubling up to 900 s and its cap 
   CHECK_FALSE(parse({"--unlock-lockout-s", "0"}));
 }
 
-TEST_CASE("--privileged takes IPv4 addresses and CIDR, --max-clients-per-address a count") {
+TEST_CASE("the --privileged list takes IPv4 addresses and CIDR, --max-clients-per-address a count") {
   auto p = parse({"--privileged", "10.0.0.5,192.168.1.0/29", "--max-clients-per-address", "4"});
   REQUIRE(p);
   CHECK(p->options.privileged == std::vector<std::string>{"10.0.0.5", "192.168.1.0/29"});

@@ -133,7 +133,7 @@ TEST_CASE("one address holding every connection does not lock out the privileged
   CHECK(client.served());
 }
 
-TEST_CASE("--max-clients-per-address refuses one address its next connection while others are served") {
+TEST_CASE("an address at --max-clients-per-address is refused its next connection while others are served") {
   Daemon d({.extra = {"--max-clients-per-address", "2"}});
   From a("127.0.0.2", d.port());
   From b("127.0.0.2", d.port());
