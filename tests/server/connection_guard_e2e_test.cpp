@@ -13,6 +13,8 @@
 #include <memory>
 
 #include "daemon.hpp"
+#include "tests/support/test_pki.hpp"
+#include "tests/support/tls_modbus_client.hpp"
 
 using namespace e2e;
 
@@ -155,4 +157,32 @@ TEST_CASE("homingd refuses a --privileged entry that is not an IPv4 address or C
   REQUIRE(r.exited());
   CHECK(r.code() != 0);
   CHECK(r.err.find("--privileged: 'plc.local' is not an IPv4 address or CIDR") != std::string::npos);
+}
+
+TEST_CASE("the TLS listener shares its connections the same way: a hog's connections give way to a privileged engineer") {
+  DaemonOptions options;
+  options.tls = tls_server_options();
+  options.extra = {"--max-clients", "2", "--privileged", "127.0.0.1"};
+  Daemon d(std::move(options));
+  // The hog holds both TLS connections, stalled before its handshake. It
+  // would lose them at the handshake timeout (3 s) anyway: the log line
+  // proves they were closed for the engineer; tried again if they were not.
+  bool made_room = false;
+  for (int attempt = 0; attempt < 5 && !made_room; ++attempt) {
+    From a("127.0.0.2", d.tls_port());
+    From b("127.0.0.2", d.tls_port());
+    REQUIRE(a.connected());
+    REQUIRE(b.connected());
+    auto engineer = TlsModbusClient::connect(d.tls_port(), tls_identity("engineer"));
+    REQUIRE(engineer);
+    CHECK(engineer->read("status.map_version") == registers::kMapVersion);
+    made_room = wait_until(
+        [&] {
+          const std::string log = d.log();
+          return log.find("tls: closed " + a.name() + " (the least recently active") != std::string::npos &&
+                 log.find("to make room for 127.0.0.1:") != std::string::npos;
+        },
+        2s);
+  }
+  CHECK(made_room);
 }
