@@ -55,6 +55,11 @@ Reply ModbusService::refuse(std::uint8_t fc, const registers::Refusal& r, const 
   return fail(fc, r.code);
 }
 
+ModbusService::~ModbusService() {
+  std::lock_guard lock(log_mutex_);
+  refusal_log_.flush_all(now());
+}
+
 void ModbusService::flush_refusal_log() {
   std::lock_guard lock(log_mutex_);
   refusal_log_.flush(now());

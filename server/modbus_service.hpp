@@ -50,6 +50,9 @@ class ModbusService final : public RequestHandler {
  public:
   ModbusService(ServiceConfig config, ControlLoop& loop, persistence::SettingsStore* store,
                 const homing::Settings& settings);
+  ~ModbusService() override;  // writes the refusal counts not yet written
+  ModbusService(const ModbusService&) = delete;
+  ModbusService& operator=(const ModbusService&) = delete;
 
   Reply handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) override;
   void disconnected(const ClientInfo& client) override;

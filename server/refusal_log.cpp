@@ -25,6 +25,14 @@ void RefusalLog::flush(Clock::time_point now) {
     return;
   }
   if (now - interval_start_ < interval_) return;
+  write_counts(now);
+}
+
+void RefusalLog::flush_all(Clock::time_point now) {
+  if (started_) write_counts(now);
+}
+
+void RefusalLog::write_counts(Clock::time_point now) {
   const auto seconds = std::chrono::duration_cast<std::chrono::seconds>(now - interval_start_).count();
   for (auto it = active_.begin(); it != active_.end();) {
     if (it->second.not_logged == 0) {

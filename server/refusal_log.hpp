@@ -31,6 +31,8 @@ class RefusalLog {
                const std::string& line, Clock::time_point now);
   // Writes the counts of an interval that has passed (call it now and then).
   void flush(Clock::time_point now);
+  // Writes every count not yet written, the interval passed or not (on the way out).
+  void flush_all(Clock::time_point now);
 
  private:
   struct Counted {
@@ -43,6 +45,7 @@ class RefusalLog {
   Clock::time_point interval_start_{};
   bool started_ = false;
   std::map<std::pair<std::string, std::string>, Counted> active_;
+  void write_counts(Clock::time_point now);
 };
 
 }  // namespace server

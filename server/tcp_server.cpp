@@ -146,6 +146,8 @@ void TcpServer::run() {
     c.last_active_ns = steady_ns();
     c.thread = std::thread([this, &c, info] { serve(c, info); });
   }
+  std::lock_guard lock(connections_mutex_);
+  refusals_.flush_all(std::chrono::steady_clock::now());
 }
 
 void TcpServer::refuse(const std::string& ip, const std::string& reason, const std::string& line) {
@@ -172,8 +174,8 @@ bool TcpServer::make_room(const Peer& peer, const std::string& address) {
       return false;
     case Admission::Kind::refuse_full:
       refuse(ip, "server full (--max-clients)",
-             fmt::format("{}: refused {}: {} clients connected, the maximum (--max-clients); none may give way to it "
-                         "(privileged, or its address holds as many)",
+             fmt::format("{}: refused {}: {} clients connected, the maximum (--max-clients); no connection may give way "
+                         "to it (the others are privileged, or no address holds two more than its own)",
                          name(), address, config_.max_clients));
       return false;
     case Admission::Kind::admit_closing: {

@@ -65,3 +65,14 @@ TEST_CASE("a client that was not refused for a whole interval is written out who
   l.log.refused("tcp 10.0.0.9", kReason, spdlog::level::warn, "again", t + 12s);
   CHECK(l.lines == std::vector<std::string>{"first", "again"});
 }
+
+TEST_CASE("on the way out the counts not yet written are written, the interval passed or not") {
+  Lines l;
+  Time t{};
+  // The interval runs from the first look at the time (t + 1 s).
+  for (int i = 0; i < 4; ++i) l.log.refused("tcp 10.0.0.9", kReason, spdlog::level::warn, "first", t + 1s);
+  l.log.flush_all(t + 3s);
+  REQUIRE(l.lines.size() == 2);
+  CHECK(l.lines[1] == "tcp 10.0.0.9: 3 more writes refused, reason 8 (wrong_unlock_code), in the last 2 s "
+                      "(one line per client and reason every 10 s)");
+}
