@@ -55,13 +55,15 @@ void Monitor::refresh_diagnostics() {
   extras_.tcp_clients = tcp_clients_ ? tcp_clients_() : 0;
 }
 
-// Twice a second: diagnostics for the input registers, and the settings
-// backup that the store keeps after a batch of changes.
+// Twice a second: diagnostics for the input registers, the refused writes'
+// counts of an interval that has passed, and the settings backup that the
+// store keeps after a batch of changes.
 void Monitor::housekeeping(std::int64_t now_ms) {
   if (now_ms - last_housekeeping_ms_ < 500) return;
   last_housekeeping_ms_ = now_ms;
   refresh_diagnostics();
   service_.set_extras(extras_);
+  service_.flush_refusal_log();
   if (store_)
     if (auto r = store_->backup_if_due(); !r) spdlog::warn("settings backup not written: {}", r.error().message);
 }
