@@ -115,6 +115,14 @@ std::vector<Phase> Run::phases_run(std::size_t a) const {
   return p;
 }
 
+void Run::apply_in_motion(const Event& e, Causes& causes) {
+  const std::size_t from = causes.list.size();
+  apply(e, causes, CyclePlan{});
+  step();
+  for (std::size_t i = from; i < causes.list.size(); ++i)
+    if (causes.list[i].phase_axis) causes.list[i].phase_seen = r_.axis(*causes.list[i].phase_axis).phase;
+}
+
 void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
   say(std::string(event_name(e.kind)) + " on " + kAxisUpper[e.axis]);
   auto set_fault = [&](sim::Fault f) {
