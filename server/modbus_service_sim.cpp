@@ -86,7 +86,8 @@ std::optional<Reply> ModbusService::write_sim(std::uint8_t fc, Table table, std:
                                                           homing::kAxisLetters[static_cast<std::size_t>(busy_axis)])),
                   client);
   if (!changes.empty())
-    spdlog::info("simulator changed by {} {}: {}", client.transport, client.address, describe_changes(changes));
+    spdlog::info("simulator changed by {} {}: {}", client.transport, client.address,
+                 describe_changes(changes, registers::kinds_of(settings())));  // a carriage in its axis's unit
   return std::nullopt;
 }
 
