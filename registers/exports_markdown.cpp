@@ -66,10 +66,12 @@ void write_values(std::string& out, const Register& r, std::set<const void*>& do
 // Which axes read deg for mm.
 std::string rotary_text(const MapUnits& units) {
   if (!units.configured())
-    return "on an axis whose `axis.<a>.kind` is rotary (the default of A, B, C; X, Y, Z are linear only) read deg for mm";
+    return "on an axis whose `axis.<a>.kind` is rotary (the default of A, B, C; X, Y, Z are linear only) read deg "
+           "for mm";
   std::string rotary;
   for (std::size_t a = 0; a < homing::kAxisCount; ++a)
-    if (units.kinds[a] == homing::AxisKind::rotary) rotary += fmt::format("{}{}", rotary.empty() ? "" : ", ", homing::kAxisUpper[a]);
+    if (units.kinds[a] == homing::AxisKind::rotary)
+      rotary += fmt::format("{}{}", rotary.empty() ? "" : ", ", homing::kAxisUpper[a]);
   return rotary.empty() ? std::string("every axis of this machine is linear")
                         : fmt::format("on the rotary axes of this machine ({}) read deg for mm", rotary);
 }

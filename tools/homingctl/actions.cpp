@@ -307,7 +307,8 @@ ActionResult move(Connection& c, const std::string& axis, const std::string& tar
   if (!raw) throw std::invalid_argument(raw.error());
   Session s(c, o);
   if (const int ex = c.write(treg, *raw)) return failure(fmt::format("writing {} refused: {}", treg.name(), exception_sentence(ex)));
-  const std::string what = fmt::format("move {} to {}", homing::kAxisUpper[static_cast<std::size_t>(a)], value_text(treg, *raw, kinds));
+  const std::string what =
+      fmt::format("move {} to {}", homing::kAxisUpper[static_cast<std::size_t>(a)], value_text(treg, *raw, kinds));
   auto r = s.pulse(fmt::format("cmd.move.{}", letter));
   if (!r) return failure(r.error());
   if (!taken(*r)) return s.refused(what, *r);
