@@ -24,9 +24,10 @@ std::string line_of(const std::string& text, const std::string& start) {
   return "";
 }
 
-// A homes on a switch as the second motor of Y, linear.
+// A homes on a switch as the second motor of Y, linear; a value typed with
+// its unit in the same command is in the unit of the kind it sets.
 const std::vector<std::string> kLinearASlaveOfY{"axis.a.mode=switch_release", "axis.a.slave_of=y",
-                                                "axis.a.kind=linear", "axis.a.max_misalignment=2"};
+                                                "axis.a.kind=linear", "axis.a.max_misalignment=2mm"};
 
 homing::Settings linear_a_slave_of_y() {
   homing::Settings s = registers::default_settings();
@@ -80,6 +81,14 @@ TEST_CASE("a linear gantry slave on A set over Modbus reads mm in get, check, ex
     REQUIRE(r.code() == 0);
   }
   CHECK_THAT(r.out, Catch::Contains("axis.a.kind: rotary -> linear"));
+
+  // B is still rotary: a length typed in mm is not its unit.
+  r = ctl(d, {"set", "axis.b.pull_off=2mm"});
+  {
+    SHOW(r);
+    CHECK(r.code() != 0);
+    CHECK_THAT(r.err, Catch::Contains("axis.b.pull_off = '2mm'") && Catch::Contains("deg"));
+  }
 
   r = ctl(d, {"get", "axis.a.pull_off", "axis.a.seek_feedrate", "axis.b.pull_off"});
   {

@@ -102,9 +102,16 @@ std::variant<Assignments, int> parse_assignments(Context& ctx, const std::vector
       throw Usage(fmt::format("{} is a command: use homingctl home/abort/reset/jog/move", r->name()));
     named.emplace_back(r, kv->second);
   }
+  // A unit typed with a value is that of the kind the axis will have: this
+  // command may set axis.<a>.kind or slave_of too (value names, no unit).
   std::vector<const Register*> regs;
-  for (const auto& [r, text] : named) regs.push_back(r);
-  const registers::AxisKinds kinds = kinds_for(ctx.connection(), regs);
+  RawMap changing;
+  for (const auto& [r, text] : named) {
+    regs.push_back(r);
+    if (r->type == registers::Type::enumeration && r->persisted)
+      if (auto raw = parse_value(*r, text)) changing[r->name()] = *raw;
+  }
+  const registers::AxisKinds kinds = kinds_for(ctx.connection(), regs, changing);
   for (const auto& [r, text] : named) {
     auto raw = parse_value(*r, text, kinds);
     if (!raw) {

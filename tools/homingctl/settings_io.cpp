@@ -34,12 +34,17 @@ homing::Settings settings_of(const RawMap& raw) { return registers::settings_fro
 
 homing::Settings read_settings(Connection& c) { return settings_of(read_settings_raw(c)); }
 
-registers::AxisKinds kinds_for(Connection& c, const std::vector<const registers::Register*>& regs) {
+registers::AxisKinds kinds_for(Connection& c, const std::vector<const registers::Register*>& regs,
+                               const RawMap& changing) {
   const bool depends = std::any_of(regs.begin(), regs.end(), [](const Register* r) {
     return r->per_axis() && homing::may_be_rotary(static_cast<std::size_t>(r->axis)) &&
            r->unit_text(registers::AxisKinds{}) != r->unit_text(registers::default_kinds());
   });
-  return depends ? registers::kinds_of(read_settings(c)) : registers::default_kinds();
+  if (!depends) return registers::default_kinds();
+  RawMap values = read_settings_raw(c);
+  for (const auto& [name, raw] : changing)
+    if (values.contains(name)) values[name] = raw;
+  return registers::kinds_of(settings_of(values));
 }
 
 namespace {

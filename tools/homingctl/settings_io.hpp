@@ -25,8 +25,11 @@ RawMap read_settings_raw(Connection& c);
 homing::Settings settings_of(const RawMap& raw);  // registers::settings_from_raw
 homing::Settings read_settings(Connection& c);
 // The kinds the module's axes move with, read only when a value of `regs`
-// has a unit that depends on one (a length, feedrate ... of A, B or C).
-registers::AxisKinds kinds_for(Connection& c, const std::vector<const registers::Register*>& regs);
+// has a unit that depends on one (a length, feedrate ... of A, B or C);
+// `changing`: settings a write sets at the same time (axis.a.kind = linear),
+// taken as they will be.
+registers::AxisKinds kinds_for(Connection& c, const std::vector<const registers::Register*>& regs,
+                               const RawMap& changing = {});
 
 struct Block {
   std::uint16_t start = 0;
