@@ -15,7 +15,7 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
   const Settings moves = motion_settings(settings);
   const AxisSettings& s = moves.axes[axis];
   const char X = kAxisUpper[axis];
-  const auto u = axis_unit(axis);
+  const auto u = axis_unit(settings, axis);  // a slave's is its master's
   const auto ph = phase_name(a.phase);
   switch (a.code) {
     case AlarmCode::none: return "";

@@ -128,6 +128,10 @@ std::optional<SettingsFault> check_slave(const Settings& settings, const Setting
 }
 
 std::optional<SettingsFault> check_axis_in(const Settings& settings, const Settings& pair, std::size_t axis) {
+  // Checked on the axis's own setting, whatever it moves with: a rotary X
+  // is wrong even while X is a slave.
+  if (settings.axes[axis].kind == AxisKind::rotary && !may_be_rotary(axis))
+    return fault(axis, AxisField::kind, CheckRule::kind_linear_only, static_cast<double>(AxisKind::rotary));
   if (auto f = check_slave(settings, pair, axis)) return f;
   const AxisSettings& s = pair.axes[axis];
   if (auto f = check_limits(s, axis)) return f;
@@ -200,7 +204,7 @@ std::optional<SettingsFault> new_fault(const Settings& before, const Settings& a
 std::string describe_fault(const SettingsFault& f, const Settings& settings) {
   const AxisSettings& s = settings.axes[f.axis];
   const auto letter = kAxisLetters[f.axis];
-  const auto unit = axis_unit(f.axis);
+  const auto unit = axis_unit(settings, f.axis);  // a slave's is its master's
   const std::string name = fmt::format("axis.{}.{}", letter, field_name(f.field));
   switch (f.rule) {
     case CheckRule::none: return "";
@@ -266,6 +270,10 @@ std::string describe_fault(const SettingsFault& f, const Settings& settings) {
       return fmt::format("{}: the axis would rest {:g} {} from its edge (pull-off, plus a slave's "
                          "switch_compensation); a shared home/limit sensor needs more than 0 so the axis "
                          "comes to rest off its sensor", name, f.value, unit);
+    case CheckRule::kind_linear_only:
+      return fmt::format("{} = rotary: {} is a linear axis (mm); only A, B and C can be rotary. Set {} = "
+                         "linear, or put the rotary axis on A, B or C",
+                         name, kAxisUpper[f.axis], name);
   }
   return "?";
 }

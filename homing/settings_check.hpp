@@ -31,6 +31,7 @@ enum class CheckRule : std::uint8_t {
   backoff_too_short,        // max_backoff cannot release the sensor after the stop (and push)
   shared_limit_rests_on_sensor,  // a shared home/limit sensor needs a pull-off off the sensor
   shared_limit_without_sensor,   // the homing method has no home sensor to share with a limit
+  kind_linear_only,         // X, Y and Z cannot be rotary
 };
 
 // Each rule in words, for the refusal codes a PLC reads
@@ -64,8 +65,10 @@ inline constexpr EnumInfo<CheckRule> kCheckRuleInfo[] = {
      "a home sensor shared with a limit needs a pull-off that leaves the sensor"},
     {CheckRule::shared_limit_without_sensor, "shared_limit_without_sensor",
      "shared_limit needs a homing method with a home sensor to share"},
+    {CheckRule::kind_linear_only, "kind_linear_only",
+     "X, Y and Z are linear axes: only A, B and C can be rotary"},
 };
-static_assert(lists_every_value(kCheckRuleInfo, CheckRule::shared_limit_without_sensor));
+static_assert(lists_every_value(kCheckRuleInfo, CheckRule::kind_linear_only));
 constexpr std::span<const EnumInfo<CheckRule>> enum_table(CheckRule) { return kCheckRuleInfo; }
 
 struct SettingsFault {

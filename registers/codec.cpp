@@ -259,12 +259,12 @@ std::string modbus_reference(Table table, std::uint16_t address) {
   return fmt::format("{}{:05d}", prefix, std::uint32_t{address} + 1);
 }
 
-std::string format_value(const Register& reg, std::int64_t raw) {
+std::string format_value(const Register& reg, std::int64_t raw, const AxisKinds& kinds) {
   if (reg.type == Type::enumeration) {
     const auto n = value_name(reg, raw);
     return n.empty() ? fmt::format("{}", raw) : fmt::format("{} ({})", raw, n);
   }
-  const auto unit = reg.unit_text();
+  const auto unit = reg.unit_text(kinds);
   if (unit.empty()) return fmt::format("{}", to_engineering(reg, raw));
   return fmt::format("{} {}", to_engineering(reg, raw), unit);
 }

@@ -113,6 +113,6 @@ std::optional<Refusal> read_module_bits(Table table, std::uint16_t start, std::s
 // "40101" style reference of an address, for messages (1-based, 6 digits).
 std::string modbus_reference(Table table, std::uint16_t address);
 // "axis.x.seek_feedrate = 1200 mm/min" style value text.
-std::string format_value(const Register& reg, std::int64_t raw);
+std::string format_value(const Register& reg, std::int64_t raw, const AxisKinds& kinds = default_kinds());
 
 }  // namespace registers

@@ -178,7 +178,7 @@ void log_stop(const StopReport& r) {
     const StopReport::Axis& x = r.axes[a];
     if (!x.moving) continue;
     any = true;
-    const auto unit = homing::axis_unit(a);
+    const auto unit = x.unit;
     spdlog::info("stop: {} decelerated from {:.3f} {}/s at {:.3f} {} to rest at {:.3f} {} ({:.3f} {} in {:.3f} s)",
                  homing::kAxisUpper[a], x.velocity_mm_per_s, unit, x.from_mm, unit, x.rest_mm, unit,
                  std::abs(x.rest_mm - x.from_mm), unit, r.machine_s);

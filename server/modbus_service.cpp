@@ -246,7 +246,7 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
     if (accepted->changes_persisted()) {
       using registers::RefusalReason;
       const std::uint16_t about = first_address(accepted->changes, start);
-      const std::string changes = describe_changes(accepted->changes);
+      const std::string changes = describe_changes(accepted->changes, registers::kinds_of(accepted->settings));
       if (locked_)
         return refuse(fc,
                       registers::Refusal::because(RefusalReason::locked, about,
@@ -284,7 +284,7 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
           spdlog::warn("history limit not applied: {}", r.error().message);
       }
       spdlog::info("settings changed by {} {}: {}", client.transport, client.address,
-                   describe_changes(accepted->changes));
+                   changes);
     }
     const std::uint16_t old_heartbeat = host_.heartbeat;
     host_ = accepted->host;

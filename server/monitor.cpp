@@ -7,6 +7,8 @@
 #include <fstream>
 #include <string>
 
+#include "homing/gantry.hpp"
+
 namespace server {
 
 std::int64_t unix_ms() {
@@ -150,9 +152,9 @@ void Monitor::poll(std::int64_t now_ms) {
       if (!(run_axes_ & homing::axis_bit(a))) continue;
       run.axis[a] = axis_record(run.result == 0, st.axes[a], now_ms - run_start_ms_);
       if (run.axis[a].excluded == persistence::Excluded::not_homed_before)
-        spdlog::info("home correction of {} not counted in its statistics: {} ({:+.3f} mm is where it stood)",
+        spdlog::info("home correction of {} not counted in its statistics: {} ({:+.3f} {} is where it stood)",
                      homing::kAxisUpper[a], persistence::excluded_text(run.axis[a].excluded),
-                     st.axes[a].home_correction_mm);
+                     st.axes[a].home_correction_mm, homing::axis_unit(settings, a));
     }
     if (run.result == 0) spdlog::info("homing done in {} ms", now_ms - run_start_ms_);
     else spdlog::warn("homing ended with alarm {}", homing::alarm_name(static_cast<homing::AlarmCode>(run.result)));

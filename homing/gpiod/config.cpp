@@ -70,6 +70,13 @@ std::expected<LineSpec, std::string> parse_line(const Ctx& ctx, const std::strin
   return spec;
 }
 
+// The wiring is read before the settings: the unit of steps_per_unit is the
+// axis's kind (axis.<a>.kind), mm on X, Y, Z.
+std::string unit_text(std::size_t a) {
+  if (!may_be_rotary(a)) return std::string(unit_of(AxisKind::linear));
+  return fmt::format("deg, or mm when axis.{}.kind = linear", kAxisLetters[a]);
+}
+
 std::expected<std::int64_t, std::string> parse_int(const Ctx& ctx, const toml::node& node, const std::string& key,
                                                    std::int64_t lo, std::int64_t hi) {
   const auto* i = node.as_integer();
@@ -94,7 +101,7 @@ std::expected<void, std::string> parse_axis(const Ctx& ctx, std::size_t a, const
       const auto d = v.value<double>();
       if (!d || !(*d > 0) || *d > 1e6)
         return Error(fmt::format("{}: [{}] steps_per_unit must be a number > 0 (motor steps per {})", ctx.origin,
-                                 section, axis_unit(a)));
+                                 section, unit_text(a)));
       out.steps_per_unit = *d;
       continue;
     }
@@ -127,7 +134,7 @@ std::expected<void, std::string> parse_axis(const Ctx& ctx, std::size_t a, const
                              ctx.origin, section));
   if (out.steps_per_unit <= 0)
     return Error(fmt::format("{}: [{}] needs steps_per_unit (motor steps per {}, e.g. 400)", ctx.origin, section,
-                             axis_unit(a)));
+                             unit_text(a)));
   return {};
 }
 

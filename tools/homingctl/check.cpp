@@ -45,7 +45,8 @@ CheckReport check_settings(const homing::Settings& settings,
     c.enabled = s.mode != HomingMode::disabled || faults[i];
     c.stop_distance_mm = homing::seek_stop_distance_mm(s);
     c.max_stop_distance_mm = s.max_stop_distance_mm;
-    const auto u = homing::axis_unit(i);
+    c.unit = homing::axis_unit(settings, i);  // a slave's is its master's
+    const std::string& u = c.unit;
     if (!c.enabled) {
       r.axes.push_back(c);
       continue;
@@ -160,7 +161,7 @@ std::string render_check(const CheckReport& r) {
   out += fmt::format("{:<4} {:<26} {:>12} {:>13} {}\n", "axis", "stop distance / max", "seek worst", "after trigger",
                      "verdict");
   for (const AxisCheck& c : r.axes) {
-    const auto u = homing::axis_unit(c.axis);
+    const std::string& u = c.unit;
     if (!c.enabled) {
       out += fmt::format("{:<4} disabled\n", homing::kAxisUpper[c.axis]);
       continue;
@@ -190,7 +191,7 @@ nlohmann::json check_json(const CheckReport& r) {
   j["warnings"] = r.warnings;
   j["axes"] = nlohmann::json::array();
   for (const AxisCheck& c : r.axes) {
-    nlohmann::json a{{"axis", std::string(homing::kAxisLetters[c.axis])}, {"enabled", c.enabled}};
+    nlohmann::json a{{"axis", std::string(homing::kAxisLetters[c.axis])}, {"enabled", c.enabled}, {"unit", c.unit}};
     if (c.enabled) {
       a["stop_distance"] = c.stop_distance_mm;
       a["max_stop_distance"] = c.max_stop_distance_mm;

@@ -216,6 +216,7 @@ void Gen::place_slave(std::size_t si, std::size_t mi, const PairDraw& pd, double
     s.final_position_mm = d.u(-50, 50);
   } else {
     s = ms;
+    s.kind = own.kind;  // what the axis is stays its own (X, Y, Z are linear only); its unit follows the master's
   }
   s.acceleration_mm_per_s2 = pd.accel;
   s.debounce_ms = pd.debounce_ms;
