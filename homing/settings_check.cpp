@@ -15,13 +15,27 @@ std::optional<SettingsFault> fault(std::size_t axis, AxisField f, CheckRule r, d
   return SettingsFault{axis, f, r, v};
 }
 
-std::optional<SettingsFault> check_motion(const AxisSettings& s, std::size_t axis) {
+// Both speeds and the acceleration: every method that searches needs them.
+std::optional<SettingsFault> check_speeds(const AxisSettings& s, std::size_t axis) {
   if (s.seek_feedrate_mm_per_min <= 0)
     return fault(axis, AxisField::seek_feedrate, CheckRule::not_positive, s.seek_feedrate_mm_per_min);
   if (s.latch_feedrate_mm_per_min <= 0)
     return fault(axis, AxisField::latch_feedrate, CheckRule::not_positive, s.latch_feedrate_mm_per_min);
   if (s.acceleration_mm_per_s2 <= 0)
     return fault(axis, AxisField::acceleration, CheckRule::not_positive, s.acceleration_mm_per_s2);
+  return std::nullopt;
+}
+
+// Where the axis rests from its reference, and the move before its search.
+std::optional<SettingsFault> check_pull_off_and_pre_move(const AxisSettings& s, std::size_t axis) {
+  if (s.pull_off_mm < 0) return fault(axis, AxisField::pull_off, CheckRule::negative, s.pull_off_mm);
+  if (s.pre_move_mode != PreMove::none && s.pre_move_distance_mm <= 0)
+    return fault(axis, AxisField::pre_move_distance, CheckRule::missing_distance, s.pre_move_distance_mm);
+  return std::nullopt;
+}
+
+std::optional<SettingsFault> check_motion(const AxisSettings& s, std::size_t axis) {
+  if (auto f = check_speeds(s, axis)) return f;
   if (s.latch_feedrate_mm_per_min >= s.seek_feedrate_mm_per_min)
     return fault(axis, AxisField::latch_feedrate, CheckRule::latch_not_slower, s.latch_feedrate_mm_per_min);
   if (s.max_seek_travel_mm <= 0)
@@ -32,9 +46,7 @@ std::optional<SettingsFault> check_motion(const AxisSettings& s, std::size_t axi
     return fault(axis, AxisField::max_backoff, CheckRule::not_positive, s.max_backoff_mm);
   if (const double needed = seek_stop_distance_mm(s); needed > s.max_stop_distance_mm)
     return fault(axis, AxisField::max_stop_distance, CheckRule::stop_distance_too_long, needed);
-  if (s.pull_off_mm < 0) return fault(axis, AxisField::pull_off, CheckRule::negative, s.pull_off_mm);
-  if (s.pre_move_mode != PreMove::none && s.pre_move_distance_mm <= 0)
-    return fault(axis, AxisField::pre_move_distance, CheckRule::missing_distance, s.pre_move_distance_mm);
+  if (auto f = check_pull_off_and_pre_move(s, axis)) return f;
   const ModeRow& row = mode_row(s.mode);
   if (row.runs(Phase::push) && s.push_distance_mm <= 0)
     return fault(axis, AxisField::push_distance, CheckRule::missing_distance, s.push_distance_mm);
@@ -53,20 +65,12 @@ std::optional<SettingsFault> check_motion(const AxisSettings& s, std::size_t axi
 // Hard-stop homing: the push toward the stop at latch feedrate, bounded in
 // travel and time, and the pull-off and pre-move at seek feedrate.
 std::optional<SettingsFault> check_stop_search(const AxisSettings& s, std::size_t axis) {
-  if (s.seek_feedrate_mm_per_min <= 0)
-    return fault(axis, AxisField::seek_feedrate, CheckRule::not_positive, s.seek_feedrate_mm_per_min);
-  if (s.latch_feedrate_mm_per_min <= 0)
-    return fault(axis, AxisField::latch_feedrate, CheckRule::not_positive, s.latch_feedrate_mm_per_min);
-  if (s.acceleration_mm_per_s2 <= 0)
-    return fault(axis, AxisField::acceleration, CheckRule::not_positive, s.acceleration_mm_per_s2);
+  if (auto f = check_speeds(s, axis)) return f;
   if (s.max_seek_travel_mm <= 0)
     return fault(axis, AxisField::max_seek_travel, CheckRule::not_positive, s.max_seek_travel_mm);
   if (s.stall_timeout_ms <= 0)
     return fault(axis, AxisField::stall_timeout_ms, CheckRule::not_positive, s.stall_timeout_ms);
-  if (s.pull_off_mm < 0) return fault(axis, AxisField::pull_off, CheckRule::negative, s.pull_off_mm);
-  if (s.pre_move_mode != PreMove::none && s.pre_move_distance_mm <= 0)
-    return fault(axis, AxisField::pre_move_distance, CheckRule::missing_distance, s.pre_move_distance_mm);
-  return std::nullopt;
+  return check_pull_off_and_pre_move(s, axis);
 }
 
 std::optional<SettingsFault> check_limits(const AxisSettings& s, std::size_t axis) {
