@@ -32,11 +32,14 @@ enum class AlarmCode : std::uint8_t {
   reapproach_not_found = 16,   // re-approach travelled max_backoff without a trigger
   permit_withdrawn = 17,       // homing permit went off during a cycle
   encoder_fault = 18,          // absolute mode without a valid encoder position
-  drive_no_answer = 19,        // drive mode: no home done within drive_home_timeout
-  drive_answered_at_once = 20, // drive mode: home done too soon after the request (the drive did not home)
-  drive_reference_lost = 21,   // drive mode: home done went off while the axis was homed
+  stop_not_found = 19,         // hard-stop homing travelled max_seek_travel without a stall
+  stall_timeout = 20,          // hard-stop homing ran stall_timeout_ms without a stall
+  stall_at_start = 21,         // hard-stop homing: the stall input was already active before moving
+  drive_no_answer = 22,        // drive mode: no home done within drive_home_timeout
+  drive_answered_at_once = 23, // drive mode: home done too soon after the request (the drive did not home)
+  drive_reference_lost = 24,   // drive mode: home done went off while the axis was homed
 };
-inline constexpr std::uint8_t kAlarmCodeCount = 22;
+inline constexpr std::uint8_t kAlarmCodeCount = 25;
 
 // The alarm table: per code its name, what happened (text) and what a
 // maintenance technician checks (what_to_check). describe_alarm() says what
@@ -86,6 +89,15 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
      "close the guard / give the permit, reset and home again"},
     {AlarmCode::encoder_fault, "encoder_fault", "no valid absolute encoder position",
      "check the encoder cable, its power and the drive's encoder alarm, then reset and home again"},
+    {AlarmCode::stop_not_found, "stop_not_found", "hard-stop homing travelled max_seek_travel without a stall",
+     "check that the drive's stall output is wired and enabled (its torque limit and detection time), the "
+     "homing direction, and that the mechanical stop lies within max_seek_travel"},
+    {AlarmCode::stall_timeout, "stall_timeout", "hard-stop homing pushed for stall_timeout_ms without a stall",
+     "check the drive's stall output and its detection time; raise stall_timeout_ms if the stop lies further "
+     "than latch_feedrate covers in that time"},
+    {AlarmCode::stall_at_start, "stall_at_start", "the stall input was active before the axis moved",
+     "check the stall input's wiring and the drive (a stall output stuck on, or the drive still in torque "
+     "limit); reset the drive, then home again"},
     {AlarmCode::drive_no_answer, "drive_no_answer", "the drive did not report home done within drive_home_timeout",
      "check the home request and home done wiring, that the drive's homing function is enabled and set up "
      "(its own home sensor, speeds), the drive's display, or raise drive_home_timeout_s"},

@@ -43,6 +43,7 @@ void PhaseRunner::dispatch() {
     case Phase::seek: return seek();
     case Phase::stop: return stop();
     case Phase::push: return push();
+    case Phase::push_to_stop: return push_to_stop();
     case Phase::back_off: return back_off();
     case Phase::reapproach: return reapproach();
     case Phase::index: return index();

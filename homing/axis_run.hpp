@@ -48,6 +48,10 @@ struct Waiting {
 struct Jog {
   std::int8_t dir = 0;
 };
+struct PushToStop {
+  double start_s = 0;           // engine time the push began
+  bool stalled = false;         // the drive reported the stall: braking at the stop
+};
 struct DriveHoming {
   double request_s = 0;       // engine time the home request was raised
   bool done_seen_off = false; // home done was seen off since the request: the drive began homing
@@ -56,7 +60,7 @@ struct DriveHoming {
 
 using PhaseData = std::variant<std::monostate, phase_data::Seek, phase_data::Stop,
                                phase_data::BackOff, phase_data::Index, phase_data::Waiting, phase_data::Jog,
-                               phase_data::DriveHoming>;
+                               phase_data::PushToStop, phase_data::DriveHoming>;
 
 // How far this axis has come in the running homing cycle, in order. The
 // gantry partner waits on it.
@@ -74,6 +78,7 @@ struct AxisReadings {
   bool drive_fault = false;
   bool absolute_valid = false;
   double absolute_mm = 0;  // absolute encoder reading
+  bool stall = false;      // the drive reports a stall (torque limit reached)
   bool drive_done = false;  // the drive's home done
 };
 

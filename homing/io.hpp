@@ -30,6 +30,7 @@ struct AxisInputs {
   bool absolute_valid = false;
   double absolute_position_mm = 0;  // absolute encoder reading
   bool drive_fault = false;
+  bool stall = false;           // the drive's stall / torque-limit output (hard-stop homing)
   bool drive_done = false;      // the drive's home done: its own homing finished, its reference valid
 };
 

@@ -27,7 +27,8 @@ enum class Phase : std::uint8_t {
   move = 15,
   stopping = 16,      // decelerating after an alarm or abort
   clear_sensors = 17, // gantry: both sides move off their sensors together before the seek
-  drive_homing = 18,  // the drive homes itself: home request on, waiting for its home done
+  push_to_stop = 18,  // hard-stop homing: pushing toward the mechanical stop until the drive stalls
+  drive_homing = 19,  // the drive homes itself: home request on, waiting for its home done
 };
 
 inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
@@ -50,6 +51,8 @@ inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
     {Phase::stopping, "stopping", "decelerating after an alarm or abort"},
     {Phase::clear_sensors, "clear_sensors",
      "gantry: both sides move off their sensors together (latch feedrate) before the seek"},
+    {Phase::push_to_stop, "push_to_stop",
+     "hard-stop homing: moving into the mechanical stop at reduced current until the drive reports a stall"},
     {Phase::drive_homing, "drive_homing",
      "the drive homes itself: home request on, waiting for its home done within drive_home_timeout"},
 };

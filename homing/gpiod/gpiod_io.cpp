@@ -80,7 +80,7 @@ std::expected<void, std::string> GpiodIo::request_all(const BackendConfig& c) {
     OutputLine step, dir;
     for (auto r : {output(cfg.step, step), output(cfg.dir, dir), output(cfg.enable, a.enable),
                    output(cfg.push, a.push), output(cfg.commutator, a.commutator), edges(cfg.home, a.home),
-                   edges(cfg.index, a.index), level(cfg.drive_fault, 0, a.drive_fault),
+                   edges(cfg.index, a.index), level(cfg.drive_fault, 0, a.drive_fault), level(cfg.stall, 0, a.stall),
                    output(cfg.home_request, a.home_request), level(cfg.home_done, input_debounce_ns_, a.home_done)})
       if (!r) return r;
     if (step.id && dir.id)  // an axis without an output of its own has no pulses to make
@@ -173,6 +173,7 @@ Inputs GpiodIo::read() {
       input->take(period_start_ns_, end, rising_only, *edges, *level);
     }
     ai.drive_fault = sample(a.drive_fault);
+    ai.stall = sample(a.stall);
     ai.drive_done = sample(a.home_done);
     if (a.generator && a.generator->failed()) {
       // A step or dir write failed: the motor no longer follows the count.

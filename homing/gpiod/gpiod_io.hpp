@@ -68,7 +68,7 @@ class GpiodIo final : public MachineIo {
     std::unique_ptr<StepGenerator> generator;
     OutputLine enable, push, commutator, home_request;
     std::unique_ptr<EdgeInput> home, index;
-    std::unique_ptr<LevelInput> drive_fault, home_done;
+    std::unique_ptr<LevelInput> drive_fault, stall, home_done;
     std::string reported_failure;
   };
 

@@ -17,9 +17,11 @@ enum class Fault : std::uint8_t {
   sensor_stuck_inactive = 2,
   wire_break = 3,
   drive_fault = 4,
-  drive_never_answers = 5,     // drive mode: on the home request the drive drops home done and never finishes
-  drive_answers_at_once = 6,   // drive mode: home done on at once on the request, without homing
-  drive_done_lost = 7,         // drive mode: home done held off (lost reference, broken wire)
+  stall_dead = 5,     // the drive's stall output never turns on
+  stall_stuck = 6,    // the drive's stall output is on all the time
+  drive_never_answers = 7,     // drive mode: on the home request the drive drops home done and never finishes
+  drive_answers_at_once = 8,   // drive mode: home done on at once on the request, without homing
+  drive_done_lost = 9,         // drive mode: home done held off (lost reference, broken wire)
 };
 inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::none, "none", "no fault"},
@@ -27,6 +29,8 @@ inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::sensor_stuck_inactive, "sensor_stuck_inactive", "sensor never turns active"},
     {Fault::wire_break, "wire_break", "sensor wire broken (NC reads active, NO never)"},
     {Fault::drive_fault, "drive_fault", "the drive reports a fault"},
+    {Fault::stall_dead, "stall_dead", "the drive's stall output never turns on"},
+    {Fault::stall_stuck, "stall_stuck", "the drive's stall output is on all the time"},
     {Fault::drive_never_answers, "drive_never_answers",
      "the drive starts homing on the home request (drops home done) but never finishes"},
     {Fault::drive_answers_at_once, "drive_answers_at_once", "the drive reports home done at once, without homing"},
@@ -47,6 +51,12 @@ struct AxisConfig {
   double index_pitch_mm = 0;      // 0 = no index
   double index_offset_mm = 0;
   double absolute_offset_mm = 0;  // absolute encoder reads actual + offset
+  // The drive's stall output: on once the carriage has been held by a
+  // mechanical stop, with the motor driving into it, for the detection time
+  // plus a random share of the spread (drawn per contact); off when the
+  // motor no longer drives into the stop.
+  double stall_detect_ms = 20;
+  double stall_spread_ms = 10;
   // The drive's own homing (drive mode): on the home request it moves the
   // carriage itself to its home at its own speed, waits, then reports done.
   double drive_home_position_mm = 0;       // where its homing ends (its own home sensor)

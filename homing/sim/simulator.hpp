@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "bounce.hpp"
+#include "carriage.hpp"
 #include "config.hpp"
 #include "edge_ring.hpp"
 #include "home_sensor.hpp"
@@ -97,6 +98,9 @@ class Simulator {
     bool bounce_odd = false;       // an odd number of bounce toggles so far: contact is flipped
     bool reported_level = false;   // electrical level at the end of the last period
     EdgeRing ring{};
+    double held_since_s = -1;      // the motor has driven into a stop since then (-1: not)
+    double stall_after_s = 0;      // this contact's detection time
+    std::uint64_t contacts = 0;    // contacts with a stop so far (draws the detection time)
     HomingDrive drive{};           // drive mode: the drive's own homing
   };
   bool out_request(std::size_t axis, std::size_t output, const AxisOutputs& out) const;
@@ -109,6 +113,9 @@ class Simulator {
   void advance_axis(std::size_t axis, std::size_t output, const AxisOutputs& drive, bool linked,
                     double dt_s);
   bool electrical_level(std::size_t axis) const;
+  // The drive's stall output at the end of a period whose carriage path ended
+  // at end_mm, the motor moving from motor_start_mm to motor_end_mm.
+  bool stall_output(std::size_t axis, const CarriagePath& path, double motor_start_mm, double motor_end_mm);
   bool reports_edges(std::size_t axis) const;
   void route_sensors(const Outputs& outputs);
 

@@ -94,6 +94,7 @@ home_done = 8
 }
 
 TEST_CASE("wiring check: drive mode needs the home_request and home_done lines, not a home line") {
+  const std::string drive_mode = "axis.x.mode " + std::to_string(static_cast<int>(homing::HomingMode::drive));
   BackendConfig wiring = drive_wiring();
   wiring.axes[0].home.reset();
   CHECK_FALSE(check_wiring(wiring, drive_settings()));
@@ -101,12 +102,12 @@ TEST_CASE("wiring check: drive mode needs the home_request and home_done lines, 
   no_request.axes[0].home_request.reset();
   auto problem = check_wiring(no_request, drive_settings());
   REQUIRE(problem);
-  CHECK_THAT(*problem, Catch::Contains("axis.x.mode 9 has the drive home itself but [gpiod.axes.X] has no "
-                                       "'home_request' line"));
+  CHECK_THAT(*problem, Catch::Contains(drive_mode + " has the drive home itself but [gpiod.axes.X] has no "
+                                                    "'home_request' line"));
   BackendConfig no_done = wiring;
   no_done.axes[0].home_done.reset();
   problem = check_wiring(no_done, drive_settings());
   REQUIRE(problem);
-  CHECK_THAT(*problem, Catch::Contains("axis.x.mode 9 waits for the drive's home done but [gpiod.axes.X] has no "
-                                       "'home_done' line"));
+  CHECK_THAT(*problem, Catch::Contains(drive_mode + " waits for the drive's home done but [gpiod.axes.X] has no "
+                                                    "'home_done' line"));
 }

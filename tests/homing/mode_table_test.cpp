@@ -13,8 +13,9 @@ using namespace rig;
 
 namespace {
 
-// X on the typical switch (release edge at 0.05 mm, trigger edge at 0), an
-// index pulse every 5 mm at 0.3 mm, an absolute encoder reading carriage + 7,
+// X on the typical switch (release edge at 0.05 mm, trigger edge at 0), its
+// mechanical stop at -5 mm, an index pulse every 5 mm at 0.3 mm, an absolute
+// encoder reading carriage + 7,
 // a pre-move and a final move wherever the method allows them.
 Rig rig_for(const ModeRow& row) {
   Rig r;
@@ -98,6 +99,7 @@ TEST_CASE("a mode cannot home without an input its row names, and homes without 
       {Signal::index, "index pulse", [](Rig& r) { r.machine.axes[0].index_pitch_mm = 0; }},
       {Signal::absolute_encoder, "absolute encoder",
        [](Rig& r) { r.tweak_inputs = [](Inputs& in) { in.axes[0].absolute_valid = false; }; }},
+      {Signal::stall, "stall output", [](Rig& r) { r.machine.axes[0].fault = sim::Fault::stall_dead; }},
       {Signal::drive_done, "drive's home done",
        [](Rig& r) { r.tweak_inputs = [](Inputs& in) { in.axes[0].drive_done = false; }; }},
   };
@@ -150,6 +152,12 @@ TEST_CASE("every mode gives the axis the coordinate its row defines", "[modes][t
           // Negative homing: home_position lies pull_off above the reference edge.
           const double rest = rest_point_mm(s, reference_edge_mm(row));
           CHECK(offset == Approx(s.home_position_mm - rest).margin(edge_tolerance_mm(s, r.dt_s)));
+          break;
+        }
+        case Coordinate::mechanical_stop: {
+          // Pull-off above the stop the carriage was pushed against, whatever steps it lost there.
+          const double rest = rest_point_mm(s, r.machine.axes[0].hard_stop_min_mm);
+          CHECK(offset == Approx(s.home_position_mm - rest).margin(1e-9));
           break;
         }
       }

@@ -95,7 +95,7 @@ TEST_CASE("exception 02: an unmapped address, nothing changes") {
   Client c = Client::tcp(d.port());
   const auto before = holding_snapshot(c);
   // Unmapped holding addresses: between the globals, inside a per-axis block's gap, far away.
-  // (X's offset 15 is axis.x.drive_home_timeout_s.)
+  // (X's offsets 15 and 16 are axis.x.drive_home_timeout_s and axis.x.kind.)
   for (std::uint16_t a : {50, 114, 117, 150, 700, 9000, 65535}) {
     INFO("holding " << a);
     REQUIRE(registers::find_register(registers::Unit::module, registers::Table::holding_register, a) == nullptr);
@@ -259,7 +259,8 @@ TEST_CASE("exception 03: a value out of range, nothing changes") {
   Client c = Client::tcp(d.port());
   const auto before = holding_snapshot(c);
   const std::vector<std::pair<const char*, std::int64_t>> bad{
-      {"axis.x.mode", homing::kHomingModeCount},  {"axis.x.direction", 2},          {"axis.y.seek_feedrate", 0},
+      {"axis.x.mode", homing::kHomingModeCount},  // the first number past the mode table
+      {"axis.x.direction", 2},          {"axis.y.seek_feedrate", 0},
       {"axis.z.debounce_ms", 1001}, {"global.watchdog_ms", 60001},    {"sequence.step1", 64},
       {"axis.x.max_seek_travel", 100000001}, {"axis.x.pull_off", -1}, {"axis.x.home_position", -100000001},
       {"global.allowed_without_homing", 3},

@@ -188,6 +188,14 @@ void Gen::causes() {
       m.sim.axes[a].fault = m.plan[a].start_fault;
     }
   }
+  // A drive's stall output dead or stuck on from power-up (hard-stop homing).
+  if (d.chance(0.15)) {
+    std::size_t a = 0;
+    if (pick_axis(axes_where([&](std::size_t x) { return m.settings.axes[x].mode == HomingMode::hard_stop; }), a)) {
+      m.plan[a].start_fault = d.pick({sim::Fault::stall_dead, sim::Fault::stall_stuck});
+      m.sim.axes[a].fault = m.plan[a].start_fault;
+    }
+  }
   // A drive that homes itself gone wrong: it never answers, answers at once,
   // has lost its home done, or answers after its time limit.
   if (d.chance(0.12)) {
@@ -215,6 +223,13 @@ void Gen::causes() {
 
 double Gen::axis_time_estimate(std::size_t a) const {
   const AxisSettings e = effective(m.settings, a);
+  if (e.mode == HomingMode::hard_stop) {
+    const sim::AxisConfig& c = m.sim.axes[a];
+    const double stop = e.direction == Direction::negative ? c.hard_stop_min_mm : c.hard_stop_max_mm;
+    const double latch_v = mm_per_min_to_mm_per_s(e.latch_feedrate_mm_per_min);
+    return (std::abs(c.actual_position_mm - stop) + e.pre_move_distance_mm) / latch_v + 1.0 +
+           (final_move_wanted(e) ? 2.0 : 0.0);
+  }
   if (e.mode == HomingMode::drive) {
     const sim::AxisConfig& c = m.sim.axes[a];
     return std::abs(c.drive_home_position_mm - c.actual_position_mm) / (c.drive_speed_mm_per_min / 60) +

@@ -162,6 +162,37 @@ void Gen::still_axis(std::size_t a) {
   }
 }
 
+void Gen::hard_stop_axis(std::size_t a) {
+  AxisSettings& s = m.settings.axes[a];
+  sim::AxisConfig& c = m.sim.axes[a];
+  draw_motion(s, c, PairDraw{});
+  const double dir = s.direction == Direction::positive ? 1.0 : -1.0;
+  // In the frame the stop lies at 0, the carriage starts above it.
+  const double start_f = d.u(2, 60);
+  c.actual_position_mm = mirror(dir, start_f);
+  c.sensor_min_mm = 1;  // no cam: max below min
+  c.sensor_max_mm = 0;
+  set_stops(a, dir, 0, start_f + 500);
+  c.stall_detect_ms = d.u(5, 40);
+  c.stall_spread_ms = d.u(0, 20);
+  const double pre = s.pre_move_mode == PreMove::always ? s.pre_move_distance_mm : 0;
+  // Room for the stall's detection and the braking after it, lost against the stop.
+  s.max_seek_travel_mm = start_f + pre + d.u(1, 30);
+  const double latch_v = mm_per_min_to_mm_per_s(s.latch_feedrate_mm_per_min);
+  s.stall_timeout_ms = (s.max_seek_travel_mm / latch_v * 1.2 + 1) * 1000;
+  s.shared_limit = false;
+  s.final_move_enable = d.chance(0.3);
+  s.final_position_mm = s.home_position_mm - dir * d.u(0, 20);  // away from the stop
+  // Soft limits that keep jogs and moves off the stop: its side just inside
+  // the stop, between it and the home position.
+  s.pull_off_mm = std::max(s.pull_off_mm, 0.2);
+  const double stop_machine = s.home_position_mm + dir * s.pull_off_mm;
+  s.soft_limits_enable = d.chance(0.5);
+  const double near = stop_machine - dir * 0.1, far = s.home_position_mm - dir * d.u(25, 100);
+  s.soft_limit_min_mm = std::min(near, far);
+  s.soft_limit_max_mm = std::max(near, far);
+}
+
 // The drive's own home lies near the start, well inside the stops and off the
 // cam; it answers within its time limit (late, up to most of the margin, one
 // time in four), at its own speed.
@@ -202,6 +233,7 @@ void Gen::place_slave(std::size_t si, std::size_t mi, const PairDraw& pd, double
     s.final_position_mm = d.u(-50, 50);
   } else {
     s = ms;
+    s.kind = own.kind;  // what the axis is stays its own (X, Y, Z are linear only); its unit follows the master's
   }
   s.acceleration_mm_per_s2 = pd.accel;
   s.debounce_ms = pd.debounce_ms;
@@ -344,8 +376,11 @@ void Gen::roles_and_modes() {
     s.mode = d.pick({HomingMode::disabled, HomingMode::manual, HomingMode::switch_release,
                      HomingMode::switch_release, HomingMode::switch_reapproach, HomingMode::switch_reapproach,
                      HomingMode::switch_index, HomingMode::absolute, HomingMode::absolute_final,
-                     HomingMode::pushing_release, HomingMode::pushing_reapproach, HomingMode::drive});
-    if (s.mode == HomingMode::drive) {
+                     HomingMode::pushing_release, HomingMode::pushing_reapproach, HomingMode::hard_stop,
+                     HomingMode::drive});
+    if (s.mode == HomingMode::hard_stop) {
+      hard_stop_axis(a);
+    } else if (s.mode == HomingMode::drive) {
       drive_axis(a);
     } else if (mode_uses_switch(s.mode)) {
       s.shared_limit = !mode_is_pushing(s.mode) && d.chance(0.25);

@@ -46,7 +46,7 @@
 TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // 8001884: a commutator slave squared on a bounce (fails before the fix of
   // align_slave on this generator; named scenario in gantry_test.cpp).
-  const std::uint64_t seeds[] = {1, 7, 3, 8, 490, 715, 2, 173, 959, 1242, 2054, 84, 4, 103, 1069, 412, 627, 3972, 8001884};
+  const std::uint64_t seeds[] = {1, 7, 3, 8, 490, 715, 2, 173, 959, 1242, 2054, 84, 4, 103, 1069, 412, 627, 3972, 8001884, 31342370};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);

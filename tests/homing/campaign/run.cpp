@@ -103,9 +103,26 @@ std::vector<Phase> Run::phases_run(std::size_t a) const {
     if (pair_master(r_.settings, a) >= 0 && r_.settings.axes[a].slave_mode == SlaveMode::external_commutator)
       p.push_back(Phase::align_slave);
   }
+  if (e.mode == HomingMode::hard_stop) {
+    p = {Phase::push_to_stop, Phase::pull_off};
+    if (e.pre_move_mode != PreMove::none) p.push_back(Phase::pre_move);
+  }
+  // A software-slaved pair on its sensors first clears them together.
+  if (const int partner = partner_index(r_.settings, a); partner >= 0) {
+    const std::size_t slave = master_index(r_.settings, a) >= 0 ? a : static_cast<std::size_t>(partner);
+    if (r_.settings.axes[slave].slave_mode == SlaveMode::own_output) p.push_back(Phase::clear_sensors);
+  }
   if (e.mode == HomingMode::drive) p.push_back(Phase::drive_homing);
   if (final_move_wanted(e)) p.push_back(Phase::final_move);
   return p;
+}
+
+void Run::apply_in_motion(const Event& e, Causes& causes) {
+  const std::size_t from = causes.list.size();
+  apply(e, causes, CyclePlan{});
+  step();
+  for (std::size_t i = from; i < causes.list.size(); ++i)
+    if (causes.list[i].phase_axis) causes.list[i].phase_seen = r_.axis(*causes.list[i].phase_axis).phase;
 }
 
 void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {

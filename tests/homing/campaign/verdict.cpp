@@ -121,6 +121,19 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
       c.add(letter(a) + "'s cam shorter than its stop", {AlarmCode::overrun_during_stop, AlarmCode::sensor_not_found}, bit,
             mover && overruns);
     }
+    // Hard-stop homing: a stall output that never comes or is on all the
+    // time, or a stop further than the push reaches (README).
+    if (mover && e.mode == HomingMode::hard_stop) {
+      if (f == sim::Fault::stall_dead)
+        c.add(letter(a) + "'s dead stall output", {AlarmCode::stop_not_found, AlarmCode::stall_timeout}, bit, true);
+      if (f == sim::Fault::stall_stuck) c.add(letter(a) + "'s stall output stuck on", {AlarmCode::stall_at_start}, bit, true);
+      const auto& cfg = r.sim().axis_config(a);
+      const double stop = dir_of(e) < 0 ? cfg.hard_stop_min_mm : cfg.hard_stop_max_mm;
+      const double reach = e.max_seek_travel_mm - (e.pre_move_mode == PreMove::always ? e.pre_move_distance_mm : 0);
+      const double gap = std::abs(r.actual(a) - stop);
+      // Near the end of the reach the stall's detection time decides.
+      if (gap > reach - 1) c.add(letter(a) + "'s stop beyond the push's reach", {AlarmCode::stop_not_found, AlarmCode::stall_timeout}, bit, gap > reach + 1e-3);
+    }
     if (p.rest_on_sensor) c.add(letter(a) + "'s shared limit resting on its sensor", {AlarmCode::settings_fault, AlarmCode::not_released}, bit);
     // A cycle that starts deeper in the cam than max_backoff can release (a
     // jog or move left it there) backs off straight away and must give up.
@@ -304,6 +317,9 @@ double path_bound(rig::Rig& r, const Machine& m, std::size_t a, double x_start) 
       final_d = std::abs(e.final_position_mm - (x_start + c.absolute_offset_mm - e.home_position_mm));
     }
   }
+  if (e.mode == HomingMode::hard_stop)
+    return e.pre_move_distance_mm + e.max_seek_travel_mm + stop_distance_mm(latch_v, acc) + latch_v * m.max_dt_s +
+           e.pull_off_mm + final_d + stop + 1;
   if (e.mode == HomingMode::drive) {
     // The drive's own travel to its home (from where the cycle started), then the final move.
     const auto& c = r.sim().axis_config(a);
@@ -331,7 +347,7 @@ double time_bound(rig::Rig& r, const Machine& m, const CyclePlan& plan) {
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     if (!(plan.movers & axis_bit(a))) continue;
     const AxisSettings e = effective(r.settings, a);
-    const double v = mm_per_min_to_mm_per_s(mode_uses_switch(e.mode) ? e.latch_feedrate_mm_per_min : e.seek_feedrate_mm_per_min);
+    const double v = mm_per_min_to_mm_per_s(searches(e.mode) ? e.latch_feedrate_mm_per_min : e.seek_feedrate_mm_per_min);
     if (v > 0) t += 2 * path_bound(r, m, a, r.actual(a)) / v;
     if (e.mode == HomingMode::drive) t += e.drive_home_timeout_s;  // at most, whatever the drive does
   }
