@@ -69,6 +69,14 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
       return fmt::format("{}: homing permit went off during {}", X, ph);
     case AlarmCode::encoder_fault:
       return fmt::format("{}: absolute encoder gives no valid position", X);
+    case AlarmCode::unlock_not_confirmed:
+      return fmt::format("{}: locking indexer not reported unlocked within lock_timeout_ms {:g} ms of the "
+                         "unlock output; the axis did not move", X, s.lock_timeout_ms);
+    case AlarmCode::lock_not_confirmed:
+      return fmt::format("{}: locking indexer not reported locked within lock_timeout_ms {:g} ms after the "
+                         "axis came to rest", X, s.lock_timeout_ms);
+    case AlarmCode::lock_engaged:
+      return fmt::format("{}: locking indexer reported locked during {} while the unlock output was on", X, ph);
   }
   return "?";
 }

@@ -32,8 +32,11 @@ enum class AlarmCode : std::uint8_t {
   reapproach_not_found = 16,   // re-approach travelled max_backoff without a trigger
   permit_withdrawn = 17,       // homing permit went off during a cycle
   encoder_fault = 18,          // absolute mode without a valid encoder position
+  unlock_not_confirmed = 19,   // locking indexer: not unlocked within lock_timeout_ms
+  lock_not_confirmed = 20,     // locking indexer: not locked again within lock_timeout_ms of rest
+  lock_engaged = 21,           // locking indexer: reported locked while unlocked for motion
 };
-inline constexpr std::uint8_t kAlarmCodeCount = 19;
+inline constexpr std::uint8_t kAlarmCodeCount = 22;
 
 // The alarm table: per code its name, what happened (text) and what a
 // maintenance technician checks (what_to_check). describe_alarm() says what
@@ -83,8 +86,17 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
      "close the guard / give the permit, reset and home again"},
     {AlarmCode::encoder_fault, "encoder_fault", "no valid absolute encoder position",
      "check the encoder cable, its power and the drive's encoder alarm, then reset and home again"},
+    {AlarmCode::unlock_not_confirmed, "unlock_not_confirmed", "locking indexer did not report unlocked in time",
+     "check the indexer's air or hydraulic supply, its unlock valve and the unlocked sensor and their wiring, "
+     "or raise lock_timeout_ms; then reset"},
+    {AlarmCode::lock_not_confirmed, "lock_not_confirmed", "locking indexer did not report locked in time after rest",
+     "check that the locking pin can enter (the axis rests on an indexing position), the unlock valve drops "
+     "and the unlocked sensor releases, or raise lock_timeout_ms; then reset"},
+    {AlarmCode::lock_engaged, "lock_engaged", "locking indexer reported locked while unlocked for motion",
+     "check the indexer's air or hydraulic pressure, the unlock valve and the unlocked sensor and its wiring "
+     "(a flickering sensor), and the axis for damage; then reset and home again"},
 };
-static_assert(lists_every_value(kAlarmInfo, AlarmCode::encoder_fault));
+static_assert(lists_every_value(kAlarmInfo, AlarmCode::lock_engaged));
 static_assert(std::size(kAlarmInfo) == kAlarmCodeCount);
 constexpr std::span<const AlarmInfo> enum_table(AlarmCode) { return kAlarmInfo; }
 

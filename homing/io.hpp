@@ -30,6 +30,9 @@ struct AxisInputs {
   bool absolute_valid = false;
   double absolute_position_mm = 0;  // absolute encoder reading
   bool drive_fault = false;
+  // Locking indexer: the pin is fully out (LinuxCNC joint.N.is-unlocked).
+  // Only read on an axis with axis.<a>.indexer_lock.
+  bool indexer_unlocked = false;
 };
 
 // Commands arrive as one-period requests (the runtime turns a coil write into
@@ -60,6 +63,7 @@ struct AxisOutputs {
   bool enable = false;
   bool push_output = false;      // lowers motor current while pushing into the stop
   bool commutator_output = false;  // master axis only: route the output to the slave
+  bool indexer_unlock = false;   // locking indexer: pull the pin out (LinuxCNC joint.N.unlock)
 };
 
 struct Outputs {

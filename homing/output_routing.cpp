@@ -1,6 +1,6 @@
 // Each axis's output channel: the motion of the motor it drives now (a
 // commutator master's channel drives its slave's motor while it aligns),
-// the enable, push and commutator outputs.
+// the enable, push, commutator and indexer unlock outputs.
 #include "engine.hpp"
 #include "gantry.hpp"
 
@@ -30,6 +30,7 @@ void Engine::route_outputs(const Settings& settings) {
     out.enable = !estop_;
     out.push_output = run.push_output;
     out.commutator_output = run.commutator_output;
+    out.indexer_unlock = run.indexer.unlock_output();
   }
 }
 

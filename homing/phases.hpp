@@ -27,6 +27,8 @@ enum class Phase : std::uint8_t {
   move = 15,
   stopping = 16,      // decelerating after an alarm or abort
   clear_sensors = 17, // gantry: both sides move off their sensors together before the seek
+  unlock = 18,        // locking indexer: unlock output on, motion held until it reports unlocked
+  lock = 19,          // locking indexer: at rest, unlock output off, waiting for it to lock
 };
 
 inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
@@ -49,8 +51,10 @@ inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
     {Phase::stopping, "stopping", "decelerating after an alarm or abort"},
     {Phase::clear_sensors, "clear_sensors",
      "gantry: both sides move off their sensors together (latch feedrate) before the seek"},
+    {Phase::unlock, "unlock", "locking indexer: unlocking before the axis moves (motion held until unlocked)"},
+    {Phase::lock, "lock", "locking indexer: at rest, locking again"},
 };
-static_assert(lists_every_value(kPhaseInfo, Phase::clear_sensors));
+static_assert(lists_every_value(kPhaseInfo, Phase::lock));
 constexpr std::span<const EnumInfo<Phase>> enum_table(Phase) { return kPhaseInfo; }
 
 std::string_view phase_name(Phase phase);

@@ -79,6 +79,10 @@ struct AxisSettings {
   bool soft_limits_enable = false;
   bool shared_limit = false;
   double jog_feedrate_mm_per_min = 0;
+  // Locking indexer (README "Locking indexer"): unlock before any motion of
+  // this axis, lock again once it rests, each confirmed within lock_timeout_ms.
+  bool indexer_lock = false;
+  double lock_timeout_ms = 0;
   friend bool operator==(const AxisSettings&, const AxisSettings&) = default;
 };
 
@@ -132,6 +136,8 @@ enum class AxisField : std::uint8_t {
   soft_limits_enable,
   shared_limit,
   jog_feedrate,
+  indexer_lock,
+  lock_timeout_ms,
 };
 // The name of each: the suffix of its register name (axis.<a>.<name>).
 struct AxisFieldInfo {
@@ -167,8 +173,10 @@ inline constexpr AxisFieldInfo kAxisFieldInfo[] = {
     {AxisField::soft_limits_enable, "soft_limits_enable"},
     {AxisField::shared_limit, "shared_limit"},
     {AxisField::jog_feedrate, "jog_feedrate"},
+    {AxisField::indexer_lock, "indexer_lock"},
+    {AxisField::lock_timeout_ms, "lock_timeout_ms"},
 };
-static_assert(lists_every_value(kAxisFieldInfo, AxisField::jog_feedrate));
+static_assert(lists_every_value(kAxisFieldInfo, AxisField::lock_timeout_ms));
 constexpr std::span<const AxisFieldInfo> enum_table(AxisField) { return kAxisFieldInfo; }
 
 std::string_view field_name(AxisField field);

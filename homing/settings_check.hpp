@@ -30,6 +30,7 @@ enum class CheckRule : std::uint8_t {
   squaring_beyond_misalignment,  // pull-off difference + compensation alone exceed max_misalignment
   backoff_too_short,        // max_backoff cannot release the sensor after the stop (and push)
   shared_limit_rests_on_sensor,  // a shared home/limit sensor needs a pull-off off the sensor
+  indexer_in_gantry,        // a locking indexer on a gantry master or slave
 };
 
 // Each rule in words, for the refusal codes a PLC reads
@@ -61,8 +62,10 @@ inline constexpr EnumInfo<CheckRule> kCheckRuleInfo[] = {
      "max_backoff cannot release the sensor after the stop (and the push)"},
     {CheckRule::shared_limit_rests_on_sensor, "shared_limit_rests_on_sensor",
      "a home sensor shared with a limit needs a pull-off that leaves the sensor"},
+    {CheckRule::indexer_in_gantry, "indexer_in_gantry",
+     "a locking indexer (indexer_lock) is for an axis of its own, not a gantry master or slave"},
 };
-static_assert(lists_every_value(kCheckRuleInfo, CheckRule::shared_limit_rests_on_sensor));
+static_assert(lists_every_value(kCheckRuleInfo, CheckRule::indexer_in_gantry));
 constexpr std::span<const EnumInfo<CheckRule>> enum_table(CheckRule) { return kCheckRuleInfo; }
 
 struct SettingsFault {

@@ -70,7 +70,7 @@ enum class Key : std::uint8_t {
   sim_seed, sim_actual_position, sim_sensor_min, sim_sensor_max, sim_hysteresis, sim_noise,
   sim_bounce_ms, sim_sensor_nc, sim_hard_stop_min, sim_hard_stop_max, sim_index_pitch,
   sim_index_offset, sim_absolute_offset, sim_fault, sim_lose_steps, sim_estop, sim_start_button,
-  sim_sensor, sim_at_hard_stop, sim_driven_by,
+  sim_sensor, sim_at_hard_stop, sim_driven_by, sim_unlock_delay_ms, sim_lock_delay_ms, sim_indexer_locked,
 };
 
 struct Register;

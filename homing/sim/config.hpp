@@ -17,6 +17,8 @@ enum class Fault : std::uint8_t {
   sensor_stuck_inactive = 2,
   wire_break = 3,
   drive_fault = 4,
+  indexer_stuck_locked = 5,  // the indexer's pin goes in and stays in, whatever the unlock output says
+  indexer_never_locks = 6,   // the pin stays out once out: the indexer never reports locked again
 };
 inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::none, "none", "no fault"},
@@ -24,8 +26,11 @@ inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::sensor_stuck_inactive, "sensor_stuck_inactive", "sensor never turns active"},
     {Fault::wire_break, "wire_break", "sensor wire broken (NC reads active, NO never)"},
     {Fault::drive_fault, "drive_fault", "the drive reports a fault"},
+    {Fault::indexer_stuck_locked, "indexer_stuck_locked",
+     "the locking indexer's pin goes in (at once, even under motion) and never comes out"},
+    {Fault::indexer_never_locks, "indexer_never_locks", "the locking indexer's pin, once out, never goes in again"},
 };
-static_assert(lists_every_value(kFaultInfo, Fault::drive_fault));
+static_assert(lists_every_value(kFaultInfo, Fault::indexer_never_locks));
 constexpr std::span<const EnumInfo<Fault>> enum_table(Fault) { return kFaultInfo; }
 
 struct AxisConfig {
@@ -40,6 +45,10 @@ struct AxisConfig {
   double index_offset_mm = 0;
   double absolute_offset_mm = 0;  // absolute encoder reads actual + offset
   Fault fault = Fault::none;
+  // Locking indexer (when fitted, MachineConfig::indexer): time from the
+  // unlock output's change to the pin being out / in.
+  double unlock_delay_ms = 0;
+  double lock_delay_ms = 0;
 };
 
 struct MachineConfig {
@@ -47,6 +56,9 @@ struct MachineConfig {
   std::uint64_t seed = 1;
   // commutator_slave[m] = s when axis s is an external-commutator slave of master m (else -1).
   std::array<int, kAxisCount> commutator_slave{-1, -1, -1, -1, -1, -1};
+  // indexer[a]: axis a has a locking indexer (its pin holds the carriage
+  // while in; its unlocked input reports the pin out).
+  std::array<bool, kAxisCount> indexer{};
 };
 
 }  // namespace homing::sim

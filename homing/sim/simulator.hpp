@@ -58,6 +58,8 @@ class Simulator {
   // Wires axis slave (-1: none) to master's step output through a commutator.
   // Takes effect at the next advance(); the carriages stay where they are.
   void set_commutator_slave(std::size_t master, int slave);
+  // Fits (or removes) a locking indexer on the axis; a fitted one starts locked.
+  void set_indexer(std::size_t axis, bool fitted);
   void set_estop(bool pressed);
   void set_start_button(bool pressed);
   void set_homing_permit(bool on);
@@ -71,6 +73,11 @@ class Simulator {
   // The output driving this carriage is still running at the end of the last
   // period and is connected to it (a drive fault does not count: the motor runs).
   bool moving(std::size_t axis) const { return axes_[axis].moving; }
+  // Locking indexer: its pin is in and holds the carriage.
+  bool indexer_locked(std::size_t axis) const { return axes_[axis].pin_in; }
+  // During the last period the motor driving this carriage ran while its
+  // indexer held it (the steps were lost): what must never happen.
+  bool moved_while_locked(std::size_t axis) const { return axes_[axis].moved_while_locked; }
   double time_s() const { return time_s_; }
   const MachineConfig& config() const { return config_; }
 
@@ -92,6 +99,9 @@ class Simulator {
     bool bounce_odd = false;       // an odd number of bounce toggles so far: contact is flipped
     bool reported_level = false;   // electrical level at the end of the last period
     EdgeRing ring{};
+    bool pin_in = false;           // locking indexer: the pin holds the carriage
+    double pin_timer_s = 0;        // how long the unlock output has wanted the pin to move
+    bool moved_while_locked = false;
   };
 
   void reseed();
@@ -104,6 +114,7 @@ class Simulator {
   bool electrical_level(std::size_t axis) const;
   bool reports_edges(std::size_t axis) const;
   void route_sensors(const Outputs& outputs);
+  void advance_indexer(std::size_t axis, bool unlock_output, double dt_s);
 
   MachineConfig config_;
   std::array<Axis, kAxisCount> axes_{};
