@@ -25,6 +25,9 @@ struct AxisLines {
   std::optional<LineSpec> step, dir, enable;            // outputs
   std::optional<LineSpec> push, commutator;             // outputs (pushing modes, gantry commutator)
   std::optional<LineSpec> home, index, drive_fault;     // inputs
+  // Locking indexer (axis.<a>.indexer_lock): the output that pulls the pin
+  // out, and the input that reports it out.
+  std::optional<LineSpec> unlock, unlocked;
   // A step/dir output of its own. Without one the axis can only be an
   // external-commutator slave (moved by its master's output) or never move.
   bool has_output() const { return step.has_value(); }
@@ -50,7 +53,8 @@ std::expected<BackendConfig, std::string> load_config(const std::string& path);
 // an axis that can move (mode not disabled) needs a step/dir output of its
 // own, unless it is an external-commutator slave; a commutator slave's master
 // needs step/dir and a `commutator` line; an axis homing on a switch needs a
-// `home` line (a commutator slave's switch is read on its master's). The
+// `home` line (a commutator slave's switch is read on its master's); an axis
+// with axis.<a>.indexer_lock needs its `unlock` and `unlocked` lines. The
 // first problem in words, or nullopt.
 std::optional<std::string> check_wiring(const BackendConfig& config, const homing::Settings& settings);
 
