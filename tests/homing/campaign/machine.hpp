@@ -50,9 +50,15 @@ enum class EventKind : std::uint8_t {
   permit_off,
   reset,       // a reset command while the cycle runs
   home_again,  // a second home command while the cycle runs
+  // Locking indexer faults: drawn apart from the kinds above (on indexer
+  // axes only, from their own dice), so machines without one draw as before.
+  indexer_stuck_locked,
+  indexer_never_locks,
   count
 };
 const char* event_name(EventKind k);
+// The kinds drawn for any machine: those before the indexer faults.
+inline constexpr int kCommonEventKinds = static_cast<int>(EventKind::indexer_stuck_locked);
 
 struct Event {
   EventKind kind = EventKind::abort;
@@ -81,6 +87,7 @@ struct AxisPlan {
   bool rest_on_sensor = false; // shared limit that rests on its own sensor after pull-off
   sim::Fault start_fault = sim::Fault::none;  // present from power-up
   bool encoder_invalid = false;
+  bool indexer = false;        // a locking indexer (axis.<a>.indexer_lock, fitted on the simulator)
 };
 
 struct Machine {

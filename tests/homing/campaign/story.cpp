@@ -15,6 +15,8 @@ const char* fault_name(sim::Fault f) {
     case sim::Fault::sensor_stuck_inactive: return "sensor stuck inactive";
     case sim::Fault::wire_break: return "wire break";
     case sim::Fault::drive_fault: return "drive fault";
+    case sim::Fault::indexer_stuck_locked: return "indexer stuck locked";
+    case sim::Fault::indexer_never_locks: return "indexer never locks";
   }
   return "?";
 }
@@ -96,6 +98,9 @@ std::string story(const Machine& m) {
     machine_side(o, m.sim.axes[a], p);
     if (p.short_cam) o << "; CAM SHORTER THAN THE STOP";
     if (p.rest_on_sensor) o << "; SHARED LIMIT RESTS ON ITS SENSOR";
+    if (p.indexer)
+      o << "; locking indexer (unlock " << m.sim.axes[a].unlock_delay_ms << " ms, lock " << m.sim.axes[a].lock_delay_ms
+        << " ms, timeout " << m.settings.axes[a].lock_timeout_ms << " ms)";
     if (p.start_fault != sim::Fault::none) o << "; FAULT FROM POWER-UP: " << fault_name(p.start_fault);
     if (p.encoder_invalid) o << "; ENCODER INVALID";
     o << "\n";
