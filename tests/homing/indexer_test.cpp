@@ -281,3 +281,38 @@ SCENARIO("an indexer fault on the simulator leaves the home switch's edges and t
     }
   }
 }
+
+SCENARIO("a lock that engages under a running motor unhomes its axis even when alarms keep the homed state",
+         "[indexer]") {
+  Rig r = indexer_rig();
+  r.settings.global.alarm_clears_homed = false;
+  r.step();
+  r.pending.home_all = true;
+  r.step();
+  r.run_until([&] { return r.axis(A).phase == Phase::done && r.sim().indexer_locked(A); }, 60);
+  REQUIRE(r.axis(A).homed);
+  WHEN("the pin drops in while A jogs") {
+    r.jog(A, +1);
+    r.run_until([&] { return r.axis(A).velocity_mm_per_s > 0; }, 1);
+    r.run_for(0.05);
+    r.set_fault(A, sim::Fault::indexer_stuck_locked);
+    r.run_until([&] { return r.status().alarm; }, 1);
+    THEN("lock_engaged, and A is no longer homed: its motor ran on against the pin") {
+      CHECK(r.axis(A).alarm.code == AlarmCode::lock_engaged);
+      CHECK_FALSE(r.axis(A).homed);
+    }
+  }
+  WHEN("the pin drops in while A rests unlocked at its soft limit under a held jog") {
+    r.settings.axes[A].soft_limits_enable = true;
+    r.settings.axes[A].soft_limit_max_mm = 2;
+    r.jog(A, +1);
+    r.run_until([&] { return r.axis(A).position_mm == 2 && r.axis(A).velocity_mm_per_s == 0; }, 5);
+    REQUIRE(r.axis(A).phase == Phase::jog);
+    r.set_fault(A, sim::Fault::indexer_stuck_locked);
+    r.run_until([&] { return r.status().alarm; }, 1);
+    THEN("lock_engaged, and A stays homed: nothing ran against the pin") {
+      CHECK(r.axis(A).alarm.code == AlarmCode::lock_engaged);
+      CHECK(r.axis(A).homed);
+    }
+  }
+}
