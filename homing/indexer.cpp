@@ -21,71 +21,100 @@ bool wants_to_move(const AxisRun& run) {
   return run.in_cycle && run.phase != Phase::waiting && run.phase != Phase::done;
 }
 
+// One period of one indexer: what it sees, and what it asks of the engine.
+struct IndexerPeriod {
+  Indexer& ix;
+  bool unlocked_in;  // the indexer reports its pin out (the period just ended)
+  bool wants;        // the axis moves or is to move
+  double now_s;
+  double timeout_s;
+  AlarmCode alarm = AlarmCode::none;
+  IndexerState after_alarm{};  // entered once the alarm is raised (it names the phase it struck in)
+  bool steps_lost = false;     // a running motor met the pin
+
+  void enter(IndexerState st) {
+    ix.state = st;
+    ix.since_s = now_s;
+  }
+  bool timed_out() const { return now_s - ix.since_s > timeout_s; }
+  void raise(AlarmCode code, IndexerState then) {
+    alarm = code;
+    after_alarm = then;
+  }
+
+  // Locked: a motion to come raises the unlock output first.
+  void locked() {
+    if (wants) enter(IndexerState::unlocking);
+  }
+  // Unlock output on, motion held: on until the pin is reported out.
+  void unlocking() {
+    if (!wants) enter(IndexerState::locking);  // the motion went away before the unlock
+    else if (unlocked_in) enter(IndexerState::unlocked);
+    else if (timed_out()) raise(AlarmCode::unlock_not_confirmed, IndexerState::unlocking);
+  }
+  // Unlocked for motion: locked again once at rest; reported locked before
+  // that, the pin went in on its own.
+  void unlocked(bool motor_ran) {
+    if (!unlocked_in) {
+      steps_lost = motor_ran;
+      raise(AlarmCode::lock_engaged, IndexerState::unlocking);  // held; at rest it locks (output off)
+    } else if (!wants) {
+      enter(IndexerState::locking);
+    }
+  }
+  // At rest, unlock output off: locked once the pin is reported in.
+  void locking() {
+    if (wants) enter(IndexerState::unlocking);
+    else if (!unlocked_in) enter(IndexerState::locked);
+    else if (timed_out()) raise(AlarmCode::lock_not_confirmed, IndexerState::lock_failed);
+  }
+  // The lock timed out (alarm raised once): locked when the pin is seen in.
+  void lock_failed() {
+    if (wants) enter(IndexerState::unlocking);
+    else if (!unlocked_in) enter(IndexerState::locked);
+  }
+
+  void run(bool motor_ran) {
+    switch (ix.state) {
+      case IndexerState::none:
+        return enter(IndexerState::locking);  // switched on, or start-up: the output is off
+      case IndexerState::locked: return locked();
+      case IndexerState::unlocking: return unlocking();
+      case IndexerState::unlocked: return unlocked(motor_ran);
+      case IndexerState::locking: return locking();
+      case IndexerState::lock_failed: return lock_failed();
+    }
+  }
+};
+
 }  // namespace
 
 void Engine::run_indexers(const Settings& settings, const Inputs& inputs) {
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     AxisRun& run = axes_[a];
     const AxisSettings& s = settings.axes[a];
-    Indexer& ix = run.indexer;
     if (!s.indexer_lock) {
-      ix = Indexer{};
+      run.indexer = Indexer{};
       continue;
     }
-    const bool unlocked_in = inputs.axes[a].indexer_unlocked;
-    const double timeout_s = s.lock_timeout_ms / 1000.0;
-    auto enter = [&](IndexerState st) {
-      ix.state = st;
-      ix.since_s = time_s_;
-    };
-    auto alarm = [&](AlarmCode code) {
-      raise(settings, axis_bit(a), Alarm{code, Phase::idle, AxisField::lock_timeout_ms, s.lock_timeout_ms, 0});
-    };
-    // Switched on (or at start-up): the output is off, so the indexer locks.
-    if (ix.state == IndexerState::none) enter(IndexerState::locking);
-    const bool wants = wants_to_move(run);
-    const bool at_rest = !wants;
-    switch (ix.state) {
-      case IndexerState::none:
-      case IndexerState::locked:
-        if (wants) enter(IndexerState::unlocking);
-        break;
-      case IndexerState::lock_failed:
-        if (wants) enter(IndexerState::unlocking);
-        else if (!unlocked_in) enter(IndexerState::locked);
-        break;
-      case IndexerState::locking:
-        if (wants) enter(IndexerState::unlocking);
-        else if (!unlocked_in) enter(IndexerState::locked);
-        else if (time_s_ - ix.since_s > timeout_s) {
-          alarm(AlarmCode::lock_not_confirmed);
-          enter(IndexerState::lock_failed);
-        }
-        break;
-      case IndexerState::unlocking:
-      case IndexerState::unlocked:
-        break;
+    IndexerPeriod p{run.indexer, inputs.axes[a].indexer_unlocked, wants_to_move(run), time_s_,
+                    s.lock_timeout_ms / 1000.0};
+    const bool motor_ran = run.moving() || run.period_start.velocity_mm_per_s != 0;
+    // A state entered now acts on this period's input at once (a pin already
+    // out, or already in): at most a few hand-overs, the first alarm ends it.
+    for (int i = 0; i < 3 && p.alarm == AlarmCode::none; ++i) {
+      const IndexerState before = run.indexer.state;
+      p.run(motor_ran);
+      if (run.indexer.state == before) break;
     }
-    // Unlocking and unlocked, also when just entered: the input of the period
-    // just ended already shows a pin that never went in.
-    if (ix.state == IndexerState::unlocking) {
-      if (at_rest) enter(IndexerState::locking);  // the motion went away before the unlock
-      else if (unlocked_in) enter(IndexerState::unlocked);
-      else if (time_s_ - ix.since_s > timeout_s) alarm(AlarmCode::unlock_not_confirmed);
-    } else if (ix.state == IndexerState::unlocked) {
-      if (!unlocked_in) {
-        // Locked under an axis meant to move: the motion stops (the alarm
-        // halts every axis) and the command below holds this one. A motor
-        // that was running loses its steps against the pin: the axis is no
-        // longer where its coordinate says, whatever alarm_clears_homed says.
-        if (run.moving() || run.period_start.velocity_mm_per_s != 0) run.home.reset();
-        alarm(AlarmCode::lock_engaged);
-        enter(IndexerState::unlocking);
-      } else if (at_rest) {
-        enter(IndexerState::locking);
-      }
+    // The motor ran on against the pin: the axis is no longer where its
+    // coordinate says, whatever alarm_clears_homed says.
+    if (p.steps_lost) run.home.reset();
+    if (p.alarm != AlarmCode::none) {
+      raise(settings, axis_bit(a), Alarm{p.alarm, Phase::idle, AxisField::lock_timeout_ms, s.lock_timeout_ms, 0});
+      if (run.indexer.state != p.after_alarm) p.enter(p.after_alarm);
     }
-    if (!ix.lets_move()) run.command = stop_command(s.acceleration_mm_per_s2);
+    if (!run.indexer.lets_move()) run.command = stop_command(s.acceleration_mm_per_s2);
   }
 }
 
