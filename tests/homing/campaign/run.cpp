@@ -130,10 +130,28 @@ std::vector<Phase> Run::phases_run(std::size_t a) const {
 
 void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
   say(std::string(event_name(e.kind)) + " on " + kAxisUpper[e.axis]);
+  // The simulated axis has one fault at a time: a new one replaces the old.
+  // A locking indexer's fault replaced by another need not show any more;
+  // an indexer fault does not replace another (the campaign keeps that one).
+  const sim::Fault present = r_.sim().axis_config(e.axis).fault;
+  const bool indexer_event = e.kind == EventKind::indexer_stuck_locked || e.kind == EventKind::indexer_never_locks;
+  if (indexer_event && present != sim::Fault::none) {
+    say(std::string("(not applied: ") + kAxisUpper[e.axis] + " has another fault)");
+    return;
+  }
   auto set_fault = [&](sim::Fault f) {
     auto c = r_.sim().axis_config(e.axis);
     c.fault = f;
     r_.sim().set_axis_config(e.axis, c);
+    if (present == sim::Fault::indexer_stuck_locked || present == sim::Fault::indexer_never_locks) {
+      const std::uint32_t indexer_codes =
+          code_bits({AlarmCode::unlock_not_confirmed, AlarmCode::lock_not_confirmed, AlarmCode::lock_engaged});
+      for (Cause& k : causes.list)
+        if ((k.axes & axis_bit(e.axis)) && (k.codes & indexer_codes) && k.must) {
+          k.must = false;
+          k.what += " (its fault replaced by another: it need not show)";
+        }
+    }
   };
   switch (e.kind) {
     case EventKind::abort: r_.pending.abort = true; break;
@@ -166,7 +184,8 @@ void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
     case EventKind::indexer_stuck_locked:
     case EventKind::indexer_never_locks: {
       const bool unlocked = r_.engine.outputs().axes[e.axis].indexer_unlock;
-      indexer_cause(causes, e, r_.settings, r_.status(), plan, unlocked, r_.sim().indexer_locked(e.axis));
+      indexer_cause(causes, e, r_.settings, r_.status(), plan, unlocked, r_.sim().indexer_locked(e.axis),
+                    r_.sim().moving(e.axis));
       if (e.kind == EventKind::indexer_stuck_locked) {
         set_fault(sim::Fault::indexer_stuck_locked);
         // Struck under an axis unlocked for motion: its motor may brake

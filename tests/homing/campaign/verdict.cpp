@@ -230,21 +230,28 @@ void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st,
 }
 
 void indexer_cause(Causes& c, const Event& e, const Settings& s, const Status& st, const CyclePlan& plan,
-                   bool unlock_output, bool pin_in) {
+                   bool unlock_output, bool pin_in, bool motor_running) {
   const std::string who = std::string(event_name(e.kind)) + " on " + letter(e.axis);
   const AxisStatus& as = st.axes[e.axis];
   const AxisMask bit = axis_bit(e.axis);
   const bool locking = as.phase == Phase::lock;
   // Locked, in a later sequence step of this cycle: it will unlock to home.
   const bool to_move = (plan.covered & bit) && as.phase == Phase::waiting && mode_uses_switch(s.axes[e.axis].mode);
+  // The engine's next period still reads the pin as it stands now (the fault
+  // acts in the period that follows); it locks the pin in the one after.
   if (e.kind == EventKind::indexer_stuck_locked) {
-    // The engine reads the pin as it stands now in its next period.
-    if (unlock_output && !pin_in)  // out for motion (or about to be seen out): it drops in under the axis
-      c.add(who, {AlarmCode::lock_engaged}, bit, true);
-    else if (unlock_output)        // still in while unlocking: it never comes out
+    if (unlock_output && !pin_in) {
+      // Out for motion: it drops in under the axis. Certain while the motor
+      // still runs; an axis coming to rest in that period locks instead.
+      if (motor_running) c.add(who, {AlarmCode::lock_engaged}, bit, true);
+      else c.add(who, {AlarmCode::lock_engaged, AlarmCode::unlock_not_confirmed}, bit, false);
+    } else if (unlock_output) {  // still in while unlocking: it never comes out
       c.add(who, {AlarmCode::unlock_not_confirmed}, bit, true);
-    else                           // locked or locking: the next unlock times out
-      c.add(who, {AlarmCode::unlock_not_confirmed}, bit, to_move && !locking);
+    } else if (!pin_in) {        // locking, pin still out: in at once, unless a motion comes first
+      c.add(who, {AlarmCode::unlock_not_confirmed, AlarmCode::lock_engaged}, bit, false);
+    } else {                     // locked: the next unlock times out
+      c.add(who, {AlarmCode::unlock_not_confirmed}, bit, to_move);
+    }
     return;
   }
   // Never locks: a pin that is out, or comes out for the motion still to
