@@ -72,7 +72,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     check(o.time_scale >= 0.01 && o.time_scale <= 1000.0, "time scale out of range");
     check(o.parity == 'N' || o.parity == 'E' || o.parity == 'O', "parity");
     check(o.stop_bits == 1 || o.stop_bits == 2, "stop bits");
-    check(o.unlock_code >= 0 && o.unlock_code <= 65535, "unlock code out of range");
+    check(o.unlock_code >= 0 && o.unlock_code <= 4294967295LL, "unlock code out of range");
     check(o.tcp_enabled || !o.rtu_device.empty() || o.tls_enabled, "nothing to serve");
     check(!o.tls_enabled || (o.tls_port >= 1 && o.tls_port <= 65535), "tls port out of range");
     check(!o.tls_enabled || (!o.tls_cert.empty() && !o.tls_key.empty() && !o.tls_ca.empty()), "tls without its files");

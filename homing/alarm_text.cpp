@@ -15,7 +15,7 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
   const Settings moves = motion_settings(settings);
   const AxisSettings& s = moves.axes[axis];
   const char X = kAxisUpper[axis];
-  const auto u = axis_unit(axis);
+  const auto u = axis_unit(settings, axis);  // a slave's is its master's
   const auto ph = phase_name(a.phase);
   switch (a.code) {
     case AlarmCode::none: return "";
@@ -69,6 +69,22 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
       return fmt::format("{}: homing permit went off during {}", X, ph);
     case AlarmCode::encoder_fault:
       return fmt::format("{}: absolute encoder gives no valid position", X);
+    case AlarmCode::stop_not_found:
+      return fmt::format("{}: no stall reported within {:.3f} {} of travel toward the mechanical stop "
+                         "(max_seek_travel {:g} {})", X, a.value, u, s.max_seek_travel_mm, u);
+    case AlarmCode::stall_timeout:
+      return fmt::format("{}: no stall reported after pushing toward the mechanical stop for {:.1f} s "
+                         "(stall_timeout_ms {:g})", X, a.value, s.stall_timeout_ms);
+    case AlarmCode::stall_at_start:
+      return fmt::format("{}: the drive's stall input was active before the push toward the stop began", X);
+    case AlarmCode::drive_no_answer:
+      return fmt::format("{}: the drive did not report home done within {:g} s of the home request", X,
+                         s.drive_home_timeout_s);
+    case AlarmCode::drive_answered_at_once:
+      return fmt::format("{}: the drive reported home done {:.3f} s after the home request, sooner than any "
+                         "homing ({:g} s): it did not home", X, a.value, kDriveMinHomingTime_s);
+    case AlarmCode::drive_reference_lost:
+      return fmt::format("{}: the drive's home done went off at {:.3f} {} while the axis was homed", X, a.value, u);
     case AlarmCode::unlock_not_confirmed:
       return fmt::format("{}: locking indexer not reported unlocked within lock_timeout_ms {:g} ms of the "
                          "unlock output; the axis did not move", X, s.lock_timeout_ms);

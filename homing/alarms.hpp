@@ -32,11 +32,17 @@ enum class AlarmCode : std::uint8_t {
   reapproach_not_found = 16,   // re-approach travelled max_backoff without a trigger
   permit_withdrawn = 17,       // homing permit went off during a cycle
   encoder_fault = 18,          // absolute mode without a valid encoder position
-  unlock_not_confirmed = 19,   // locking indexer: not unlocked within lock_timeout_ms
-  lock_not_confirmed = 20,     // locking indexer: not locked again within lock_timeout_ms of rest
-  lock_engaged = 21,           // locking indexer: reported locked while unlocked for motion
+  stop_not_found = 19,         // hard-stop homing travelled max_seek_travel without a stall
+  stall_timeout = 20,          // hard-stop homing ran stall_timeout_ms without a stall
+  stall_at_start = 21,         // hard-stop homing: the stall input was already active before moving
+  drive_no_answer = 22,        // drive mode: no home done within drive_home_timeout
+  drive_answered_at_once = 23, // drive mode: home done too soon after the request (the drive did not home)
+  drive_reference_lost = 24,   // drive mode: home done went off while the axis was homed
+  unlock_not_confirmed = 25,   // locking indexer: not unlocked within lock_timeout_ms
+  lock_not_confirmed = 26,     // locking indexer: not locked again within lock_timeout_ms of rest
+  lock_engaged = 27,           // locking indexer: reported locked while unlocked for motion
 };
-inline constexpr std::uint8_t kAlarmCodeCount = 22;
+inline constexpr std::uint8_t kAlarmCodeCount = 28;
 
 // The alarm table: per code its name, what happened (text) and what a
 // maintenance technician checks (what_to_check). describe_alarm() says what
@@ -86,6 +92,24 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
      "close the guard / give the permit, reset and home again"},
     {AlarmCode::encoder_fault, "encoder_fault", "no valid absolute encoder position",
      "check the encoder cable, its power and the drive's encoder alarm, then reset and home again"},
+    {AlarmCode::stop_not_found, "stop_not_found", "hard-stop homing travelled max_seek_travel without a stall",
+     "check that the drive's stall output is wired and enabled (its torque limit and detection time), the "
+     "homing direction, and that the mechanical stop lies within max_seek_travel"},
+    {AlarmCode::stall_timeout, "stall_timeout", "hard-stop homing pushed for stall_timeout_ms without a stall",
+     "check the drive's stall output and its detection time; raise stall_timeout_ms if the stop lies further "
+     "than latch_feedrate covers in that time"},
+    {AlarmCode::stall_at_start, "stall_at_start", "the stall input was active before the axis moved",
+     "check the stall input's wiring and the drive (a stall output stuck on, or the drive still in torque "
+     "limit); reset the drive, then home again"},
+    {AlarmCode::drive_no_answer, "drive_no_answer", "the drive did not report home done within drive_home_timeout",
+     "check the home request and home done wiring, that the drive's homing function is enabled and set up "
+     "(its own home sensor, speeds), the drive's display, or raise drive_home_timeout_s"},
+    {AlarmCode::drive_answered_at_once, "drive_answered_at_once",
+     "the drive reported home done at once: it did not home",
+     "check that home done is the drive's home-end output (not ready or in-position), that it drops when a "
+     "homing starts, and that the home request reaches the drive"},
+    {AlarmCode::drive_reference_lost, "drive_reference_lost", "the drive's home done went off while the axis was homed",
+     "check the drive's alarm history and the home done wiring; the axis is no longer homed: reset and home again"},
     {AlarmCode::unlock_not_confirmed, "unlock_not_confirmed", "locking indexer did not report unlocked in time",
      "check the indexer's air or hydraulic supply, its unlock valve and the unlocked sensor and their wiring, "
      "or raise lock_timeout_ms; then reset"},

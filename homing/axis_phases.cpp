@@ -43,6 +43,7 @@ void PhaseRunner::dispatch() {
     case Phase::seek: return seek();
     case Phase::stop: return stop();
     case Phase::push: return push();
+    case Phase::push_to_stop: return push_to_stop();
     case Phase::back_off: return back_off();
     case Phase::reapproach: return reapproach();
     case Phase::index: return index();
@@ -51,6 +52,7 @@ void PhaseRunner::dispatch() {
     case Phase::final_move: return final_move();
     case Phase::waiting: return waiting();
     case Phase::align_slave: return align_slave();
+    case Phase::drive_homing: return drive_homing();
     case Phase::done:
       run.entered = true;
       return;
@@ -58,6 +60,8 @@ void PhaseRunner::dispatch() {
     case Phase::jog:
     case Phase::move:
     case Phase::stopping:
+    case Phase::unlock:  // shown for a held axis only (AxisRun::shown_phase), never its own phase
+    case Phase::lock:
       // Not a homing phase while a cycle runs: a bug. Stop rather than guess.
       return fail(AlarmCode::aborted);
   }

@@ -48,10 +48,19 @@ struct Waiting {
 struct Jog {
   std::int8_t dir = 0;
 };
+struct PushToStop {
+  double start_s = 0;           // engine time the push began
+  bool stalled = false;         // the drive reported the stall: braking at the stop
+};
+struct DriveHoming {
+  double request_s = 0;       // engine time the home request was raised
+  bool done_seen_off = false; // home done was seen off since the request: the drive began homing
+};
 }  // namespace phase_data
 
 using PhaseData = std::variant<std::monostate, phase_data::Seek, phase_data::Stop,
-                               phase_data::BackOff, phase_data::Index, phase_data::Waiting, phase_data::Jog>;
+                               phase_data::BackOff, phase_data::Index, phase_data::Waiting, phase_data::Jog,
+                               phase_data::PushToStop, phase_data::DriveHoming>;
 
 // How far this axis has come in the running homing cycle, in order. The
 // gantry partner waits on it.
@@ -89,6 +98,8 @@ struct AxisReadings {
   bool drive_fault = false;
   bool absolute_valid = false;
   double absolute_mm = 0;  // absolute encoder reading
+  bool stall = false;      // the drive reports a stall (torque limit reached)
+  bool drive_done = false;  // the drive's home done
 };
 
 struct AxisRun {
@@ -111,6 +122,9 @@ struct AxisRun {
   std::int8_t prev_jog_request = 0;  // the jog input of the last period (a jog starts on a change)
   bool limit_tripped = false;   // shared limit tripped: jog away until it releases
   double pair_rel0_mm = 0;      // gantry slave: slave - master motor position at cycle start
+  // Homed by its drive (drive mode): from then on the drive's home done must
+  // stay on, or the drive has lost the reference the coordinate rests on.
+  bool drive_referenced = false;
   Indexer indexer{};
 
   // The homing cycle.

@@ -86,6 +86,7 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
     if (!(covered & axis_bit(a))) continue;
     run.in_cycle = true;
     run.home.reset();
+    run.drive_referenced = false;
     run.set_phase(Phase::waiting);  // for its step
     run.entered = false;
     run.reached = Reached::nothing;

@@ -61,6 +61,18 @@ Settings motion_settings(const Settings& settings) {
   return out;
 }
 
+// Any axis slave_of names, not only the master of a valid pair: a fault that
+// refuses the pair is about a slave already, in its master's unit.
+AxisKind axis_kind(const Settings& settings, std::size_t axis) {
+  const int m = master_of(settings.axes[axis]);
+  const bool names_master = m >= 0 && m < static_cast<int>(kAxisCount) && m != static_cast<int>(axis);
+  return settings.axes[names_master ? static_cast<std::size_t>(m) : axis].kind;
+}
+
+std::string_view axis_unit(const Settings& settings, std::size_t axis) {
+  return unit_of(axis_kind(settings, axis));
+}
+
 AxisSettings commutator_slave_homing(AxisSettings s) {
   s.max_seek_travel_mm = s.max_misalignment_mm;
   s.pre_move_mode = PreMove::none;

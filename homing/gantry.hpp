@@ -3,6 +3,7 @@
 // The engine, the configuration check, the register validation and the tools
 // all ask these functions, so the answer is the same everywhere.
 #include <cstddef>
+#include <string_view>
 
 #include "settings.hpp"
 
@@ -27,6 +28,17 @@ bool is_commutator_slave(const Settings& settings, std::size_t axis);
 // pair move with the lower of their two accelerations, so neither drive is
 // asked for more than it can do, in homing, jog, move and every stop.
 Settings motion_settings(const Settings& settings);
+
+// The kind an axis moves with: its own axis.<a>.kind, or, for a slave (any
+// axis whose slave_of names another axis), its master's, like its other
+// motion settings: a slave's own kind is not used while it is a slave. It
+// names the unit of every value of the axis, everywhere: alarm texts,
+// settings faults, the log, homingctl, the settings file, the tag files made
+// for a machine.
+AxisKind axis_kind(const Settings& settings, std::size_t axis);
+// "mm" or "deg": the unit of a length on the axis (feedrates per min,
+// accelerations per s²).
+std::string_view axis_unit(const Settings& settings, std::size_t axis);
 
 // What an external-commutator slave homes with when its motor runs alone,
 // from its motion settings: it only corrects the gantry's skew from its

@@ -40,7 +40,8 @@ void PhaseRunner::set_home(double reference_motor_mm, double machine_mm_at_rest)
 }
 
 void PhaseRunner::assign() {
-  if (row().coordinate != Coordinate::reference_edge) {
+  const Coordinate coordinate = row().coordinate;
+  if (coordinate == Coordinate::here || coordinate == Coordinate::absolute_encoder) {
     const std::optional<double> here = run.coordinate_where_it_stands(s);
     if (!here) return fail(AlarmCode::encoder_fault);
     set_home(run.motor.position_mm, *here);

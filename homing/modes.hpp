@@ -27,6 +27,8 @@ enum class HomingMode : std::uint8_t {
   absolute_final = 6,
   pushing_release = 7,
   pushing_reapproach = 8,
+  hard_stop = 9,
+  drive = 10,
 };
 
 // What a method needs wired to the axis, one bit each.
@@ -36,6 +38,9 @@ enum class Signal : std::uint16_t {
   index = 1u << 2,             // the encoder's index pulse
   push_output = 1u << 3,       // reduces the motor current while pushing into the stop
   absolute_encoder = 1u << 4,  // the absolute position (and its valid flag)
+  stall = 1u << 5,             // the drive's stall / torque-limit output
+  drive_request = 1u << 6,     // output: asks the drive to run its own homing procedure
+  drive_done = 1u << 7,        // input: the drive reports its homing done (its reference is valid)
 };
 using Signals = std::uint16_t;
 constexpr Signals operator|(Signal a, Signal b) {
@@ -58,6 +63,9 @@ inline constexpr SignalInfo kSignalInfo[] = {
     {Signal::push_output, "push", "reduced-current output while pushing", "pushes into a stop", false},
     // Not a GPIO line: read from the drive or encoder interface.
     {Signal::absolute_encoder, "absolute", "absolute encoder position", "reads an absolute encoder", false},
+    {Signal::stall, "stall", "the drive's stall or torque-limit output", "homes on the drive's stall output", true},
+    {Signal::drive_request, "home_request", "home request output to the drive", "has the drive home itself", true},
+    {Signal::drive_done, "home_done", "home done input from the drive", "waits for the drive's home done", true},
 };
 
 // The coordinate a method gives the axis once homed.
@@ -66,6 +74,8 @@ enum class Coordinate : std::uint8_t {
   here,              // home_position where the axis stands, without moving
   reference_edge,    // home_position at the reference edge, pull-off (and a slave's compensation) away
   absolute_encoder,  // the encoder's reading minus home_position (home_position is the encoder's offset)
+  mechanical_stop,   // home_position pull-off away from the mechanical stop the carriage was pushed against
+  drive_reference,   // home_position where the drive, homing itself, reported done (and the axis rests)
 };
 
 enum class FinalMove : std::uint8_t {
@@ -75,6 +85,11 @@ enum class FinalMove : std::uint8_t {
 };
 
 inline constexpr std::size_t kMaxModePhases = 9;
+
+// Drive mode: a home done sooner than this after the home request cannot
+// follow a homing (a drive needs longer to start, search and stop even when
+// already on its sensor): the drive did not home (drive_answered_at_once).
+inline constexpr double kDriveMinHomingTime_s = 0.05;
 
 struct ModeRow {
   HomingMode value;
@@ -123,9 +138,12 @@ inline constexpr std::array<Phase, kMaxModePhases> index{P::pre_move, P::seek,  
 inline constexpr std::array<Phase, kMaxModePhases> push_release{P::pre_move, P::seek,     P::stop,
                                                                 P::push,     P::back_off, P::pull_off,
                                                                 P::assign,   P::final_move};
+inline constexpr std::array<Phase, kMaxModePhases> hard_stop{P::pre_move, P::push_to_stop, P::pull_off, P::assign,
+                                                             P::final_move};
 inline constexpr std::array<Phase, kMaxModePhases> push_reapproach{P::pre_move,   P::seek,     P::stop,
                                                                    P::push,       P::back_off, P::reapproach,
                                                                    P::pull_off,   P::assign,   P::final_move};
+inline constexpr std::array<Phase, kMaxModePhases> drive{P::drive_homing, P::assign, P::final_move};
 }  // namespace mode_phases
 
 inline constexpr ModeRow kModeTable[] = {
@@ -157,10 +175,22 @@ inline constexpr ModeRow kModeTable[] = {
     {HomingMode::pushing_reapproach, "pushing_reapproach", "seek, push into the mechanical stop, re-approach edge",
      Signal::step_output | Signal::home_sensor | Signal::push_output, mode_phases::push_reapproach, 9,
      Coordinate::reference_edge, FinalMove::if_enabled, false, true, true},
+    {HomingMode::hard_stop, "hard_stop",
+     "no switch: push into the mechanical stop at latch feedrate and reduced current until the drive reports a "
+     "stall; the stop is the reference",
+     Signal::step_output | Signal::push_output | Signal::stall, mode_phases::hard_stop, 5,
+     Coordinate::mechanical_stop, FinalMove::if_enabled, false, false, false},
+    // The drive homes itself on its own sensor at its own speeds (CiA 402
+    // homing mode, HOME/HOME-END of Oriental AZ and IAI drives): the module
+    // sends no steps meanwhile, so it can square no gantry. Its home input is
+    // free, so it may serve as a hard limit, as with manual.
+    {HomingMode::drive, "drive", "the drive homes itself on request; home_position where it reports done",
+     Signal::step_output | Signal::drive_request | Signal::drive_done, mode_phases::drive, 3,
+     Coordinate::drive_reference, FinalMove::if_enabled, false, false, true},
     // clang-format on
 };
 inline constexpr std::uint8_t kHomingModeCount = std::size(kModeTable);
-static_assert(lists_every_value(kModeTable, HomingMode::pushing_reapproach));
+static_assert(lists_every_value(kModeTable, HomingMode::drive));
 constexpr std::span<const ModeRow> enum_table(HomingMode) { return kModeTable; }
 
 // Each row's phase count matches its list, and every method that moves to
@@ -176,8 +206,13 @@ constexpr bool rows_are_consistent() {
         !(r.needs_signal(Signal::home_sensor) && r.runs(Phase::seek) && r.runs(Phase::pull_off)))
       return false;
     if (r.runs(Phase::index) != r.needs_signal(Signal::index)) return false;
-    if (r.runs(Phase::push) != r.needs_signal(Signal::push_output)) return false;
+    if (r.runs(Phase::push) && !r.needs_signal(Signal::push_output)) return false;
+    if (r.runs(Phase::push_to_stop) != r.needs_signal(Signal::stall)) return false;
+    if ((r.coordinate == Coordinate::mechanical_stop) != r.runs(Phase::push_to_stop)) return false;
     if ((r.gantry_master || r.gantry_slave) && !r.needs_signal(Signal::home_sensor)) return false;
+    if (r.runs(Phase::drive_homing) != r.needs_signal(Signal::drive_request)) return false;
+    if (r.needs_signal(Signal::drive_request) != r.needs_signal(Signal::drive_done)) return false;
+    if ((r.coordinate == Coordinate::drive_reference) != r.runs(Phase::drive_homing)) return false;
   }
   return true;
 }

@@ -1,6 +1,6 @@
 // Each axis's output channel: the motion of the motor it drives now (a
 // commutator master's channel drives its slave's motor while it aligns),
-// the enable, push, commutator and indexer unlock outputs.
+// the enable, push, commutator, drive home-request and indexer unlock outputs.
 #include "engine.hpp"
 #include "gantry.hpp"
 
@@ -30,6 +30,11 @@ void Engine::route_outputs(const Settings& settings) {
     out.enable = !estop_;
     out.push_output = run.push_output;
     out.commutator_output = run.commutator_output;
+    // On exactly while the drive homes in a running cycle: an alarm, abort or
+    // e-stop drops it in the same period (an alarm raised while a step
+    // begins may leave a later axis showing its first phase, out of the cycle).
+    // A locking indexer not yet unlocked holds it back, as it holds steps.
+    out.drive_request = run.phase == Phase::drive_homing && run.in_cycle && !estop_ && run.indexer.lets_move();
     out.indexer_unlock = run.indexer.unlock_output();
   }
 }

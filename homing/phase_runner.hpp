@@ -94,6 +94,7 @@ struct PhaseRunner {
   void stop();
   void after_stop();
   void push();
+  void push_to_stop();  // hard-stop homing (stop_phases.cpp)
   void back_off();
   void reapproach();
   // The index search runs away from the sensor (-dir) from the release edge.
@@ -110,6 +111,7 @@ struct PhaseRunner {
   void final_move();
   void waiting();
   void align_slave();
+  void drive_homing();  // drive_phases.cpp
   void begin();
   void dispatch();
 };

@@ -27,8 +27,10 @@ enum class Phase : std::uint8_t {
   move = 15,
   stopping = 16,      // decelerating after an alarm or abort
   clear_sensors = 17, // gantry: both sides move off their sensors together before the seek
-  unlock = 18,        // locking indexer: unlock output on, motion held until it reports unlocked
-  lock = 19,          // locking indexer: at rest, unlock output off, waiting for it to lock
+  push_to_stop = 18,  // hard-stop homing: pushing toward the mechanical stop until the drive stalls
+  drive_homing = 19,  // the drive homes itself: home request on, waiting for its home done
+  unlock = 20,        // locking indexer: unlock output on, motion held until it reports unlocked
+  lock = 21,          // locking indexer: at rest, unlock output off, waiting for it to lock
 };
 
 inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
@@ -51,6 +53,10 @@ inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
     {Phase::stopping, "stopping", "decelerating after an alarm or abort"},
     {Phase::clear_sensors, "clear_sensors",
      "gantry: both sides move off their sensors together (latch feedrate) before the seek"},
+    {Phase::push_to_stop, "push_to_stop",
+     "hard-stop homing: moving into the mechanical stop at reduced current until the drive reports a stall"},
+    {Phase::drive_homing, "drive_homing",
+     "the drive homes itself: home request on, waiting for its home done within drive_home_timeout"},
     {Phase::unlock, "unlock", "locking indexer: unlocking before the axis moves (motion held until unlocked)"},
     {Phase::lock, "lock", "locking indexer: at rest, locking again"},
 };

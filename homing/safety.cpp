@@ -1,5 +1,5 @@
 // What raises an alarm from the inputs each period: e-stop, lost settings,
-// drive faults, the watchdog, the homing permit, and the hard and soft limits
+// drive faults, a drive's lost reference, the watchdog, the homing permit, and the hard and soft limits
 // of a homed axis.
 #include "engine.hpp"
 #include "mutation.hpp"
@@ -32,6 +32,8 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
     }
     raise(settings, axis_bit(a), Alarm{AlarmCode::drive_fault});
   }
+
+  check_drive_references(settings);
 
   comm_lost_ = inputs.communication_lost;
   if (comm_lost_ && any_motion()) {
@@ -74,6 +76,25 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
     const double v = run.motor.velocity_mm_per_s;
     if (s.soft_limits_enable && ((pos < s.soft_limit_min_mm - tol && v < 0) || (pos > s.soft_limit_max_mm + tol && v > 0)))
       raise(settings, axis_bit(a), Alarm{AlarmCode::soft_limit, Phase::idle, AxisField::none, pos, 0});
+  }
+}
+
+// An axis homed by its drive rests its coordinate on the drive's reference:
+// when the drive's home done goes off (the drive lost it, or the wire broke)
+// the axis is no longer homed, whatever global.alarm_clears_homed says.
+void Engine::check_drive_references(const Settings& settings) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    AxisRun& run = axes_[a];
+    if (!run.drive_referenced) continue;
+    if (!mode_row(settings.axes[a].mode).runs(Phase::drive_homing)) {
+      run.drive_referenced = false;
+      continue;
+    }
+    if (run.readings.drive_done || !run.homed() || run.phase == Phase::drive_homing) continue;
+    const double pos = run.machine_position_mm();
+    run.home.reset();
+    run.drive_referenced = false;
+    raise(settings, axis_bit(a), Alarm{AlarmCode::drive_reference_lost, Phase::idle, AxisField::none, pos, 0});
   }
 }
 

@@ -63,7 +63,8 @@ void Engine::read_inputs(const Settings& settings, const Inputs& inputs, double 
       }
     }
     channel.sensor_active = filter.stable() != nc;
-    axes_[c].readings = AxisReadings{in.drive_fault, in.absolute_valid, in.absolute_position_mm};
+    axes_[c].readings =
+        AxisReadings{in.drive_fault, in.absolute_valid, in.absolute_position_mm, in.stall, in.drive_done};
   }
 }
 

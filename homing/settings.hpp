@@ -51,6 +51,26 @@ constexpr std::span<const EnumInfo<AllowedWithoutHoming>> enum_table(AllowedWith
   return kAllowedWithoutHomingInfo;
 }
 
+// What an axis is: it names the unit of every length, feedrate and
+// acceleration of the axis (mm or degrees). X, Y and Z are linear only; A, B
+// and C are rotary unless set linear (the second motor of a linear axis, a
+// gantry slave on A). A slave moves with its master's kind (gantry.hpp).
+enum class AxisKind : std::uint8_t { linear = 0, rotary = 1 };
+inline constexpr EnumInfo<AxisKind> kAxisKindInfo[] = {
+    {AxisKind::linear, "linear", "linear axis: lengths in mm, feedrates in mm/min"},
+    {AxisKind::rotary, "rotary", "rotary axis: angles in degrees, feedrates in deg/min (A, B, C only)"},
+};
+static_assert(lists_every_value(kAxisKindInfo, AxisKind::rotary));
+constexpr std::span<const EnumInfo<AxisKind>> enum_table(AxisKind) { return kAxisKindInfo; }
+
+// A new module's kind of each axis (the default of axis.<a>.kind): A, B, C
+// rotary, X, Y, Z linear. Only the axes rotary by default may be rotary.
+constexpr AxisKind default_kind(std::size_t axis) { return is_rotary(axis) ? AxisKind::rotary : AxisKind::linear; }
+constexpr bool may_be_rotary(std::size_t axis) { return is_rotary(axis); }
+// The unit of a length on an axis of this kind; feedrates are it per minute,
+// accelerations it per s².
+constexpr std::string_view unit_of(AxisKind kind) { return kind == AxisKind::rotary ? "deg" : "mm"; }
+
 struct AxisSettings {
   HomingMode mode = HomingMode::disabled;
   Direction direction = Direction::negative;
@@ -79,6 +99,9 @@ struct AxisSettings {
   bool soft_limits_enable = false;
   bool shared_limit = false;
   double jog_feedrate_mm_per_min = 0;
+  double stall_timeout_ms = 0;  // hard-stop homing: longest push toward the stop before stall_timeout
+  AxisKind kind = AxisKind::linear;  // Settings gives each axis its default_kind
+  double drive_home_timeout_s = 0;  // drive mode: the drive must report home done within this
   // Locking indexer (README "Locking indexer"): unlock before any motion of
   // this axis, lock again once it rests, each confirmed within lock_timeout_ms.
   bool indexer_lock = false;
@@ -99,8 +122,16 @@ struct GlobalSettings {
   friend bool operator==(const GlobalSettings&, const GlobalSettings&) = default;
 };
 
-struct Settings {
+// Neutral axes, each of its default kind, so settings built by hand name the
+// units a new module names.
+constexpr std::array<AxisSettings, kAxisCount> default_kind_axes() {
   std::array<AxisSettings, kAxisCount> axes{};
+  for (std::size_t a = 0; a < kAxisCount; ++a) axes[a].kind = default_kind(a);
+  return axes;
+}
+
+struct Settings {
+  std::array<AxisSettings, kAxisCount> axes = default_kind_axes();
   GlobalSettings global{};
   friend bool operator==(const Settings&, const Settings&) = default;
 };
@@ -136,6 +167,9 @@ enum class AxisField : std::uint8_t {
   soft_limits_enable,
   shared_limit,
   jog_feedrate,
+  stall_timeout_ms,
+  kind,
+  drive_home_timeout,
   indexer_lock,
   lock_timeout_ms,
 };
@@ -173,6 +207,9 @@ inline constexpr AxisFieldInfo kAxisFieldInfo[] = {
     {AxisField::soft_limits_enable, "soft_limits_enable"},
     {AxisField::shared_limit, "shared_limit"},
     {AxisField::jog_feedrate, "jog_feedrate"},
+    {AxisField::stall_timeout_ms, "stall_timeout_ms"},
+    {AxisField::kind, "kind"},
+    {AxisField::drive_home_timeout, "drive_home_timeout_s"},
     {AxisField::indexer_lock, "indexer_lock"},
     {AxisField::lock_timeout_ms, "lock_timeout_ms"},
 };

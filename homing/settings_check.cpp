@@ -15,13 +15,27 @@ std::optional<SettingsFault> fault(std::size_t axis, AxisField f, CheckRule r, d
   return SettingsFault{axis, f, r, v};
 }
 
-std::optional<SettingsFault> check_motion(const AxisSettings& s, std::size_t axis) {
+// Both speeds and the acceleration: every method that searches needs them.
+std::optional<SettingsFault> check_speeds(const AxisSettings& s, std::size_t axis) {
   if (s.seek_feedrate_mm_per_min <= 0)
     return fault(axis, AxisField::seek_feedrate, CheckRule::not_positive, s.seek_feedrate_mm_per_min);
   if (s.latch_feedrate_mm_per_min <= 0)
     return fault(axis, AxisField::latch_feedrate, CheckRule::not_positive, s.latch_feedrate_mm_per_min);
   if (s.acceleration_mm_per_s2 <= 0)
     return fault(axis, AxisField::acceleration, CheckRule::not_positive, s.acceleration_mm_per_s2);
+  return std::nullopt;
+}
+
+// Where the axis rests from its reference, and the move before its search.
+std::optional<SettingsFault> check_pull_off_and_pre_move(const AxisSettings& s, std::size_t axis) {
+  if (s.pull_off_mm < 0) return fault(axis, AxisField::pull_off, CheckRule::negative, s.pull_off_mm);
+  if (s.pre_move_mode != PreMove::none && s.pre_move_distance_mm <= 0)
+    return fault(axis, AxisField::pre_move_distance, CheckRule::missing_distance, s.pre_move_distance_mm);
+  return std::nullopt;
+}
+
+std::optional<SettingsFault> check_motion(const AxisSettings& s, std::size_t axis) {
+  if (auto f = check_speeds(s, axis)) return f;
   if (s.latch_feedrate_mm_per_min >= s.seek_feedrate_mm_per_min)
     return fault(axis, AxisField::latch_feedrate, CheckRule::latch_not_slower, s.latch_feedrate_mm_per_min);
   if (s.max_seek_travel_mm <= 0)
@@ -32,9 +46,7 @@ std::optional<SettingsFault> check_motion(const AxisSettings& s, std::size_t axi
     return fault(axis, AxisField::max_backoff, CheckRule::not_positive, s.max_backoff_mm);
   if (const double needed = seek_stop_distance_mm(s); needed > s.max_stop_distance_mm)
     return fault(axis, AxisField::max_stop_distance, CheckRule::stop_distance_too_long, needed);
-  if (s.pull_off_mm < 0) return fault(axis, AxisField::pull_off, CheckRule::negative, s.pull_off_mm);
-  if (s.pre_move_mode != PreMove::none && s.pre_move_distance_mm <= 0)
-    return fault(axis, AxisField::pre_move_distance, CheckRule::missing_distance, s.pre_move_distance_mm);
+  if (auto f = check_pull_off_and_pre_move(s, axis)) return f;
   const ModeRow& row = mode_row(s.mode);
   if (row.runs(Phase::push) && s.push_distance_mm <= 0)
     return fault(axis, AxisField::push_distance, CheckRule::missing_distance, s.push_distance_mm);
@@ -50,6 +62,17 @@ std::optional<SettingsFault> check_motion(const AxisSettings& s, std::size_t axi
   return std::nullopt;
 }
 
+// Hard-stop homing: the push toward the stop at latch feedrate, bounded in
+// travel and time, and the pull-off and pre-move at seek feedrate.
+std::optional<SettingsFault> check_stop_search(const AxisSettings& s, std::size_t axis) {
+  if (auto f = check_speeds(s, axis)) return f;
+  if (s.max_seek_travel_mm <= 0)
+    return fault(axis, AxisField::max_seek_travel, CheckRule::not_positive, s.max_seek_travel_mm);
+  if (s.stall_timeout_ms <= 0)
+    return fault(axis, AxisField::stall_timeout_ms, CheckRule::not_positive, s.stall_timeout_ms);
+  return check_pull_off_and_pre_move(s, axis);
+}
+
 std::optional<SettingsFault> check_limits(const AxisSettings& s, std::size_t axis) {
   if (!s.soft_limits_enable) return std::nullopt;
   if (s.soft_limit_min_mm >= s.soft_limit_max_mm)
@@ -57,7 +80,8 @@ std::optional<SettingsFault> check_limits(const AxisSettings& s, std::size_t axi
   auto outside = [&](double x) { return x < s.soft_limit_min_mm || x > s.soft_limit_max_mm; };
   // home_position is a place on the axis, except for an absolute encoder (its offset).
   const Coordinate c = mode_row(s.mode).coordinate;
-  const bool home_is_a_place = c == Coordinate::here || c == Coordinate::reference_edge;
+  const bool home_is_a_place = c == Coordinate::here || c == Coordinate::reference_edge ||
+                               c == Coordinate::mechanical_stop || c == Coordinate::drive_reference;
   if (home_is_a_place && outside(s.home_position_mm))
     return fault(axis, AxisField::home_position, CheckRule::outside_soft_limits, s.home_position_mm);
   if (final_move_wanted(s) && outside(s.final_position_mm))
@@ -123,11 +147,21 @@ std::optional<SettingsFault> check_indexer(const Settings& settings, std::size_t
 }
 
 std::optional<SettingsFault> check_axis_in(const Settings& settings, const Settings& pair, std::size_t axis) {
+  // Checked on the axis's own setting, whatever it moves with: a rotary X
+  // is wrong even while X is a slave.
+  if (settings.axes[axis].kind == AxisKind::rotary && !may_be_rotary(axis))
+    return fault(axis, AxisField::kind, CheckRule::kind_linear_only, static_cast<double>(AxisKind::rotary));
   if (auto f = check_slave(settings, pair, axis)) return f;
   if (auto f = check_indexer(settings, axis)) return f;
   const AxisSettings& s = pair.axes[axis];
   if (auto f = check_limits(s, axis)) return f;
-  if (mode_row(s.mode).runs(Phase::seek)) return check_motion(s, axis);
+  const ModeRow& row = mode_row(s.mode);
+  if (s.shared_limit && !row.shares_limit)
+    return fault(axis, AxisField::shared_limit, CheckRule::shared_limit_without_sensor, 1);
+  if (row.runs(Phase::seek)) return check_motion(s, axis);
+  if (row.runs(Phase::push_to_stop)) return check_stop_search(s, axis);
+  if (row.runs(Phase::drive_homing) && !(s.drive_home_timeout_s > 0))
+    return fault(axis, AxisField::drive_home_timeout, CheckRule::missing_time_limit, s.drive_home_timeout_s);
   if (final_move_wanted(s)) {
     if (s.seek_feedrate_mm_per_min <= 0)
       return fault(axis, AxisField::seek_feedrate, CheckRule::not_positive, s.seek_feedrate_mm_per_min);
@@ -192,7 +226,7 @@ std::optional<SettingsFault> new_fault(const Settings& before, const Settings& a
 std::string describe_fault(const SettingsFault& f, const Settings& settings) {
   const AxisSettings& s = settings.axes[f.axis];
   const auto letter = kAxisLetters[f.axis];
-  const auto unit = axis_unit(f.axis);
+  const auto unit = axis_unit(settings, f.axis);  // a slave's is its master's
   const std::string name = fmt::format("axis.{}.{}", letter, field_name(f.field));
   switch (f.rule) {
     case CheckRule::none: return "";
@@ -251,6 +285,9 @@ std::string describe_fault(const SettingsFault& f, const Settings& settings) {
                          letter, s.max_backoff_mm, unit, f.value, unit,
                          mode_is_pushing(s.mode) ? " plus push_distance" : "",
                          mode_is_pushing(s.mode) ? " or lower push_distance" : "");
+    case CheckRule::shared_limit_without_sensor:
+      return fmt::format("{}: mode {} homes without a home sensor, so there is none to share with a hard "
+                         "limit; set {} = 0", name, mode_name(s.mode), name);
     case CheckRule::indexer_in_gantry:
       return fmt::format("{}: a locking indexer holds one axis; on a gantry one side would be held while the "
                          "other moves; switch indexer_lock off or take the axis out of the gantry (slave_of)",
@@ -259,6 +296,14 @@ std::string describe_fault(const SettingsFault& f, const Settings& settings) {
       return fmt::format("{}: the axis would rest {:g} {} from its edge (pull-off, plus a slave's "
                          "switch_compensation); a shared home/limit sensor needs more than 0 so the axis "
                          "comes to rest off its sensor", name, f.value, unit);
+    case CheckRule::kind_linear_only:
+      return fmt::format("{} = rotary: {} is a linear axis (mm); only A, B and C can be rotary. Set {} = "
+                         "linear, or put the rotary axis on A, B or C",
+                         name, kAxisUpper[f.axis], name);
+    case CheckRule::missing_time_limit:
+      return fmt::format("{} is {:g} s; mode {} waits for the drive's home done at most this long and needs "
+                         "it greater than 0 (longer than the drive's own homing takes)", name, f.value,
+                         mode_name(s.mode));
   }
   return "?";
 }

@@ -30,6 +30,9 @@ enum class CheckRule : std::uint8_t {
   squaring_beyond_misalignment,  // pull-off difference + compensation alone exceed max_misalignment
   backoff_too_short,        // max_backoff cannot release the sensor after the stop (and push)
   shared_limit_rests_on_sensor,  // a shared home/limit sensor needs a pull-off off the sensor
+  shared_limit_without_sensor,   // the homing method has no home sensor to share with a limit
+  kind_linear_only,         // X, Y and Z cannot be rotary
+  missing_time_limit,       // drive mode needs drive_home_timeout_s > 0
   indexer_in_gantry,        // a locking indexer on a gantry master or slave
 };
 
@@ -62,6 +65,12 @@ inline constexpr EnumInfo<CheckRule> kCheckRuleInfo[] = {
      "max_backoff cannot release the sensor after the stop (and the push)"},
     {CheckRule::shared_limit_rests_on_sensor, "shared_limit_rests_on_sensor",
      "a home sensor shared with a limit needs a pull-off that leaves the sensor"},
+    {CheckRule::shared_limit_without_sensor, "shared_limit_without_sensor",
+     "shared_limit needs a homing method with a home sensor to share"},
+    {CheckRule::kind_linear_only, "kind_linear_only",
+     "X, Y and Z are linear axes: only A, B and C can be rotary"},
+    {CheckRule::missing_time_limit, "missing_time_limit",
+     "drive-performed homing needs drive_home_timeout_s greater than 0"},
     {CheckRule::indexer_in_gantry, "indexer_in_gantry",
      "a locking indexer (indexer_lock) is for an axis of its own, not a gantry master or slave"},
 };

@@ -132,7 +132,7 @@ std::string settings_file_text(const std::map<std::string, std::int64_t>& values
                                std::int64_t now_ms, const SettingsFileCodec* codec) {
   std::string text = header(source, now_ms, codec != nullptr);
   for (const auto& [name, value] : values) {
-    if (codec) text += fmt::format("{} = {}\n", bare_or_quoted_key(name), codec->write(name, value));
+    if (codec) text += fmt::format("{} = {}\n", bare_or_quoted_key(name), codec->write(name, value, values));
     else text += fmt::format("{} = {}\n", quote_key(name), value);
   }
   return text;

@@ -44,7 +44,11 @@ struct SettingsFile {
 // How a setting is spelled in a version-2 file (given by the register layer).
 struct SettingsFileCodec {
   // A raw value as a TOML value, optionally followed by "  # comment" (the unit).
-  std::function<std::string(const std::string& name, std::int64_t raw)> write;
+  // `all`: every value of the file, for a spelling that depends on another
+  // setting (the unit of an axis's values on its axis.<a>.kind).
+  std::function<std::string(const std::string& name, std::int64_t raw,
+                            const std::map<std::string, std::int64_t>& all)>
+      write;
   // A file value back to the raw value, or why it cannot be (names the setting,
   // the value and the rule).
   std::function<std::expected<std::int64_t, std::string>(const std::string& name, const SettingsFileValue& value)> read;

@@ -126,7 +126,7 @@ void set_host_raw(HostRegisters& host, const Register& reg, std::int64_t raw) {
     case Key::host_heartbeat: host.heartbeat = static_cast<std::uint16_t>(raw); return;
     case Key::host_target: host.target_mm.at(axis_index(reg)) = to_engineering(reg, raw); return;
     case Key::host_homing_permit: host.homing_permit = raw != 0; return;
-    case Key::security_unlock: host.unlock_code = static_cast<std::uint16_t>(raw); return;
+    case Key::security_unlock: host.unlock_code = static_cast<std::uint32_t>(raw); return;
     case Key::cmd_home_axes: return;  // a command (validate_write), nothing held
     case Key::cmd_jog_plus: host.jog_plus.at(axis_index(reg)) = raw != 0; return;
     case Key::cmd_jog_minus: host.jog_minus.at(axis_index(reg)) = raw != 0; return;
@@ -193,6 +193,8 @@ std::int64_t read_raw(const Register& reg, const ModuleView& view) {
     case Key::status_refusal_count: return view.extras.refusal_count;
     case Key::status_last_refused_register: return view.extras.last_refused_register;
     case Key::status_last_refusal_reason: return view.extras.last_refusal_reason;
+    case Key::status_unlock_lockout_s: return view.extras.unlock_lockout_s;
+    case Key::status_wrong_unlock_codes: return view.extras.wrong_unlock_codes;
     case Key::status_alarm: return st.alarm ? 1 : 0;
     case Key::status_homing: return st.homing ? 1 : 0;
     case Key::status_estop: return st.estop ? 1 : 0;
@@ -257,12 +259,12 @@ std::string modbus_reference(Table table, std::uint16_t address) {
   return fmt::format("{}{:05d}", prefix, std::uint32_t{address} + 1);
 }
 
-std::string format_value(const Register& reg, std::int64_t raw) {
+std::string format_value(const Register& reg, std::int64_t raw, const AxisKinds& kinds) {
   if (reg.type == Type::enumeration) {
     const auto n = value_name(reg, raw);
     return n.empty() ? fmt::format("{}", raw) : fmt::format("{} ({})", raw, n);
   }
-  const auto unit = reg.unit_text();
+  const auto unit = reg.unit_text(kinds);
   if (unit.empty()) return fmt::format("{}", to_engineering(reg, raw));
   return fmt::format("{} {}", to_engineering(reg, raw), unit);
 }

@@ -34,7 +34,7 @@ struct HostRegisters {
   std::uint16_t heartbeat = 0;                     // host.heartbeat
   std::array<double, homing::kAxisCount> target_mm{};  // axis.<a>.target (axis unit)
   bool homing_permit = false;                      // host.homing_permit
-  std::uint16_t unlock_code = 0;                   // security.unlock, as last written (reads 0)
+  std::uint32_t unlock_code = 0;                   // security.unlock(32), as last written (reads 0)
   std::array<bool, homing::kAxisCount> jog_plus{};     // cmd.jog_plus.<a> held
   std::array<bool, homing::kAxisCount> jog_minus{};    // cmd.jog_minus.<a> held
 };
@@ -55,6 +55,9 @@ struct StatusExtras {
   std::uint16_t refusal_count = 0;
   std::uint16_t last_refused_register = 0;
   std::uint16_t last_refusal_reason = 0;
+  // The unlock code's guard (owned by the Modbus service).
+  std::uint16_t unlock_lockout_s = 0;
+  std::uint16_t wrong_unlock_codes = 0;
 };
 
 // ---- coils and command registers -> commands ----
@@ -110,6 +113,6 @@ std::optional<Refusal> read_module_bits(Table table, std::uint16_t start, std::s
 // "40101" style reference of an address, for messages (1-based, 6 digits).
 std::string modbus_reference(Table table, std::uint16_t address);
 // "axis.x.seek_feedrate = 1200 mm/min" style value text.
-std::string format_value(const Register& reg, std::int64_t raw);
+std::string format_value(const Register& reg, std::int64_t raw, const AxisKinds& kinds = default_kinds());
 
 }  // namespace registers

@@ -56,6 +56,7 @@ enum class RefusalReason : std::uint8_t {
   no_axis_named,        // cmd.home_axes = 0
   axis_disabled,        // cmd.home_axes names an axis whose mode is disabled
   homing_blocked,       // cmd.home_axes while an alarm, e-stop, drive fault, lost link or missing permit blocks homing
+  unlock_locked_out,    // security.unlock after too many wrong codes in a row: not even compared until the lockout ends
 };
 // Each reason with the exception it is answered with, its name and its text.
 struct RefusalReasonInfo {
@@ -92,8 +93,10 @@ inline constexpr RefusalReasonInfo kRefusalReasonInfo[] = {
      "cmd.home_axes names an axis whose mode is disabled"},
     {RefusalReason::homing_blocked, ExceptionCode::server_device_failure, "homing_blocked",
      "homing cannot start now (alarm, e-stop, drive fault, lost link or missing permit): see status.interlocks"},
+    {RefusalReason::unlock_locked_out, ExceptionCode::server_device_busy, "unlock_locked_out",
+     "too many wrong unlock codes in a row: every unlock is refused until status.unlock_lockout_s reads 0"},
 };
-static_assert(homing::lists_every_value(kRefusalReasonInfo, RefusalReason::homing_blocked));
+static_assert(homing::lists_every_value(kRefusalReasonInfo, RefusalReason::unlock_locked_out));
 constexpr std::span<const RefusalReasonInfo> enum_table(RefusalReason) { return kRefusalReasonInfo; }
 
 inline constexpr std::uint16_t kRuleReasonBase = 100;

@@ -8,20 +8,31 @@
 
 namespace registers {
 
+// The units the maps name for each axis's values. The committed hmi_maps/ are
+// made without settings: a new module's kinds (A, B, C rotary), and every
+// value of an axis that may be rotary says that its unit follows
+// axis.<a>.kind. `homingctl maps` makes the maps of one configured machine:
+// the kinds its axes move with (a slave its master's).
+struct MapUnits {
+  AxisKinds kinds = default_kinds();
+  std::string source;  // where the settings came from (a module, a file); "" = a new module's
+  bool configured() const { return !source.empty(); }
+};
+
 struct GeneratedFile {
   std::string name;     // file name inside hmi_maps/
   std::string content;
 };
 
 // Every generated file, in a fixed order.
-std::vector<GeneratedFile> generate_hmi_maps();
+std::vector<GeneratedFile> generate_hmi_maps(const MapUnits& units = {});
 
-std::string export_csv(Unit unit);        // registers.csv / sim_registers.csv
-std::string export_markdown();            // registers.md
-std::string export_json();                // registers.json
-std::string export_kepware(Unit unit);    // kepware_*.csv (one device per unit id)
-std::string export_ignition();            // ignition_tags.json
-std::string export_home_assistant();      // home_assistant_modbus.yaml
+std::string export_csv(Unit unit, const MapUnits& units = {});      // registers.csv / sim_registers.csv
+std::string export_markdown(const MapUnits& units = {});            // registers.md
+std::string export_json(const MapUnits& units = {});                // registers.json
+std::string export_kepware(Unit unit, const MapUnits& units = {});  // kepware_*.csv (one device per unit id)
+std::string export_ignition(const MapUnits& units = {});            // ignition_tags.json
+std::string export_home_assistant(const MapUnits& units = {});      // home_assistant_modbus.yaml
 std::string export_alarms_csv();          // alarms.csv: the engine's alarm table
 std::string export_refusals_csv();        // refusals.csv: the codes of status.last_refusal_reason
 std::string export_enums_csv();           // enums.csv: every value list, named
@@ -32,7 +43,11 @@ std::string csv_field(std::string_view s);      // RFC 4180 quoting when needed
 std::string scale_text(const Register& reg);    // "1", "0.001"
 std::string engineering_text(const Register& reg, std::int64_t raw);
 std::string flat_name(const Register& reg);     // "axis_x_seek_feedrate"
-std::string description(const Register& reg);   // with <a> replaced by the axis letter
+// With <a> replaced by the axis letter; in maps made without settings, a
+// value of an axis that may be rotary says its unit follows axis.<a>.kind.
+std::string description(const Register& reg, const MapUnits& units);
+// The first lines' note: where the file comes from (and for which machine).
+std::string generated_note(const MapUnits& units);
 // The text spelled in ASCII (µ -> u, ² -> ^2, ° -> deg, ± -> +/-, ...), for
 // importers that read files in a Windows code page.
 std::string ascii_text(std::string_view utf8);

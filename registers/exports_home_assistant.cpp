@@ -34,7 +34,7 @@ std::string entity(const Register& r) {
 
 }  // namespace
 
-std::string export_home_assistant() {
+std::string export_home_assistant(const MapUnits& units) {
   std::string sensors, binary_sensors, switches;
   for (const Register& r : all_registers()) {
     switch (r.table) {
@@ -45,7 +45,8 @@ std::string export_home_assistant() {
                                            "        precision: {}\n",
                                            r.table == Table::holding_register ? "holding" : "input",
                                            ha_data_type(r.type), r.scale(), precision);
-        if (!r.unit_text().empty()) sensors += fmt::format("        unit_of_measurement: \"{}\"\n", r.unit_text());
+        if (const auto unit = r.unit_text(units.kinds); !unit.empty())
+          sensors += fmt::format("        unit_of_measurement: \"{}\"\n", unit);
         sensors += fmt::format("        scan_interval: {}\n",
                                r.table == Table::holding_register ? kSettingScan_s : kLiveScan_s);
         break;
@@ -75,7 +76,7 @@ std::string export_home_assistant() {
       "# value in one call: axis.x.home_position = -12.5 mm -> raw -12500 -> value: [65535, 53036].\n"
       "modbus:\n  - name: homing_module\n    type: tcp\n    host: 127.0.0.1\n    port: 1502\n"
       "    sensors:\n{}    binary_sensors:\n{}    switches:\n{}",
-      exports_detail::kGeneratedNote, sensors, binary_sensors, switches);
+      exports_detail::generated_note(units), sensors, binary_sensors, switches);
 }
 
 }  // namespace registers

@@ -47,7 +47,7 @@ ordered_json& folder(ordered_json& parent, const std::string& name) {
 
 }  // namespace
 
-std::string export_ignition() {
+std::string export_ignition(const MapUnits& units) {
   ordered_json root{{"name", "HomingModule"}, {"tagType", "Folder"}, {"tags", ordered_json::array()}};
   for (Unit unit : {Unit::module, Unit::simulator}) {
     ordered_json& top = folder(root, unit == Unit::module ? "module" : "simulator");
@@ -63,9 +63,9 @@ std::string export_ignition() {
                        {"opcItemPath", fmt::format("ns=1;s=[HomingModule]{}.{}{}", exports_detail::default_unit_id(unit),
                                                    designator(r), std::uint32_t{r.address} + 1)},
                        {"dataType", ignition_type(r)},
-                       {"documentation", exports_detail::description(r)},
+                       {"documentation", exports_detail::description(r, units)},
                        {"readOnly", !r.writable()}};
-      if (!r.unit_text().empty()) tag["engUnit"] = r.unit_text();
+      if (const auto unit = r.unit_text(units.kinds); !unit.empty()) tag["engUnit"] = unit;
       if (r.scale() != 1.0) {
         tag["scaleMode"] = "Linear";
         tag["rawLow"] = 0;

@@ -5,10 +5,10 @@
 
 namespace registers {
 
-std::string export_json() {
+std::string export_json(const MapUnits& units) {
   using nlohmann::ordered_json;
   ordered_json doc;
-  doc["generated"] = exports_detail::kGeneratedNote;
+  doc["generated"] = exports_detail::generated_note(units);
   doc["map_version"] = kMapVersion;
   doc["word_order_default"] = "high_first";
   doc["address_base"] = 0;
@@ -29,13 +29,13 @@ std::string export_json() {
       j["words"] = r.words();
       j["type"] = type_name(r.type);
       j["access"] = access_name(r.access);
-      j["unit"] = r.unit_text();
+      j["unit"] = r.unit_text(units.kinds);
       j["scale"] = r.scale();
       j["min"] = r.min;
       j["max"] = r.max;
       j["default"] = r.default_raw;
       j["persisted"] = r.persisted;
-      j["description"] = exports_detail::description(r);
+      j["description"] = exports_detail::description(r, units);
       if (r.per_axis()) {
         j["axis"] = homing::kAxisLetters[static_cast<std::size_t>(r.axis)];
         j["offset"] = r.offset;

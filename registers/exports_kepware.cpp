@@ -37,8 +37,8 @@ std::string values_text(const Register& r) {
   return out;
 }
 
-std::string description(const Register& r) {
-  std::string d = exports_detail::description(r);
+std::string description(const Register& r, const MapUnits& units) {
+  std::string d = exports_detail::description(r, units);
   if (!r.values.empty()) {
     const std::string with_values = fmt::format("{} ({})", d, values_text(r));
     d = with_values.size() <= kMaxDescription ? with_values : d + " (values: see registers.md)";
@@ -48,7 +48,7 @@ std::string description(const Register& r) {
 
 }  // namespace
 
-std::string export_kepware(Unit unit) {
+std::string export_kepware(Unit unit, const MapUnits& units) {
   using exports_detail::csv_field;
   std::string out =
       "Tag Name,Address,Data Type,Respect Data Type,Client Access,Scan Rate,Scaling,Raw Low,Raw High,"
@@ -60,7 +60,8 @@ std::string export_kepware(Unit unit) {
                : std::string(",,,,,,,");
     out += fmt::format("{},{},{},1,{},100,{},{},{},0\n", r.name(), modbus_reference(r.table, r.address),
                        kepware_type(r.type), r.writable() ? "R/W" : "RO", scaling,
-                       csv_field(exports_detail::ascii_text(r.unit_text())), csv_field(description(r)));
+                       csv_field(exports_detail::ascii_text(r.unit_text(units.kinds))),
+                       csv_field(description(r, units)));
   }
   return out;
 }

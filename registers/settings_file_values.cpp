@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 
+#include "registers/defaults.hpp"
 #include "registers/lookup.hpp"
 #include "registers/value_text.hpp"
 
@@ -27,7 +28,8 @@ const Register* setting_named(const std::string& name) {
 
 }  // namespace
 
-std::string file_value_text(const std::string& name, std::int64_t raw) {
+std::string file_value_text(const std::string& name, std::int64_t raw,
+                            const std::map<std::string, std::int64_t>& all) {
   const Register* reg = setting_named(name);
   if (!reg) return fmt::format("{}", raw);
   if (reg->type == Type::enumeration || reg->type == Type::bitmask) {
@@ -36,7 +38,7 @@ std::string file_value_text(const std::string& name, std::int64_t raw) {
     return fmt::format("{}", raw);  // a number without a name (an old database)
   }
   if (is_flag(*reg)) return raw ? "true" : "false";
-  const auto unit = reg->unit_text();
+  const auto unit = reg->unit_text(kinds_of(settings_from_raw(all).settings));
   if (unit.empty()) return fmt::format("{}", raw);
   return fmt::format("{}  # {}", decimal_text(*reg, raw), unit);
 }

@@ -11,6 +11,7 @@
 //   global.history_max_rows = 10000
 #include <cstdint>
 #include <expected>
+#include <map>
 #include <string>
 #include <variant>
 
@@ -20,8 +21,12 @@ namespace registers {
 using FileValue = std::variant<std::int64_t, double, bool, std::string>;
 
 // The TOML value of a setting's raw value, with its unit as a comment when it
-// has one. Exact: reading it back gives the same raw value.
-std::string file_value_text(const std::string& name, std::int64_t raw);
+// has one. Exact: reading it back gives the same raw value. `all` holds every
+// setting of the file (name -> raw): the unit of a per-axis value is that of
+// the kind the axis moves with there (axis.<a>.kind, a slave its master's);
+// a setting missing from `all` has its default.
+std::string file_value_text(const std::string& name, std::int64_t raw,
+                            const std::map<std::string, std::int64_t>& all);
 
 // A file value as the raw value: numbers in the register's unit, value names
 // (or their numbers) for lists, true/false or 0/1 for flags, and texts as

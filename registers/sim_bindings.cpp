@@ -12,6 +12,7 @@ namespace {
 using homing::sim::AxisConfig;
 using homing::sim::MachineConfig;
 
+// Every knob held as a double, in engineering units.
 template <class A>
 auto length_field(A& a, Key k) -> decltype(&a.noise_mm) {
   switch (k) {
@@ -26,6 +27,9 @@ auto length_field(A& a, Key k) -> decltype(&a.noise_mm) {
     case Key::sim_index_pitch: return &a.index_pitch_mm;
     case Key::sim_index_offset: return &a.index_offset_mm;
     case Key::sim_absolute_offset: return &a.absolute_offset_mm;
+    case Key::sim_drive_home_position: return &a.drive_home_position_mm;
+    case Key::sim_drive_speed: return &a.drive_speed_mm_per_min;
+    case Key::sim_drive_answer_ms: return &a.drive_answer_ms;
     case Key::sim_unlock_delay_ms: return &a.unlock_delay_ms;
     case Key::sim_lock_delay_ms: return &a.lock_delay_ms;
     default: return nullptr;

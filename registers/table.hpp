@@ -30,7 +30,7 @@ enum class Table : std::uint8_t { coil = 0, discrete_input = 1, input_register =
 enum class Type : std::uint8_t { boolean, u16, i16, u32, i32, enumeration, bitmask };
 enum class Access : std::uint8_t { r, rw, w };
 
-// What the raw integer measures. Together with the axis (linear or rotary) it
+// What the raw integer measures. Together with the axis's kind (linear or rotary) it
 // gives the unit text and the scale, so no row can pair µm with scale 1.
 enum class Quantity : std::uint8_t {
   none,              // counts, codes, flags: scale 1, no unit
@@ -39,6 +39,7 @@ enum class Quantity : std::uint8_t {
   feedrate_per_min,  // raw mm/min (deg/min), scale 1
   acceleration_per_s2,  // raw mm/s² (deg/s²), scale 1
   time_ms,           // raw milliseconds, scale 1
+  time_s,            // raw seconds, scale 1
 };
 
 // What a register that is not a setting is bound to (status, host values,
@@ -55,6 +56,7 @@ enum class Key : std::uint8_t {
   status_settings_locked, status_command_count, axis_alarm_value, diag_loop_periods, diag_late_p50_us, diag_late_p99_us, diag_late_p999_us,
   diag_late_max_us, diag_engine_step_ns, diag_rss_kb, diag_tcp_clients,
   status_refusal_count, status_last_refused_register, status_last_refusal_reason,
+  status_unlock_lockout_s, status_wrong_unlock_codes,
   axis_phase, axis_alarm, axis_alarm_phase, axis_position, axis_velocity, axis_home_correction,
   axis_stop_distance, axis_trigger_position, axis_phase_distance, axis_correction_mean,
   axis_correction_spread,
@@ -70,10 +72,20 @@ enum class Key : std::uint8_t {
   sim_seed, sim_actual_position, sim_sensor_min, sim_sensor_max, sim_hysteresis, sim_noise,
   sim_bounce_ms, sim_sensor_nc, sim_hard_stop_min, sim_hard_stop_max, sim_index_pitch,
   sim_index_offset, sim_absolute_offset, sim_fault, sim_lose_steps, sim_estop, sim_start_button,
-  sim_sensor, sim_at_hard_stop, sim_driven_by, sim_unlock_delay_ms, sim_lock_delay_ms, sim_indexer_locked,
+  sim_sensor, sim_at_hard_stop, sim_driven_by,
+  sim_drive_home_position, sim_drive_speed, sim_drive_answer_ms,
+  sim_unlock_delay_ms, sim_lock_delay_ms, sim_indexer_locked,
 };
 
 struct Register;
+
+// The kind each axis moves with (homing::axis_kind: its axis.<a>.kind, a
+// slave its master's). It names the unit of the axis's lengths, feedrates and
+// accelerations: mm or deg. Texts made without settings (the committed
+// hmi_maps/) use a new module's kinds.
+using AxisKinds = std::array<homing::AxisKind, homing::kAxisCount>;
+AxisKinds default_kinds();  // X Y Z linear, A B C rotary (the defaults of axis.<a>.kind)
+AxisKinds kinds_of(const homing::Settings& settings);
 
 // What a settings row fills: one member of homing::AxisSettings (per-axis rows;
 // the row's axis picks the element of Settings::axes) or of
@@ -138,7 +150,9 @@ struct Register {
   constexpr bool writable() const { return access != Access::r; }
   constexpr std::uint32_t end() const { return std::uint32_t{address} + words(); }  // one past
   std::string name() const;
-  std::string_view unit_text() const;  // "mm", "deg/min", "" ...
+  // "mm", "deg/min", "" ...: the unit on an axis of the kind it moves with.
+  std::string_view unit_text(const AxisKinds& kinds) const;
+  std::string_view unit_text() const;  // with default_kinds(): only where no settings are known
   double scale() const;                // engineering = raw * scale
 };
 

@@ -28,8 +28,8 @@ std::string where(Unit unit, Table table, std::uint32_t address) {
                      modbus_reference(table, static_cast<std::uint16_t>(address)), unit_name(unit));
 }
 
-std::string range_text(const Register& reg) {
-  const auto unit = reg.unit_text();
+std::string range_text(const Register& reg, const AxisKinds& kinds) {
+  const auto unit = reg.unit_text(kinds);
   return fmt::format("{}..{}{}{}", to_engineering(reg, reg.min), to_engineering(reg, reg.max),
                      unit.empty() ? "" : " ", unit);
 }
@@ -60,7 +60,7 @@ std::optional<Refusal> named_axes_refusal(const CommandRequest& c, const homing:
 
 std::expected<std::vector<RawWrite>, Refusal> decode_write(Unit unit, Table table, std::uint16_t start,
                                                             std::span<const std::uint16_t> values,
-                                                            WordOrder order) {
+                                                            WordOrder order, const AxisKinds& kinds) {
   if (values.empty())
     return std::unexpected(
         Refusal::because(RefusalReason::empty, start, "a write of 0 items"));
@@ -104,7 +104,7 @@ std::expected<std::vector<RawWrite>, Refusal> decode_write(Unit unit, Table tabl
     if ((raw < reg->min || raw > reg->max) && !value_fault)
       value_fault = Refusal::because(RefusalReason::out_of_range, reg->address,
                                      fmt::format("{} = {} is outside its range {}; nothing was written",
-                                                 reg->name(), format_value(*reg, raw), range_text(*reg)));
+                                                 reg->name(), format_value(*reg, raw, kinds), range_text(*reg, kinds)));
     out.push_back({reg, raw});
     a = reg->end();
   }
@@ -120,7 +120,7 @@ std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t 
                                                      std::span<const std::uint16_t> values, WordOrder order,
                                                      const homing::Settings& settings,
                                                      const HostRegisters& host) {
-  auto decoded = decode_write(Unit::module, table, start, values, order);
+  auto decoded = decode_write(Unit::module, table, start, values, order, kinds_of(settings));
   if (!decoded) return std::unexpected(decoded.error());
 
   AcceptedWrite result{{}, settings, host, {}};
@@ -174,6 +174,8 @@ std::optional<Refusal> refusal_now(const AcceptedWrite& write, const homing::Sta
 }
 
 std::optional<Refusal> validate_settings_map(const std::map<std::string, std::int64_t>& values) {
+  const SettingsFromRaw decoded = settings_from_raw(values);
+  const AxisKinds kinds = kinds_of(decoded.settings);
   for (const auto& [name, raw] : values) {
     const Register* reg = find_register(name);
     if (!reg || !reg->persisted)
@@ -181,9 +183,9 @@ std::optional<Refusal> validate_settings_map(const std::map<std::string, std::in
     if (raw < reg->min || raw > reg->max)
       return Refusal::because(
           RefusalReason::out_of_range, reg->address,
-          fmt::format("{} = {} is outside its range {}", name, format_value(*reg, raw), range_text(*reg)));
+          fmt::format("{} = {} is outside its range {}", name, format_value(*reg, raw, kinds),
+                      range_text(*reg, kinds)));
   }
-  const SettingsFromRaw decoded = settings_from_raw(values);
   for (const auto& fault : homing::check_settings(decoded.settings))
     if (fault) return rule_refusal(*fault, homing::describe_fault(*fault, decoded.settings));
   return std::nullopt;

@@ -36,9 +36,11 @@ struct Change {
 // 02 for an unmapped address anywhere in the range, a read-only register or
 // table, or a write covering only one half of a 32-bit value; 03 for a value
 // outside its range (address faults are reported first, as libmodbus does).
+// `kinds` name the units in the messages (kinds_of the module's settings).
 std::expected<std::vector<RawWrite>, Refusal> decode_write(Unit unit, Table table, std::uint16_t start,
                                                             std::span<const std::uint16_t> values,
-                                                            WordOrder order);
+                                                            WordOrder order,
+                                                            const AxisKinds& kinds = default_kinds());
 
 struct AcceptedWrite {
   std::vector<Change> changes;          // in address order

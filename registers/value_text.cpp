@@ -32,7 +32,7 @@ bool is_flag(const Register& reg) {
          (reg.min == 0 && reg.max == 1 && reg.values.empty() && reg.quantity == Quantity::none);
 }
 
-std::string accepted_text(const Register& reg) {
+std::string accepted_text(const Register& reg, const AxisKinds& kinds) {
   if (!reg.values.empty() && reg.type == Type::enumeration) {
     std::string s;
     for (const auto& v : reg.values) s += fmt::format("{}{} ({})", s.empty() ? "" : ", ", v.name, v.value);
@@ -44,16 +44,17 @@ std::string accepted_text(const Register& reg) {
     return fmt::format("bit names joined by '+' ({}), 'none', or a number {}..{}", s, reg.min, reg.max);
   }
   if (is_flag(reg)) return "0/1 (off/on)";
-  const auto u = reg.unit_text();
+  const auto u = reg.unit_text(kinds);
   return fmt::format("{}{}{} .. {}{}{}", eng(reg, reg.min), u.empty() ? "" : " ", u, eng(reg, reg.max),
                      u.empty() ? "" : " ", u);
 }
 
-std::expected<std::int64_t, std::string> parse_value(const Register& reg, std::string_view input) {
+std::expected<std::int64_t, std::string> parse_value(const Register& reg, std::string_view input,
+                                                     const AxisKinds& kinds) {
   const std::string text = trim(input);
   const std::string name = reg.name();
   auto bad = [&](std::string_view why) {
-    return std::unexpected(fmt::format("{} = '{}': {}; accepted: {}", name, text, why, accepted_text(reg)));
+    return std::unexpected(fmt::format("{} = '{}': {}; accepted: {}", name, text, why, accepted_text(reg, kinds)));
   };
   if (text.empty()) return bad("no value");
   const std::string l = lower(text);
@@ -94,7 +95,7 @@ std::expected<std::int64_t, std::string> parse_value(const Register& reg, std::s
   if (!done) {
     // A number, optionally followed by the register's unit.
     std::string num = l;
-    const std::string unit = lower(std::string(reg.unit_text()));
+    const std::string unit = lower(std::string(reg.unit_text(kinds)));
     if (!unit.empty() && num.size() > unit.size() && num.ends_with(unit)) num = trim(num.substr(0, num.size() - unit.size()));
     double v = 0;
     const auto* b = num.data();
@@ -105,7 +106,7 @@ std::expected<std::int64_t, std::string> parse_value(const Register& reg, std::s
     if (reg.scale() == 1.0 && v != std::floor(v)) return bad("must be a whole number");
     const double scaled = v / reg.scale();
     if (std::abs(scaled - std::round(scaled)) > 1e-6 * std::max(1.0, std::abs(scaled)))
-      return bad(fmt::format("finer than the register's step of {} {}", reg.scale(), reg.unit_text()));
+      return bad(fmt::format("finer than the register's step of {} {}", reg.scale(), reg.unit_text(kinds)));
     if (scaled < static_cast<double>(reg.min) - 0.5 || scaled > static_cast<double>(reg.max) + 0.5)
       return bad("out of range");
     raw = std::llround(scaled);
@@ -114,7 +115,7 @@ std::expected<std::int64_t, std::string> parse_value(const Register& reg, std::s
   return raw;
 }
 
-std::string value_text(const Register& reg, std::int64_t raw) {
+std::string value_text(const Register& reg, std::int64_t raw, const AxisKinds& kinds) {
   if (reg.type == Type::enumeration) {
     const auto n = value_name(reg, raw);
     return n.empty() ? fmt::format("{}", raw) : std::string(n);
@@ -125,7 +126,7 @@ std::string value_text(const Register& reg, std::int64_t raw) {
       if (raw & (std::int64_t{1} << v.value)) s += fmt::format("{}{}", s.empty() ? "" : "+", v.name);
     return s.empty() ? "none" : s;
   }
-  const auto u = reg.unit_text();
+  const auto u = reg.unit_text(kinds);
   return u.empty() ? eng(reg, raw) : fmt::format("{} {}", eng(reg, raw), u);
 }
 

@@ -18,12 +18,15 @@ bool is_flag(const Register& reg);
 // "12.5", "12.5mm", "switch_reapproach", "2", "on", "x+y" (bitmask) -> raw.
 // Range-checked against the table; the error names the register, the value
 // and what is accepted.
-std::expected<std::int64_t, std::string> parse_value(const Register& reg, std::string_view text);
+// `kinds`: the kind each axis moves with (kinds_of the settings), which names
+// the unit of a per-axis value; without settings, a new module's.
+std::expected<std::int64_t, std::string> parse_value(const Register& reg, std::string_view text,
+                                                     const AxisKinds& kinds = default_kinds());
 
 // "12.5 mm", "switch_reapproach", "x+y", "1" (flags), for tables.
-std::string value_text(const Register& reg, std::int64_t raw);
+std::string value_text(const Register& reg, std::int64_t raw, const AxisKinds& kinds = default_kinds());
 
 // "1 mm .. 60000 mm", or the enum names.
-std::string accepted_text(const Register& reg);
+std::string accepted_text(const Register& reg, const AxisKinds& kinds = default_kinds());
 
 }  // namespace registers

@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "homing/gantry.hpp"
+
 namespace server {
 
 std::int64_t monotonic_ns() {
@@ -299,6 +301,7 @@ void ControlLoop::begin_stop_report() {
     r.velocity_mm_per_s = st.axes[a].velocity_mm_per_s;
     r.moving = r.velocity_mm_per_s != 0;
     r.from_mm = st.axes[a].position_mm;
+    r.unit = homing::axis_unit(settings_, a);
   }
 }
 

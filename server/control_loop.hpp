@@ -11,6 +11,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -54,6 +55,7 @@ struct StopReport {
     double velocity_mm_per_s = 0;  // then
     double from_mm = 0;         // machine coordinates, then
     double rest_mm = 0;         // where it came to rest
+    std::string_view unit = "mm";  // of the kind the axis moves with (homing::axis_unit)
   };
   std::array<Axis, homing::kAxisCount> axes{};
   double machine_s = 0;  // machine time the stop took

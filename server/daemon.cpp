@@ -78,7 +78,10 @@ ServiceConfig service_config(const Options& opt, const ControlLoop& loop, const 
   if (!loop.has_sim()) config.sim_unit_id = std::nullopt;  // no simulator behind real GPIO
   config.word_order = opt.word_order;
   for (const auto& entry : opt.write_allow) config.write_allow.push_back(*parse_cidr(entry));
-  config.unlock_code = static_cast<std::uint16_t>(opt.unlock_code);
+  config.unlock_code = static_cast<std::uint32_t>(opt.unlock_code);
+  config.unlock_policy.first_lockout = std::chrono::seconds(opt.unlock_lockout_s);
+  config.unlock_policy.max_lockout = std::chrono::seconds(opt.unlock_lockout_max_s);
+  config.refusal_log_interval = std::chrono::seconds(opt.refusal_log_interval_s);
   if (!opt.vendor_name.empty()) config.identity.vendor_name = opt.vendor_name;
   if (!opt.vendor_url.empty()) config.identity.vendor_url = opt.vendor_url;
   if (!opt.product_name.empty()) config.identity.product_name = opt.product_name;
@@ -94,13 +97,25 @@ struct Transports {
   std::unique_ptr<RtuServer> rtu;
 };
 
+// Where a listener listens and how it shares its connections (plain TCP and TLS alike).
+ListenConfig listen_config(const Options& opt, const std::string& host, int port) {
+  ListenConfig config;
+  config.host = host;
+  config.port = port;
+  config.max_clients = opt.max_clients;
+  config.idle_timeout_s = opt.idle_timeout_s;
+  for (const auto& entry : opt.privileged) config.privileged.push_back(*parse_cidr(entry));
+  config.max_per_address = opt.max_clients_per_address;
+  config.refusal_log_interval_s = opt.refusal_log_interval_s;
+  return config;
+}
+
 // The TLS listener: certificate, key, CA and CRL loaded, bound; the error names the file or address.
 std::expected<void, std::string> open_tls(const Options& opt, ModbusService& service, Transports& t) {
   auto opener = TlsOpener::create(TlsConfig{{opt.tls_cert, opt.tls_key, opt.tls_ca, opt.tls_crl}, opt.tls_default_role});
   if (!opener) return std::unexpected(opener.error());
   TlsOpener* files = opener->get();
-  auto server = std::make_unique<TcpServer>(ListenConfig{opt.tls_host, opt.tls_port, opt.max_clients, opt.idle_timeout_s},
-                                            service, std::move(*opener));
+  auto server = std::make_unique<TcpServer>(listen_config(opt, opt.tls_host, opt.tls_port), service, std::move(*opener));
   if (auto r = server->listen(); !r) return std::unexpected(r.error());
   t.tls = std::move(server);
   t.tls_files = files;
@@ -126,7 +141,7 @@ void reload_tls(const Options& opt, Transports& t) {
 std::expected<Transports, std::string> open_transports(const Options& opt, ModbusService& service) {
   Transports t;
   if (opt.tcp_enabled) {
-    t.tcp = std::make_unique<TcpServer>(opt.tcp_host, opt.tcp_port, opt.max_clients, opt.idle_timeout_s, service);
+    t.tcp = std::make_unique<TcpServer>(listen_config(opt, opt.tcp_host, opt.tcp_port), service);
     if (auto r = t.tcp->listen(); !r) return std::unexpected(r.error());
   }
   if (opt.tls_enabled) {
@@ -163,7 +178,7 @@ void log_stop(const StopReport& r) {
     const StopReport::Axis& x = r.axes[a];
     if (!x.moving) continue;
     any = true;
-    const auto unit = homing::axis_unit(a);
+    const auto unit = x.unit;
     spdlog::info("stop: {} decelerated from {:.3f} {}/s at {:.3f} {} to rest at {:.3f} {} ({:.3f} {} in {:.3f} s)",
                  homing::kAxisUpper[a], x.velocity_mm_per_s, unit, x.from_mm, unit, x.rest_mm, unit,
                  std::abs(x.rest_mm - x.from_mm), unit, r.machine_s);

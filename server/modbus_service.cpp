@@ -29,11 +29,21 @@ std::uint16_t first_address(const std::vector<registers::Change>& changes, std::
 
 Reply ModbusService::refuse(std::uint8_t fc, const registers::Refusal& r, const ClientInfo& client) {
   const auto level = r.reason == registers::RefusalReason::storage_failed ? spdlog::level::err : spdlog::level::warn;
-  spdlog::log(level, "{} {}: write refused with exception {:02X} ({}), reason {} ({}) at address {}: {}",
-              client.transport, client.address, static_cast<int>(r.code), registers::exception_name(r.code),
-              r.reason_code(),
-              r.reason == registers::RefusalReason::rule ? homing::name_of(r.rule) : homing::name_of(r.reason),
-              r.address, r.message);
+  const std::string reason =
+      fmt::format("reason {} ({})", r.reason_code(),
+                  r.reason == registers::RefusalReason::rule ? homing::name_of(r.rule) : homing::name_of(r.reason));
+  const std::string line =
+      fmt::format("{} {}: write refused with exception {:02X} ({}), {} at address {}: {}", client.transport,
+                  client.address, static_cast<int>(r.code), registers::exception_name(r.code), reason, r.address,
+                  r.message);
+  // Counted per client address (not per connection: a client that reconnects
+  // is the same client) and certificate.
+  const std::string who = fmt::format("{} {}{}{}", client.transport, client.address.substr(0, client.address.rfind(':')),
+                                      client.identity.empty() ? "" : " ", client.identity);
+  {
+    std::lock_guard lock(log_mutex_);
+    refusal_log_.refused(who, reason, level, line, now());
+  }
   // Count, register and reason of one refusal in one word, so that a read
   // never pairs the count of one refusal with the reason of another.
   std::uint64_t old = last_refusal_.load();
@@ -45,9 +55,30 @@ Reply ModbusService::refuse(std::uint8_t fc, const registers::Refusal& r, const 
   return fail(fc, r.code);
 }
 
+ModbusService::~ModbusService() {
+  std::lock_guard lock(log_mutex_);
+  refusal_log_.flush_all(now());
+}
+
+void ModbusService::flush_refusal_log() {
+  std::lock_guard lock(log_mutex_);
+  refusal_log_.flush(now());
+}
+
+std::chrono::steady_clock::time_point ModbusService::now() const {
+  return config_.clock ? config_.clock() : std::chrono::steady_clock::now();
+}
+
 ModbusService::ModbusService(ServiceConfig config, ControlLoop& loop, persistence::SettingsStore* store,
                              const homing::Settings& settings)
-    : config_(config), loop_(loop), store_(store), settings_(settings), locked_(config.unlock_code != 0) {
+    : config_(config),
+      loop_(loop),
+      store_(store),
+      settings_(settings),
+      locked_(config.unlock_code != 0),
+      unlock_guard_(config.unlock_code, config.unlock_policy),
+      refusal_log_("writes", config.refusal_log_interval,
+                   [](spdlog::level::level_enum level, const std::string& line) { spdlog::log(level, "{}", line); }) {
   extras_.settings_locked = locked_;
 }
 
@@ -162,6 +193,8 @@ Reply ModbusService::read(Target target, std::uint8_t fc, const ReadRequest& r) 
     extras.refusal_count = static_cast<std::uint16_t>(refusal & 0xFFFF);
     extras.last_refused_register = static_cast<std::uint16_t>((refusal >> 16) & 0xFFFF);
     extras.last_refusal_reason = static_cast<std::uint16_t>((refusal >> 32) & 0xFFFF);
+    extras.unlock_lockout_s = static_cast<std::uint16_t>(std::min<std::int64_t>(unlock_guard_.remaining(now()).count(), 0xFFFF));
+    extras.wrong_unlock_codes = static_cast<std::uint16_t>(std::min<std::uint32_t>(unlock_guard_.wrong_in_a_row(), 0xFFFF));
     const registers::ModuleView view{settings_, host_, snap.status, extras};
     refused = bits ? registers::read_module_bits(r.table, r.start, flags, view)
                    : registers::read_module_words(r.table, r.start, words, config_.word_order, view);
@@ -203,24 +236,17 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
     if (auto refused = registers::refusal_now(*accepted, loop_.snapshot().status))
       return refuse(fc, *refused, client);
     if (accepted->host.unlock_code != 0) {
-      const bool right = config_.unlock_code != 0 && accepted->host.unlock_code == config_.unlock_code;
+      const std::uint32_t code = accepted->host.unlock_code;
       accepted->host.unlock_code = 0;
-      if (!right) {
-        const registers::Register* unlock = registers::find_register("security.unlock");
-        return refuse(fc,
-                      registers::Refusal::because(registers::RefusalReason::wrong_unlock_code,
-                                                  unlock ? unlock->address : start,
-                                                  "wrong unlock code written to security.unlock; settings stay locked"),
-                      client);
-      }
-      if (locked_) spdlog::info("settings unlocked by {} {}", client.transport, client.address);
-      locked_ = false;
-      extras_.settings_locked = false;
+      std::uint16_t address = start;
+      for (const auto& c : accepted->changes)
+        if (c.reg->key == registers::Key::security_unlock) address = c.reg->address;
+      if (auto refused = try_unlock(fc, code, address, client)) return refused;
     }
     if (accepted->changes_persisted()) {
       using registers::RefusalReason;
       const std::uint16_t about = first_address(accepted->changes, start);
-      const std::string changes = describe_changes(accepted->changes);
+      const std::string changes = describe_changes(accepted->changes, registers::kinds_of(accepted->settings));
       if (locked_)
         return refuse(fc,
                       registers::Refusal::because(RefusalReason::locked, about,
@@ -258,7 +284,7 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
           spdlog::warn("history limit not applied: {}", r.error().message);
       }
       spdlog::info("settings changed by {} {}: {}", client.transport, client.address,
-                   describe_changes(accepted->changes));
+                   changes);
     }
     const std::uint16_t old_heartbeat = host_.heartbeat;
     host_ = accepted->host;
@@ -266,6 +292,40 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
     commands = std::move(accepted->commands);
   }
   run_commands(commands, client);
+  return std::nullopt;
+}
+
+// Under mutex_.
+std::optional<Reply> ModbusService::try_unlock(std::uint8_t fc, std::uint32_t code, std::uint16_t address,
+                                               const ClientInfo& client) {
+  using registers::RefusalReason;
+  const auto at = now();
+  const UnlockGuard::Outcome outcome = unlock_guard_.attempt(code, at);
+  switch (outcome.verdict) {
+    case UnlockVerdict::locked_out:
+      return refuse(fc,
+                    registers::Refusal::because(
+                        RefusalReason::unlock_locked_out, address,
+                        fmt::format("{} wrong unlock codes in a row: every unlock is refused for {} s more "
+                                    "(status.unlock_lockout_s); the code written was not tried, settings stay locked",
+                                    outcome.wrong_in_a_row, unlock_guard_.remaining(at).count())),
+                    client);
+    case UnlockVerdict::wrong:
+      if (outcome.lockout_started)
+        spdlog::warn("security.unlock: {} wrong unlock codes in a row, the last from {} {}: every unlock is refused "
+                     "for {} s (status.unlock_lockout_s), longer with each further wrong code",
+                     outcome.wrong_in_a_row, client.transport, client.address, outcome.lockout.count());
+      return refuse(fc,
+                    registers::Refusal::because(RefusalReason::wrong_unlock_code, address,
+                                                fmt::format("wrong unlock code written to security.unlock ({} in a "
+                                                            "row); settings stay locked",
+                                                            outcome.wrong_in_a_row)),
+                    client);
+    case UnlockVerdict::right: break;
+  }
+  if (locked_) spdlog::info("settings unlocked by {} {}", client.transport, client.address);
+  locked_ = false;
+  extras_.settings_locked = false;
   return std::nullopt;
 }
 

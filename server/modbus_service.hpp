@@ -7,6 +7,7 @@
 // modbus_service_commands.cpp hands commands to the loop; modbus_service_sim.cpp
 // serves the simulator unit.
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <mutex>
@@ -18,11 +19,13 @@
 #include "device_identification.hpp"
 #include "line_diagnostics.hpp"
 #include "options.hpp"
+#include "refusal_log.hpp"
 #include "persistence/settings_store.hpp"
 #include "registers/codec.hpp"
 #include "registers/validate.hpp"
 #include "request_decoder.hpp"
 #include "request_handler.hpp"
+#include "unlock_guard.hpp"
 
 namespace server {
 
@@ -31,7 +34,12 @@ struct ServiceConfig {
   std::optional<std::uint8_t> sim_unit_id = 247;  // absent with real hardware
   registers::WordOrder word_order = registers::WordOrder::high_first;
   std::vector<Cidr> write_allow;  // empty: every TCP client may write
-  std::uint16_t unlock_code = 0;  // 0: settings are never locked
+  std::uint32_t unlock_code = 0;  // 0: settings are never locked
+  UnlockPolicy unlock_policy;     // wrong codes in a row before the lockout, its length and cap
+  std::chrono::seconds refusal_log_interval{10};  // refused writes: counts per client and reason per interval
+  // The runtime's clock (the unlock lockout, the refusal log); empty: the
+  // steady clock. Tests drive their own.
+  std::function<std::chrono::steady_clock::time_point()> clock;
   // What the machine behind can do (GPIO wiring): settings it cannot run are
   // refused with exception 03 and the returned reason. Empty: anything.
   std::function<std::optional<std::string>(const homing::Settings&)> machine_check;
@@ -42,11 +50,18 @@ class ModbusService final : public RequestHandler {
  public:
   ModbusService(ServiceConfig config, ControlLoop& loop, persistence::SettingsStore* store,
                 const homing::Settings& settings);
+  ~ModbusService() override;  // writes the refusal counts not yet written
+  ModbusService(const ModbusService&) = delete;
+  ModbusService& operator=(const ModbusService&) = delete;
 
   Reply handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) override;
   void disconnected(const ClientInfo& client) override;
   void bus_event(Transport transport, BusEvent event) override { diagnostics_.bus_event(transport, event); }
   LineCounters line_counters(Transport transport) const { return diagnostics_.counters(transport); }
+
+  // Writes the refusal counts of an interval that has passed (the monitor
+  // calls it now and then, so a flood's last counts are not kept back).
+  void flush_refusal_log();
 
   // Called by the monitor with the history summary.
   void set_extras(const registers::StatusExtras& extras);
@@ -70,6 +85,9 @@ class ModbusService final : public RequestHandler {
   // records it for status.refusal_count / last_refused_register /
   // last_refusal_reason, and answers its exception.
   Reply refuse(std::uint8_t fc, const registers::Refusal& refusal, const ClientInfo& client);
+  // A code written to security.unlock or security.unlock32, through the guard.
+  std::optional<Reply> try_unlock(std::uint8_t fc, std::uint32_t code, std::uint16_t address, const ClientInfo& client);
+  std::chrono::steady_clock::time_point now() const;
 
   ServiceConfig config_;
   ControlLoop& loop_;
@@ -83,6 +101,9 @@ class ModbusService final : public RequestHandler {
   LineDiagnostics diagnostics_;
   // The last refused write: count (bits 0-15), register (16-31), reason (32-47).
   std::atomic<std::uint64_t> last_refusal_{0};
+  UnlockGuard unlock_guard_;  // under mutex_
+  std::mutex log_mutex_;      // refusal_log_ (refuse() runs with and without mutex_)
+  RefusalLog refusal_log_;
 };
 
 }  // namespace server

@@ -36,8 +36,11 @@ std::int64_t ModbusService::sim_raw(const registers::Register& reg, const Snapsh
 
 std::optional<Reply> ModbusService::write_sim(std::uint8_t fc, Table table, std::uint16_t start,
                                               std::span<const std::uint16_t> values, const ClientInfo& client) {
+  // A carriage's values in the unit of its axis's kind (the module's settings).
+  const registers::AxisKinds kinds = registers::kinds_of(settings());
   // Address, access and range need no machine: refused here at once.
-  if (auto decoded = registers::decode_write(registers::Unit::simulator, table, start, values, config_.word_order);
+  if (auto decoded =
+          registers::decode_write(registers::Unit::simulator, table, start, values, config_.word_order, kinds);
       !decoded)
     return refuse(fc, decoded.error(), client);
   // The rest is decided and applied on the live simulator inside the control
@@ -87,7 +90,8 @@ std::optional<Reply> ModbusService::write_sim(std::uint8_t fc, Table table, std:
                                                           homing::kAxisLetters[static_cast<std::size_t>(busy_axis)])),
                   client);
   if (!changes.empty())
-    spdlog::info("simulator changed by {} {}: {}", client.transport, client.address, describe_changes(changes));
+    spdlog::info("simulator changed by {} {}: {}", client.transport, client.address,
+                 describe_changes(changes, kinds));
   return std::nullopt;
 }
 

@@ -7,6 +7,8 @@
 #include <fstream>
 #include <string>
 
+#include "homing/gantry.hpp"
+
 namespace server {
 
 std::int64_t unix_ms() {
@@ -55,13 +57,15 @@ void Monitor::refresh_diagnostics() {
   extras_.tcp_clients = tcp_clients_ ? tcp_clients_() : 0;
 }
 
-// Twice a second: diagnostics for the input registers, and the settings
-// backup that the store keeps after a batch of changes.
+// Twice a second: diagnostics for the input registers, the refused writes'
+// counts of an interval that has passed, and the settings backup that the
+// store keeps after a batch of changes.
 void Monitor::housekeeping(std::int64_t now_ms) {
   if (now_ms - last_housekeeping_ms_ < 500) return;
   last_housekeeping_ms_ = now_ms;
   refresh_diagnostics();
   service_.set_extras(extras_);
+  service_.flush_refusal_log();
   if (store_)
     if (auto r = store_->backup_if_due(); !r) spdlog::warn("settings backup not written: {}", r.error().message);
 }
@@ -148,9 +152,9 @@ void Monitor::poll(std::int64_t now_ms) {
       if (!(run_axes_ & homing::axis_bit(a))) continue;
       run.axis[a] = axis_record(run.result == 0, st.axes[a], now_ms - run_start_ms_);
       if (run.axis[a].excluded == persistence::Excluded::not_homed_before)
-        spdlog::info("home correction of {} not counted in its statistics: {} ({:+.3f} mm is where it stood)",
+        spdlog::info("home correction of {} not counted in its statistics: {} ({:+.3f} {} is where it stood)",
                      homing::kAxisUpper[a], persistence::excluded_text(run.axis[a].excluded),
-                     st.axes[a].home_correction_mm);
+                     st.axes[a].home_correction_mm, homing::axis_unit(settings, a));
     }
     if (run.result == 0) spdlog::info("homing done in {} ms", now_ms - run_start_ms_);
     else spdlog::warn("homing ended with alarm {}", homing::alarm_name(static_cast<homing::AlarmCode>(run.result)));

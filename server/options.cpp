@@ -158,6 +158,14 @@ OptionParser::Table::Table() {
   app.add_option("--max-clients,--max_clients", o.max_clients, "Maximum simultaneous TCP clients")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
+  app.add_option("--max-clients-per-address,--max_clients_per_address", o.max_clients_per_address,
+                 "Maximum simultaneous TCP clients from one address; 0: as many as --max-clients")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
+  app.add_option("--privileged", o.privileged,
+                 "Privileged TCP client addresses (the PLC, the HMI; IPv4 address or CIDR, comma separated): their "
+                 "connections never give way, and when the server is full one of another client is closed for them")
+      ->delimiter(',');
   app.add_option("--idle-timeout-s,--idle_timeout_s", o.idle_timeout_s, "Drop a TCP client silent for this long")
       ->check(CLI::Range(1, 86400))
       ->capture_default_str();
@@ -175,8 +183,23 @@ OptionParser::Table::Table() {
                  "only read. Default: every client")
       ->delimiter(',');
   app.add_option("--unlock-code,--unlock_code", o.unlock_code,
-                 "Lock settings writes until this code (1..65535) is written to security.unlock")
-      ->check(CLI::Range(1, 65535));
+                 "Lock settings writes until this code is written: 1..65535 to security.unlock (FC 06) or "
+                 "security.unlock32, up to 4294967295 to security.unlock32 (both words in one FC 16 request)")
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{4294967295LL}));
+  app.add_option("--unlock-lockout-s,--unlock_lockout_s", o.unlock_lockout_s,
+                 "After 5 wrong unlock codes in a row every unlock is refused for this long, doubling with each "
+                 "further wrong code")
+      ->check(CLI::Range(1, 86400))
+      ->capture_default_str();
+  app.add_option("--unlock-lockout-max-s,--unlock_lockout_max_s", o.unlock_lockout_max_s,
+                 "The longest lockout of the unlock code")
+      ->check(CLI::Range(1, 86400))
+      ->capture_default_str();
+  app.add_option("--refusal-log-interval-s,--refusal_log_interval_s", o.refusal_log_interval_s,
+                 "Refused writes and connections: the first of a client and reason is logged whole, the rest as "
+                 "one count per client and reason every this many seconds")
+      ->check(CLI::Range(1, 3600))
+      ->capture_default_str();
   app.add_option("--vendor-name,--vendor_name", o.vendor_name,
                  "Vendor name the module reports (FC 43 object 0)")
       ->check(identity_text);
@@ -244,6 +267,12 @@ std::expected<ParseOutcome, std::string> OptionParser::parse(int argc, char** ar
   o.word_order = t.word_order == "low-first" ? registers::WordOrder::low_first : registers::WordOrder::high_first;
   for (const auto& entry : o.write_allow)
     if (!parse_cidr(entry)) return std::unexpected("--write-allow: '" + entry + "' is not an IPv4 address or CIDR (e.g. 10.0.0.0/24)");
+  for (const auto& entry : o.privileged)
+    if (!parse_cidr(entry)) return std::unexpected("--privileged: '" + entry + "' is not an IPv4 address or CIDR (e.g. 10.0.0.5 or 10.0.0.0/29)");
+  if (o.unlock_lockout_max_s < o.unlock_lockout_s)
+    return std::unexpected("--unlock-lockout-max-s " + std::to_string(o.unlock_lockout_max_s) +
+                           " is below --unlock-lockout-s " + std::to_string(o.unlock_lockout_s) +
+                           ": the longest lockout cannot be shorter than the first");
   if (!o.tcp_enabled && o.rtu_device.empty() && !o.tls_enabled)
     return std::unexpected("--no-tcp needs --rtu DEVICE or --tls HOST[:PORT]: with neither, nothing would be served");
   if (o.sim_unit_id == o.unit_id && o.backend == "sim")

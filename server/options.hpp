@@ -27,6 +27,8 @@ struct Options {
   int rt_priority = 20;  // SCHED_FIFO for the control thread; 0 = normal scheduling
   registers::WordOrder word_order = registers::WordOrder::high_first;
   int max_clients = 32;
+  int max_clients_per_address = 0;  // 0: as many as max_clients
+  std::vector<std::string> privileged;  // addresses that never give way: "192.168.1.10", "10.0.0.0/24"
   int idle_timeout_s = 60;
   int sim_unit_id = 247;
   double time_scale = 1.0;
@@ -34,7 +36,10 @@ struct Options {
   std::string config_path;
   // Access: TCP clients allowed to write (empty = all); others may only read.
   std::vector<std::string> write_allow;  // "192.168.1.10", "10.0.0.0/24"
-  int unlock_code = 0;                   // 0 = no settings lock
+  std::int64_t unlock_code = 0;          // 0 = no settings lock; up to 32 bits
+  int unlock_lockout_s = 10;             // the first lockout after too many wrong codes in a row
+  int unlock_lockout_max_s = 900;        // the lockout doubles up to this
+  int refusal_log_interval_s = 10;       // refused writes: one line per client and reason per interval
   // Modbus/TCP Security (TLS) beside TCP and RTU: off unless --tls is given.
   bool tls_enabled = false;
   std::string tls_host;

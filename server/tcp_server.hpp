@@ -13,7 +13,12 @@
 #include <string>
 #include <thread>
 
+#include <vector>
+
 #include "byte_channel.hpp"
+#include "connection_policy.hpp"
+#include "options.hpp"
+#include "refusal_log.hpp"
 #include "request_handler.hpp"
 
 namespace server {
@@ -36,12 +41,18 @@ struct ListenConfig {
   int port = 0;
   int max_clients = 32;
   int idle_timeout_s = 60;
+  // Connection management (server/connection_policy.hpp): addresses that
+  // never give way (--privileged) and the cap per address (0: max_clients).
+  std::vector<Cidr> privileged;
+  int max_per_address = 0;
+  int refusal_log_interval_s = 10;  // refused connections: one line per address and reason per interval
 };
 
 class TcpServer {
  public:
   // Plain Modbus TCP.
   TcpServer(std::string host, int port, int max_clients, int idle_timeout_s, RequestHandler& handler);
+  TcpServer(ListenConfig config, RequestHandler& handler);
   // Each connection through `opener` first (Modbus/TCP Security: a TlsOpener).
   TcpServer(ListenConfig config, RequestHandler& handler, std::unique_ptr<ChannelOpener> opener);
   ~TcpServer();
@@ -58,12 +69,20 @@ class TcpServer {
 
  private:
   struct Connection {
-    int fd = -1;
+    int fd = -1;  // closed by its own thread, under connections_mutex_
     std::thread thread;
     std::atomic<bool> finished{false};
+    Peer peer;
+    std::string address;
+    std::atomic<std::int64_t> last_active_ns{0};
+    // Closed to make room for another client: for whom (empty: not).
+    std::string closed_for;
   };
   void serve(Connection& connection, ClientInfo info);
   void reap(bool all);
+  // Room for a client from `address`; false: refused (logged).
+  bool make_room(const Peer& peer, const std::string& address);
+  void refuse(const std::string& ip, const std::string& reason, const std::string& line);
   std::string_view name() const;  // "tcp", "tls": for the log
 
   ListenConfig config_;
@@ -76,6 +95,7 @@ class TcpServer {
   std::atomic<std::uint64_t> next_id_{1};
   std::mutex connections_mutex_;
   std::list<Connection> connections_;
+  RefusalLog refusals_;  // under connections_mutex_
 };
 
 }  // namespace server

@@ -9,12 +9,12 @@ persistence::ChangeSource source_of(const ClientInfo& client) {
                                    client.identity.empty() ? client.address : client.address + " " + client.identity};
 }
 
-std::string describe_changes(const std::vector<registers::Change>& changes) {
+std::string describe_changes(const std::vector<registers::Change>& changes, const registers::AxisKinds& kinds) {
   std::string out;
   for (const auto& c : changes) {
     if (!out.empty()) out += "; ";
-    out += c.reg->name() + ": " + registers::format_value(*c.reg, c.old_raw) + " -> " +
-           registers::format_value(*c.reg, c.new_raw);
+    out += c.reg->name() + ": " + registers::format_value(*c.reg, c.old_raw, kinds) + " -> " +
+           registers::format_value(*c.reg, c.new_raw, kinds);
   }
   return out;
 }

@@ -14,7 +14,8 @@ namespace server {
 // subject and role.
 persistence::ChangeSource source_of(const ClientInfo& client);
 
-// "axis.x.pull_off: 2 mm -> 2.5 mm; ..." in engineering units.
-std::string describe_changes(const std::vector<registers::Change>& changes);
+// "axis.x.pull_off: 2 mm -> 2.5 mm; ..." in engineering units, each axis's
+// in the unit of the kind it moves with (registers::kinds_of the settings).
+std::string describe_changes(const std::vector<registers::Change>& changes, const registers::AxisKinds& kinds);
 
 }  // namespace server

@@ -70,6 +70,13 @@ std::expected<LineSpec, std::string> parse_line(const Ctx& ctx, const std::strin
   return spec;
 }
 
+// The wiring is read before the settings: the unit of steps_per_unit is the
+// axis's kind (axis.<a>.kind), mm on X, Y, Z.
+std::string unit_text(std::size_t a) {
+  if (!may_be_rotary(a)) return std::string(unit_of(AxisKind::linear));
+  return fmt::format("deg, or mm when axis.{}.kind = linear", kAxisLetters[a]);
+}
+
 std::expected<std::int64_t, std::string> parse_int(const Ctx& ctx, const toml::node& node, const std::string& key,
                                                    std::int64_t lo, std::int64_t hi) {
   const auto* i = node.as_integer();
@@ -87,14 +94,15 @@ std::expected<void, std::string> parse_axis(const Ctx& ctx, std::size_t a, const
       {"enable", &AxisLines::enable},   {"push", &AxisLines::push},
       {"commutator", &AxisLines::commutator}, {"home", &AxisLines::home},
       {"index", &AxisLines::index},     {"drive_fault", &AxisLines::drive_fault},
-      {"unlock", &AxisLines::unlock},   {"unlocked", &AxisLines::unlocked}};
+      {"stall", &AxisLines::stall},     {"home_request", &AxisLines::home_request},
+      {"home_done", &AxisLines::home_done}, {"unlock", &AxisLines::unlock}, {"unlocked", &AxisLines::unlocked}};
   for (const auto& [k, v] : t) {
     const std::string key(k.str());
     if (key == "steps_per_unit") {
       const auto d = v.value<double>();
       if (!d || !(*d > 0) || *d > 1e6)
         return Error(fmt::format("{}: [{}] steps_per_unit must be a number > 0 (motor steps per {})", ctx.origin,
-                                 section, axis_unit(a)));
+                                 section, unit_text(a)));
       out.steps_per_unit = *d;
       continue;
     }
@@ -109,7 +117,8 @@ std::expected<void, std::string> parse_axis(const Ctx& ctx, std::size_t a, const
     }
     if (!known)
       return Error(fmt::format("{}: [{}] unknown key '{}' (known: steps_per_unit, step, dir, enable, push, "
-                               "commutator, home, index, drive_fault, unlock, unlocked)",
+                               "commutator, home, index, drive_fault, stall, home_request, home_done, unlock, "
+                               "unlocked)",
                                ctx.origin, section, key));
   }
   // Neither: an axis with no output of its own (an external-commutator slave,
@@ -127,7 +136,7 @@ std::expected<void, std::string> parse_axis(const Ctx& ctx, std::size_t a, const
                              ctx.origin, section));
   if (out.steps_per_unit <= 0)
     return Error(fmt::format("{}: [{}] needs steps_per_unit (motor steps per {}, e.g. 400)", ctx.origin, section,
-                             axis_unit(a)));
+                             unit_text(a)));
   return {};
 }
 
@@ -139,7 +148,7 @@ std::expected<void, std::string> check_unique(const BackendConfig& c, const std:
     if (*o) all.push_back(&**o);
   for (const AxisLines& a : c.axes)
     for (const auto* o : {&a.step, &a.dir, &a.enable, &a.push, &a.commutator, &a.home, &a.index, &a.drive_fault,
-                          &a.unlock, &a.unlocked})
+                          &a.stall, &a.home_request, &a.home_done, &a.unlock, &a.unlocked})
       if (*o) all.push_back(&**o);
   for (std::size_t i = 0; i < all.size(); ++i)
     for (std::size_t j = i + 1; j < all.size(); ++j)
@@ -231,6 +240,9 @@ bool has_line(const AxisLines& lines, homing::Signal signal) {
     case homing::Signal::index: return lines.index.has_value();
     case homing::Signal::push_output: return lines.push.has_value();
     case homing::Signal::absolute_encoder: return false;  // no GPIO line carries it
+    case homing::Signal::stall: return lines.stall.has_value();
+    case homing::Signal::drive_request: return lines.home_request.has_value();
+    case homing::Signal::drive_done: return lines.home_done.has_value();
   }
   return false;
 }

@@ -25,6 +25,10 @@ struct AxisLines {
   std::optional<LineSpec> step, dir, enable;            // outputs
   std::optional<LineSpec> push, commutator;             // outputs (pushing modes, gantry commutator)
   std::optional<LineSpec> home, index, drive_fault;     // inputs
+  std::optional<LineSpec> stall;                        // input: the drive's stall output (hard-stop homing)
+  // Drive-performed homing (axis.<a>.mode = drive): the request to the drive
+  // (output) and its home done (input, a level).
+  std::optional<LineSpec> home_request, home_done;
   // Locking indexer (axis.<a>.indexer_lock): the output that pulls the pin
   // out, and the input that reports it out.
   std::optional<LineSpec> unlock, unlocked;

@@ -17,8 +17,13 @@ enum class Fault : std::uint8_t {
   sensor_stuck_inactive = 2,
   wire_break = 3,
   drive_fault = 4,
-  indexer_stuck_locked = 5,  // the indexer's pin goes in and stays in, whatever the unlock output says
-  indexer_never_locks = 6,   // the pin stays out once out: the indexer never reports locked again
+  stall_dead = 5,     // the drive's stall output never turns on
+  stall_stuck = 6,    // the drive's stall output is on all the time
+  drive_never_answers = 7,     // drive mode: on the home request the drive drops home done and never finishes
+  drive_answers_at_once = 8,   // drive mode: home done on at once on the request, without homing
+  drive_done_lost = 9,         // drive mode: home done held off (lost reference, broken wire)
+  indexer_stuck_locked = 10, // the indexer's pin goes in and stays in, whatever the unlock output says
+  indexer_never_locks = 11,  // the pin stays out once out: the indexer never reports locked again
 };
 inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::none, "none", "no fault"},
@@ -26,6 +31,13 @@ inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::sensor_stuck_inactive, "sensor_stuck_inactive", "sensor never turns active"},
     {Fault::wire_break, "wire_break", "sensor wire broken (NC reads active, NO never)"},
     {Fault::drive_fault, "drive_fault", "the drive reports a fault"},
+    {Fault::stall_dead, "stall_dead", "the drive's stall output never turns on"},
+    {Fault::stall_stuck, "stall_stuck", "the drive's stall output is on all the time"},
+    {Fault::drive_never_answers, "drive_never_answers",
+     "the drive starts homing on the home request (drops home done) but never finishes"},
+    {Fault::drive_answers_at_once, "drive_answers_at_once", "the drive reports home done at once, without homing"},
+    {Fault::drive_done_lost, "drive_done_lost",
+     "the drive's home done goes off and stays off (lost reference, broken wire)"},
     {Fault::indexer_stuck_locked, "indexer_stuck_locked",
      "the locking indexer's pin goes in (at once, even under motion) and never comes out"},
     {Fault::indexer_never_locks, "indexer_never_locks", "the locking indexer's pin, once out, never goes in again"},
@@ -44,6 +56,17 @@ struct AxisConfig {
   double index_pitch_mm = 0;      // 0 = no index
   double index_offset_mm = 0;
   double absolute_offset_mm = 0;  // absolute encoder reads actual + offset
+  // The drive's stall output: on once the carriage has been held by a
+  // mechanical stop, with the motor driving into it, for the detection time
+  // plus a random share of the spread (drawn per contact); off when the
+  // motor no longer drives into the stop.
+  double stall_detect_ms = 20;
+  double stall_spread_ms = 10;
+  // The drive's own homing (drive mode): on the home request it moves the
+  // carriage itself to its home at its own speed, waits, then reports done.
+  double drive_home_position_mm = 0;       // where its homing ends (its own home sensor)
+  double drive_speed_mm_per_min = 600;
+  double drive_answer_ms = 100;            // after arriving, before home done
   Fault fault = Fault::none;
   // Locking indexer (when fitted, MachineConfig::indexer): time from the
   // unlock output's change to the pin being out / in.

@@ -36,6 +36,8 @@ Simulator::Simulator(const MachineConfig& config) : config_(config) {
     own_[i].absolute_valid = true;
     own_[i].absolute_position_mm = ax.actual_mm + c.absolute_offset_mm;
     own_[i].drive_fault = c.fault == Fault::drive_fault;
+    own_[i].stall = c.fault == Fault::stall_stuck;
+    own_[i].drive_done = ax.drive.done(c);
     ax.pin_in = config_.indexer[i];
     own_[i].indexer_unlocked = false;
   }
@@ -116,6 +118,11 @@ bool Simulator::electrical_level(std::size_t axis) const {
     case Fault::wire_break: return false;  // NO then reads inactive, NC reads active
     case Fault::none:
     case Fault::drive_fault:
+    case Fault::stall_dead:
+    case Fault::stall_stuck:
+    case Fault::drive_never_answers:
+    case Fault::drive_answers_at_once:
+    case Fault::drive_done_lost: break;
     case Fault::indexer_stuck_locked:
     case Fault::indexer_never_locks: break;
   }
@@ -131,6 +138,11 @@ bool Simulator::reports_edges(std::size_t axis) const {
     case Fault::wire_break: return false;
     case Fault::none:
     case Fault::drive_fault:
+    case Fault::stall_dead:
+    case Fault::stall_stuck:
+    case Fault::drive_never_answers:
+    case Fault::drive_answers_at_once:
+    case Fault::drive_done_lost:
     case Fault::indexer_stuck_locked:
     case Fault::indexer_never_locks: break;
   }
@@ -211,6 +223,11 @@ void Simulator::advance_axis(std::size_t i, std::size_t output, const AxisOutput
   }
   ax.moving = linked && motor.end.velocity_mm_per_s != 0;
   ax.actual_mm = carriage.count ? carriage.end_mm : ax.actual_mm;
+  // A drive homing itself moves the carriage without steps (the slip
+  // changes); the sensor takes the new place at the next period's start.
+  const Stops stops = stops_of(c);
+  if (ax.drive.advance(out_request(i, output, out), c, stops.min_mm, stops.max_mm, ax.actual_mm, dt_s))
+    ax.moving = true;
   c.actual_position_mm = ax.actual_mm;
 
   // True edges and bounce toggles in time order; each one flips the contact.
@@ -238,6 +255,53 @@ void Simulator::advance_axis(std::size_t i, std::size_t output, const AxisOutput
   in.absolute_valid = true;
   in.absolute_position_mm = ax.actual_mm + c.absolute_offset_mm;
   in.drive_fault = c.fault == Fault::drive_fault;
+  in.stall = stall_output(i, carriage, out.motor.position_mm, motor.end.position_mm);
+  in.drive_done = ax.drive.done(c);
+}
+
+namespace {
+// A fraction in [0, 1) from a seed and two counters (splitmix64): the same
+// contact draws the same detection time in every run with this seed.
+double fraction(std::uint64_t seed, std::uint64_t a, std::uint64_t b) {
+  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * (a * 1000003ull + b + 1);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * 0x1.0p-53;
+}
+}  // namespace
+
+bool Simulator::stall_output(std::size_t i, const CarriagePath& path, double motor_start_mm, double motor_end_mm) {
+  Axis& ax = axes_[i];
+  const AxisConfig& c = config_.axes[i];
+  if (c.fault == Fault::stall_stuck) return true;
+  // Driving into a stop: the carriage ends the period on it and the motor
+  // moved further toward it.
+  const Stops stops = stops_of(c);
+  const bool on_min = std::abs(ax.actual_mm - stops.min_mm) <= kTouch_mm && motor_end_mm < motor_start_mm;
+  const bool on_max = std::abs(ax.actual_mm - stops.max_mm) <= kTouch_mm && motor_end_mm > motor_start_mm;
+  if (!on_min && !on_max) {
+    ax.held_since_s = -1;
+    return false;
+  }
+  if (ax.held_since_s < 0) {
+    // Held since the start of the last piece of the period: the carriage at rest on the stop.
+    double since = time_s_;
+    if (path.count > 0) since += path.pieces[path.count - 1].motion.start_s;
+    ax.held_since_s = since;
+    ax.stall_after_s = (c.stall_detect_ms + c.stall_spread_ms * fraction(config_.seed, i, ax.contacts++)) / 1000.0;
+  }
+  if (c.fault == Fault::stall_dead) return false;
+  const double now = time_s_ + (path.count > 0 ? path.pieces[path.count - 1].motion.start_s +
+                                                     path.pieces[path.count - 1].motion.duration_s
+                                               : 0.0);
+  return now - ax.held_since_s >= ax.stall_after_s;
+}
+
+// The home request reaches the carriage's own drive only (a commutator slave
+// has none of its own on the master's output).
+bool Simulator::out_request(std::size_t axis, std::size_t output, const AxisOutputs& out) const {
+  return output == axis && out.drive_request;
 }
 
 // The pin moves lock_delay / unlock_delay after the unlock output asks it to;

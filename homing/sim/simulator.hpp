@@ -12,9 +12,11 @@
 #include <vector>
 
 #include "bounce.hpp"
+#include "carriage.hpp"
 #include "config.hpp"
 #include "edge_ring.hpp"
 #include "home_sensor.hpp"
+#include "homing_drive.hpp"
 #include "homing/io.hpp"
 
 namespace homing::sim {
@@ -71,8 +73,12 @@ class Simulator {
   bool sensor_active(std::size_t axis) const { return axes_[axis].sensor.active(); }
   bool at_hard_stop(std::size_t axis) const;
   // The output driving this carriage is still running at the end of the last
-  // period and is connected to it (a drive fault does not count: the motor runs).
+  // period and is connected to it (a drive fault does not count: the motor runs),
+  // or a drive homing itself moved it in the last period.
   bool moving(std::size_t axis) const { return axes_[axis].moving; }
+  // Drive mode: the drive reports home done / runs its own homing now.
+  bool drive_done(std::size_t axis) const { return axes_[axis].drive.done(config_.axes[axis]); }
+  bool drive_homing(std::size_t axis) const { return axes_[axis].drive.homing(); }
   // Locking indexer: its pin is in and holds the carriage.
   bool indexer_locked(std::size_t axis) const { return axes_[axis].pin_in; }
   // During the last period the motor driving this carriage ran while its
@@ -99,10 +105,15 @@ class Simulator {
     bool bounce_odd = false;       // an odd number of bounce toggles so far: contact is flipped
     bool reported_level = false;   // electrical level at the end of the last period
     EdgeRing ring{};
+    double held_since_s = -1;      // the motor has driven into a stop since then (-1: not)
+    double stall_after_s = 0;      // this contact's detection time
+    std::uint64_t contacts = 0;    // contacts with a stop so far (draws the detection time)
+    HomingDrive drive{};           // drive mode: the drive's own homing
     bool pin_in = false;           // locking indexer: the pin holds the carriage
     double pin_timer_s = 0;        // how long the unlock output has wanted the pin to move
     bool moved_while_locked = false;
   };
+  bool out_request(std::size_t axis, std::size_t output, const AxisOutputs& out) const;
 
   void reseed();
   // The commutator slave wired to master's output, or -1.
@@ -112,6 +123,9 @@ class Simulator {
   void advance_axis(std::size_t axis, std::size_t output, const AxisOutputs& drive, bool linked,
                     double dt_s);
   bool electrical_level(std::size_t axis) const;
+  // The drive's stall output at the end of a period whose carriage path ended
+  // at end_mm, the motor moving from motor_start_mm to motor_end_mm.
+  bool stall_output(std::size_t axis, const CarriagePath& path, double motor_start_mm, double motor_end_mm);
   bool reports_edges(std::size_t axis) const;
   void route_sensors(const Outputs& outputs);
   void advance_indexer(std::size_t axis, bool unlock_output, double dt_s);

@@ -570,3 +570,86 @@ SCENARIO("an axis alarm clears every axis's homed state exactly when global.alar
     }
   }
 }
+
+namespace {
+Rig drive_axis_rig(sim::Fault fault) {
+  Rig r;
+  r.settings.axes[0].mode = HomingMode::drive;
+  r.settings.axes[0].drive_home_timeout_s = 20;
+  r.machine.axes[0].fault = fault;
+  return r;
+}
+}  // namespace
+
+SCENARIO("drive_no_answer: the drive begins homing on the request and never reports done", "[alarms][drive]") {
+  Rig r = drive_axis_rig(sim::Fault::drive_never_answers);
+  r.step();
+  r.pending.home_all = true;
+  r.step();
+  const double requested_at = r.sim().time_s();
+  r.run_until([&] { return r.status().alarm || !r.status().homing; }, 60);
+  CHECK(r.axis(0).alarm.code == AlarmCode::drive_no_answer);
+  CHECK(r.axis(0).alarm.phase == Phase::drive_homing);
+  // Not before the time limit.
+  CHECK(r.sim().time_s() - requested_at >= 20 - 0.002);
+  CHECK_FALSE(r.engine.outputs().axes[0].drive_request);
+  CHECK(text_of(r, 0).find("X: the drive did not report home done within 20 s of the home request") == 0);
+  check_latched_until_reset(r, 0, AlarmCode::drive_no_answer);
+}
+
+SCENARIO("drive_answered_at_once: home done arrives in the first period after the request", "[alarms][drive]") {
+  Rig r = drive_axis_rig(sim::Fault::drive_answers_at_once);
+  r.step();
+  r.clear_trace();
+  home_into_alarm(r, 5);
+  CHECK(r.axis(0).alarm.code == AlarmCode::drive_answered_at_once);
+  CHECK(r.axis(0).alarm.phase == Phase::drive_homing);
+  CHECK(r.axis(0).alarm.value < kDriveMinHomingTime_s);
+  CHECK(r.trace[0].path_mm == 0);
+  CHECK_FALSE(r.axis(0).homed);
+  CHECK(text_of(r, 0).find("sooner than any homing") != std::string::npos);
+  check_latched_until_reset(r, 0, AlarmCode::drive_answered_at_once);
+}
+
+SCENARIO("drive_answered_at_once: a drive that keeps an old home done on and never drops it", "[alarms][drive]") {
+  Rig r = drive_axis_rig(sim::Fault::none);
+  r.step();
+  REQUIRE(r.home_all());
+  REQUIRE(r.sim().drive_done(0));
+  // The drive now ignores requests but keeps its old done on.
+  auto c = r.sim().axis_config(0);
+  c.fault = sim::Fault::drive_answers_at_once;
+  r.sim().set_axis_config(0, c);
+  home_into_alarm(r, 5);
+  CHECK(r.axis(0).alarm.code == AlarmCode::drive_answered_at_once);
+  CHECK(r.axis(0).alarm.value == Approx(kDriveMinHomingTime_s).margin(0.002));
+  check_latched_until_reset(r, 0, AlarmCode::drive_answered_at_once);
+}
+
+SCENARIO("drive_reference_lost: home done goes off while the axis is homed", "[alarms][drive]") {
+  for (bool clears : {true, false}) {
+    DYNAMIC_SECTION("alarm_clears_homed = " << clears) {
+      Rig r = drive_axis_rig(sim::Fault::none);
+      r.settings.global.alarm_clears_homed = clears;
+      r.step();
+      REQUIRE(r.home_all());
+      r.run_for(0.5);
+      REQUIRE_FALSE(r.status().alarm);
+      auto c = r.sim().axis_config(0);
+      c.fault = sim::Fault::drive_done_lost;
+      r.sim().set_axis_config(0, c);
+      r.step();
+      r.step();
+      CHECK(r.axis(0).alarm.code == AlarmCode::drive_reference_lost);
+      // Unhomed whatever alarm_clears_homed says: its coordinate rested on the drive's reference.
+      CHECK_FALSE(r.axis(0).homed);
+      CHECK(text_of(r, 0).find("X: the drive's home done went off at 0.000 mm while the axis was homed") == 0);
+      check_latched_until_reset(r, 0, AlarmCode::drive_reference_lost);
+      CHECK_FALSE(r.axis(0).homed);
+      // With the drive repaired the axis homes again.
+      c.fault = sim::Fault::none;
+      r.sim().set_axis_config(0, c);
+      CHECK(r.home_all());
+    }
+  }
+}

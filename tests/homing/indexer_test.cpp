@@ -316,3 +316,45 @@ SCENARIO("a lock that engages under a running motor unhomes its axis even when a
     }
   }
 }
+
+// Drive-performed homing moves the carriage without the module's steps, so
+// the indexer holds the home request back as it holds steps: a drive asked
+// to home against the pin would lose its position or break the pin.
+SCENARIO("drive mode on an indexer axis: the home request waits until the axis is unlocked", "[indexer][drive]") {
+  Rig r = indexer_rig();
+  r.settings.axes[A].mode = HomingMode::drive;
+  r.settings.axes[A].drive_home_timeout_s = 30;
+  r.step();
+  REQUIRE(r.sim().indexer_locked(A));
+  bool request_while_locked = false, request_seen = false, moved_while_locked = false;
+  r.on_period = [&](Rig& rig) {
+    const bool request = rig.engine.outputs().axes[A].drive_request;
+    request_seen = request_seen || request;
+    if (request && (rig.sim().indexer_locked(A) || rig.axis(A).phase == Phase::unlock)) request_while_locked = true;
+    moved_while_locked = moved_while_locked || rig.sim().moved_while_locked(A);
+  };
+  GIVEN("an indexer that unlocks in 50 ms") {
+    r.pending.home_all = true;
+    r.run_until([&] { return !r.status().homing; }, 60);
+    r.run_until([&] { return r.sim().indexer_locked(A) && r.axis(A).phase == Phase::done; }, 2);
+    THEN("the drive homes once unlocked, the axis is homed at the drive's home and locked again") {
+      CHECK(request_seen);
+      CHECK_FALSE(request_while_locked);
+      CHECK_FALSE(moved_while_locked);
+      CHECK_FALSE(r.status().alarm);
+      CHECK(r.axis(A).homed);
+      CHECK(r.actual(A) == Approx(0).margin(1e-9));
+      CHECK(r.sim().indexer_locked(A));
+    }
+  }
+  GIVEN("an indexer stuck locked") {
+    r.set_fault(A, sim::Fault::indexer_stuck_locked);
+    r.pending.home_all = true;
+    r.run_until([&] { return r.status().alarm; }, 5);
+    THEN("the unlock times out and the drive was never asked to home") {
+      CHECK(r.axis(A).alarm.code == AlarmCode::unlock_not_confirmed);
+      CHECK_FALSE(request_seen);
+      CHECK(r.actual(A) == 100);
+    }
+  }
+}

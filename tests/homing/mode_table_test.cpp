@@ -13,8 +13,9 @@ using namespace rig;
 
 namespace {
 
-// X on the typical switch (release edge at 0.05 mm, trigger edge at 0), an
-// index pulse every 5 mm at 0.3 mm, an absolute encoder reading carriage + 7,
+// X on the typical switch (release edge at 0.05 mm, trigger edge at 0), its
+// mechanical stop at -5 mm, an index pulse every 5 mm at 0.3 mm, an absolute
+// encoder reading carriage + 7,
 // a pre-move and a final move wherever the method allows them.
 Rig rig_for(const ModeRow& row) {
   Rig r;
@@ -35,6 +36,7 @@ Rig rig_for(const ModeRow& row) {
 struct Watched {
   std::vector<Phase> phases;
   bool push_output = false;
+  bool drive_request = false;
 };
 
 Watched home_and_watch(Rig& r) {
@@ -44,6 +46,7 @@ Watched home_and_watch(Rig& r) {
     const bool homing_phase = p != Phase::idle && p != Phase::waiting && p != Phase::done && p != Phase::stopping;
     if (homing_phase && (w.phases.empty() || w.phases.back() != p)) w.phases.push_back(p);
     w.push_output = w.push_output || rig.engine.outputs().axes[0].push_output;
+    w.drive_request = w.drive_request || rig.engine.outputs().axes[0].drive_request;
   };
   r.home_all();
   r.on_period = nullptr;
@@ -80,6 +83,7 @@ TEST_CASE("every mode shows the phases of its row in order and drives the output
       CHECK_FALSE(r.status().alarm);
       CHECK(w.phases == timed_phases(row));
       CHECK(w.push_output == row.needs_signal(Signal::push_output));
+      CHECK(w.drive_request == row.needs_signal(Signal::drive_request));
     }
   }
 }
@@ -95,6 +99,9 @@ TEST_CASE("a mode cannot home without an input its row names, and homes without 
       {Signal::index, "index pulse", [](Rig& r) { r.machine.axes[0].index_pitch_mm = 0; }},
       {Signal::absolute_encoder, "absolute encoder",
        [](Rig& r) { r.tweak_inputs = [](Inputs& in) { in.axes[0].absolute_valid = false; }; }},
+      {Signal::stall, "stall output", [](Rig& r) { r.machine.axes[0].fault = sim::Fault::stall_dead; }},
+      {Signal::drive_done, "drive's home done",
+       [](Rig& r) { r.tweak_inputs = [](Inputs& in) { in.axes[0].drive_done = false; }; }},
   };
   for (const ModeRow& row : kModeTable) {
     for (const Missing& m : inputs) {
@@ -137,10 +144,20 @@ TEST_CASE("every mode gives the axis the coordinate its row defines", "[modes][t
         case Coordinate::absolute_encoder:
           CHECK(offset == Approx(r.machine.axes[0].absolute_offset_mm - s.home_position_mm).margin(1e-9));
           break;
+        case Coordinate::drive_reference:
+          // home_position where the drive's own homing left the carriage.
+          CHECK(offset == Approx(s.home_position_mm - r.machine.axes[0].drive_home_position_mm).margin(1e-9));
+          break;
         case Coordinate::reference_edge: {
           // Negative homing: home_position lies pull_off above the reference edge.
           const double rest = rest_point_mm(s, reference_edge_mm(row));
           CHECK(offset == Approx(s.home_position_mm - rest).margin(edge_tolerance_mm(s, r.dt_s)));
+          break;
+        }
+        case Coordinate::mechanical_stop: {
+          // Pull-off above the stop the carriage was pushed against, whatever steps it lost there.
+          const double rest = rest_point_mm(s, r.machine.axes[0].hard_stop_min_mm);
+          CHECK(offset == Approx(s.home_position_mm - rest).margin(1e-9));
           break;
         }
       }

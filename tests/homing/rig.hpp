@@ -36,6 +36,8 @@ inline AxisSettings typical_axis() {
   s.soft_limit_min_mm = -1;
   s.soft_limit_max_mm = 500;
   s.jog_feedrate_mm_per_min = 600;
+  s.stall_timeout_ms = 120'000;  // hard-stop homing: 2 min of pushing at latch feedrate
+  s.drive_home_timeout_s = 30;  // drive mode: the drive's own homing (see typical_sim_axis) takes ~10 s
   return s;
 }
 
@@ -48,6 +50,10 @@ inline sim::AxisConfig typical_sim_axis() {
   c.noise_mm = 0;
   c.hard_stop_min_mm = -5;
   c.hard_stop_max_mm = 1000;
+  // Drive mode: the drive homes itself to 0 at 600 mm/min and answers 100 ms later.
+  c.drive_home_position_mm = 0;
+  c.drive_speed_mm_per_min = 600;
+  c.drive_answer_ms = 100;
   return c;
 }
 

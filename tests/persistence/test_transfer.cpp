@@ -141,7 +141,7 @@ namespace {
 // Like the register layer's codec: "mm" settings are written and read in mm
 // (raw µm / 1000), everything else as the raw integer; a text is refused.
 const SettingsFileCodec kMmCodec{
-    [](const std::string& name, std::int64_t raw) {
+    [](const std::string& name, std::int64_t raw, const std::map<std::string, std::int64_t>&) {
       return name.ends_with("position") ? fmt::format("{:.3f}  # mm", raw / 1000.0) : std::to_string(raw);
     },
     [](const std::string& name, const SettingsFileValue& v) -> std::expected<std::int64_t, std::string> {

@@ -67,9 +67,9 @@ TEST_CASE("a simulator write applies to a copy and reports lost steps and placem
   CHECK(sim_raw(lose, ok->config, ok->switches, rb) == 0);  // reads back 0
 
   const Register& fault = reg("sim.y.fault");
-  // One past the last fault (drive_fault = 4 was the last before the locking indexer's).
-  const std::array<std::uint16_t, 1> beyond{static_cast<std::uint16_t>(fault.max + 1)};
-  const auto refused = validate_sim_write(Table::holding_register, fault.address, beyond, WordOrder::high_first, c, sw, rb);
+  // The first number past the last simulated fault.
+  const std::array<std::uint16_t, 1> past{static_cast<std::uint16_t>(std::size(homing::sim::kFaultInfo))};
+  const auto refused = validate_sim_write(Table::holding_register, fault.address, past, WordOrder::high_first, c, sw, rb);
   REQUIRE_FALSE(refused);
   CHECK(refused.error().code == ExceptionCode::illegal_data_value);
 

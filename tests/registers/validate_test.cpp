@@ -52,7 +52,8 @@ TEST_CASE("a write out of range is exception 03 and changes nothing") {
   REQUIRE_FALSE(refused);
   CHECK(refused.error().code == ExceptionCode::illegal_data_value);
   CHECK_THAT(refused.error().message, Catch::Contains("axis.x.seek_feedrate") && Catch::Contains("60000"));
-  const auto mode = write_one("axis.y.mode", 9, s);
+  // The first number past the mode table's last row.
+  const auto mode = write_one("axis.y.mode", homing::kHomingModeCount, s);
   REQUIRE_FALSE(mode);
   CHECK(mode.error().code == ExceptionCode::illegal_data_value);
 }

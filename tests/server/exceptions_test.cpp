@@ -7,6 +7,8 @@
 #include <map>
 
 #include "daemon.hpp"
+#include "homing/modes.hpp"
+#include "homing/sim/config.hpp"
 #include "homing/status.hpp"
 
 using namespace e2e;
@@ -93,7 +95,8 @@ TEST_CASE("exception 02: an unmapped address, nothing changes") {
   Client c = Client::tcp(d.port());
   const auto before = holding_snapshot(c);
   // Unmapped holding addresses: between the globals, inside a per-axis block's gap, far away.
-  for (std::uint16_t a : {50, 114, 115, 150, 700, 9000, 65535}) {
+  // (X's offsets 15 and 16 are axis.x.drive_home_timeout_s and axis.x.kind.)
+  for (std::uint16_t a : {50, 114, 117, 150, 700, 9000, 65535}) {
     INFO("holding " << a);
     REQUIRE(registers::find_register(registers::Unit::module, registers::Table::holding_register, a) == nullptr);
     CHECK(fc6(c, a, 1) == MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
@@ -256,7 +259,8 @@ TEST_CASE("exception 03: a value out of range, nothing changes") {
   Client c = Client::tcp(d.port());
   const auto before = holding_snapshot(c);
   const std::vector<std::pair<const char*, std::int64_t>> bad{
-      {"axis.x.mode", 9},          {"axis.x.direction", 2},          {"axis.y.seek_feedrate", 0},
+      {"axis.x.mode", homing::kHomingModeCount},  // the first number past the mode table
+      {"axis.x.direction", 2},          {"axis.y.seek_feedrate", 0},
       {"axis.z.debounce_ms", 1001}, {"global.watchdog_ms", 60001},    {"sequence.step1", 64},
       {"axis.x.max_seek_travel", 100000001}, {"axis.x.pull_off", -1}, {"axis.x.home_position", -100000001},
       {"global.allowed_without_homing", 3},
@@ -265,9 +269,9 @@ TEST_CASE("exception 03: a value out of range, nothing changes") {
     INFO(name << " = " << raw);
     CHECK(c.write(name, raw) == MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
   }
-  // The simulator unit validates too (one past its last fault; 5 was that
-  // before the locking indexer's faults).
-  CHECK(c.write("sim.x.fault", reg("sim.x.fault").max + 1) == MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+  // The simulator unit validates too.
+  CHECK(c.write("sim.x.fault", static_cast<std::int64_t>(std::size(homing::sim::kFaultInfo))) ==
+        MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
   CHECK(c.read("sim.x.fault") == 0);
   // A coil written with a value other than 0x0000 / 0xFF00.
   const auto reply = c.raw(pdu16(1, 0x05, reg("host.homing_permit").address, 0x1234));

@@ -8,6 +8,7 @@
 #include <regex>
 
 #include "daemon.hpp"
+#include "homing/modes.hpp"
 #include "homing/status.hpp"
 
 using namespace e2e;
@@ -76,7 +77,8 @@ TEST_CASE("mbpoll configures, starts and watches a home-all, exceptions reach it
   const RunResult half = mbpoll(d.port(), "4", reg("axis.x.pull_off").address, {"5"});
   CHECK(half.code() != 0);
   CHECK(half.err.find("Illegal data address") != std::string::npos);
-  const RunResult range = mbpoll(d.port(), "4", reg("axis.x.mode").address, {"9"});
+  const RunResult range = mbpoll(d.port(), "4", reg("axis.x.mode").address,
+                                 {std::to_string(homing::kHomingModeCount)});  // past the mode table
   CHECK(range.code() != 0);
   CHECK(range.err.find("Illegal data value") != std::string::npos);
   const RunResult unmapped = mbpoll(d.port(), "4", 9000, {"-c", "4"});

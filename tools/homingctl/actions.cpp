@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "homing/status.hpp"
+#include "homing/gantry.hpp"
 #include "settings_io.hpp"
 #include "status_view.hpp"
 #include "values.hpp"
@@ -139,7 +140,7 @@ struct Session {
     for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
       if (settings.axes[a].mode == homing::HomingMode::disabled) continue;
       pos += fmt::format("{}{} = {:.3f} {}{}", pos.empty() ? "" : ", ", homing::kAxisUpper[a], s.axes[a].position,
-                         homing::axis_unit(a), s.axes[a].homed ? "" : " (not homed)");
+                         homing::axis_unit(settings, a), s.axes[a].homed ? "" : " (not homed)");
       positions[std::string(homing::kAxisLetters[a])] = s.axes[a].position;
     }
     res.json["positions"] = positions;
@@ -301,11 +302,13 @@ ActionResult move(Connection& c, const std::string& axis, const std::string& tar
   if (a < 0) throw std::invalid_argument(fmt::format("move: '{}' is not an axis (x, y, z, a, b, c)", axis));
   const auto letter = homing::kAxisLetters[static_cast<std::size_t>(a)];
   const auto& treg = register_named(fmt::format("axis.{}.target", letter));
-  auto raw = parse_value(treg, target);
+  const registers::AxisKinds kinds = kinds_for(c, {&treg});  // the target in the axis's unit
+  auto raw = parse_value(treg, target, kinds);
   if (!raw) throw std::invalid_argument(raw.error());
   Session s(c, o);
   if (const int ex = c.write(treg, *raw)) return failure(fmt::format("writing {} refused: {}", treg.name(), exception_sentence(ex)));
-  const std::string what = fmt::format("move {} to {}", homing::kAxisUpper[static_cast<std::size_t>(a)], value_text(treg, *raw));
+  const std::string what =
+      fmt::format("move {} to {}", homing::kAxisUpper[static_cast<std::size_t>(a)], value_text(treg, *raw, kinds));
   auto r = s.pulse(fmt::format("cmd.move.{}", letter));
   if (!r) return failure(r.error());
   if (!taken(*r)) return s.refused(what, *r);

@@ -45,7 +45,8 @@ CheckReport check_settings(const homing::Settings& settings,
     c.enabled = s.mode != HomingMode::disabled || faults[i];
     c.stop_distance_mm = homing::seek_stop_distance_mm(s);
     c.max_stop_distance_mm = s.max_stop_distance_mm;
-    const auto u = homing::axis_unit(i);
+    c.unit = homing::axis_unit(settings, i);  // a slave's is its master's
+    const std::string& u = c.unit;
     if (!c.enabled) {
       r.axes.push_back(c);
       continue;
@@ -72,6 +73,11 @@ CheckReport check_settings(const homing::Settings& settings,
           break;
         case Phase::stop: phase(p, a > 0 ? seek_v / a + s.debounce_ms / 1000.0 : 0); break;
         case Phase::push: phase(p, move_time(s.push_distance_mm, latch_v, a)); break;
+        case Phase::push_to_stop:
+          // Bounded twice: the travel at latch feedrate, and stall_timeout_ms.
+          c.seek_worst_s = std::min(move_time(s.max_seek_travel_mm, latch_v, a), s.stall_timeout_ms / 1000.0);
+          phase(p, c.seek_worst_s);
+          break;
         case Phase::back_off:
           phase(p, move_time(c.stop_distance_mm + latch_stop, latch_v, a) + s.debounce_ms / 1000.0);
           break;
@@ -81,11 +87,13 @@ CheckReport check_settings(const homing::Settings& settings,
         case Phase::final_move:
           if (final_move) phase(p, move_time(s.final_position_mm - s.home_position_mm, seek_v, a));
           break;
+        // The drive's own homing takes what it takes: its time limit is the worst case.
+        case Phase::drive_homing: phase(p, s.drive_home_timeout_s); break;
         default: break;  // no motion of its own (assign) or not a phase of a method
       }
     }
     for (const auto& [name, t] : c.phases)
-      if (name != "seek") c.after_trigger_s += t;
+      if (name != "seek" && name != "push_to_stop") c.after_trigger_s += t;
 
     // Warnings the engine's check does not refuse.
     if (homing::mode_uses_switch(s.mode)) {
@@ -155,7 +163,7 @@ std::string render_check(const CheckReport& r) {
   out += fmt::format("{:<4} {:<26} {:>12} {:>13} {}\n", "axis", "stop distance / max", "seek worst", "after trigger",
                      "verdict");
   for (const AxisCheck& c : r.axes) {
-    const auto u = homing::axis_unit(c.axis);
+    const std::string& u = c.unit;
     if (!c.enabled) {
       out += fmt::format("{:<4} disabled\n", homing::kAxisUpper[c.axis]);
       continue;
@@ -185,7 +193,7 @@ nlohmann::json check_json(const CheckReport& r) {
   j["warnings"] = r.warnings;
   j["axes"] = nlohmann::json::array();
   for (const AxisCheck& c : r.axes) {
-    nlohmann::json a{{"axis", std::string(homing::kAxisLetters[c.axis])}, {"enabled", c.enabled}};
+    nlohmann::json a{{"axis", std::string(homing::kAxisLetters[c.axis])}, {"enabled", c.enabled}, {"unit", c.unit}};
     if (c.enabled) {
       a["stop_distance"] = c.stop_distance_mm;
       a["max_stop_distance"] = c.max_stop_distance_mm;

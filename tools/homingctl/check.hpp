@@ -19,6 +19,7 @@ struct TriggerCam {
 struct AxisCheck {
   std::size_t axis = 0;
   bool enabled = false;
+  std::string unit;                // of the kind the axis moves with: "mm" or "deg"
   double stop_distance_mm = 0;     // seek_stop_distance_mm
   double max_stop_distance_mm = 0;
   std::optional<std::string> fault;  // describe_fault: homing will be refused

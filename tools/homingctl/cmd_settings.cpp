@@ -8,6 +8,7 @@
 #include <variant>
 
 #include "check.hpp"
+#include "maps.hpp"
 #include "homing/settings_check.hpp"
 #include "cli.hpp"
 #include "registers/lookup.hpp"
@@ -51,18 +52,21 @@ std::vector<const Register*> resolve(const std::vector<std::string>& names) {
 
 void print_changes(const Context& ctx, const WritePlan& plan) {
   for (const auto& ch : plan.changes)
-    if (!ctx.json) fmt::print("{}: {} -> {}\n", ch.reg->name(), value_text(*ch.reg, ch.old_raw), value_text(*ch.reg, ch.new_raw));
+    if (!ctx.json)
+      fmt::print("{}: {} -> {}\n", ch.reg->name(), value_text(*ch.reg, ch.old_raw, plan.kinds),
+                 value_text(*ch.reg, ch.new_raw, plan.kinds));
 }
 
 int get(Context& ctx, const std::vector<std::string>& names) {
   const auto regs = resolve(names);
   Connection& c = ctx.connection();
   const auto values = c.read_many(regs);
+  const registers::AxisKinds kinds = kinds_for(c, regs);
   nlohmann::json j = nlohmann::json::object();
   for (const Register* r : regs) {
     const auto raw = values.at(r->name());
-    if (ctx.json) j[r->name()] = value_json(*r, raw);
-    else fmt::print("{} = {}\n", r->name(), value_text(*r, raw));
+    if (ctx.json) j[r->name()] = value_json(*r, raw, kinds);
+    else fmt::print("{} = {}\n", r->name(), value_text(*r, raw, kinds));
   }
   if (ctx.json) print_json(j);
   return kOk;
@@ -81,8 +85,10 @@ struct Assignments {
 };
 
 // The assignments, or the exit code of a refusal already printed.
-std::variant<Assignments, int> parse_assignments(const std::vector<std::string>& texts) {
+// Values are read in the units of the kinds the axes move with now.
+std::variant<Assignments, int> parse_assignments(Context& ctx, const std::vector<std::string>& texts) {
   Assignments out;
+  std::vector<std::pair<const Register*, std::string>> named;
   for (const auto& a : texts) {
     auto kv = split_assignment(a);
     if (!kv) throw Usage(kv.error());
@@ -94,7 +100,20 @@ std::variant<Assignments, int> parse_assignments(const std::vector<std::string>&
     }
     if (r->unit == Unit::module && r->table == Table::coil)
       throw Usage(fmt::format("{} is a command: use homingctl home/abort/reset/jog/move", r->name()));
-    auto raw = parse_value(*r, kv->second);
+    named.emplace_back(r, kv->second);
+  }
+  // A unit typed with a value is that of the kind the axis will have: this
+  // command may set axis.<a>.kind or slave_of too (value names, no unit).
+  std::vector<const Register*> regs;
+  RawMap changing;
+  for (const auto& [r, text] : named) {
+    regs.push_back(r);
+    if (r->type == registers::Type::enumeration && r->persisted)
+      if (auto raw = parse_value(*r, text)) changing[r->name()] = *raw;
+  }
+  const registers::AxisKinds kinds = kinds_for(ctx.connection(), regs, changing);
+  for (const auto& [r, text] : named) {
+    auto raw = parse_value(*r, text, kinds);
     if (!raw) {
       fmt::print(stderr, "refused: {}; nothing was written\n", raw.error());
       return kFailed;
@@ -144,7 +163,7 @@ int set_simulator_values(Context& ctx, const std::vector<std::pair<const Registe
 }
 
 int set(Context& ctx, const SetOptions& o) {
-  const auto parsed = parse_assignments(o.assignments);
+  const auto parsed = parse_assignments(ctx, o.assignments);
   if (const int* refused = std::get_if<int>(&parsed)) return *refused;
   const Assignments& a = std::get<Assignments>(parsed);
   if (!a.module.empty())
@@ -192,6 +211,43 @@ int export_settings(Context& ctx, const std::string& file) {
   }
   if (ctx.json) print_json({{"ok", true}, {"file", file}, {"settings", values.size()}});
   else fmt::print("exported {} settings to {}\n", values.size(), file);
+  return kOk;
+}
+
+// The HMI tag files of this machine: from the module's settings, or from a
+// settings file (no module needed).
+struct MapsOptions {
+  std::string dir;
+  std::string from;  // a settings file; "" = the module's settings
+};
+
+int write_machine_maps(Context& ctx, const MapsOptions& o) {
+  RawMap values;
+  std::string source;
+  if (o.from.empty()) {
+    Connection& c = ctx.connection();
+    values = read_settings_raw(c);
+    source = fmt::format("the settings of the module at {}", c.describe());
+  } else {
+    auto file = read_settings_file(o.from);
+    if (!file) {
+      fmt::print(stderr, "homingctl maps: {}; nothing was written\n", file.error());
+      return kFailed;
+    }
+    values = file->values;
+    source = o.from;
+  }
+  const registers::MapUnits units = map_units_of(values, source);
+  auto n = write_maps(o.dir, units);
+  if (!n) {
+    fmt::print(stderr, "homingctl maps: {}\n", n.error());
+    return kFailed;
+  }
+  std::string kinds;
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+    kinds += fmt::format("{}{} {}", a ? ", " : "", homing::kAxisUpper[a], homing::name_of(units.kinds[a]));
+  if (ctx.json) print_json({{"ok", true}, {"dir", o.dir}, {"files", *n}, {"source", source}});
+  else fmt::print("wrote {} map files to {} for {} ({})\n", *n, o.dir, source, kinds);
   return kOk;
 }
 
@@ -262,6 +318,12 @@ void add_settings_commands(Commands& commands, Context&) {
                [file](Context& c) { return export_settings(c, *file); })
       ->add_option("file", *file, "output file")
       ->required();
+  auto maps = std::make_shared<MapsOptions>();
+  auto* maps_cmd = commands.add("maps", "write the HMI tag files (Kepware, Ignition, Home Assistant, CSV, JSON, Markdown) "
+                                        "of this machine: each axis in the unit of its axis.<a>.kind",
+                                [maps](Context& c) { return write_machine_maps(c, *maps); });
+  maps_cmd->add_option("dir", maps->dir, "directory to write into")->required();
+  maps_cmd->add_option("--from", maps->from, "a settings file (homingctl export) instead of the module's settings");
   auto dry_run = std::make_shared<bool>(false);
   auto* import_cmd = commands.add("import", "write the settings of a TOML file (engineering values, or raw ones of a format_version 1 file; checked first; all or nothing)",
                                   [file, dry_run](Context& c) { return import_settings(c, *file, *dry_run); });

@@ -4,6 +4,7 @@
 #include <optional>
 
 #include "actions.hpp"
+#include "homing/gantry.hpp"
 #include "cli.hpp"
 #include "settings_io.hpp"
 #include "status_view.hpp"
@@ -64,7 +65,7 @@ void print_summary(std::size_t axis, const Trace& t, const std::string& alarm, c
     fmt::print("{}: {} samples every {:g} ms over {:.3f} s", homing::kAxisUpper[axis], t.samples.size(), t.interval_ms,
                t.duration_ms / 1000.0);
   if (t.edge_time_ms) fmt::print(", reference edge at {} ms ({:.3f} {})", *t.edge_time_ms, t.edge_position_mm,
-                                 homing::axis_unit(axis));
+                                 t.unit());
   fmt::print("{}\n", alarm.empty() ? "" : "\n  alarm: " + alarm);
   if (!o.svg_file.empty()) fmt::print("drawn to {}\n", o.svg_file);
 }
@@ -75,7 +76,10 @@ int trace(Context& ctx, const TraceOptions& o) {
   const auto axis = static_cast<std::size_t>(index);
   if (auto bad = window_error(o.from_s, o.to_s)) throw Usage(fmt::format("trace: {}", *bad));
   Connection& c = ctx.connection();
-  const Trace whole = read_trace_or_explain(c, axis);
+  Trace whole = read_trace_or_explain(c, axis);
+  // The unit shows in the SVG and the summary only (the CSV and JSON name no
+  // unit): the settings are read for those alone.
+  if (!o.svg_file.empty() || (!ctx.json && o.csv_file != "-")) whole.kind = homing::axis_kind(read_settings(c), axis);
   if (whole.samples.empty()) {
     fmt::print(stderr, "no trace for {}: the axis has not taken part in a homing cycle since homingd started\n",
                homing::kAxisUpper[axis]);

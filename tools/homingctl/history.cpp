@@ -8,6 +8,7 @@
 #include "homing/axes.hpp"
 #include "persistence/settings_store.hpp"
 #include "persistence/time_text.hpp"
+#include "registers/defaults.hpp"
 #include "registers/lookup.hpp"
 #include "values.hpp"
 
@@ -17,9 +18,9 @@ namespace {
 
 std::string local_time(std::int64_t ms) { return persistence::time_text(ms, persistence::TimeZone::local); }
 
-std::string shown(const std::string& name, std::int64_t raw) {
+std::string shown(const std::string& name, std::int64_t raw, const registers::AxisKinds& kinds) {
   const registers::Register* r = registers::find_register(name);
-  return r ? value_text(*r, raw) : std::to_string(raw);
+  return r ? value_text(*r, raw, kinds) : std::to_string(raw);
 }
 
 // "  X Y excluded: not homed before the cycle": the axes of a run whose
@@ -66,12 +67,14 @@ void add_runs(HistoryReport& out, const std::vector<persistence::HomingRun>& run
   }
 }
 
-void add_changes(HistoryReport& out, const std::vector<persistence::AuditEntry>& changes) {
+// Values in the units of the axes' kinds as the database holds them now.
+void add_changes(HistoryReport& out, const std::vector<persistence::AuditEntry>& changes,
+                 const registers::AxisKinds& kinds) {
   out.json["changes"] = nlohmann::json::array();
   out.text += fmt::format("settings changes (newest first, {} shown):\n", changes.size());
   for (const auto& c : changes) {
     out.text += fmt::format("  {}  {:<6} {:<22} {:<32} {} -> {}\n", local_time(c.time_ms), c.transport, c.client, c.name,
-                            shown(c.name, c.old_value), shown(c.name, c.new_value));
+                            shown(c.name, c.old_value, kinds), shown(c.name, c.new_value, kinds));
     out.json["changes"].push_back({{"time_ms", c.time_ms}, {"transport", c.transport}, {"client", c.client},
                                    {"name", c.name}, {"old", c.old_value}, {"new", c.new_value}});
   }
@@ -132,7 +135,7 @@ std::expected<HistoryReport, std::string> read_history(const std::string& db, co
 
   HistoryReport out;
   add_runs(out, *runs);
-  add_changes(out, *changes);
+  add_changes(out, *changes, registers::kinds_of(registers::settings_from_raw(store->load()).settings));
   if (request.corrections > 0)
     if (auto c = add_corrections(out, *store, request.corrections); !c) return std::unexpected(c.error());
   return out;

@@ -34,6 +34,19 @@ homing::Settings settings_of(const RawMap& raw) { return registers::settings_fro
 
 homing::Settings read_settings(Connection& c) { return settings_of(read_settings_raw(c)); }
 
+registers::AxisKinds kinds_for(Connection& c, const std::vector<const registers::Register*>& regs,
+                               const RawMap& changing) {
+  const bool depends = std::any_of(regs.begin(), regs.end(), [](const Register* r) {
+    return r->per_axis() && homing::may_be_rotary(static_cast<std::size_t>(r->axis)) &&
+           r->unit_text(registers::AxisKinds{}) != r->unit_text(registers::default_kinds());
+  });
+  if (!depends) return registers::default_kinds();
+  RawMap values = read_settings_raw(c);
+  for (const auto& [name, raw] : changing)
+    if (values.contains(name)) values[name] = raw;
+  return registers::kinds_of(settings_of(values));
+}
+
 namespace {
 
 // Runs of holding registers without gaps: one write request can cover a run.
@@ -79,6 +92,7 @@ ModuleState state_of(const RawMap& current) {
 // The values that change, each a setting in its range; `after` gets them.
 std::expected<std::vector<PlannedChange>, std::string> changes_of(const RawMap& current, const RawMap& wanted,
                                                                   bool check, ModuleState& after) {
+  const registers::AxisKinds kinds = registers::kinds_of(after.settings);  // as the module holds them now
   std::vector<PlannedChange> changes;
   for (const auto& [name, raw] : wanted) {
     const Register* r = registers::find_register(name);
@@ -86,7 +100,7 @@ std::expected<std::vector<PlannedChange>, std::string> changes_of(const RawMap& 
       return std::unexpected(fmt::format("'{}' is not a setting (module holding register)", name));
     if (check && (raw < r->min || raw > r->max))
       return std::unexpected(fmt::format("{} = {} is outside its range {}; nothing was written", name,
-                                         value_text(*r, raw), accepted_text(*r)));
+                                         value_text(*r, raw, kinds), accepted_text(*r, kinds)));
     const auto it = current.find(name);
     if (it == current.end()) return std::unexpected(fmt::format("internal: current value of {} not read", name));
     if (it->second == raw) continue;
@@ -184,6 +198,7 @@ std::expected<WritePlan, std::string> plan_write(const RawMap& current, const Ra
   if (!changes) return std::unexpected(changes.error());
   WritePlan plan;
   plan.changes = std::move(*changes);
+  plan.kinds = registers::kinds_of(after.settings);
   if (plan.changes.empty()) return plan;
 
   // The final settings must pass the engine's rule set, as the daemon runs it.
@@ -245,7 +260,7 @@ std::string settings_file_text(const RawMap& values, const std::string& source, 
 }
 
 std::string file_value_text(const registers::Register& reg, std::int64_t raw) {
-  std::string text = registers::file_value_text(reg.name(), raw);
+  std::string text = registers::file_value_text(reg.name(), raw, {});  // the unit comment is cut
   if (const auto comment = text.find("  #"); comment != std::string::npos) text.resize(comment);
   return text;
 }

@@ -24,6 +24,12 @@ const std::vector<const registers::Register*>& persisted_registers();
 RawMap read_settings_raw(Connection& c);
 homing::Settings settings_of(const RawMap& raw);  // registers::settings_from_raw
 homing::Settings read_settings(Connection& c);
+// The kinds the module's axes move with, read only when a value of `regs`
+// has a unit that depends on one (a length, feedrate ... of A, B or C);
+// `changing`: settings a write sets at the same time (axis.a.kind = linear),
+// taken as they will be.
+registers::AxisKinds kinds_for(Connection& c, const std::vector<const registers::Register*>& regs,
+                               const RawMap& changing = {});
 
 struct Block {
   std::uint16_t start = 0;
@@ -38,6 +44,7 @@ struct PlannedChange {
 struct WritePlan {
   std::vector<Block> blocks;  // in the order to write (each passes the daemon's check)
   std::vector<PlannedChange> changes;
+  registers::AxisKinds kinds = registers::default_kinds();  // after the write: the units of the changes
 };
 
 // Plans writing `wanted` (module holding registers, name -> raw) over `current`

@@ -123,7 +123,7 @@ std::string render_status(const StatusView& s, const homing::Settings& settings,
     const AxisView& x = s.axes[a];
     const auto& st = settings.axes[a];
     const bool disabled = st.mode == homing::HomingMode::disabled;
-    const std::string pos = disabled ? "-" : fmt::format("{:.3f} {}", x.position, homing::axis_unit(a));
+    const std::string pos = disabled ? "-" : fmt::format("{:.3f} {}", x.position, homing::axis_unit(settings, a));
     std::string alarm = x.alarm == homing::AlarmCode::none
                             ? "-"
                             : fmt::format("{}: {}", homing::alarm_name(x.alarm), alarm_text(a, x, settings));
@@ -137,10 +137,10 @@ std::string render_status(const StatusView& s, const homing::Settings& settings,
       const double bound = phase_bound_mm(x.phase, homes_with);
       if (bound > 0)
         out += fmt::format("     {} {} {:.3f} / {:g} {}\n", progress_bar(x.phase_distance, bound, 30),
-                           homing::phase_name(x.phase), std::abs(x.phase_distance), bound, homing::axis_unit(a));
+                           homing::phase_name(x.phase), std::abs(x.phase_distance), bound, homing::axis_unit(settings, a));
       else
         out += fmt::format("     {} {:.3f} {}\n", homing::phase_name(x.phase), std::abs(x.phase_distance),
-                           homing::axis_unit(a));
+                           homing::axis_unit(settings, a));
     }
   }
   out += fmt::format("state: {}", homing::state_name(s.state));
@@ -165,8 +165,8 @@ std::string progress_line(const StatusView& s, const homing::Settings& settings,
     if (!distances) continue;
     const double bound = phase_bound_mm(x.phase, settings.axes[a]);
     const double done = std::abs(x.phase_distance);
-    axes += bound > 0 ? fmt::format(" {:.1f} / {:g} {}", std::min(done, bound), bound, homing::axis_unit(a))
-                      : fmt::format(" {:.1f} {}", done, homing::axis_unit(a));
+    axes += bound > 0 ? fmt::format(" {:.1f} / {:g} {}", std::min(done, bound), bound, homing::axis_unit(settings, a))
+                      : fmt::format(" {:.1f} {}", done, homing::axis_unit(settings, a));
   }
   if (axes.empty()) return "";
   return s.sequence_step ? fmt::format("step {}: {}", s.sequence_step, axes) : axes;
@@ -198,7 +198,7 @@ nlohmann::json status_json(const StatusView& s, const homing::Settings& settings
     e["mode"] = std::string(homing::mode_name(settings.axes[a].mode));
     e["phase"] = std::string(homing::phase_name(x.phase));
     e["position"] = x.position;
-    e["unit"] = std::string(homing::axis_unit(a));
+    e["unit"] = std::string(homing::axis_unit(settings, a));
     e["homed"] = x.homed;
     e["sensor"] = x.sensor;
     e["busy"] = x.busy;

@@ -14,6 +14,7 @@
 #include "connection.hpp"
 #include "homing/phases.hpp"
 #include "homing/alarms.hpp"
+#include "homing/settings.hpp"
 
 namespace homingctl {
 
@@ -41,9 +42,14 @@ struct Trace {
   std::uint32_t duration_ms = 0;
   std::vector<TracePoint> samples;
   std::optional<TimeWindow> window;  // set by window_trace: the samples are those inside it
+  // The kind the axis moves with (homing::axis_kind of the module's settings,
+  // set by `homingctl trace`); unset, a new module's kind of the axis.
+  std::optional<homing::AxisKind> kind;
 
   // Where the recorded cycle ends (ms): its duration, or the last sample if later.
   double end_ms() const;
+  // "mm" or "deg": the unit of the positions.
+  std::string_view unit() const;
 };
 
 // Parses the words of a trace file (header + samples); throws std::runtime_error when malformed.

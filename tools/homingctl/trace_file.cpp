@@ -21,6 +21,8 @@ std::int32_t i32(const std::vector<std::uint16_t>& w, std::size_t at) { return s
 
 }  // namespace
 
+std::string_view Trace::unit() const { return homing::unit_of(kind.value_or(homing::default_kind(axis))); }
+
 double Trace::end_ms() const {
   double end = duration_ms;
   if (!samples.empty()) end = std::max<double>(end, samples.back().time_ms);

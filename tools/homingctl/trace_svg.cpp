@@ -131,7 +131,7 @@ class Drawing {
     o_ += fmt::format("<rect width=\"{:.0f}\" height=\"{:.0f}\" fill=\"white\"/>\n", kWidth, height_);
     heading();
     phases();
-    const auto unit = homing::axis_unit(t_.axis);
+    const auto unit = t_.unit();
     plot("position", fmt::format("position ({})", unit), top_, kPlotH, p_lo_, p_hi_, p_ticks_,
          [](const TracePoint& s) { return s.position_mm; }, "#1f4e9c", false);
     plot("velocity", fmt::format("velocity ({}/s)", unit), y_vel_, kPlotH, v_lo_, v_hi_, v_ticks_,
@@ -255,7 +255,7 @@ class Drawing {
     if (!edge_shown()) return;
     const double x = tx(*t_.edge_time_ms);
     const std::string label = fmt::format("reference edge {:.3f} {} at {} ms", t_.edge_position_mm,
-                                          homing::axis_unit(t_.axis), *t_.edge_time_ms);
+                                          t_.unit(), *t_.edge_time_ms);
     const bool left_of_line = x + 4 + text_width(label, kFont) > left_ + plot_w_;
     o_ += "<g id=\"reference-edge\">\n";
     o_ += fmt::format("<line x1=\"{:.2f}\" x2=\"{:.2f}\" y1=\"{:.0f}\" y2=\"{:.0f}\" stroke=\"#d00000\" "

@@ -21,11 +21,11 @@ std::string trim(std::string_view s) {
 
 }  // namespace
 
-nlohmann::json value_json(const Register& reg, std::int64_t raw) {
+nlohmann::json value_json(const Register& reg, std::int64_t raw, const registers::AxisKinds& kinds) {
   nlohmann::json j;
   j["raw"] = raw;
   j["value"] = registers::to_engineering(reg, raw);
-  j["unit"] = std::string(reg.unit_text());
+  j["unit"] = std::string(reg.unit_text(kinds));
   if (reg.type == Type::enumeration || reg.type == Type::bitmask) j["text"] = value_text(reg, raw);
   return j;
 }

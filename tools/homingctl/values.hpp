@@ -19,7 +19,8 @@ using registers::parse_value;
 using registers::value_text;
 
 // {"raw":..,"value":..,"unit":..,"name":..}
-nlohmann::json value_json(const registers::Register& reg, std::int64_t raw);
+nlohmann::json value_json(const registers::Register& reg, std::int64_t raw,
+                          const registers::AxisKinds& kinds = registers::default_kinds());
 
 // Splits "NAME=VALUE".
 std::expected<std::pair<std::string, std::string>, std::string> split_assignment(std::string_view arg);

@@ -37,7 +37,7 @@ void Run::exercise_motion() {
   bool interrupted = false;
   if (const auto ev = motion_event(a)) {
     r_.run_for(d_.u(0.0, jog_s));
-    apply(*ev, causes, CyclePlan{});
+    apply_in_motion(*ev, causes);
     acts_ |= act::event_in_jog_or_move;
     interrupted = true;
   }
@@ -64,7 +64,7 @@ void Run::exercise_motion() {
       if (const auto ev = motion_event(a)) {
         r_.run_until([&] { return r_.axis(a).velocity_mm_per_s != 0 || !ok(); }, 1);
         r_.run_for(d_.u(0.0, 0.2));
-        apply(*ev, causes, CyclePlan{});
+        apply_in_motion(*ev, causes);
         acts_ |= act::event_in_jog_or_move;
         stopped_short = stopped_short_any = true;
       }

@@ -9,7 +9,9 @@
 // feedrates and accelerations up to the registers' maxima, every
 // allowed_without_homing, settings the configuration check must refuse,
 // faults (dead or stuck sensors, wire breaks, drive faults, e-stop, lost
-// steps, an invalid absolute encoder) at random moments or aimed at a phase,
+// steps, an invalid absolute encoder; for drive-performed homing a drive that
+// never answers, answers at once, answers after its time limit or drops its
+// home done) at random moments or aimed at a phase,
 // aborts, resets, re-homes, jogs and moves (before homing too, and cut short
 // by aborts, e-stops, drive faults and communication losses), settings written
 // between cycles, a hard-limit trip, a start button held at power-up, and

@@ -127,6 +127,10 @@ void Gen::invalid_settings() {
       st.axes[a].shared_limit = true;
       st.axes[a].pull_off_mm = 0;
       break;
+    case Invalid::drive_without_time_limit:
+      if (!pick_axis(axes_where([&](std::size_t x) { return st.axes[x].mode == HomingMode::drive; }), a)) return;
+      st.axes[a].drive_home_timeout_s = 0;
+      break;
     case Invalid::none:
     case Invalid::count:
       return;
@@ -184,6 +188,31 @@ void Gen::causes() {
       m.sim.axes[a].fault = m.plan[a].start_fault;
     }
   }
+  // A drive's stall output dead or stuck on from power-up (hard-stop homing).
+  if (d.chance(0.15)) {
+    std::size_t a = 0;
+    if (pick_axis(axes_where([&](std::size_t x) { return m.settings.axes[x].mode == HomingMode::hard_stop; }), a)) {
+      m.plan[a].start_fault = d.pick({sim::Fault::stall_dead, sim::Fault::stall_stuck});
+      m.sim.axes[a].fault = m.plan[a].start_fault;
+    }
+  }
+  // A drive that homes itself gone wrong: it never answers, answers at once,
+  // has lost its home done, or answers after its time limit.
+  if (d.chance(0.12)) {
+    std::size_t a = 0;
+    if (pick_axis(axes_where([&](std::size_t x) { return m.settings.axes[x].mode == HomingMode::drive; }), a)) {
+      const int kind = d.integer(0, 3);
+      if (kind == 3) {
+        m.sim.axes[a].drive_answer_ms = 1000 * (m.settings.axes[a].drive_home_timeout_s + d.u(0.5, 3));
+        m.plan[a].late_drive = true;
+      } else {
+        m.plan[a].start_fault = kind == 0   ? sim::Fault::drive_never_answers
+                                : kind == 1 ? sim::Fault::drive_answers_at_once
+                                            : sim::Fault::drive_done_lost;
+        m.sim.axes[a].fault = m.plan[a].start_fault;
+      }
+    }
+  }
   // An absolute encoder that reports no valid position.
   if (d.chance(0.05)) {
     std::size_t a = 0;
@@ -194,6 +223,18 @@ void Gen::causes() {
 
 double Gen::axis_time_estimate(std::size_t a) const {
   const AxisSettings e = effective(m.settings, a);
+  if (e.mode == HomingMode::hard_stop) {
+    const sim::AxisConfig& c = m.sim.axes[a];
+    const double stop = e.direction == Direction::negative ? c.hard_stop_min_mm : c.hard_stop_max_mm;
+    const double latch_v = mm_per_min_to_mm_per_s(e.latch_feedrate_mm_per_min);
+    return (std::abs(c.actual_position_mm - stop) + e.pre_move_distance_mm) / latch_v + 1.0 +
+           (final_move_wanted(e) ? 2.0 : 0.0);
+  }
+  if (e.mode == HomingMode::drive) {
+    const sim::AxisConfig& c = m.sim.axes[a];
+    return std::abs(c.drive_home_position_mm - c.actual_position_mm) / (c.drive_speed_mm_per_min / 60) +
+           c.drive_answer_ms / 1000 + (final_move_wanted(e) ? 2.0 : 0.0);
+  }
   if (!mode_uses_switch(e.mode)) return final_move_wanted(e) ? 2.0 : 0.0;
   const double seek_v = mm_per_min_to_mm_per_s(e.seek_feedrate_mm_per_min);
   const double latch_v = mm_per_min_to_mm_per_s(e.latch_feedrate_mm_per_min);
@@ -227,6 +268,8 @@ void Gen::events() {
       if (!pick_axis(axes_where([&](std::size_t x) { return plan.movers & axis_bit(x) && mode_uses_switch(effective(m.settings, x).mode); }), a)) continue;
     } else if (e.kind == EventKind::drive_fault) {
       if (!pick_axis(axes_where([&](std::size_t x) { return plan.movers & axis_bit(x); }), a)) continue;
+    } else if (e.kind == EventKind::drive_done_lost) {
+      if (!pick_axis(axes_where([&](std::size_t x) { return m.settings.axes[x].mode == HomingMode::drive; }), a)) continue;
     }
     e.axis = a;
     if (e.kind == EventKind::permit_off) m.settings.global.permit_required = true;
@@ -288,14 +331,15 @@ const char* invalid_name(Invalid v) {
                                 "gantry stop distance beyond max misalignment",
                                 "gantry master in a pushing mode",
                                 "slave without a sensor of its own",
-                                "shared limit resting on its sensor (no pull-off)"};
+                                "shared limit resting on its sensor (no pull-off)",
+                                "drive-performed homing without a time limit"};
   return names[static_cast<int>(v)];
 }
 
 const char* event_name(EventKind k) {
   static const char* names[] = {"abort", "e-stop", "drive fault", "sensor stuck active", "sensor stuck inactive",
                                 "wire break", "communication lost", "permit off", "reset", "home again",
-                                "indexer stuck locked", "indexer never locks"};
+                                "drive's home done lost", "indexer stuck locked", "indexer never locks"};
   return names[static_cast<int>(k)];
 }
 

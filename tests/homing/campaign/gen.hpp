@@ -50,6 +50,10 @@ struct Gen {
   // An axis homed without a search: manual, absolute, disabled. Its cam lies
   // out of the way; stops far from where it may move.
   void still_axis(std::size_t a);
+  // A hard-stop axis: no cam, its stop within max_seek_travel, a drive whose
+  // stall detection takes its own time.
+  void hard_stop_axis(std::size_t a);
+  void drive_axis(std::size_t a);  // drive mode: a still axis whose drive homes itself
 
   // The slave of master mi: its own sensor, placed so that the beam starts
   // square to within the skew drawn (or beyond the limit: a bad-skew run).

@@ -34,6 +34,7 @@ enum class Invalid : std::uint8_t {
   pushing_master,
   slave_without_sensor,
   shared_limit_on_sensor,
+  drive_without_time_limit,
   count
 };
 const char* invalid_name(Invalid v);
@@ -50,6 +51,7 @@ enum class EventKind : std::uint8_t {
   permit_off,
   reset,       // a reset command while the cycle runs
   home_again,  // a second home command while the cycle runs
+  drive_done_lost,  // drive mode: the drive's home done goes off for good
   // Locking indexer faults: drawn apart from the kinds above (on indexer
   // axes only, from their own dice), so machines without one draw as before.
   indexer_stuck_locked,
@@ -87,6 +89,7 @@ struct AxisPlan {
   bool rest_on_sensor = false; // shared limit that rests on its own sensor after pull-off
   sim::Fault start_fault = sim::Fault::none;  // present from power-up
   bool encoder_invalid = false;
+  bool late_drive = false;     // drive mode: the drive answers after its time limit
   bool indexer = false;        // a locking indexer (axis.<a>.indexer_lock, fitted on the simulator)
 };
 

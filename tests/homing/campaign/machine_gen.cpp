@@ -152,7 +152,7 @@ void Gen::still_axis(std::size_t a) {
   c.absolute_offset_mm = 2 * s.home_position_mm - start + d.u(-5, 5);
   s.final_move_enable = d.chance(0.3);
   s.final_position_mm = s.home_position_mm + d.u(-20, 20);
-  s.soft_limits_enable = s.mode == HomingMode::manual && d.chance(0.5);
+  s.soft_limits_enable = (s.mode == HomingMode::manual || s.mode == HomingMode::drive) && d.chance(0.5);
   s.soft_limit_min_mm = std::min(s.home_position_mm, s.final_position_mm) - d.u(0.5, 30);
   s.soft_limit_max_mm = std::max(s.home_position_mm, s.final_position_mm) + d.u(0.5, 30);
   if (s.mode == HomingMode::absolute_final) {
@@ -160,6 +160,54 @@ void Gen::still_axis(std::size_t a) {
     const double machine_now = start + c.absolute_offset_mm - s.home_position_mm;
     s.final_position_mm = machine_now + d.u(-20, 20);
   }
+}
+
+void Gen::hard_stop_axis(std::size_t a) {
+  AxisSettings& s = m.settings.axes[a];
+  sim::AxisConfig& c = m.sim.axes[a];
+  draw_motion(s, c, PairDraw{});
+  const double dir = s.direction == Direction::positive ? 1.0 : -1.0;
+  // In the frame the stop lies at 0, the carriage starts above it.
+  const double start_f = d.u(2, 60);
+  c.actual_position_mm = mirror(dir, start_f);
+  c.sensor_min_mm = 1;  // no cam: max below min
+  c.sensor_max_mm = 0;
+  set_stops(a, dir, 0, start_f + 500);
+  c.stall_detect_ms = d.u(5, 40);
+  c.stall_spread_ms = d.u(0, 20);
+  const double pre = s.pre_move_mode == PreMove::always ? s.pre_move_distance_mm : 0;
+  // Room for the stall's detection and the braking after it, lost against the stop.
+  s.max_seek_travel_mm = start_f + pre + d.u(1, 30);
+  const double latch_v = mm_per_min_to_mm_per_s(s.latch_feedrate_mm_per_min);
+  s.stall_timeout_ms = (s.max_seek_travel_mm / latch_v * 1.2 + 1) * 1000;
+  s.shared_limit = false;
+  s.final_move_enable = d.chance(0.3);
+  s.final_position_mm = s.home_position_mm - dir * d.u(0, 20);  // away from the stop
+  // Soft limits that keep jogs and moves off the stop: its side just inside
+  // the stop, between it and the home position.
+  s.pull_off_mm = std::max(s.pull_off_mm, 0.2);
+  const double stop_machine = s.home_position_mm + dir * s.pull_off_mm;
+  s.soft_limits_enable = d.chance(0.5);
+  const double near = stop_machine - dir * 0.1, far = s.home_position_mm - dir * d.u(25, 100);
+  s.soft_limit_min_mm = std::min(near, far);
+  s.soft_limit_max_mm = std::max(near, far);
+}
+
+// The drive's own home lies near the start, well inside the stops and off the
+// cam; it answers within its time limit (late, up to most of the margin, one
+// time in four), at its own speed.
+void Gen::drive_axis(std::size_t a) {
+  still_axis(a);
+  AxisSettings& s = m.settings.axes[a];
+  sim::AxisConfig& c = m.sim.axes[a];
+  c.drive_home_position_mm = c.actual_position_mm + d.u(-40, 40);
+  c.drive_speed_mm_per_min = d.u(300, 6000);
+  // Wherever jogs, moves and lost steps leave the carriage, within its stops.
+  const double reach_s = (c.hard_stop_max_mm - c.hard_stop_min_mm) / (c.drive_speed_mm_per_min / 60);
+  const double margin_s = d.u(0.5, 3);
+  // Never sooner than a homing can be (kDriveMinHomingTime_s), even from its own home.
+  c.drive_answer_ms = 1000 * (d.chance(0.25) ? d.u(0.5, 0.9) * margin_s : d.u(kDriveMinHomingTime_s + 0.02, 0.3));
+  s.drive_home_timeout_s = std::ceil(reach_s + c.drive_answer_ms / 1000 + margin_s);
 }
 
 void Gen::place_slave(std::size_t si, std::size_t mi, const PairDraw& pd, double budget, double slack,
@@ -185,6 +233,7 @@ void Gen::place_slave(std::size_t si, std::size_t mi, const PairDraw& pd, double
     s.final_position_mm = d.u(-50, 50);
   } else {
     s = ms;
+    s.kind = own.kind;  // what the axis is stays its own (X, Y, Z are linear only); its unit follows the master's
   }
   s.acceleration_mm_per_s2 = pd.accel;
   s.debounce_ms = pd.debounce_ms;
@@ -327,8 +376,13 @@ void Gen::roles_and_modes() {
     s.mode = d.pick({HomingMode::disabled, HomingMode::manual, HomingMode::switch_release,
                      HomingMode::switch_release, HomingMode::switch_reapproach, HomingMode::switch_reapproach,
                      HomingMode::switch_index, HomingMode::absolute, HomingMode::absolute_final,
-                     HomingMode::pushing_release, HomingMode::pushing_reapproach});
-    if (mode_uses_switch(s.mode)) {
+                     HomingMode::pushing_release, HomingMode::pushing_reapproach, HomingMode::hard_stop,
+                     HomingMode::drive});
+    if (s.mode == HomingMode::hard_stop) {
+      hard_stop_axis(a);
+    } else if (s.mode == HomingMode::drive) {
+      drive_axis(a);
+    } else if (mode_uses_switch(s.mode)) {
       s.shared_limit = !mode_is_pushing(s.mode) && d.chance(0.25);
       draw_motion(s, m.sim.axes[a], PairDraw{});
       if (s.shared_limit && mode_reapproaches(s.mode)) {

@@ -154,9 +154,17 @@ struct CyclePlan {
   std::array<int, kAxisCount> step{};  // 1..6 for covered axes, 0 otherwise
 };
 
+// README: a switch or pushing mode searches its sensor's edge, hard-stop
+// homing pushes into its mechanical stop; the other modes move only for the
+// final move.
+inline bool searches(HomingMode m) { return mode_uses_switch(m) || m == HomingMode::hard_stop; }
+// The modes that push into a mechanical stop with the push output on.
+inline bool pushes_into_stop(HomingMode m) { return mode_is_pushing(m) || m == HomingMode::hard_stop; }
+
 inline bool moves_when_homing(const Settings& s, std::size_t a) {
   const AxisSettings e = effective(s, a);
-  return mode_uses_switch(e.mode) || final_move_wanted(e);
+  // A drive homing itself moves the carriage without steps.
+  return searches(e.mode) || e.mode == HomingMode::drive || final_move_wanted(e);
 }
 
 inline CyclePlan plan_cycle(const Settings& s, bool all, AxisMask requested) {

@@ -85,6 +85,7 @@ std::vector<Event> Run::common_events(const CyclePlan& plan, double estimate) {
   const bool sensor = e.kind == EventKind::stuck_active || e.kind == EventKind::stuck_inactive || e.kind == EventKind::wire_break;
   if (sensor && !mode_uses_switch(effective(r_.settings, e.axis).mode)) return out;
   if (e.kind == EventKind::permit_off && !r_.settings.global.permit_required) return out;
+  if (e.kind == EventKind::drive_done_lost && effective(r_.settings, e.axis).mode != HomingMode::drive) return out;
   // Half of them aimed at a phase the axis runs (a slave's pair phases too).
   const std::vector<Phase> phases = phases_run(e.axis);
   if (!phases.empty() && d_.chance(0.5)) {
@@ -124,8 +125,26 @@ std::vector<Phase> Run::phases_run(std::size_t a) const {
     if (pair_master(r_.settings, a) >= 0 && r_.settings.axes[a].slave_mode == SlaveMode::external_commutator)
       p.push_back(Phase::align_slave);
   }
+  if (e.mode == HomingMode::hard_stop) {
+    p = {Phase::push_to_stop, Phase::pull_off};
+    if (e.pre_move_mode != PreMove::none) p.push_back(Phase::pre_move);
+  }
+  // A software-slaved pair on its sensors first clears them together.
+  if (const int partner = partner_index(r_.settings, a); partner >= 0) {
+    const std::size_t slave = master_index(r_.settings, a) >= 0 ? a : static_cast<std::size_t>(partner);
+    if (r_.settings.axes[slave].slave_mode == SlaveMode::own_output) p.push_back(Phase::clear_sensors);
+  }
+  if (e.mode == HomingMode::drive) p.push_back(Phase::drive_homing);
   if (final_move_wanted(e)) p.push_back(Phase::final_move);
   return p;
+}
+
+void Run::apply_in_motion(const Event& e, Causes& causes) {
+  const std::size_t from = causes.list.size();
+  apply(e, causes, CyclePlan{});
+  step();
+  for (std::size_t i = from; i < causes.list.size(); ++i)
+    if (causes.list[i].phase_axis) causes.list[i].phase_seen = r_.axis(*causes.list[i].phase_axis).phase;
 }
 
 void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
@@ -181,6 +200,7 @@ void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
     case EventKind::permit_off: r_.sim().set_homing_permit(false); break;
     case EventKind::reset: r_.pending.reset_alarm = true; break;
     case EventKind::home_again: r_.pending.home_all = true; break;
+    case EventKind::drive_done_lost: set_fault(sim::Fault::drive_done_lost); break;
     case EventKind::indexer_stuck_locked:
     case EventKind::indexer_never_locks: {
       const bool unlocked = r_.engine.outputs().axes[e.axis].indexer_unlock;

@@ -68,6 +68,10 @@ class Run {
  private:
   bool ok() const { return !w_->failed(); }
   void step() { r_.step(); }
+  // An event during a jog or a move, and the period after it: an input the
+  // simulator changed is read by the engine in the next period, whose phase
+  // its alarm may carry (a move may arrive meanwhile: campaign seed 31342370).
+  void apply_in_motion(const Event& e, Causes& causes);
   void settle(double max_s = 10);
   void say(const std::string& what);
   void power_up();

@@ -15,6 +15,11 @@ const char* fault_name(sim::Fault f) {
     case sim::Fault::sensor_stuck_inactive: return "sensor stuck inactive";
     case sim::Fault::wire_break: return "wire break";
     case sim::Fault::drive_fault: return "drive fault";
+    case sim::Fault::stall_dead: return "stall output dead";
+    case sim::Fault::stall_stuck: return "stall output stuck on";
+    case sim::Fault::drive_never_answers: return "drive never answers its home request";
+    case sim::Fault::drive_answers_at_once: return "drive answers its home request at once";
+    case sim::Fault::drive_done_lost: return "drive's home done lost";
     case sim::Fault::indexer_stuck_locked: return "indexer stuck locked";
     case sim::Fault::indexer_never_locks: return "indexer never locks";
   }

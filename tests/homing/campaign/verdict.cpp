@@ -121,6 +121,19 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
       c.add(letter(a) + "'s cam shorter than its stop", {AlarmCode::overrun_during_stop, AlarmCode::sensor_not_found}, bit,
             mover && overruns);
     }
+    // Hard-stop homing: a stall output that never comes or is on all the
+    // time, or a stop further than the push reaches (README).
+    if (mover && e.mode == HomingMode::hard_stop) {
+      if (f == sim::Fault::stall_dead)
+        c.add(letter(a) + "'s dead stall output", {AlarmCode::stop_not_found, AlarmCode::stall_timeout}, bit, true);
+      if (f == sim::Fault::stall_stuck) c.add(letter(a) + "'s stall output stuck on", {AlarmCode::stall_at_start}, bit, true);
+      const auto& cfg = r.sim().axis_config(a);
+      const double stop = dir_of(e) < 0 ? cfg.hard_stop_min_mm : cfg.hard_stop_max_mm;
+      const double reach = e.max_seek_travel_mm - (e.pre_move_mode == PreMove::always ? e.pre_move_distance_mm : 0);
+      const double gap = std::abs(r.actual(a) - stop);
+      // Near the end of the reach the stall's detection time decides.
+      if (gap > reach - 1) c.add(letter(a) + "'s stop beyond the push's reach", {AlarmCode::stop_not_found, AlarmCode::stall_timeout}, bit, gap > reach + 1e-3);
+    }
     if (p.rest_on_sensor) c.add(letter(a) + "'s shared limit resting on its sensor", {AlarmCode::settings_fault, AlarmCode::not_released}, bit);
     // A cycle that starts deeper in the cam than max_backoff can release (a
     // jog or move left it there) backs off straight away and must give up.
@@ -163,6 +176,23 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
         c.add(letter(a) + "'s skew beyond its max misalignment",
               {AlarmCode::misalignment, AlarmCode::not_released, AlarmCode::sensor_not_found, AlarmCode::slave_sensor_missing},
               static_cast<AxisMask>(bit | axis_bit(mi)), skew > limit + p.extras_mm);
+    }
+    // A drive that homes itself: what its fault, or an answer after its
+    // time limit, must raise when its step comes.
+    if (e.mode == HomingMode::drive && (plan.covered & bit)) {
+      const auto& cfg = r.sim().axis_config(a);
+      if (f == sim::Fault::drive_never_answers || f == sim::Fault::drive_done_lost)
+        c.add(letter(a) + "'s drive never reporting home done", {AlarmCode::drive_no_answer}, bit, true);
+      if (f == sim::Fault::drive_answers_at_once)
+        c.add(letter(a) + "'s drive answering at once", {AlarmCode::drive_answered_at_once}, bit, true);
+      if (f == sim::Fault::none || f == sim::Fault::drive_fault) {
+        const double takes = std::abs(cfg.drive_home_position_mm - r.actual(a)) / (cfg.drive_speed_mm_per_min / 60) +
+                             cfg.drive_answer_ms / 1000;
+        // Within a few late periods of the limit either may happen.
+        if (takes > e.drive_home_timeout_s - 0.1)
+          c.add(letter(a) + "'s drive answering after its time limit", {AlarmCode::drive_no_answer}, bit,
+                takes > e.drive_home_timeout_s + 0.1);
+      }
     }
     // A locking indexer's fault from power-up: the first unlock of an axis
     // that moves in this cycle times out (stuck locked), or its first lock
@@ -221,6 +251,14 @@ void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st,
     case EventKind::permit_off:
       c.add("the permit withdrawn", {AlarmCode::permit_withdrawn}, running, s.global.permit_required && running != 0);
       break;
+    case EventKind::drive_done_lost: {
+      // Done already given (homed by its drive): the reference is lost;
+      // still to come: the drive never answers. Must show only for an axis
+      // this cycle homes by its drive.
+      const bool mine = (plan.covered & axis_bit(e.axis)) && s.axes[e.axis].mode == HomingMode::drive;
+      c.add(who, {AlarmCode::drive_reference_lost, AlarmCode::drive_no_answer}, axis_bit(e.axis), mine);
+      break;
+    }
     case EventKind::reset:
     case EventKind::home_again:
     case EventKind::indexer_stuck_locked:  // indexer_cause: it needs the indexer's state
@@ -324,6 +362,14 @@ double path_bound(rig::Rig& r, const Machine& m, std::size_t a, double x_start) 
       final_d = std::abs(e.final_position_mm - (x_start + c.absolute_offset_mm - e.home_position_mm));
     }
   }
+  if (e.mode == HomingMode::hard_stop)
+    return e.pre_move_distance_mm + e.max_seek_travel_mm + stop_distance_mm(latch_v, acc) + latch_v * m.max_dt_s +
+           e.pull_off_mm + final_d + stop + 1;
+  if (e.mode == HomingMode::drive) {
+    // The drive's own travel to its home (from where the cycle started), then the final move.
+    const auto& c = r.sim().axis_config(a);
+    return std::abs(c.drive_home_position_mm - x_start) + final_d + stop + 1e-6;
+  }
   if (!mode_uses_switch(e.mode)) return final_d + stop + 1e-6;
   const double over = e.max_stop_distance_mm + seek_v * m.max_dt_s + 1e-3;
   const double index = e.mode == HomingMode::switch_index ? e.index_pitch_mm * 1.1 + stop_distance_mm(latch_v, acc) : 0;
@@ -346,8 +392,9 @@ double time_bound(rig::Rig& r, const Machine& m, const CyclePlan& plan) {
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     if (!(plan.movers & axis_bit(a))) continue;
     const AxisSettings e = effective(r.settings, a);
-    const double v = mm_per_min_to_mm_per_s(mode_uses_switch(e.mode) ? e.latch_feedrate_mm_per_min : e.seek_feedrate_mm_per_min);
+    const double v = mm_per_min_to_mm_per_s(searches(e.mode) ? e.latch_feedrate_mm_per_min : e.seek_feedrate_mm_per_min);
     if (v > 0) t += 2 * path_bound(r, m, a, r.actual(a)) / v;
+    if (e.mode == HomingMode::drive) t += e.drive_home_timeout_s;  // at most, whatever the drive does
   }
   return t;
 }

@@ -155,7 +155,7 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
   // A switch mode must have been unhomed by its cycle first; the others are
   // assigned (again) when their step begins.
   if (in_window && (plan.covered & bit) && as.homed && !(flipped & bit) && e.mode != HomingMode::disabled &&
-      (!mode_uses_switch(e.mode) || !homed_prev_[a]))
+      ((!searches(e.mode) && e.mode != HomingMode::drive) || !homed_prev_[a]))
     on_flip(a, x_eng);
   if (!as.homed) truth[a].valid = false;
   homed_prev_[a] = as.homed;
@@ -168,7 +168,7 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
   // along with its master's output, into its stop too. Once at the stop it
   // may rest there, but never drives on into it at full current.
   if (r_.sim().at_hard_stop(a)) {
-    const bool pushing = mode_is_pushing(e.mode);
+    const bool pushing = pushes_into_stop(e.mode);
     const bool reduced = r_.engine.outputs().axes[a].push_output ||
                          (master >= 0 && r_.engine.outputs().axes[static_cast<std::size_t>(master)].push_output);
     const bool rides = master >= 0 && r_.settings.axes[a].slave_mode == SlaveMode::external_commutator &&
@@ -206,8 +206,10 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
     if (st.homing && st.sequence_step != plan.step[a])
       fail("an axis moved outside its sequence step",
            fmt_axis(a, r_, x) + "; its step " + std::to_string(plan.step[a]) + ", running " + std::to_string(st.sequence_step));
-    if (!mode_uses_switch(e.mode) && as.phase != Phase::final_move && as.phase != Phase::stopping)
-      fail("a manual or absolute axis moved outside its final move", fmt_axis(a, r_, x));
+    const bool drive_homes = e.mode == HomingMode::drive && as.phase == Phase::drive_homing;
+    if (!searches(e.mode) && as.phase != Phase::final_move && as.phase != Phase::stopping && !drive_homes)
+      fail("a manual, absolute or drive-homed axis moved outside its final move (or its drive's homing)",
+           fmt_axis(a, r_, x));
   }
   if (!(allowed & bit) && v == 0 && !r_.sim().moving(a)) grace_[a] = false;
 
@@ -381,6 +383,16 @@ void Watch::on_flip(std::size_t a, double x) {
     t.offset = e.home_position_mm - x;
   } else if (e.mode == HomingMode::manual) {
     t.offset = e.home_position_mm - window_start_x[a];
+  } else if (e.mode == HomingMode::hard_stop) {
+    // Pull-off away from the stop it homes against, whatever steps were lost there.
+    const double stop = dir_of(e) < 0 ? c.hard_stop_min_mm : c.hard_stop_max_mm;
+    t.rest = rig::rest_point_mm(e, stop);
+    t.has_rest = true;
+    t.offset = e.home_position_mm - t.rest;
+    t.tol = 1e-6;
+  } else if (e.mode == HomingMode::drive) {
+    // home_position where the drive's own homing ends.
+    t.offset = e.home_position_mm - std::clamp(c.drive_home_position_mm, c.hard_stop_min_mm, c.hard_stop_max_mm);
   } else {
     // A sensor forced to a level during the cycle makes exactly the edge
     // some phase looks for: dead (stuck inactive, an open NO circuit) looks
