@@ -18,7 +18,7 @@ void Engine::raise(const Settings& settings, AxisMask axes, Alarm alarm) {
     AxisRun& run = axes_[a];
     if (!(axes & axis_bit(a)) || run.alarm) continue;
     run.alarm = alarm;
-    run.alarm.phase = run.phase;
+    run.alarm.phase = run.shown_phase();
     latched = true;
   }
   if (latched) halt(settings);

@@ -85,6 +85,14 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
                          "homing ({:g} s): it did not home", X, a.value, kDriveMinHomingTime_s);
     case AlarmCode::drive_reference_lost:
       return fmt::format("{}: the drive's home done went off at {:.3f} {} while the axis was homed", X, a.value, u);
+    case AlarmCode::unlock_not_confirmed:
+      return fmt::format("{}: locking indexer not reported unlocked within lock_timeout_ms {:g} ms of the "
+                         "unlock output; the axis did not move", X, s.lock_timeout_ms);
+    case AlarmCode::lock_not_confirmed:
+      return fmt::format("{}: locking indexer not reported locked within lock_timeout_ms {:g} ms after the "
+                         "axis came to rest", X, s.lock_timeout_ms);
+    case AlarmCode::lock_engaged:
+      return fmt::format("{}: locking indexer reported locked during {} while the unlock output was on", X, ph);
   }
   return "?";
 }

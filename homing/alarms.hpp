@@ -38,8 +38,11 @@ enum class AlarmCode : std::uint8_t {
   drive_no_answer = 22,        // drive mode: no home done within drive_home_timeout
   drive_answered_at_once = 23, // drive mode: home done too soon after the request (the drive did not home)
   drive_reference_lost = 24,   // drive mode: home done went off while the axis was homed
+  unlock_not_confirmed = 25,   // locking indexer: not unlocked within lock_timeout_ms
+  lock_not_confirmed = 26,     // locking indexer: not locked again within lock_timeout_ms of rest
+  lock_engaged = 27,           // locking indexer: reported locked while unlocked for motion
 };
-inline constexpr std::uint8_t kAlarmCodeCount = 25;
+inline constexpr std::uint8_t kAlarmCodeCount = 28;
 
 // The alarm table: per code its name, what happened (text) and what a
 // maintenance technician checks (what_to_check). describe_alarm() says what
@@ -107,8 +110,17 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
      "homing starts, and that the home request reaches the drive"},
     {AlarmCode::drive_reference_lost, "drive_reference_lost", "the drive's home done went off while the axis was homed",
      "check the drive's alarm history and the home done wiring; the axis is no longer homed: reset and home again"},
+    {AlarmCode::unlock_not_confirmed, "unlock_not_confirmed", "locking indexer did not report unlocked in time",
+     "check the indexer's air or hydraulic supply, its unlock valve and the unlocked sensor and their wiring, "
+     "or raise lock_timeout_ms; then reset"},
+    {AlarmCode::lock_not_confirmed, "lock_not_confirmed", "locking indexer did not report locked in time after rest",
+     "check that the locking pin can enter (the axis rests on an indexing position), the unlock valve drops "
+     "and the unlocked sensor releases, or raise lock_timeout_ms; then reset"},
+    {AlarmCode::lock_engaged, "lock_engaged", "locking indexer reported locked while unlocked for motion",
+     "check the indexer's air or hydraulic pressure, the unlock valve and the unlocked sensor and its wiring "
+     "(a flickering sensor), and the axis for damage; then reset and home again"},
 };
-static_assert(lists_every_value(kAlarmInfo, AlarmCode::drive_reference_lost));
+static_assert(lists_every_value(kAlarmInfo, AlarmCode::lock_engaged));
 static_assert(std::size(kAlarmInfo) == kAlarmCodeCount);
 constexpr std::span<const AlarmInfo> enum_table(AlarmCode) { return kAlarmInfo; }
 

@@ -60,6 +60,8 @@ void PhaseRunner::dispatch() {
     case Phase::jog:
     case Phase::move:
     case Phase::stopping:
+    case Phase::unlock:  // shown for a held axis only (AxisRun::shown_phase), never its own phase
+    case Phase::lock:
       // Not a homing phase while a cycle runs: a bug. Stop rather than guess.
       return fail(AlarmCode::aborted);
   }

@@ -73,6 +73,26 @@ enum class Reached : std::uint8_t {
   assigned,            // home position assigned
 };
 
+// The locking indexer of an axis (indexer.cpp), apart from its phase: a
+// homing phase, jog or move keeps its phase while the indexer holds it.
+enum class IndexerState : std::uint8_t {
+  none,         // the axis has no locking indexer (axis.<a>.indexer_lock off)
+  locked,       // unlock output off, confirmed locked
+  unlocking,    // unlock output on, motion held until it reports unlocked
+  unlocked,     // unlock output on, confirmed unlocked: the axis may move
+  locking,      // at rest, unlock output off, waiting for it to report locked
+  lock_failed,  // lock_not_confirmed raised: output off, locked once it reports so
+};
+struct Indexer {
+  IndexerState state = IndexerState::none;
+  double since_s = 0;  // engine time the state was entered
+  bool unlock_output() const {
+    return state == IndexerState::unlocking || state == IndexerState::unlocked;
+  }
+  // Motion passes only while confirmed unlocked (or on an axis without one).
+  bool lets_move() const { return state == IndexerState::none || state == IndexerState::unlocked; }
+};
+
 // What this period's inputs say of the axis's drive and encoder.
 struct AxisReadings {
   bool drive_fault = false;
@@ -105,6 +125,7 @@ struct AxisRun {
   // Homed by its drive (drive mode): from then on the drive's home done must
   // stay on, or the drive has lost the reference the coordinate rests on.
   bool drive_referenced = false;
+  Indexer indexer{};
 
   // The homing cycle.
   bool in_cycle = false;
@@ -124,7 +145,15 @@ struct AxisRun {
   // Homing, jogging, moving, braking, or still in motion: what the status
   // register axis.<a>.busy shows.
   bool busy() const {
-    return in_cycle || phase == Phase::jog || phase == Phase::move || phase == Phase::stopping || moving();
+    return in_cycle || phase == Phase::jog || phase == Phase::move || phase == Phase::stopping || moving() ||
+           indexer.state == IndexerState::unlocking || indexer.state == IndexerState::locking;
+  }
+  // What axis.<a>.phase shows: the indexer's unlock or lock while it holds
+  // the axis or locks it after rest, else the phase.
+  Phase shown_phase() const {
+    if (indexer.state == IndexerState::unlocking) return Phase::unlock;
+    if (indexer.state == IndexerState::locking) return Phase::lock;
+    return phase;
   }
   double machine_position_mm() const { return motor.position_mm + offset_mm; }
   // The coordinate the axis is given where it stands, without a reference

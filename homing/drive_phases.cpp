@@ -14,7 +14,9 @@ namespace homing {
 void PhaseRunner::drive_homing() {
   auto& d = run.phase_data<phase_data::DriveHoming>();
   const bool done = run.readings.drive_done;
-  if (entry()) {
+  // A locking indexer still unlocking holds the request back (the drive
+  // would drive against the pin): its clock starts once the axis may move.
+  if (entry() || !run.indexer.lets_move()) {
     d.request_s = ctx.time_s;
     d.done_seen_off = !done;
     run.command = stop_command(accel);  // the drive moves the carriage; the motor output stays at rest

@@ -1,5 +1,5 @@
 // The engine's period: motion, inputs, safety, commands, homing phases,
-// gantries, status and outputs, in that order. Each step has its own file:
+// gantries, locking indexers, status and outputs, in that order. Each step has its own file:
 // home_frame, sensor_inputs, safety and alarm_path, cycle and axis_phases,
 // jog_move, gantry_guard, publish and output_routing.
 #include "engine.hpp"
@@ -33,6 +33,7 @@ StepResult Engine::step(const Settings& configured, const Inputs& inputs, double
   follow_masters(settings);
   guard_gantries(settings);
   release_commutators(settings);
+  run_indexers(settings, inputs);  // last word on motion: a locked axis is held
   publish(settings, inputs);
   route_outputs(settings);
   first_step_ = false;

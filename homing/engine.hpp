@@ -44,6 +44,7 @@ class Engine {
   void follow_masters(const Settings& settings);                                  // gantry_guard.cpp
   void guard_gantries(const Settings& settings);
   void release_commutators(const Settings& settings);
+  void run_indexers(const Settings& settings, const Inputs& inputs);              // indexer.cpp
   void keep_home_frames(const Settings& settings);                                // home_frame.cpp
   void publish(const Settings& settings, const Inputs& inputs);                   // publish.cpp
   void route_outputs(const Settings& settings);                                   // output_routing.cpp

@@ -52,6 +52,8 @@ Settings motion_settings(const Settings& settings) {
     slave.max_misalignment_mm = own.max_misalignment_mm;
     slave.slave_of = own.slave_of;
     slave.slave_mode = own.slave_mode;
+    slave.indexer_lock = own.indexer_lock;  // an indexer is the slave's own hardware
+    slave.lock_timeout_ms = own.lock_timeout_ms;
     if (planted(Mutant::slave_keeps_own_direction)) slave.direction = own.direction;
     const double pair_accel = std::min(own.acceleration_mm_per_s2, master.acceleration_mm_per_s2);
     slave.acceleration_mm_per_s2 = master.acceleration_mm_per_s2 = pair_accel;

@@ -32,6 +32,9 @@ struct AxisInputs {
   bool drive_fault = false;
   bool stall = false;           // the drive's stall / torque-limit output (hard-stop homing)
   bool drive_done = false;      // the drive's home done: its own homing finished, its reference valid
+  // Locking indexer: the pin is fully out (LinuxCNC joint.N.is-unlocked).
+  // Only read on an axis with axis.<a>.indexer_lock.
+  bool indexer_unlocked = false;
 };
 
 // Commands arrive as one-period requests (the runtime turns a coil write into
@@ -63,6 +66,7 @@ struct AxisOutputs {
   bool push_output = false;      // lowers motor current while pushing into the stop
   bool commutator_output = false;  // master axis only: route the output to the slave
   bool drive_request = false;    // asks the drive to home itself (drive mode, phase drive_homing)
+  bool indexer_unlock = false;   // locking indexer: pull the pin out (LinuxCNC joint.N.unlock)
 };
 
 struct Outputs {

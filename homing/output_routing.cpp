@@ -1,6 +1,6 @@
 // Each axis's output channel: the motion of the motor it drives now (a
 // commutator master's channel drives its slave's motor while it aligns),
-// the enable, push, commutator and drive home-request outputs.
+// the enable, push, commutator, drive home-request and indexer unlock outputs.
 #include "engine.hpp"
 #include "gantry.hpp"
 
@@ -33,7 +33,9 @@ void Engine::route_outputs(const Settings& settings) {
     // On exactly while the drive homes in a running cycle: an alarm, abort or
     // e-stop drops it in the same period (an alarm raised while a step
     // begins may leave a later axis showing its first phase, out of the cycle).
-    out.drive_request = run.phase == Phase::drive_homing && run.in_cycle && !estop_;
+    // A locking indexer not yet unlocked holds it back, as it holds steps.
+    out.drive_request = run.phase == Phase::drive_homing && run.in_cycle && !estop_ && run.indexer.lets_move();
+    out.indexer_unlock = run.indexer.unlock_output();
   }
 }
 

@@ -29,6 +29,8 @@ enum class Phase : std::uint8_t {
   clear_sensors = 17, // gantry: both sides move off their sensors together before the seek
   push_to_stop = 18,  // hard-stop homing: pushing toward the mechanical stop until the drive stalls
   drive_homing = 19,  // the drive homes itself: home request on, waiting for its home done
+  unlock = 20,        // locking indexer: unlock output on, motion held until it reports unlocked
+  lock = 21,          // locking indexer: at rest, unlock output off, waiting for it to lock
 };
 
 inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
@@ -55,8 +57,10 @@ inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
      "hard-stop homing: moving into the mechanical stop at reduced current until the drive reports a stall"},
     {Phase::drive_homing, "drive_homing",
      "the drive homes itself: home request on, waiting for its home done within drive_home_timeout"},
+    {Phase::unlock, "unlock", "locking indexer: unlocking before the axis moves (motion held until unlocked)"},
+    {Phase::lock, "lock", "locking indexer: at rest, locking again"},
 };
-static_assert(lists_every_value(kPhaseInfo, Phase::drive_homing));
+static_assert(lists_every_value(kPhaseInfo, Phase::lock));
 constexpr std::span<const EnumInfo<Phase>> enum_table(Phase) { return kPhaseInfo; }
 
 std::string_view phase_name(Phase phase);

@@ -16,7 +16,7 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
     const AxisRun& run = axes_[a];
     const AxisSettings& s = settings.axes[a];
     AxisStatus& as = st.axes[a];
-    as.phase = run.phase;
+    as.phase = run.shown_phase();
     as.alarm = run.alarm;
     as.position_mm = run.machine_position_mm();
     as.velocity_mm_per_s = run.motor.velocity_mm_per_s;

@@ -102,6 +102,10 @@ struct AxisSettings {
   double stall_timeout_ms = 0;  // hard-stop homing: longest push toward the stop before stall_timeout
   AxisKind kind = AxisKind::linear;  // Settings gives each axis its default_kind
   double drive_home_timeout_s = 0;  // drive mode: the drive must report home done within this
+  // Locking indexer (README "Locking indexer"): unlock before any motion of
+  // this axis, lock again once it rests, each confirmed within lock_timeout_ms.
+  bool indexer_lock = false;
+  double lock_timeout_ms = 0;
   friend bool operator==(const AxisSettings&, const AxisSettings&) = default;
 };
 
@@ -166,6 +170,8 @@ enum class AxisField : std::uint8_t {
   stall_timeout_ms,
   kind,
   drive_home_timeout,
+  indexer_lock,
+  lock_timeout_ms,
 };
 // The name of each: the suffix of its register name (axis.<a>.<name>).
 struct AxisFieldInfo {
@@ -204,8 +210,10 @@ inline constexpr AxisFieldInfo kAxisFieldInfo[] = {
     {AxisField::stall_timeout_ms, "stall_timeout_ms"},
     {AxisField::kind, "kind"},
     {AxisField::drive_home_timeout, "drive_home_timeout_s"},
+    {AxisField::indexer_lock, "indexer_lock"},
+    {AxisField::lock_timeout_ms, "lock_timeout_ms"},
 };
-static_assert(lists_every_value(kAxisFieldInfo, AxisField::drive_home_timeout));
+static_assert(lists_every_value(kAxisFieldInfo, AxisField::lock_timeout_ms));
 constexpr std::span<const AxisFieldInfo> enum_table(AxisField) { return kAxisFieldInfo; }
 
 std::string_view field_name(AxisField field);

@@ -132,12 +132,27 @@ std::optional<SettingsFault> check_slave(const Settings& settings, const Setting
   return std::nullopt;
 }
 
+// A locking indexer holds one axis: a gantry side held while its partner
+// moves would rack the pair, so neither side of a gantry may have one.
+std::optional<SettingsFault> check_indexer(const Settings& settings, std::size_t axis) {
+  const AxisSettings& s = settings.axes[axis];
+  if (!s.indexer_lock) return std::nullopt;
+  bool gantry = master_of(s) >= 0;
+  for (std::size_t other = 0; other < kAxisCount; ++other)
+    gantry = gantry || (other != axis && master_of(settings.axes[other]) == static_cast<int>(axis));
+  if (gantry) return fault(axis, AxisField::indexer_lock, CheckRule::indexer_in_gantry, 1);
+  if (s.lock_timeout_ms <= 0)
+    return fault(axis, AxisField::lock_timeout_ms, CheckRule::not_positive, s.lock_timeout_ms);
+  return std::nullopt;
+}
+
 std::optional<SettingsFault> check_axis_in(const Settings& settings, const Settings& pair, std::size_t axis) {
   // Checked on the axis's own setting, whatever it moves with: a rotary X
   // is wrong even while X is a slave.
   if (settings.axes[axis].kind == AxisKind::rotary && !may_be_rotary(axis))
     return fault(axis, AxisField::kind, CheckRule::kind_linear_only, static_cast<double>(AxisKind::rotary));
   if (auto f = check_slave(settings, pair, axis)) return f;
+  if (auto f = check_indexer(settings, axis)) return f;
   const AxisSettings& s = pair.axes[axis];
   if (auto f = check_limits(s, axis)) return f;
   const ModeRow& row = mode_row(s.mode);
@@ -273,6 +288,10 @@ std::string describe_fault(const SettingsFault& f, const Settings& settings) {
     case CheckRule::shared_limit_without_sensor:
       return fmt::format("{}: mode {} homes without a home sensor, so there is none to share with a hard "
                          "limit; set {} = 0", name, mode_name(s.mode), name);
+    case CheckRule::indexer_in_gantry:
+      return fmt::format("{}: a locking indexer holds one axis; on a gantry one side would be held while the "
+                         "other moves; switch indexer_lock off or take the axis out of the gantry (slave_of)",
+                         name);
     case CheckRule::shared_limit_rests_on_sensor:
       return fmt::format("{}: the axis would rest {:g} {} from its edge (pull-off, plus a slave's "
                          "switch_compensation); a shared home/limit sensor needs more than 0 so the axis "

@@ -33,6 +33,7 @@ enum class CheckRule : std::uint8_t {
   shared_limit_without_sensor,   // the homing method has no home sensor to share with a limit
   kind_linear_only,         // X, Y and Z cannot be rotary
   missing_time_limit,       // drive mode needs drive_home_timeout_s > 0
+  indexer_in_gantry,        // a locking indexer on a gantry master or slave
 };
 
 // Each rule in words, for the refusal codes a PLC reads
@@ -70,8 +71,10 @@ inline constexpr EnumInfo<CheckRule> kCheckRuleInfo[] = {
      "X, Y and Z are linear axes: only A, B and C can be rotary"},
     {CheckRule::missing_time_limit, "missing_time_limit",
      "drive-performed homing needs drive_home_timeout_s greater than 0"},
+    {CheckRule::indexer_in_gantry, "indexer_in_gantry",
+     "a locking indexer (indexer_lock) is for an axis of its own, not a gantry master or slave"},
 };
-static_assert(lists_every_value(kCheckRuleInfo, CheckRule::missing_time_limit));
+static_assert(lists_every_value(kCheckRuleInfo, CheckRule::indexer_in_gantry));
 constexpr std::span<const EnumInfo<CheckRule>> enum_table(CheckRule) { return kCheckRuleInfo; }
 
 struct SettingsFault {

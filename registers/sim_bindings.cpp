@@ -30,6 +30,8 @@ auto length_field(A& a, Key k) -> decltype(&a.noise_mm) {
     case Key::sim_drive_home_position: return &a.drive_home_position_mm;
     case Key::sim_drive_speed: return &a.drive_speed_mm_per_min;
     case Key::sim_drive_answer_ms: return &a.drive_answer_ms;
+    case Key::sim_unlock_delay_ms: return &a.unlock_delay_ms;
+    case Key::sim_lock_delay_ms: return &a.lock_delay_ms;
     default: return nullptr;
   }
 }
@@ -89,6 +91,7 @@ std::int64_t sim_raw(const Register& reg, const MachineConfig& config, const Sim
       case Key::sim_sensor: return readback.sensor[i] ? 1 : 0;
       case Key::sim_at_hard_stop: return readback.at_hard_stop[i] ? 1 : 0;
       case Key::sim_driven_by: return readback.driven_by[i];
+      case Key::sim_indexer_locked: return readback.indexer_locked[i] ? 1 : 0;
       case Key::sim_lose_steps: return 0;
       case Key::sim_sensor_nc: return a.sensor_nc ? 1 : 0;
       case Key::sim_fault: return static_cast<std::int64_t>(a.fault);

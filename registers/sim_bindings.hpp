@@ -26,6 +26,7 @@ struct SimReadback {
   std::array<bool, homing::kAxisCount> sensor{};                // Simulator::sensor_active
   std::array<bool, homing::kAxisCount> at_hard_stop{};          // Simulator::at_hard_stop
   std::array<std::uint8_t, homing::kAxisCount> driven_by{};     // 0 own output, m + 1: Simulator::driving_output
+  std::array<bool, homing::kAxisCount> indexer_locked{};        // Simulator::indexer_locked
 };
 
 // The table's defaults for the simulated machine (a home-all with

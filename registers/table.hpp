@@ -74,6 +74,7 @@ enum class Key : std::uint8_t {
   sim_index_offset, sim_absolute_offset, sim_fault, sim_lose_steps, sim_estop, sim_start_button,
   sim_sensor, sim_at_hard_stop, sim_driven_by,
   sim_drive_home_position, sim_drive_speed, sim_drive_answer_ms,
+  sim_unlock_delay_ms, sim_lock_delay_ms, sim_indexer_locked,
 };
 
 struct Register;

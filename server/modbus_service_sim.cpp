@@ -19,6 +19,7 @@ registers::SimReadback readback_of(const homing::sim::SimulatorView& sim) {
     r.sensor[a] = sim.axes[a].sensor;
     r.at_hard_stop[a] = sim.axes[a].at_hard_stop;
     r.driven_by[a] = sim.axes[a].driven_by;
+    r.indexer_locked[a] = sim.axes[a].indexer_locked;
   }
   return r;
 }

@@ -95,7 +95,7 @@ std::expected<void, std::string> parse_axis(const Ctx& ctx, std::size_t a, const
       {"commutator", &AxisLines::commutator}, {"home", &AxisLines::home},
       {"index", &AxisLines::index},     {"drive_fault", &AxisLines::drive_fault},
       {"stall", &AxisLines::stall},     {"home_request", &AxisLines::home_request},
-      {"home_done", &AxisLines::home_done}};
+      {"home_done", &AxisLines::home_done}, {"unlock", &AxisLines::unlock}, {"unlocked", &AxisLines::unlocked}};
   for (const auto& [k, v] : t) {
     const std::string key(k.str());
     if (key == "steps_per_unit") {
@@ -117,7 +117,8 @@ std::expected<void, std::string> parse_axis(const Ctx& ctx, std::size_t a, const
     }
     if (!known)
       return Error(fmt::format("{}: [{}] unknown key '{}' (known: steps_per_unit, step, dir, enable, push, "
-                               "commutator, home, index, drive_fault, stall, home_request, home_done)",
+                               "commutator, home, index, drive_fault, stall, home_request, home_done, unlock, "
+                               "unlocked)",
                                ctx.origin, section, key));
   }
   // Neither: an axis with no output of its own (an external-commutator slave,
@@ -147,7 +148,7 @@ std::expected<void, std::string> check_unique(const BackendConfig& c, const std:
     if (*o) all.push_back(&**o);
   for (const AxisLines& a : c.axes)
     for (const auto* o : {&a.step, &a.dir, &a.enable, &a.push, &a.commutator, &a.home, &a.index, &a.drive_fault,
-                          &a.stall, &a.home_request, &a.home_done})
+                          &a.stall, &a.home_request, &a.home_done, &a.unlock, &a.unlocked})
       if (*o) all.push_back(&**o);
   for (std::size_t i = 0; i < all.size(); ++i)
     for (std::size_t j = i + 1; j < all.size(); ++j)
@@ -254,6 +255,12 @@ std::optional<std::string> check_wiring(const BackendConfig& config, const homin
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const homing::AxisSettings& s = settings.axes[a];
     const AxisLines& lines = config.axes[a];
+    // Without its lines the indexer could never be unlocked (or seen locked).
+    if (s.indexer_lock && (!lines.unlock || !lines.unlocked))
+      return fmt::format("axis.{0}.indexer_lock is on but [gpiod.axes.{1}] has no '{2}' line (the {3}); wire "
+                         "both 'unlock' (output) and 'unlocked' (input) or set axis.{0}.indexer_lock = 0",
+                         lower(a), letter(a), lines.unlock ? "unlocked" : "unlock",
+                         lines.unlock ? "input that reports the indexer unlocked" : "output that unlocks the indexer");
     if (s.mode == HomingMode::disabled) continue;
     const int m = homing::master_of(s);
     const bool commutator_slave = s.slave_mode == homing::SlaveMode::external_commutator && m >= 0 &&

@@ -29,6 +29,9 @@ struct AxisLines {
   // Drive-performed homing (axis.<a>.mode = drive): the request to the drive
   // (output) and its home done (input, a level).
   std::optional<LineSpec> home_request, home_done;
+  // Locking indexer (axis.<a>.indexer_lock): the output that pulls the pin
+  // out, and the input that reports it out.
+  std::optional<LineSpec> unlock, unlocked;
   // A step/dir output of its own. Without one the axis can only be an
   // external-commutator slave (moved by its master's output) or never move.
   bool has_output() const { return step.has_value(); }
@@ -54,7 +57,8 @@ std::expected<BackendConfig, std::string> load_config(const std::string& path);
 // an axis that can move (mode not disabled) needs a step/dir output of its
 // own, unless it is an external-commutator slave; a commutator slave's master
 // needs step/dir and a `commutator` line; an axis homing on a switch needs a
-// `home` line (a commutator slave's switch is read on its master's). The
+// `home` line (a commutator slave's switch is read on its master's); an axis
+// with axis.<a>.indexer_lock needs its `unlock` and `unlocked` lines. The
 // first problem in words, or nullopt.
 std::optional<std::string> check_wiring(const BackendConfig& config, const homing::Settings& settings);
 

@@ -81,7 +81,8 @@ std::expected<void, std::string> GpiodIo::request_all(const BackendConfig& c) {
     for (auto r : {output(cfg.step, step), output(cfg.dir, dir), output(cfg.enable, a.enable),
                    output(cfg.push, a.push), output(cfg.commutator, a.commutator), edges(cfg.home, a.home),
                    edges(cfg.index, a.index), level(cfg.drive_fault, 0, a.drive_fault), level(cfg.stall, 0, a.stall),
-                   output(cfg.home_request, a.home_request), level(cfg.home_done, input_debounce_ns_, a.home_done)})
+                   output(cfg.home_request, a.home_request), level(cfg.home_done, input_debounce_ns_, a.home_done),
+                   output(cfg.unlock, a.unlock), level(cfg.unlocked, 0, a.unlocked)})
       if (!r) return r;
     if (step.id && dir.id)  // an axis without an output of its own has no pulses to make
       a.generator = std::make_unique<StepGenerator>(api, *step.id, *dir.id, cfg.steps_per_unit, dir_setup_ns_);
@@ -140,6 +141,7 @@ void GpiodIo::apply(const Outputs& outputs) {
     write(a.push, o.push_output);
     write(a.commutator, o.commutator_output);
     write(a.home_request, o.drive_request);
+    write(a.unlock, o.indexer_unlock);
   }
   write(lamp_, outputs.homing_done_lamp);
 }
@@ -175,6 +177,7 @@ Inputs GpiodIo::read() {
     ai.drive_fault = sample(a.drive_fault);
     ai.stall = sample(a.stall);
     ai.drive_done = sample(a.home_done);
+    ai.indexer_unlocked = sample(a.unlocked);
     if (a.generator && a.generator->failed()) {
       // A step or dir write failed: the motor no longer follows the count.
       ai.drive_fault = true;
@@ -206,6 +209,7 @@ void GpiodIo::shutdown() {
     write(a.push, false);
     write(a.commutator, false);
     write(a.home_request, false);
+    write(a.unlock, false);  // the indexer locks: nothing drives the axis any more
   }
   write(lamp_, false);
 }

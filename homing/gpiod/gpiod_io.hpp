@@ -49,7 +49,7 @@ class GpiodIo final : public MachineIo {
   Inputs read() override;
   // Queues each axis's segment to start at the beginning of the period now
   // beginning (+ playback_delay_us, 0 by default) and sets enable, push,
-  // commutator, the drive's home request and the lamp.
+  // commutator, the drive's home request, the indexer's unlock and the lamp.
   void apply(const Outputs& outputs) override;
   void shutdown() override;
 
@@ -66,9 +66,9 @@ class GpiodIo final : public MachineIo {
   struct Axis {
     bool configured = false;
     std::unique_ptr<StepGenerator> generator;
-    OutputLine enable, push, commutator, home_request;
+    OutputLine enable, push, commutator, home_request, unlock;
     std::unique_ptr<EdgeInput> home, index;
-    std::unique_ptr<LevelInput> drive_fault, stall, home_done;
+    std::unique_ptr<LevelInput> drive_fault, stall, home_done, unlocked;
     std::string reported_failure;
   };
 

@@ -22,6 +22,8 @@ enum class Fault : std::uint8_t {
   drive_never_answers = 7,     // drive mode: on the home request the drive drops home done and never finishes
   drive_answers_at_once = 8,   // drive mode: home done on at once on the request, without homing
   drive_done_lost = 9,         // drive mode: home done held off (lost reference, broken wire)
+  indexer_stuck_locked = 10, // the indexer's pin goes in and stays in, whatever the unlock output says
+  indexer_never_locks = 11,  // the pin stays out once out: the indexer never reports locked again
 };
 inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::none, "none", "no fault"},
@@ -36,8 +38,11 @@ inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::drive_answers_at_once, "drive_answers_at_once", "the drive reports home done at once, without homing"},
     {Fault::drive_done_lost, "drive_done_lost",
      "the drive's home done goes off and stays off (lost reference, broken wire)"},
+    {Fault::indexer_stuck_locked, "indexer_stuck_locked",
+     "the locking indexer's pin goes in (at once, even under motion) and never comes out"},
+    {Fault::indexer_never_locks, "indexer_never_locks", "the locking indexer's pin, once out, never goes in again"},
 };
-static_assert(lists_every_value(kFaultInfo, Fault::drive_done_lost));
+static_assert(lists_every_value(kFaultInfo, Fault::indexer_never_locks));
 constexpr std::span<const EnumInfo<Fault>> enum_table(Fault) { return kFaultInfo; }
 
 struct AxisConfig {
@@ -63,6 +68,10 @@ struct AxisConfig {
   double drive_speed_mm_per_min = 600;
   double drive_answer_ms = 100;            // after arriving, before home done
   Fault fault = Fault::none;
+  // Locking indexer (when fitted, MachineConfig::indexer): time from the
+  // unlock output's change to the pin being out / in.
+  double unlock_delay_ms = 0;
+  double lock_delay_ms = 0;
 };
 
 struct MachineConfig {
@@ -70,6 +79,9 @@ struct MachineConfig {
   std::uint64_t seed = 1;
   // commutator_slave[m] = s when axis s is an external-commutator slave of master m (else -1).
   std::array<int, kAxisCount> commutator_slave{-1, -1, -1, -1, -1, -1};
+  // indexer[a]: axis a has a locking indexer (its pin holds the carriage
+  // while in; its unlocked input reports the pin out).
+  std::array<bool, kAxisCount> indexer{};
 };
 
 }  // namespace homing::sim

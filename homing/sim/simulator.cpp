@@ -38,6 +38,8 @@ Simulator::Simulator(const MachineConfig& config) : config_(config) {
     own_[i].drive_fault = c.fault == Fault::drive_fault;
     own_[i].stall = c.fault == Fault::stall_stuck;
     own_[i].drive_done = ax.drive.done(c);
+    ax.pin_in = config_.indexer[i];
+    own_[i].indexer_unlocked = false;
   }
   route_sensors(Outputs{});
 }
@@ -87,6 +89,15 @@ void Simulator::set_commutator_slave(std::size_t master, int slave) {
   config_.commutator_slave[master] = slave;
 }
 
+void Simulator::set_indexer(std::size_t axis, bool fitted) {
+  if (config_.indexer[axis] == fitted) return;
+  config_.indexer[axis] = fitted;
+  axes_[axis].pin_in = fitted;
+  axes_[axis].pin_timer_s = 0;
+  own_[axis].indexer_unlocked = false;
+  inputs_.axes[axis].indexer_unlocked = false;
+}
+
 void Simulator::set_estop(bool pressed) { inputs_.estop = pressed; }
 void Simulator::set_start_button(bool pressed) { inputs_.start_button = pressed; }
 void Simulator::set_homing_permit(bool on) { inputs_.homing_permit = on; }
@@ -112,13 +123,30 @@ bool Simulator::electrical_level(std::size_t axis) const {
     case Fault::drive_never_answers:
     case Fault::drive_answers_at_once:
     case Fault::drive_done_lost: break;
+    case Fault::indexer_stuck_locked:
+    case Fault::indexer_never_locks: break;
   }
   return c.sensor_nc ? !contact : contact;
 }
 
+// A sensor fault forces the level: the switch's own edges no longer show.
+// Any other fault (drive, indexer) leaves the switch alone.
 bool Simulator::reports_edges(std::size_t axis) const {
-  const Fault f = config_.axes[axis].fault;
-  return f != Fault::sensor_stuck_active && f != Fault::sensor_stuck_inactive && f != Fault::wire_break;
+  switch (config_.axes[axis].fault) {
+    case Fault::sensor_stuck_active:
+    case Fault::sensor_stuck_inactive:
+    case Fault::wire_break: return false;
+    case Fault::none:
+    case Fault::drive_fault:
+    case Fault::stall_dead:
+    case Fault::stall_stuck:
+    case Fault::drive_never_answers:
+    case Fault::drive_answers_at_once:
+    case Fault::drive_done_lost:
+    case Fault::indexer_stuck_locked:
+    case Fault::indexer_never_locks: break;
+  }
+  return true;
 }
 
 void Simulator::advance(const Outputs& outputs, double dt_s) {
@@ -126,6 +154,7 @@ void Simulator::advance(const Outputs& outputs, double dt_s) {
   for (std::size_t i = 0; i < kAxisCount; ++i) {
     const std::size_t o = driving_output(i);
     advance_axis(i, o, outputs.axes[o], connected(i, o, outputs), dt_s);
+    advance_indexer(i, outputs.axes[i].indexer_unlock, dt_s);
   }
   route_sensors(outputs);
   time_s_ += dt_s;
@@ -179,8 +208,13 @@ void Simulator::advance_axis(std::size_t i, std::size_t output, const AxisOutput
 
   const MotionPath motor = plan_path(out.motor, out.motion, dt_s);
   // A faulted drive, or a master carriage while the commutator feeds its slave,
-  // stands still: the output's steps do not reach it.
-  const bool follows = linked && c.fault != Fault::drive_fault;
+  // stands still: the output's steps do not reach it. An indexer's pin holds
+  // the carriage for the whole period it is in at the start of (the steps
+  // are lost, as against a stop).
+  const bool motor_runs = motor.end.position_mm != out.motor.position_mm || out.motor.velocity_mm_per_s != 0 ||
+                          motor.end.velocity_mm_per_s != 0;
+  ax.moved_while_locked = linked && ax.pin_in && motor_runs;
+  const bool follows = linked && c.fault != Fault::drive_fault && !ax.pin_in;
   const CarriagePath carriage = carriage_path(out.motor, motor, ax.actual_mm, stops_of(c), follows);
   for (std::size_t p = 0; p < carriage.count; ++p) {
     const CarriagePiece& piece = carriage.pieces[p];
@@ -268,6 +302,34 @@ bool Simulator::stall_output(std::size_t i, const CarriagePath& path, double mot
 // has none of its own on the master's output).
 bool Simulator::out_request(std::size_t axis, std::size_t output, const AxisOutputs& out) const {
   return output == axis && out.drive_request;
+}
+
+// The pin moves lock_delay / unlock_delay after the unlock output asks it to;
+// the unlocked input reports it out. Faults: stuck locked puts it in at once
+// and keeps it there; never locks keeps it out once out.
+void Simulator::advance_indexer(std::size_t i, bool unlock_output, double dt_s) {
+  Axis& ax = axes_[i];
+  const AxisConfig& c = config_.axes[i];
+  if (!config_.indexer[i]) {
+    ax.pin_in = false;
+    own_[i].indexer_unlocked = false;  // nothing wired
+    return;
+  }
+  const bool wants_in = !unlock_output;
+  if (c.fault == Fault::indexer_stuck_locked) {
+    ax.pin_in = true;
+    ax.pin_timer_s = 0;
+  } else if (wants_in != ax.pin_in && !(wants_in && c.fault == Fault::indexer_never_locks)) {
+    ax.pin_timer_s += dt_s;
+    const double delay_s = (wants_in ? c.lock_delay_ms : c.unlock_delay_ms) / 1000.0;
+    if (ax.pin_timer_s >= delay_s) {
+      ax.pin_in = wants_in;
+      ax.pin_timer_s = 0;
+    }
+  } else {
+    ax.pin_timer_s = 0;
+  }
+  own_[i].indexer_unlocked = !ax.pin_in;
 }
 
 void Simulator::route_sensors(const Outputs& outputs) {

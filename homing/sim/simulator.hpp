@@ -60,6 +60,8 @@ class Simulator {
   // Wires axis slave (-1: none) to master's step output through a commutator.
   // Takes effect at the next advance(); the carriages stay where they are.
   void set_commutator_slave(std::size_t master, int slave);
+  // Fits (or removes) a locking indexer on the axis; a fitted one starts locked.
+  void set_indexer(std::size_t axis, bool fitted);
   void set_estop(bool pressed);
   void set_start_button(bool pressed);
   void set_homing_permit(bool on);
@@ -77,6 +79,11 @@ class Simulator {
   // Drive mode: the drive reports home done / runs its own homing now.
   bool drive_done(std::size_t axis) const { return axes_[axis].drive.done(config_.axes[axis]); }
   bool drive_homing(std::size_t axis) const { return axes_[axis].drive.homing(); }
+  // Locking indexer: its pin is in and holds the carriage.
+  bool indexer_locked(std::size_t axis) const { return axes_[axis].pin_in; }
+  // During the last period the motor driving this carriage ran while its
+  // indexer held it (the steps were lost): what must never happen.
+  bool moved_while_locked(std::size_t axis) const { return axes_[axis].moved_while_locked; }
   double time_s() const { return time_s_; }
   const MachineConfig& config() const { return config_; }
 
@@ -102,6 +109,9 @@ class Simulator {
     double stall_after_s = 0;      // this contact's detection time
     std::uint64_t contacts = 0;    // contacts with a stop so far (draws the detection time)
     HomingDrive drive{};           // drive mode: the drive's own homing
+    bool pin_in = false;           // locking indexer: the pin holds the carriage
+    double pin_timer_s = 0;        // how long the unlock output has wanted the pin to move
+    bool moved_while_locked = false;
   };
   bool out_request(std::size_t axis, std::size_t output, const AxisOutputs& out) const;
 
@@ -118,6 +128,7 @@ class Simulator {
   bool stall_output(std::size_t axis, const CarriagePath& path, double motor_start_mm, double motor_end_mm);
   bool reports_edges(std::size_t axis) const;
   void route_sensors(const Outputs& outputs);
+  void advance_indexer(std::size_t axis, bool unlock_output, double dt_s);
 
   MachineConfig config_;
   std::array<Axis, kAxisCount> axes_{};

@@ -25,6 +25,7 @@ SimulatorView SimulatorControls::view() const {
     axis.moving = sim_.moving(a);
     const std::size_t o = sim_.driving_output(a);
     axis.driven_by = o == a ? 0 : static_cast<std::uint8_t>(o + 1);
+    axis.indexer_locked = sim_.indexer_locked(a);
   }
   v.estop = sim_.inputs().estop;
   v.start_button = sim_.inputs().start_button;
@@ -36,6 +37,7 @@ void SimulatorControls::follow_settings(const Settings& settings) {
   const std::array<int, kAxisCount> wiring = commutator_wiring(settings);
   for (std::size_t m = 0; m < kAxisCount; ++m)
     if (sim_.config().commutator_slave[m] != wiring[m]) sim_.set_commutator_slave(m, wiring[m]);
+  for (std::size_t a = 0; a < kAxisCount; ++a) sim_.set_indexer(a, settings.axes[a].indexer_lock);
 }
 
 bool SimulatorControls::in_motion(std::size_t axis, const Outputs& next) const { return sim_.in_motion(axis, next); }

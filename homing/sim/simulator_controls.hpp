@@ -24,6 +24,7 @@ struct AxisView {
   bool at_hard_stop = false;
   bool moving = false;         // Simulator::moving
   std::uint8_t driven_by = 0;  // 0 its own output, m + 1: master m's (external commutator)
+  bool indexer_locked = false; // a fitted locking indexer's pin is in (holds the carriage)
 };
 
 // The whole simulated machine at one instant, copied out for a reader.
@@ -50,7 +51,8 @@ class SimulatorControls {
 
   SimulatorView view() const;
   // Wires the simulated commutators as the settings say the machine is
-  // wired (commutator_wiring); called whenever the settings change.
+  // wired (commutator_wiring) and fits a locking indexer on each axis with
+  // axis.<a>.indexer_lock; called whenever the settings change.
   void follow_settings(const Settings& settings);
   // The carriage moves, or the outputs about to run (next) would move it.
   bool in_motion(std::size_t axis, const Outputs& next) const;

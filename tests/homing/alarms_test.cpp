@@ -396,6 +396,64 @@ SCENARIO("encoder_fault: absolute mode without a valid encoder position", "[alar
   check_latched_until_reset(r, 0, AlarmCode::encoder_fault);
 }
 
+SCENARIO("unlock_not_confirmed: a locking indexer stuck locked when the axis is to home", "[alarms][indexer]") {
+  Rig r;
+  r.fit_indexer(0, 50, 300);
+  r.machine.axes[0].fault = sim::Fault::indexer_stuck_locked;
+  r.clear_trace();
+  home_into_alarm(r, 2);
+  CHECK(r.axis(0).alarm.code == AlarmCode::unlock_not_confirmed);
+  CHECK(r.axis(0).alarm.phase == Phase::unlock);
+  CHECK(r.trace[0].path_mm == 0);
+  CHECK(r.sim().time_s() == Approx(0.3).margin(0.005));
+  CHECK(text_of(r, 0).find("X: locking indexer not reported unlocked within lock_timeout_ms 300 ms") == 0);
+  check_latched_until_reset(r, 0, AlarmCode::unlock_not_confirmed);
+}
+
+SCENARIO("lock_not_confirmed: a locking indexer that does not lock again after a move", "[alarms][indexer]") {
+  Rig r;
+  r.fit_indexer(0, 50, 300);
+  r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+  r.step();
+  r.move(0, 5);
+  r.run_until([&] { return r.axis(0).phase == Phase::move; }, 1);
+  r.set_fault(0, sim::Fault::indexer_never_locks);
+  r.run_until([&] { return r.axis(0).phase == Phase::lock; }, 5);
+  REQUIRE(r.axis(0).phase == Phase::lock);
+  const double rest_s = r.sim().time_s();
+  r.run_until([&] { return r.status().alarm; }, 2);
+  CHECK(r.axis(0).alarm.code == AlarmCode::lock_not_confirmed);
+  CHECK(r.axis(0).alarm.phase == Phase::lock);
+  CHECK(r.sim().time_s() - rest_s == Approx(0.3).margin(0.005));
+  CHECK(r.axis(0).position_mm == Approx(5).margin(1e-9));
+  CHECK(text_of(r, 0).find("X: locking indexer not reported locked within lock_timeout_ms 300 ms") == 0);
+  r.set_fault(0, sim::Fault::none);
+  check_latched_until_reset(r, 0, AlarmCode::lock_not_confirmed);
+  r.run_for(0.2);
+  CHECK(r.sim().indexer_locked(0));
+  CHECK_FALSE(r.status().alarm);
+}
+
+SCENARIO("lock_engaged: a locking indexer that locks on its own under a jog", "[alarms][indexer]") {
+  Rig r;
+  r.fit_indexer(0, 50, 300);
+  r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+  r.step();
+  r.jog(0, +1);
+  r.run_until([&] { return r.axis(0).phase == Phase::jog && r.axis(0).velocity_mm_per_s > 0; }, 1);
+  r.run_for(0.05);
+  r.set_fault(0, sim::Fault::indexer_stuck_locked);
+  r.step();  // the period in which the pin went in
+  r.step();  // the engine sees it
+  CHECK(r.axis(0).alarm.code == AlarmCode::lock_engaged);
+  CHECK(r.axis(0).alarm.phase == Phase::jog);
+  CHECK(r.engine.outputs().axes[0].motion.target_velocity_mm_per_s == 0);
+  CHECK(text_of(r, 0).find("X: locking indexer reported locked during jog") == 0);
+  r.release_jogs();
+  r.set_fault(0, sim::Fault::none);
+  check_latched_until_reset(r, 0, AlarmCode::lock_engaged);
+}
+
 SCENARIO("every alarm code has a name and a text", "[alarms]") {
   Settings s;
   s.axes[0] = typical_axis();

@@ -172,6 +172,21 @@ struct Rig {
     settings.axes[a] = typical_axis();
     settings.global.sequence_steps[static_cast<std::size_t>(step_no - 1)] |= axis_bit(a);
   }
+  // Gives axis a locking indexer (README "Locking indexer"): on in the
+  // settings and fitted on the simulated machine, pin out/in after delay_ms.
+  void fit_indexer(std::size_t a, double delay_ms = 50, double timeout_ms = 500) {
+    settings.axes[a].indexer_lock = true;
+    settings.axes[a].lock_timeout_ms = timeout_ms;
+    machine.indexer[a] = true;
+    machine.axes[a].unlock_delay_ms = delay_ms;
+    machine.axes[a].lock_delay_ms = delay_ms;
+  }
+  // Injects a simulator fault on axis a now.
+  void set_fault(std::size_t a, sim::Fault f) {
+    sim::AxisConfig c = sim().axis_config(a);
+    c.fault = f;
+    sim().set_axis_config(a, c);
+  }
   // Strips the input timestamps: a backend that reports levels only.
   void levels_only() {
     tweak_inputs = [](Inputs& in) {

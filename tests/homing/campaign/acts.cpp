@@ -95,10 +95,25 @@ AxisMask Run::with_slave(std::size_t a) const {
   return static_cast<AxisMask>(axis_bit(a) | (slave >= 0 ? axis_bit(static_cast<std::size_t>(slave)) : 0));
 }
 
+// A locking indexer's fault left by a cycle that ended without an alarm: the
+// next unlock of its axis times out (stuck locked), or its next lock does
+// (never locks, once the pin is out).
+void Run::indexer_faults(Causes& causes) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const sim::Fault f = r_.sim().axis_config(a).fault;
+    const std::string axis(1, kAxisUpper[a]);
+    if (f == sim::Fault::indexer_stuck_locked)
+      causes.add(axis + "'s indexer stuck locked", {AlarmCode::unlock_not_confirmed}, axis_bit(a));
+    if (f == sim::Fault::indexer_never_locks)
+      causes.add(axis + "'s indexer that never locks", {AlarmCode::lock_not_confirmed}, axis_bit(a));
+  }
+}
+
 // A shared-limit sensor a fault holds active (stuck active, an open NC
 // circuit) trips its homed axis as soon as no cycle runs (seed 8049361: it
 // stuck during the last periods of a cycle that then ended homed).
 void Run::limit_sensor_faults(Causes& causes) {
+  indexer_faults(causes);
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const sim::Fault f = r_.sim().axis_config(a).fault;
     const bool held_active = f == sim::Fault::sensor_stuck_active || (f == sim::Fault::wire_break && r_.settings.axes[a].sensor_nc);
@@ -137,6 +152,9 @@ void Run::motion_before_homing() {
   r_.jog(a, away);
   step();
   const CommandResult jog_res = r_.status().last_command_result;
+  // A locking indexer unlocks first: the jog's time starts once it may move.
+  const double unlock_by = r_.sim().time_s() + 1.0;
+  while (r_.axis(a).phase == Phase::unlock && r_.sim().time_s() < unlock_by && ok()) step();
   double fastest = 0;
   const double end = r_.sim().time_s() + hold_s;
   while (r_.sim().time_s() < end && ok()) {

@@ -259,7 +259,7 @@ void Gen::events() {
   const int n = d.chance(0.8) ? 1 : 2;
   for (int i = 0; i < n; ++i) {
     Event e;
-    e.kind = static_cast<EventKind>(d.integer(0, static_cast<int>(EventKind::count) - 1));
+    e.kind = static_cast<EventKind>(d.integer(0, kCommonEventKinds - 1));
     e.at_s = d.u(0, m.cycle_estimate_s);
     std::size_t a = 0;
     const bool sensor = e.kind == EventKind::stuck_active || e.kind == EventKind::stuck_inactive ||
@@ -275,6 +275,39 @@ void Gen::events() {
     if (e.kind == EventKind::permit_off) m.settings.global.permit_required = true;
     m.events.push_back(e);
   }
+}
+
+// Locking indexers on plain axes no slave_of names either way (a gantry may
+// not have one: indexer_in_gantry), with their own dice so that the rest of
+// the machine draws as before: pin delays up to 30 ms, a timeout of 60 to
+// 400 ms, now and then a fault from power-up or during the first cycle.
+void Gen::indexers() {
+  Dice ix(m.seed, 7);
+  const CyclePlan plan = plan_cycle(m.settings, true, 0);
+  std::vector<std::size_t> fitted;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    AxisSettings& s = m.settings.axes[a];
+    bool linked = s.slave_of != 0;
+    for (const AxisSettings& o : m.settings.axes) linked = linked || o.slave_of == a + 1;
+    if (m.plan[a].role != Role::plain || linked || s.shared_limit || !ix.chance(0.25)) continue;
+    s.indexer_lock = true;
+    s.lock_timeout_ms = ix.u(60, 400);
+    m.sim.indexer[a] = true;
+    m.sim.axes[a].unlock_delay_ms = ix.u(0, 30);
+    m.sim.axes[a].lock_delay_ms = ix.u(0, 30);
+    m.plan[a].indexer = true;
+    if (m.plan[a].start_fault == sim::Fault::none && ix.chance(0.12)) {
+      m.plan[a].start_fault = ix.pick({sim::Fault::indexer_stuck_locked, sim::Fault::indexer_never_locks});
+      m.sim.axes[a].fault = m.plan[a].start_fault;
+    }
+    if ((plan.movers & axis_bit(a)) && m.plan[a].start_fault == sim::Fault::none) fitted.push_back(a);
+  }
+  if (fitted.empty() || !ix.chance(0.35)) return;
+  Event e;
+  e.kind = ix.pick({EventKind::indexer_stuck_locked, EventKind::indexer_never_locks});
+  e.axis = fitted[static_cast<std::size_t>(ix.integer(0, static_cast<int>(fitted.size()) - 1))];
+  e.at_s = ix.u(0, m.cycle_estimate_s);
+  m.events.push_back(e);
 }
 
 }  // namespace gen
@@ -306,7 +339,7 @@ const char* invalid_name(Invalid v) {
 const char* event_name(EventKind k) {
   static const char* names[] = {"abort", "e-stop", "drive fault", "sensor stuck active", "sensor stuck inactive",
                                 "wire break", "communication lost", "permit off", "reset", "home again",
-                                "drive's home done lost"};
+                                "drive's home done lost", "indexer stuck locked", "indexer never locks"};
   return names[static_cast<int>(k)];
 }
 

@@ -77,6 +77,7 @@ struct Gen {
   void causes();
   double axis_time_estimate(std::size_t a) const;
   void events();
+  void indexers();
   Machine build();
 };
 

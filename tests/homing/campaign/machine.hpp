@@ -52,9 +52,15 @@ enum class EventKind : std::uint8_t {
   reset,       // a reset command while the cycle runs
   home_again,  // a second home command while the cycle runs
   drive_done_lost,  // drive mode: the drive's home done goes off for good
+  // Locking indexer faults: drawn apart from the kinds above (on indexer
+  // axes only, from their own dice), so machines without one draw as before.
+  indexer_stuck_locked,
+  indexer_never_locks,
   count
 };
 const char* event_name(EventKind k);
+// The kinds drawn for any machine: those before the indexer faults.
+inline constexpr int kCommonEventKinds = static_cast<int>(EventKind::indexer_stuck_locked);
 
 struct Event {
   EventKind kind = EventKind::abort;
@@ -84,6 +90,7 @@ struct AxisPlan {
   sim::Fault start_fault = sim::Fault::none;  // present from power-up
   bool encoder_invalid = false;
   bool late_drive = false;     // drive mode: the drive answers after its time limit
+  bool indexer = false;        // a locking indexer (axis.<a>.indexer_lock, fitted on the simulator)
 };
 
 struct Machine {

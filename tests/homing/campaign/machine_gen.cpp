@@ -436,6 +436,7 @@ Machine Gen::build() {
   m.sim.seed = m.seed;
   causes();
   events();
+  indexers();
   m.start_held_at_powerup = d.chance(0.15);
   m.powerup_periods = d.integer(1, 50);
   m.start_by_button = d.chance(0.25);

@@ -5,7 +5,7 @@
 
 namespace campaign {
 
-Run::Run(std::uint64_t seed) : m_(generate(seed)), d_(seed, 2), periods_(seed, 3) {
+Run::Run(std::uint64_t seed) : m_(generate(seed)), d_(seed, 2), periods_(seed, 3), indexer_events_(seed, 8) {
   r_.settings = m_.settings;
   r_.machine = m_.sim;
   const double max_dt = m_.max_dt_s;
@@ -31,9 +31,12 @@ Run::Run(std::uint64_t seed) : m_(generate(seed)), d_(seed, 2), periods_(seed, 3
 void Run::say(const std::string& what) { log_ << "  t " << r_.sim().time_s() << ": " << what << "\n"; }
 
 void Run::settle(double max_s) {
+  // At rest: no carriage moving, and no locking indexer still unlocking or locking.
   r_.run_until([&] { return (!r_.any_moving() && [&] {
                               for (std::size_t a = 0; a < kAxisCount; ++a)
-                                if (r_.sim().moving(a)) return false;
+                                if (r_.sim().moving(a) || r_.axis(a).phase == Phase::unlock ||
+                                    r_.axis(a).phase == Phase::lock)
+                                  return false;
                               return true;
                             }()) || !ok(); }, max_s);
 }
@@ -63,10 +66,16 @@ void Run::power_up() {
 }
 
 std::vector<Event> Run::random_events(const CyclePlan& plan, double estimate) {
+  std::vector<Event> out = common_events(plan, estimate);
+  add_indexer_event(out, plan, estimate);
+  return out;
+}
+
+std::vector<Event> Run::common_events(const CyclePlan& plan, double estimate) {
   std::vector<Event> out;
   if (!d_.chance(0.5)) return out;
   Event e;
-  e.kind = static_cast<EventKind>(d_.integer(0, static_cast<int>(EventKind::count) - 1));
+  e.kind = static_cast<EventKind>(d_.integer(0, kCommonEventKinds - 1));
   e.at_s = d_.u(0, estimate);
   std::vector<std::size_t> movers;
   for (std::size_t a = 0; a < kAxisCount; ++a)
@@ -86,6 +95,19 @@ std::vector<Event> Run::random_events(const CyclePlan& plan, double estimate) {
   }
   out.push_back(e);
   return out;
+}
+
+// A locking indexer's fault during a later cycle, on an axis it moves.
+void Run::add_indexer_event(std::vector<Event>& events, const CyclePlan& plan, double estimate) {
+  std::vector<std::size_t> fitted;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (m_.plan[a].indexer && (plan.movers & axis_bit(a))) fitted.push_back(a);
+  if (fitted.empty() || !indexer_events_.chance(0.3)) return;
+  Event e;
+  e.kind = indexer_events_.pick({EventKind::indexer_stuck_locked, EventKind::indexer_never_locks});
+  e.axis = fitted[static_cast<std::size_t>(indexer_events_.integer(0, static_cast<int>(fitted.size()) - 1))];
+  e.at_s = indexer_events_.u(0, estimate);
+  events.push_back(e);
 }
 
 // The phases an axis runs in a cycle, as README describes its mode (a
@@ -127,10 +149,28 @@ void Run::apply_in_motion(const Event& e, Causes& causes) {
 
 void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
   say(std::string(event_name(e.kind)) + " on " + kAxisUpper[e.axis]);
+  // The simulated axis has one fault at a time: a new one replaces the old.
+  // A locking indexer's fault replaced by another need not show any more;
+  // an indexer fault does not replace another (the campaign keeps that one).
+  const sim::Fault present = r_.sim().axis_config(e.axis).fault;
+  const bool indexer_event = e.kind == EventKind::indexer_stuck_locked || e.kind == EventKind::indexer_never_locks;
+  if (indexer_event && present != sim::Fault::none) {
+    say(std::string("(not applied: ") + kAxisUpper[e.axis] + " has another fault)");
+    return;
+  }
   auto set_fault = [&](sim::Fault f) {
     auto c = r_.sim().axis_config(e.axis);
     c.fault = f;
     r_.sim().set_axis_config(e.axis, c);
+    if (present == sim::Fault::indexer_stuck_locked || present == sim::Fault::indexer_never_locks) {
+      const std::uint32_t indexer_codes =
+          code_bits({AlarmCode::unlock_not_confirmed, AlarmCode::lock_not_confirmed, AlarmCode::lock_engaged});
+      for (Cause& k : causes.list)
+        if ((k.axes & axis_bit(e.axis)) && (k.codes & indexer_codes) && k.must) {
+          k.must = false;
+          k.what += " (its fault replaced by another: it need not show)";
+        }
+    }
   };
   switch (e.kind) {
     case EventKind::abort: r_.pending.abort = true; break;
@@ -161,6 +201,24 @@ void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
     case EventKind::reset: r_.pending.reset_alarm = true; break;
     case EventKind::home_again: r_.pending.home_all = true; break;
     case EventKind::drive_done_lost: set_fault(sim::Fault::drive_done_lost); break;
+    case EventKind::indexer_stuck_locked:
+    case EventKind::indexer_never_locks: {
+      const bool unlocked = r_.engine.outputs().axes[e.axis].indexer_unlock;
+      indexer_cause(causes, e, r_.settings, r_.status(), plan, unlocked, r_.sim().indexer_locked(e.axis),
+                    r_.sim().moving(e.axis));
+      if (e.kind == EventKind::indexer_stuck_locked) {
+        set_fault(sim::Fault::indexer_stuck_locked);
+        // Struck under an axis unlocked for motion: its motor may brake
+        // against the pin (steps lost), the one motion the watch excuses.
+        if (unlocked) {
+          w_->lock_struck |= axis_bit(e.axis);
+          w_->carriage_jumped(e.axis);
+        }
+      } else {
+        set_fault(sim::Fault::indexer_never_locks);
+      }
+      break;
+    }
     case EventKind::count: break;
   }
   event_cause(causes, e, r_.settings, r_.status(), plan);
@@ -363,7 +421,9 @@ void Run::recover() {
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     auto c = r_.sim().axis_config(a);
     if (c.fault != sim::Fault::none) {
-      if (c.fault != sim::Fault::drive_fault) faulted |= axis_bit(a);
+      // An indexer's fault leaves the carriage where it was: nothing to put back.
+      const bool indexer = c.fault == sim::Fault::indexer_stuck_locked || c.fault == sim::Fault::indexer_never_locks;
+      if (c.fault != sim::Fault::drive_fault && !indexer) faulted |= axis_bit(a);
       c.fault = sim::Fault::none;
       r_.sim().set_axis_config(a, c);
     }
@@ -379,6 +439,7 @@ void Run::recover() {
   put_back(faulted);
   w_->dead_sensor = 0;
   w_->stuck_on = 0;
+  w_->lock_struck = 0;
   if (d_.chance(0.5)) encoder_invalid_ = 0;
   for (int i = 0; i < 3; ++i) step();
   settle(10);

@@ -86,10 +86,13 @@ class Run {
   void hard_limit_recovery();
   void lost_steps();
   void change_settings();
-  void limit_sensor_faults(Causes& causes);
+  void limit_sensor_faults(Causes& causes);  // indexer_faults too
+  void indexer_faults(Causes& causes);
   std::size_t pick(const std::vector<std::size_t>& cand);  // one of them, at random
   AxisMask with_slave(std::size_t a) const;
   std::vector<Event> random_events(const CyclePlan& plan, double estimate);
+  std::vector<Event> common_events(const CyclePlan& plan, double estimate);
+  void add_indexer_event(std::vector<Event>& events, const CyclePlan& plan, double estimate);
   std::vector<Phase> phases_run(std::size_t a) const;
   void follow_ups();
   bool homed_axis(std::size_t a) const;
@@ -101,6 +104,7 @@ class Run {
   rig::Rig r_;
   Dice d_;
   Dice periods_;
+  Dice indexer_events_;  // locking-indexer faults in later cycles (their own dice: others draw as before)
   std::unique_ptr<Watch> w_;
   std::ostringstream log_;
   bool comm_lost_ = false;

@@ -20,6 +20,8 @@ const char* fault_name(sim::Fault f) {
     case sim::Fault::drive_never_answers: return "drive never answers its home request";
     case sim::Fault::drive_answers_at_once: return "drive answers its home request at once";
     case sim::Fault::drive_done_lost: return "drive's home done lost";
+    case sim::Fault::indexer_stuck_locked: return "indexer stuck locked";
+    case sim::Fault::indexer_never_locks: return "indexer never locks";
   }
   return "?";
 }
@@ -101,6 +103,9 @@ std::string story(const Machine& m) {
     machine_side(o, m.sim.axes[a], p);
     if (p.short_cam) o << "; CAM SHORTER THAN THE STOP";
     if (p.rest_on_sensor) o << "; SHARED LIMIT RESTS ON ITS SENSOR";
+    if (p.indexer)
+      o << "; locking indexer (unlock " << m.sim.axes[a].unlock_delay_ms << " ms, lock " << m.sim.axes[a].lock_delay_ms
+        << " ms, timeout " << m.settings.axes[a].lock_timeout_ms << " ms)";
     if (p.start_fault != sim::Fault::none) o << "; FAULT FROM POWER-UP: " << fault_name(p.start_fault);
     if (p.encoder_invalid) o << "; ENCODER INVALID";
     o << "\n";

@@ -194,6 +194,14 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
                 takes > e.drive_home_timeout_s + 0.1);
       }
     }
+    // A locking indexer's fault from power-up: the first unlock of an axis
+    // that moves in this cycle times out (stuck locked), or its first lock
+    // after the cycle does (never locks).
+    if (f == sim::Fault::indexer_stuck_locked)
+      c.add(letter(a) + "'s indexer stuck locked", {AlarmCode::unlock_not_confirmed}, bit, mover && mode_uses_switch(e.mode));
+    if (f == sim::Fault::indexer_never_locks)
+      c.add(letter(a) + "'s indexer that never locks", {AlarmCode::lock_not_confirmed}, bit,
+            mover && mode_uses_switch(e.mode));
     if ((encoder_invalid & bit) && mode_is_absolute(e.mode))
       c.add(letter(a) + "'s invalid absolute encoder", {AlarmCode::encoder_fault}, bit,
             (plan.covered & bit) || (plan.unsequenced & bit));
@@ -208,7 +216,11 @@ void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st,
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const AxisStatus& as = st.axes[a];
     if ((plan.covered & axis_bit(a)) && as.phase != Phase::done) running |= with_partner(s, a);
-    if (as.velocity_mm_per_s != 0 || as.phase == Phase::jog || as.phase == Phase::move) moving |= with_partner(s, a);
+    // A jog or move held while its indexer unlocks shows phase unlock; in a
+    // cycle an axis of the cycle in unlock is one of those running.
+    const bool held = as.phase == Phase::unlock && !(plan.covered & axis_bit(a));
+    if (as.velocity_mm_per_s != 0 || as.phase == Phase::jog || as.phase == Phase::move || held)
+      moving |= with_partner(s, a);
   }
   switch (e.kind) {
     case EventKind::abort:
@@ -249,8 +261,41 @@ void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st,
     }
     case EventKind::reset:
     case EventKind::home_again:
+    case EventKind::indexer_stuck_locked:  // indexer_cause: it needs the indexer's state
+    case EventKind::indexer_never_locks:
     case EventKind::count: break;
   }
+}
+
+void indexer_cause(Causes& c, const Event& e, const Settings& s, const Status& st, const CyclePlan& plan,
+                   bool unlock_output, bool pin_in, bool motor_running) {
+  const std::string who = std::string(event_name(e.kind)) + " on " + letter(e.axis);
+  const AxisStatus& as = st.axes[e.axis];
+  const AxisMask bit = axis_bit(e.axis);
+  const bool locking = as.phase == Phase::lock;
+  // Locked, in a later sequence step of this cycle: it will unlock to home.
+  const bool to_move = (plan.covered & bit) && as.phase == Phase::waiting && mode_uses_switch(s.axes[e.axis].mode);
+  // The engine's next period still reads the pin as it stands now (the fault
+  // acts in the period that follows); it locks the pin in the one after.
+  if (e.kind == EventKind::indexer_stuck_locked) {
+    if (unlock_output && !pin_in) {
+      // Out for motion: it drops in under the axis. Certain while the motor
+      // still runs; an axis coming to rest in that period locks instead.
+      if (motor_running) c.add(who, {AlarmCode::lock_engaged}, bit, true);
+      else c.add(who, {AlarmCode::lock_engaged, AlarmCode::unlock_not_confirmed}, bit, false);
+    } else if (unlock_output) {  // still in while unlocking: it never comes out
+      c.add(who, {AlarmCode::unlock_not_confirmed}, bit, true);
+    } else if (!pin_in) {        // locking, pin still out: in at once, unless a motion comes first
+      c.add(who, {AlarmCode::unlock_not_confirmed, AlarmCode::lock_engaged}, bit, false);
+    } else {                     // locked: the next unlock times out
+      c.add(who, {AlarmCode::unlock_not_confirmed}, bit, to_move);
+    }
+    return;
+  }
+  // Never locks: a pin that is out, or comes out for the motion still to
+  // come, stays out when the axis next rests.
+  const bool out_now = unlock_output || (locking && !pin_in);
+  c.add(who, {AlarmCode::lock_not_confirmed}, bit, out_now || (to_move && !locking));
 }
 
 std::optional<Unexplained> explain(const Watch& w, const Causes& causes, const Settings& s) {

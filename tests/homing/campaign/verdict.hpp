@@ -46,6 +46,12 @@ struct Causes {
 Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, bool refused, AxisMask encoder_invalid);
 // An event applied while the cycle ran (the status as it stood when it was applied).
 void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st, const CyclePlan& plan);
+// A locking indexer's fault applied while the cycle ran: exactly the alarm it
+// produces, from where the indexer stood (unlock_output: the engine's unlock
+// output; pin_in: the simulated pin; motor_running: the motor still runs
+// when the engine next looks) and whether the axis has yet to move.
+void indexer_cause(Causes& c, const Event& e, const Settings& s, const Status& st, const CyclePlan& plan,
+                   bool unlock_output, bool pin_in, bool motor_running);
 
 // Every alarm the watch saw is explained by a cause on its axis and every
 // cause that must show did: "" when so, else what is wrong.

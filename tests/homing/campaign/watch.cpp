@@ -185,6 +185,12 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
     pushed_to_stop_[a] = false;
   }
 
+  // A locking indexer holds its axis: the motor never runs while the pin is
+  // in (README "Locking indexer"), except braking after the pin went in
+  // on its own under an axis unlocked for motion (lock_engaged).
+  if (r_.sim().moved_while_locked(a) && !(lock_struck & bit))
+    fail("the motor ran while its locking indexer was locked", fmt_axis(a, r_, x));
+
   // Motion only where the configuration and the script allow it.
   const AxisMask allowed = (in_window && !refused ? plan.movers : AxisMask{0}) | outside_ | (powerup_started ? kAllAxes : 0);
   if (allowed & bit) grace_[a] = true;

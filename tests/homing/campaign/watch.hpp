@@ -54,6 +54,7 @@ class Watch {
   AxisMask dead_sensor = 0;     // a sensor that can no longer trigger (pushing seeks may hit the stop)
   AxisMask tampered = 0;        // a sensor fault during this window: its edges are not the cam's
   AxisMask stuck_on = 0;        // a sensor forced active (stuck active, an open NC circuit)
+  AxisMask lock_struck = 0;     // an indexer's pin went in under an axis unlocked for motion (until recovered)
   std::uint32_t alarms_seen = 0;  // bit per AlarmCode, any axis or global, since clear_alarms_seen()
   std::array<std::uint32_t, kAxisCount> axis_alarms{};  // ... per axis
   std::uint32_t global_alarms = 0;                      // ... as the global alarm
