@@ -64,6 +64,7 @@ class Engine {
   void start_cycle(const Settings& settings, AxisMask requested, bool all);
   bool start_step(const Settings& settings);
   void assign_unsequenced(const Settings& settings, std::size_t axis);
+  AxisMask keeps_coordinate(const Settings& settings, AxisMask unsequenced) const;
   void finish_cycle(const Settings& settings);
   void begin_axis(const Settings& settings, std::size_t axis);
   void run_axis(const Settings& settings, std::size_t axis);
