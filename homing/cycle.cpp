@@ -45,6 +45,8 @@ void Engine::home_command(const Settings& settings, const Inputs& inputs) {
       last_result_ = same ? CommandResult::already_running : CommandResult::refused_busy;
     } else if (const CommandResult r = homing_refusal(settings); r != CommandResult::accepted) {
       last_result_ = r;
+    } else if (!home_all && !settings.global.single_axis_homing) {
+      last_result_ = CommandResult::refused_home_all_only;
     } else {
       start_cycle(settings, home_all ? kAllAxes : home_axes, home_all);
     }

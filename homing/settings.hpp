@@ -116,6 +116,9 @@ struct GlobalSettings {
   bool alarm_clears_homed = true;
   std::uint32_t watchdog_ms = 0;
   bool permit_required = false;
+  // Off: only home-all homes (RosettaCNC "homing of all axes only"), so a
+  // machine whose axes must home in order is never homed piecemeal.
+  bool single_axis_homing = true;
   // Not used by the engine: the runtime bounds the audit log and the homing
   // history with it (oldest rows pruned).
   std::uint32_t history_max_rows = 10000;
