@@ -10,7 +10,8 @@ pipefail`: one failing command fails the test, naming the document, the line
 and the command's output. The blocks are written for a reader's daemon on
 127.0.0.1:1502: that address (and mbpoll's `-p 1502`) is replaced by the
 test's, and homingctl finds the daemon through the config file it reads
-(HOMINGD_CONFIG), as it finds an installed one. A document without a runnable
+(HOMINGD_CONFIG), as it finds an installed one. A line `! command` must exit
+with 1 (refused). A document without a runnable
 block fails too, so a misspelt marker cannot pass unnoticed. The daemon is
 ended by its PID with SIGTERM and must exit 0.
 
@@ -46,9 +47,23 @@ def runnable_blocks(path):
     return blocks
 
 
+# A line `! command` in a block is a command that must be refused: the reader
+# types it without the `!`, the test requires homingctl's exit code 1 (the
+# operation failed: a refusal or an alarm), so that a usage error (2) or no
+# answer (3) after a rename does not pass as the refusal the text promises.
+MUST_FAIL = """must_be_refused() {
+  local code=0
+  "$@" || code=$?
+  if [ "$code" -eq 0 ]; then echo "expected to be refused, but it succeeded: $*" >&2; return 1; fi
+  if [ "$code" -ne 1 ]; then echo "expected exit code 1 (refused), got $code: $*" >&2; return 1; fi
+}
+"""
+
+
 def for_port(text, port):
     text = text.replace("127.0.0.1:1502", f"127.0.0.1:{port}")
-    return re.sub(r"-p 1502\b", f"-p {port}", text)
+    text = re.sub(r"-p 1502\b", f"-p {port}", text)
+    return MUST_FAIL + re.sub(r"(?m)^! ", "must_be_refused ", text)
 
 
 def run_document(homingd, bin_dir, doc):
