@@ -548,7 +548,7 @@ def report(b, results, info, args, started, out_path, causes):
     w("# Benchmarks")
     w("")
     w(f"Written by `bench/run_benchmarks.sh` on {info['date']} in {(time.monotonic() - started) / 60:.1f} minutes. "
-      "Regenerate with `bash bench/run_benchmarks.sh [BUILD_DIR]` (see the README's Benchmarks section).")
+      "Regenerate with `bash bench/run_benchmarks.sh [BUILD_DIR]` (see docs/tests.md, Benchmarks).")
     w("")
     w("| | |")
     w("|---|---|")

@@ -144,6 +144,19 @@ TEST_CASE("the .deb puts the programs, unit, config, maps and documents where a 
     }
   }
   CHECK(map_files >= 5);
+  // The guides README.md links to (docs/), beside it.
+  std::size_t doc_files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(std::filesystem::path(HOMING_SOURCE_DIR) / "docs")) {
+    if (e.path().extension() != ".md") continue;
+    const std::string installed = "/usr/share/doc/homingd/docs/" + e.path().filename().string();
+    expected.insert(installed);
+    ++doc_files;
+    if (std::filesystem::exists(pkg.in_root(installed))) {
+      INFO(installed);
+      CHECK(e2e::read_file(pkg.in_root(installed)) == e2e::read_file(e.path().string()));
+    }
+  }
+  CHECK(doc_files >= 9);
   CHECK(pkg.files() == expected);
   CHECK(mode_of(pkg.in_root("/usr/bin/homingd")) == 0755);
   CHECK(mode_of(pkg.in_root("/usr/bin/homingctl")) == 0755);

@@ -1,0 +1,89 @@
+// The generated parts of docs/ must be what the tables generate today, and say
+// what a technician reads there for every alarm.
+#include <catch2/catch.hpp>
+
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "homing/alarms.hpp"
+#include "registers/exports_docs.hpp"
+#include "registers/lookup.hpp"
+#include "registers/table.hpp"
+
+namespace {
+
+std::string committed(const std::string& name) {
+  std::ifstream in(std::string(DOCS_DIR) + "/" + name, std::ios::binary);
+  std::stringstream have;
+  have << in.rdbuf();
+  return in ? have.str() : std::string();
+}
+
+std::string alarm_section() {
+  for (const auto& s : registers::generate_doc_sections())
+    if (s.name == "alarms") return s.content;
+  FAIL("no generated alarm section");
+  return "";
+}
+
+}  // namespace
+
+TEST_CASE("docs/registers.md and the alarm list of docs/troubleshooting.md are fresh") {
+  for (const auto& file : registers::generate_doc_files()) {
+    INFO("docs/" << file.name << " is stale; regenerate with: " << registers::kDocsCommand);
+    CHECK(committed(file.name) == file.content);
+  }
+  for (const auto& section : registers::generate_doc_sections()) {
+    const std::string have = committed(section.file);
+    const auto want = registers::splice_section(have, section);
+    INFO("docs/" << section.file << ": the generated " << section.name
+                 << (want ? " is stale" : " has no marker lines") << "; regenerate with: " << registers::kDocsCommand);
+    REQUIRE(want.has_value());
+    CHECK(have == *want);
+  }
+}
+
+TEST_CASE("the troubleshooting guide gives every alarm its code, name, text, how to confirm it and what to check") {
+  const std::string list = alarm_section();
+  for (std::uint8_t c = 1; c < homing::kAlarmCodeCount; ++c) {
+    const auto code = static_cast<homing::AlarmCode>(c);
+    const auto& info = homing::kAlarmInfo[c];
+    INFO("alarm " << int(c) << " " << info.name);
+    const auto at = list.find("### " + std::to_string(c) + " `" + std::string(info.name) + "`\n");
+    REQUIRE(at != std::string::npos);
+    const auto next = list.find("\n### ", at + 1);
+    const std::string entry = list.substr(at, next == std::string::npos ? std::string::npos : next - at);
+    CHECK(entry.find("**What happened:** " + std::string(info.text)) != std::string::npos);
+    CHECK(!registers::alarm_how_to_confirm(code).empty());
+    CHECK(entry.find("**How to confirm:** " + std::string(registers::alarm_how_to_confirm(code))) != std::string::npos);
+    CHECK(entry.find("**What to check:** " + std::string(homing::alarm_what_to_check(code))) != std::string::npos);
+  }
+}
+
+TEST_CASE("the register reference gives each setting its unit and default from the table") {
+  const std::string md = committed("registers.md");
+  int rows = 0;
+  for (const registers::Register& r : registers::all_registers()) {
+    if (r.table != registers::Table::holding_register || r.axis != 0 || r.unit_text(registers::AxisKinds{}).empty())
+      continue;
+    INFO(r.pattern);
+    const auto at = md.find("| `" + std::string(r.pattern) + "` |");
+    REQUIRE(at != std::string::npos);
+    const std::string row = md.substr(at, md.find('\n', at) - at);
+    const std::string unit(r.unit_text(registers::AxisKinds{}));
+    CHECK(row.find("| " + unit + " |") != std::string::npos);
+    CHECK(row.find("| " + registers::exports_detail::engineering_text(r, r.default_raw) + " " + unit + " |") !=
+          std::string::npos);
+    ++rows;
+  }
+  CHECK(rows > 10);
+}
+
+TEST_CASE("a document without the marker lines gets no generated section") {
+  const registers::GeneratedSection s{"troubleshooting.md", "alarms", "text\n"};
+  CHECK_FALSE(registers::splice_section("# Troubleshooting\nno markers here\n", s).has_value());
+  const std::string doc = "intro\n" + registers::begin_marker("alarms") + "\nold list\n" + registers::end_marker("alarms") + "\nafter\n";
+  CHECK(registers::splice_section(doc, s) ==
+        "intro\n" + registers::begin_marker("alarms") + "\ntext\n\n" + registers::end_marker("alarms") + "\nafter\n");
+}
