@@ -94,6 +94,7 @@ constexpr auto kDirections = values_of(homing::kDirectionInfo);
 constexpr auto kPreMoves = values_of(homing::kPreMoveInfo);
 constexpr auto kSlaveModes = values_of(homing::kSlaveModeInfo);
 constexpr auto kAllowed = values_of(homing::kAllowedWithoutHomingInfo);
+constexpr auto kAxisAllowed = values_of(homing::kAxisAllowedWithoutHomingInfo);
 constexpr auto kKinds = values_of(homing::kAxisKindInfo);
 constexpr auto kStates = values_of(homing::kMachineStateInfo);
 constexpr auto kCommandResults = values_of(homing::kCommandResultInfo);
@@ -133,6 +134,7 @@ constexpr ValueList kValueLists[] = {
     {"slave_of", kSlaveOf},
     {"slave_mode", kSlaveModes},
     {"allowed_without_homing", kAllowed},
+    {"axis_allowed_without_homing", kAxisAllowed},
     {"kind", kKinds},
     {"axis_mask", kAxisBits},
     {"state", kStates},
@@ -223,6 +225,7 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     {.pattern = "axis.<a>.kind", .offset = 16, .type = Type::enumeration, .max = 1, .def = kDefaultKinds, .fills = fills<&A::kind>, .values = kKinds, .description = "linear (mm) or rotary (deg, A B C only): the unit of every length, feedrate and acceleration of the axis; a slave has its master's"},
     {.pattern = "axis.<a>.indexer_lock", .offset = 18, .max = 1, .fills = fills<&A::indexer_lock>, .description = "flag (0/1): locking indexer: unlock (and wait for unlocked) before the axis moves, lock again at rest (docs/homing-methods.md \"Locking indexer\")"},
     {.pattern = "axis.<a>.lock_timeout_ms", .offset = 19, .quantity = Quantity::time_ms, .min = 1, .max = 60'000, .def = 2'000, .fills = fills<&A::lock_timeout_ms>, .description = "locking indexer: unlocked (before motion) and locked (after rest) must be reported within this time, else an alarm"},
+    {.pattern = "axis.<a>.allowed_without_homing", .offset = 66, .type = Type::enumeration, .max = last_value(kAxisAllowed), .fills = fills<&A::allowed_without_homing>, .values = kAxisAllowed, .description = "what this axis may do before it is homed: 0 = as global.allowed_without_homing, else its own (Repetier MOVE_<axis>_WHEN_HOMED)"},
     {.pattern = "axis.<a>.max_seek_travel", .offset = 20, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 500'000, .fills = fills<&A::max_seek_travel_mm>, .description = "sensor not found within this travel: alarm"},
     {.pattern = "axis.<a>.max_stop_distance", .offset = 22, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 10'000, .fills = fills<&A::max_stop_distance_mm>, .description = "the axis must stop within this distance after the trigger"},
     {.pattern = "axis.<a>.max_backoff", .offset = 24, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 10'000, .fills = fills<&A::max_backoff_mm>, .description = "the sensor must release within this back-off travel"},

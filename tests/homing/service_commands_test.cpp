@@ -82,3 +82,33 @@ SCENARIO("with single-axis homing off only home-all homes: a single-axis home is
   CHECK(r.home_all());
   CHECK(r.axis(X).homed);
 }
+
+SCENARIO("an axis's own allowed_without_homing overrides the global one, each way", "[service]") {
+  Rig r;
+  r.add_axis(Z, 1);
+  r.settings.global.allowed_without_homing = AllowedWithoutHoming::jog_reduced;
+  r.settings.axes[Z].allowed_without_homing = AxisAllowedWithoutHoming::none;  // over the work
+  r.settings.axes[X].allowed_without_homing = AxisAllowedWithoutHoming::all;
+  r.step();
+  REQUIRE_FALSE(r.axis(X).homed);
+  REQUIRE_FALSE(r.axis(Z).homed);
+  CHECK((r.status().interlocks & interlock::not_homed) != 0);
+  // Z: nothing moves before homing, not even a slow jog.
+  const double z_at = r.actual(Z);
+  r.jog(Z, +1);
+  r.run_for(0.2);
+  CHECK(r.status().last_command_result == CommandResult::refused_not_homed);
+  CHECK(r.actual(Z) == z_at);
+  r.release_jogs();
+  r.step();
+  // X: a move is allowed before homing, at its jog feedrate.
+  const double x_at = r.actual(X);
+  r.move(X, r.axis(X).position_mm + 5);
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  REQUIRE(r.run_until([&] { return !r.any_moving(); }, 30));
+  CHECK(r.actual(X) == Approx(x_at + 5).margin(1e-6));
+  // With X and Z both 'all', nothing is limited until homing.
+  r.settings.axes[Z].allowed_without_homing = AxisAllowedWithoutHoming::all;
+  r.step();
+  CHECK((r.status().interlocks & interlock::not_homed) == 0);
+}

@@ -220,8 +220,8 @@ TEST_CASE("the simulator wires an external-commutator slave to its master's outp
     const std::int64_t x0 = c.read("sim.x.actual_position"), y0 = c.read("sim.y.actual_position");
     REQUIRE(c.write("cmd.jog_plus.x", 1) == 0);
     REQUIRE(wait_until([&] { return c.read("sim.x.actual_position") > x0 + 1000; }, 5s));
-    // The slave's carriage moves with X's output: its simulator registers are busy too.
-    CHECK(c.write("sim.y.noise", 5) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
+    // The slave's carriage moves with X's output: its cams are busy too.
+    CHECK(c.write("sim.y.sensor_max", 5) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
     REQUIRE(c.write("cmd.jog_plus.x", 0) == 0);
     REQUIRE(wait_until([&] { return at_rest(c); }, 5s));
     const std::int64_t dx = c.read("sim.x.actual_position") - x0, dy = c.read("sim.y.actual_position") - y0;
