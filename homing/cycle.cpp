@@ -45,6 +45,8 @@ void Engine::home_command(const Settings& settings, const Inputs& inputs) {
       last_result_ = same ? CommandResult::already_running : CommandResult::refused_busy;
     } else if (const CommandResult r = homing_refusal(settings); r != CommandResult::accepted) {
       last_result_ = r;
+    } else if (!home_all && !settings.global.single_axis_homing) {
+      last_result_ = CommandResult::refused_home_all_only;
     } else {
       start_cycle(settings, home_all ? kAllAxes : home_axes, home_all);
     }
@@ -53,6 +55,7 @@ void Engine::home_command(const Settings& settings, const Inputs& inputs) {
 
 void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all) {
   plan_ = plan_cycle(settings, requested, all);
+  plan_.unsequenced &= static_cast<AxisMask>(~keeps_coordinate(settings, plan_.unsequenced));
   const AxisMask covered = plan_.covered();
   const AxisMask unsequenced = plan_.unsequenced;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
@@ -121,6 +124,28 @@ void Engine::run_cycle(const Settings& settings) {
   for (std::size_t a = 0; a < kAxisCount; ++a)
     if ((mask & axis_bit(a)) && axes_[a].phase != Phase::done) all_done = false;
   if (all_done) start_step(settings);
+}
+
+// An unsequenced axis already homed keeps its coordinate in a home-all: were it
+// assigned where it stands again, its soft limits would move with it, and jog,
+// home-all, jog would creep toward the stop. Only an absolute axis reads its
+// encoder again (that never creeps); a single-axis home that names the axis
+// (not unsequenced then) assigns it afresh. A slave keeps it with its master.
+AxisMask Engine::keeps_coordinate(const Settings& settings, AxisMask unsequenced) const {
+  AxisMask keep = 0;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (!(unsequenced & axis_bit(a))) continue;
+    const int m = gantry_master(settings, a);
+    const std::size_t owner = m >= 0 ? static_cast<std::size_t>(m) : a;
+    const bool from_encoder = mode_row(settings.axes[owner].mode).coordinate == Coordinate::absolute_encoder;
+    if (!from_encoder && axes_[owner].homed() && axes_[a].homed()) keep |= axis_bit(a);
+  }
+  // A pair is kept or assigned together.
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (const int m = gantry_master(settings, a); m >= 0 && (unsequenced & axis_bit(a)) &&
+                                                  ((keep >> m) & 1u) != ((keep >> a) & 1u))
+      keep &= static_cast<AxisMask>(~(axis_bit(a) | axis_bit(static_cast<std::size_t>(m))));
+  return keep;
 }
 
 // An axis in no sequence step is given its coordinate where it stands (MASSO);

@@ -61,9 +61,11 @@ class Engine {
   // Homing (cycle.cpp; the phases of one axis in axis_phases.cpp).
   CommandResult homing_refusal(const Settings& settings) const;
   void home_command(const Settings& settings, const Inputs& inputs);
+  void unhome_command(const Settings& settings, AxisMask axes);
   void start_cycle(const Settings& settings, AxisMask requested, bool all);
   bool start_step(const Settings& settings);
   void assign_unsequenced(const Settings& settings, std::size_t axis);
+  AxisMask keeps_coordinate(const Settings& settings, AxisMask unsequenced) const;
   void finish_cycle(const Settings& settings);
   void begin_axis(const Settings& settings, std::size_t axis);
   void run_axis(const Settings& settings, std::size_t axis);

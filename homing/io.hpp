@@ -42,6 +42,7 @@ struct AxisInputs {
 struct Commands {
   bool home_all = false;
   AxisMask home_axes = 0;
+  AxisMask unhome_axes = 0;  // service: forget the reference of these axes (and their gantry partners)
   bool abort = false;
   bool reset_alarm = false;
   std::array<std::int8_t, kAxisCount> jog{};  // -1, 0, +1 while held

@@ -67,7 +67,7 @@ void Engine::jog_commands(const Settings& settings, const Commands& c) {
         const int p = gantry_partner(settings, a);
         const bool recovering = run.limit_tripped || (p >= 0 && axes_[static_cast<std::size_t>(p)].limit_tripped);
         if (r == CommandResult::accepted && !homed && !recovering &&
-            settings.global.allowed_without_homing == AllowedWithoutHoming::none)
+            allowed_without_homing(settings, a) == AllowedWithoutHoming::none)
           r = CommandResult::refused_not_homed;
         if (r == CommandResult::accepted && run.phase == Phase::move) r = CommandResult::refused_busy;
         last_result_ = r;
@@ -93,7 +93,7 @@ void Engine::move_commands(const Settings& settings, const Commands& c) {
     const bool homed = run.counts_as_homed(s.mode);
     if (r == CommandResult::accepted && !std::isfinite(target)) r = CommandResult::refused_invalid;
     if (r == CommandResult::accepted && !homed &&
-        settings.global.allowed_without_homing != AllowedWithoutHoming::all)
+        allowed_without_homing(settings, a) != AllowedWithoutHoming::all)
       r = CommandResult::refused_not_homed;
     if (r == CommandResult::accepted && homed && s.soft_limits_enable &&
         (target < s.soft_limit_min_mm || target > s.soft_limit_max_mm))
@@ -118,7 +118,7 @@ void Engine::run_motion(const Settings& settings) {
     switch (run.phase) {
       case Phase::jog: {
         double v = mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min);
-        if (!homed && settings.global.allowed_without_homing != AllowedWithoutHoming::all)
+        if (!homed && allowed_without_homing(settings, a) != AllowedWithoutHoming::all)
           v = std::min(v, mm_per_min_to_mm_per_s(100.0));
         if (homed && s.soft_limits_enable) {
           const double limit = (run.jog_dir() > 0 ? s.soft_limit_max_mm : s.soft_limit_min_mm) - run.offset_mm;

@@ -11,6 +11,7 @@ namespace homing {
 void Engine::publish(const Settings& settings, const Inputs& inputs) {
   Status& st = status_;
   bool all_homed = true;
+  bool limited = false;  // an unhomed axis that may not do everything yet
   bool moving = false;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const AxisRun& run = axes_[a];
@@ -30,6 +31,7 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
     if (!std::isfinite(as.stop_distance_mm)) as.stop_distance_mm = 0;
     as.phase_distance_mm = std::abs(run.motor.position_mm - run.phase_start_mm);
     all_homed = all_homed && as.homed;
+    limited = limited || (!as.homed && allowed_without_homing(settings, a) != AllowedWithoutHoming::all);
     moving = moving || (!run.in_cycle && as.busy);
   }
   const bool alarm = any_alarm();
@@ -55,7 +57,7 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
   if (global_alarm_ == AlarmCode::settings_lost) il |= interlock::settings_lost;
   if (comm_lost_) il |= interlock::communication_lost;
   if (settings.global.permit_required && !permit_) il |= interlock::permit_missing;
-  if (!all_homed && settings.global.allowed_without_homing != AllowedWithoutHoming::all) il |= interlock::not_homed;
+  if (limited) il |= interlock::not_homed;
   if (cycle_active_) il |= interlock::homing_active;
   if (moving) il |= interlock::motion_active;
   st.interlocks = il;

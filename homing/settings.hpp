@@ -51,6 +51,21 @@ constexpr std::span<const EnumInfo<AllowedWithoutHoming>> enum_table(AllowedWith
   return kAllowedWithoutHomingInfo;
 }
 
+// Per axis, beside global.allowed_without_homing (Repetier's MOVE_<axis>_WHEN_HOMED):
+// an axis that must never move unhomed (a Z over the work) or may always move
+// (a rotary table nobody crashes) says so itself.
+enum class AxisAllowedWithoutHoming : std::uint8_t { as_global = 0, all = 1, jog_reduced = 2, none = 3 };
+inline constexpr EnumInfo<AxisAllowedWithoutHoming> kAxisAllowedWithoutHomingInfo[] = {
+    {AxisAllowedWithoutHoming::as_global, "as_global", "as global.allowed_without_homing says"},
+    {AxisAllowedWithoutHoming::all, "all", "this axis: every command is allowed before homing"},
+    {AxisAllowedWithoutHoming::jog_reduced, "jog_reduced", "this axis: only jog, at reduced speed (100 mm/min)"},
+    {AxisAllowedWithoutHoming::none, "none", "this axis: nothing moves before homing"},
+};
+static_assert(lists_every_value(kAxisAllowedWithoutHomingInfo, AxisAllowedWithoutHoming::none));
+constexpr std::span<const EnumInfo<AxisAllowedWithoutHoming>> enum_table(AxisAllowedWithoutHoming) {
+  return kAxisAllowedWithoutHomingInfo;
+}
+
 // What an axis is: it names the unit of every length, feedrate and
 // acceleration of the axis (mm or degrees). X, Y and Z are linear only; A, B
 // and C are rotary unless set linear (the second motor of a linear axis, a
@@ -106,6 +121,7 @@ struct AxisSettings {
   // this axis, lock again once it rests, each confirmed within lock_timeout_ms.
   bool indexer_lock = false;
   double lock_timeout_ms = 0;
+  AxisAllowedWithoutHoming allowed_without_homing = AxisAllowedWithoutHoming::as_global;
   friend bool operator==(const AxisSettings&, const AxisSettings&) = default;
 };
 
@@ -116,6 +132,9 @@ struct GlobalSettings {
   bool alarm_clears_homed = true;
   std::uint32_t watchdog_ms = 0;
   bool permit_required = false;
+  // Off: only home-all homes (RosettaCNC "homing of all axes only"), so a
+  // machine whose axes must home in order is never homed piecemeal.
+  bool single_axis_homing = true;
   // Not used by the engine: the runtime bounds the audit log and the homing
   // history with it (oldest rows pruned).
   std::uint32_t history_max_rows = 10000;
@@ -172,6 +191,7 @@ enum class AxisField : std::uint8_t {
   drive_home_timeout,
   indexer_lock,
   lock_timeout_ms,
+  allowed_without_homing,
 };
 // The name of each: the suffix of its register name (axis.<a>.<name>).
 struct AxisFieldInfo {
@@ -212,8 +232,9 @@ inline constexpr AxisFieldInfo kAxisFieldInfo[] = {
     {AxisField::drive_home_timeout, "drive_home_timeout_s"},
     {AxisField::indexer_lock, "indexer_lock"},
     {AxisField::lock_timeout_ms, "lock_timeout_ms"},
+    {AxisField::allowed_without_homing, "allowed_without_homing"},
 };
-static_assert(lists_every_value(kAxisFieldInfo, AxisField::lock_timeout_ms));
+static_assert(lists_every_value(kAxisFieldInfo, AxisField::allowed_without_homing));
 constexpr std::span<const AxisFieldInfo> enum_table(AxisField) { return kAxisFieldInfo; }
 
 std::string_view field_name(AxisField field);
@@ -221,6 +242,17 @@ std::string_view field_name(AxisField field);
 // -1 when the axis is not a slave, else the master's index.
 constexpr int master_of(const AxisSettings& s) {
   return s.slave_of == 0 ? -1 : static_cast<int>(s.slave_of) - 1;
+}
+
+// What axis a may do before it is homed: its own setting, else the global one.
+constexpr AllowedWithoutHoming allowed_without_homing(const Settings& settings, std::size_t a) {
+  switch (settings.axes[a].allowed_without_homing) {
+    case AxisAllowedWithoutHoming::all: return AllowedWithoutHoming::all;
+    case AxisAllowedWithoutHoming::jog_reduced: return AllowedWithoutHoming::jog_reduced;
+    case AxisAllowedWithoutHoming::none: return AllowedWithoutHoming::none;
+    case AxisAllowedWithoutHoming::as_global: break;
+  }
+  return settings.global.allowed_without_homing;
 }
 
 }  // namespace homing

@@ -41,8 +41,9 @@ enum class CommandResult : std::uint8_t {
   refused_communication_lost = 13,
   refused_settings_fault = 14,  // the configuration check refused the cycle: see the axis alarm
   refused_hard_limit = 15,   // on a tripped shared limit: only a jog away from the sensor is allowed
+  refused_home_all_only = 16,  // global.single_axis_homing is off: the machine homes all axes or none
 };
-inline constexpr std::uint8_t kCommandResultCount = 16;
+inline constexpr std::uint8_t kCommandResultCount = 17;
 inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
     {CommandResult::none, "none", "no command yet"},
     {CommandResult::accepted, "accepted", "the last command started"},
@@ -65,8 +66,10 @@ inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
      "the configuration check refused the command: see the axis alarm or homingctl check"},
     {CommandResult::refused_hard_limit, "refused_hard_limit",
      "on a tripped shared limit: only a jog away from the sensor is allowed until it releases"},
+    {CommandResult::refused_home_all_only, "refused_home_all_only",
+     "global.single_axis_homing is off: this machine homes all axes together (cmd.home_all), never one alone"},
 };
-static_assert(lists_every_value(kCommandResultInfo, CommandResult::refused_hard_limit));
+static_assert(lists_every_value(kCommandResultInfo, CommandResult::refused_home_all_only));
 static_assert(std::size(kCommandResultInfo) == kCommandResultCount);
 constexpr std::span<const EnumInfo<CommandResult>> enum_table(CommandResult) { return kCommandResultInfo; }
 

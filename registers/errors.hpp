@@ -48,7 +48,7 @@ enum class RefusalReason : std::uint8_t {
   busy,                 // a homing cycle runs
   wiring,               // the machine's wiring (GPIO) cannot do it
   storage_failed,       // the settings database did not store it
-  carriage_moving,      // simulator: that carriage moves
+  carriage_moving,      // simulator: a geometry write to a carriage that moves
   loop_not_responding,  // simulator: the control loop did not take the write in time
   empty,                // a write of 0 items
   hard_stops_inverted,  // simulator: hard_stop_min must be below hard_stop_max
@@ -80,7 +80,7 @@ inline constexpr RefusalReasonInfo kRefusalReasonInfo[] = {
     {RefusalReason::wiring, ExceptionCode::illegal_data_value, "wiring", "the machine's wiring (GPIO lines) cannot do what these settings ask"},
     {RefusalReason::storage_failed, ExceptionCode::server_device_failure, "storage_failed",
      "the settings database did not store the write (disk full or failing): see the log"},
-    {RefusalReason::carriage_moving, ExceptionCode::server_device_busy, "carriage_moving", "simulator: that carriage moves, write when it rests"},
+    {RefusalReason::carriage_moving, ExceptionCode::server_device_busy, "carriage_moving", "simulator: the write moves a carriage, its cams or stops while that carriage moves; write it when the axis rests"},
     {RefusalReason::loop_not_responding, ExceptionCode::server_device_busy, "loop_not_responding",
      "simulator: the control loop did not take the write in time"},
     {RefusalReason::empty, ExceptionCode::illegal_data_value, "empty", "a write of 0 items"},

@@ -108,6 +108,21 @@ std::int64_t sim_raw(const Register& reg, const MachineConfig& config, const Sim
   }
 }
 
+bool moves_geometry(Key key) {
+  switch (key) {
+    case Key::sim_actual_position:
+    case Key::sim_sensor_min:
+    case Key::sim_sensor_max:
+    case Key::sim_hard_stop_min:
+    case Key::sim_hard_stop_max:
+    case Key::sim_index_pitch:
+    case Key::sim_index_offset:
+    case Key::sim_absolute_offset:
+    case Key::sim_drive_home_position: return true;
+    default: return false;
+  }
+}
+
 std::expected<AcceptedSimWrite, Refusal> validate_sim_write(Table table, std::uint16_t start,
                                                             std::span<const std::uint16_t> values,
                                                             WordOrder order, const MachineConfig& config,

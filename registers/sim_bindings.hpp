@@ -48,11 +48,18 @@ struct AcceptedSimWrite {
   bool seed_written = false;                               // Simulator::set_seed(config.seed)
 };
 
+// Writes that move a carriage or what it meets (the carriage itself, its cams,
+// stops, index pulses, the encoder's zero, the drive's home): refused with 06
+// while that carriage moves, since nothing real jumps under a moving axis.
+// Everything else (faults, noise, bounce, wiring, lost steps, delays) may be
+// written at any moment, to pull a wire or fault a drive mid-cycle.
+bool moves_geometry(Key key);
+
 // A write to the simulator unit, all or nothing, like validate_write, against
 // the configuration it will be applied to (the runtime calls it on the live
 // simulator, so two writes in a row never undo each other). Not decided here:
-// exception 06 when a sim.<a>.* register is written while that carriage moves
-// (the runtime asks Simulator::in_motion for every axes_written).
+// exception 06 when a write changes a register that moves_geometry while that
+// carriage moves (the runtime asks Simulator::in_motion for each such change).
 std::expected<AcceptedSimWrite, Refusal> validate_sim_write(Table table, std::uint16_t start,
                                                             std::span<const std::uint16_t> values,
                                                             WordOrder order,

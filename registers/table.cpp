@@ -94,6 +94,7 @@ constexpr auto kDirections = values_of(homing::kDirectionInfo);
 constexpr auto kPreMoves = values_of(homing::kPreMoveInfo);
 constexpr auto kSlaveModes = values_of(homing::kSlaveModeInfo);
 constexpr auto kAllowed = values_of(homing::kAllowedWithoutHomingInfo);
+constexpr auto kAxisAllowed = values_of(homing::kAxisAllowedWithoutHomingInfo);
 constexpr auto kKinds = values_of(homing::kAxisKindInfo);
 constexpr auto kStates = values_of(homing::kMachineStateInfo);
 constexpr auto kCommandResults = values_of(homing::kCommandResultInfo);
@@ -133,6 +134,7 @@ constexpr ValueList kValueLists[] = {
     {"slave_of", kSlaveOf},
     {"slave_mode", kSlaveModes},
     {"allowed_without_homing", kAllowed},
+    {"axis_allowed_without_homing", kAxisAllowed},
     {"kind", kKinds},
     {"axis_mask", kAxisBits},
     {"state", kStates},
@@ -158,6 +160,7 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "global.alarm_clears_homed", .offset = 11, .max = 1, .def = 1, .fills = fills<&G::alarm_clears_homed>, .description = "flag (0/1): an alarm clears the homed state of every axis"},
     {.pattern = "global.watchdog_ms", .offset = 12, .quantity = Quantity::time_ms, .max = 60'000, .fills = fills<&G::watchdog_ms>, .description = "host watchdog: stop motion started over Modbus when host.heartbeat does not change for this long; 0 = off"},
     {.pattern = "global.history_max_rows", .offset = 14, .type = Type::u32, .min = 100, .max = 1'000'000, .def = 10'000, .fills = fills<&G::history_max_rows>, .description = "rows kept in the audit log and in the homing history each (oldest pruned)"},
+    {.pattern = "global.single_axis_homing", .offset = 60, .max = 1, .def = 1, .fills = fills<&G::single_axis_homing>, .description = "flag (0/1): axes may be homed alone (cmd.home.<a>, cmd.home_axes); 0 = only cmd.home_all homes, so axes that must home in order are never homed piecemeal"},
     {.pattern = "global.permit_required", .offset = 13, .max = 1, .fills = fills<&G::permit_required>, .description = "flag (0/1): homing needs host.homing_permit (or the permit input) on"},
     {.pattern = "security.unlock", .offset = 30, .max = 65535, .key = Key::security_unlock, .description = "write the unlock code (homingd --unlock-code) to allow settings writes; reads 0"},
     {.pattern = "security.unlock32", .offset = 32, .type = Type::u32, .max = 4294967295LL, .key = Key::security_unlock, .description = "the unlock code as one 32-bit value (both words in one request, FC 16): for a --unlock-code above 65535; reads 0"},
@@ -169,7 +172,7 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "status.sequence_step", .table = IR, .offset = 2, .access = Access::r, .max = 6, .key = Key::status_sequence_step, .description = "running sequence step 1..6, 0 when not homing"},
     {.pattern = "status.homing_cycles", .table = IR, .offset = 3, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .key = Key::status_homing_cycles, .description = "homing cycles completed successfully since start"},
     {.pattern = "status.heartbeat", .table = IR, .offset = 5, .access = Access::r, .max = 65535, .key = Key::status_heartbeat, .description = "increments every control period (wraps at 65535)"},
-    {.pattern = "status.last_command_result", .table = IR, .offset = 6, .type = Type::enumeration, .access = Access::r, .max = 15, .key = Key::status_last_command_result, .values = kCommandResults, .description = "result of the last command coil written"},
+    {.pattern = "status.last_command_result", .table = IR, .offset = 6, .type = Type::enumeration, .access = Access::r, .max = last_value(kCommandResults), .key = Key::status_last_command_result, .values = kCommandResults, .description = "result of the last command coil written"},
     {.pattern = "status.interlocks", .table = IR, .offset = 7, .type = Type::bitmask, .access = Access::r, .max = 511, .key = Key::status_interlocks, .values = kInterlocks, .description = "what now blocks homing or motion; 0 = free to move"},
     {.pattern = "status.global_alarm", .table = IR, .offset = 8, .type = Type::enumeration, .access = Access::r, .max = last_value(kAlarms), .key = Key::status_global_alarm, .values = kAlarms, .description = "alarm not tied to one axis (e-stop at rest, settings lost)"},
     {.pattern = "status.alarm_axis", .table = IR, .offset = 9, .type = Type::enumeration, .access = Access::r, .max = 6, .key = Key::status_alarm_axis, .values = kAlarmAxis, .description = "first axis with a latched alarm (1 = X ... 6 = C), 0 none"},
@@ -222,6 +225,7 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     {.pattern = "axis.<a>.kind", .offset = 16, .type = Type::enumeration, .max = 1, .def = kDefaultKinds, .fills = fills<&A::kind>, .values = kKinds, .description = "linear (mm) or rotary (deg, A B C only): the unit of every length, feedrate and acceleration of the axis; a slave has its master's"},
     {.pattern = "axis.<a>.indexer_lock", .offset = 18, .max = 1, .fills = fills<&A::indexer_lock>, .description = "flag (0/1): locking indexer: unlock (and wait for unlocked) before the axis moves, lock again at rest (docs/homing-methods.md \"Locking indexer\")"},
     {.pattern = "axis.<a>.lock_timeout_ms", .offset = 19, .quantity = Quantity::time_ms, .min = 1, .max = 60'000, .def = 2'000, .fills = fills<&A::lock_timeout_ms>, .description = "locking indexer: unlocked (before motion) and locked (after rest) must be reported within this time, else an alarm"},
+    {.pattern = "axis.<a>.allowed_without_homing", .offset = 66, .type = Type::enumeration, .max = last_value(kAxisAllowed), .fills = fills<&A::allowed_without_homing>, .values = kAxisAllowed, .description = "what this axis may do before it is homed: 0 = as global.allowed_without_homing, else its own (Repetier MOVE_<axis>_WHEN_HOMED)"},
     {.pattern = "axis.<a>.max_seek_travel", .offset = 20, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 500'000, .fills = fills<&A::max_seek_travel_mm>, .description = "sensor not found within this travel: alarm"},
     {.pattern = "axis.<a>.max_stop_distance", .offset = 22, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 10'000, .fills = fills<&A::max_stop_distance_mm>, .description = "the axis must stop within this distance after the trigger"},
     {.pattern = "axis.<a>.max_backoff", .offset = 24, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 10'000, .fills = fills<&A::max_backoff_mm>, .description = "the sensor must release within this back-off travel"},
@@ -258,6 +262,7 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     {.pattern = "cmd.home.<a>", .table = CO, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_home, .description = "write 1: home this axis alone (reads back 0)"},
     {.pattern = "cmd.jog_plus.<a>", .table = CO, .offset = 1, .type = Type::boolean, .access = Access::rw, .max = 1, .key = Key::cmd_jog_plus, .description = "jog positive while 1; 0 stops (reads back the held state)"},
     {.pattern = "cmd.jog_minus.<a>", .table = CO, .offset = 2, .type = Type::boolean, .access = Access::rw, .max = 1, .key = Key::cmd_jog_minus, .description = "jog negative while 1; 0 stops (reads back the held state)"},
+    {.pattern = "cmd.unhome.<a>", .table = CO, .offset = 4, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_unhome, .description = "write 1: forget this axis's reference (and its gantry partner's) without moving; refused while it moves or a cycle runs (reads back 0)"},
     {.pattern = "cmd.move.<a>", .table = CO, .offset = 3, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_move, .description = "write 1: move to axis.<a>.target at jog_feedrate (reads back 0)"},
 });
 

@@ -59,6 +59,7 @@ void ControlLoop::submit(const homing::Commands& c, bool from_modbus) {
   std::lock_guard lock(mailbox_mutex_);
   pending_.home_all |= c.home_all;
   pending_.home_axes |= c.home_axes;
+  pending_.unhome_axes |= c.unhome_axes;
   pending_.abort |= c.abort;
   pending_.reset_alarm |= c.reset_alarm;
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {

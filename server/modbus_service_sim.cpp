@@ -47,7 +47,7 @@ std::optional<Reply> ModbusService::write_sim(std::uint8_t fc, Table table, std:
   // loop (never on a snapshot that may miss the previous write), and answered
   // once a snapshot shows it: an acknowledged write holds and reads back.
   std::optional<registers::Refusal> refused;
-  int busy_axis = -1;
+  const registers::Register* busy_reg = nullptr;
   std::vector<registers::Change> changes;
   const ControlLoop::SimEdit edit = [&](homing::sim::SimulatorControls& sim, const homing::Outputs& next) {
     const homing::sim::SimulatorView now = sim.view();
@@ -58,10 +58,12 @@ std::optional<Reply> ModbusService::write_sim(std::uint8_t fc, Table table, std:
       return;
     }
     const registers::AcceptedSimWrite& w = *accepted;
-    // A carriage that moves (or is about to) is not touched at all.
-    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-      if (w.axes_written[a] && sim.in_motion(a, next)) {
-        busy_axis = static_cast<int>(a);
+    // A carriage that moves (or is about to) keeps its geometry; faults,
+    // noise, wiring and lost steps may strike it at any moment.
+    for (const registers::Change& c : w.changes) {
+      if (c.reg->per_axis() && registers::moves_geometry(c.reg->key) &&
+          sim.in_motion(static_cast<std::size_t>(c.reg->axis), next)) {
+        busy_reg = c.reg;
         return;
       }
     }
@@ -83,11 +85,12 @@ std::optional<Reply> ModbusService::write_sim(std::uint8_t fc, Table table, std:
                                               "the control loop did not take the simulator write in time"),
                   client);
   if (refused) return refuse(fc, *refused, client);
-  if (busy_axis >= 0)
+  if (busy_reg)
     return refuse(fc,
-                  registers::Refusal::because(RefusalReason::carriage_moving, start,
-                                              fmt::format("sim.{}.* is not written while that carriage moves",
-                                                          homing::kAxisLetters[static_cast<std::size_t>(busy_axis)])),
+                  registers::Refusal::because(RefusalReason::carriage_moving, busy_reg->address,
+                                              fmt::format("{} moves the carriage or what it meets: not written while "
+                                                          "that carriage moves; write it when the axis rests",
+                                                          busy_reg->name())),
                   client);
   if (!changes.empty())
     spdlog::info("simulator changed by {} {}: {}", client.transport, client.address,

@@ -77,6 +77,59 @@ SCENARIO("an axis in no step is assigned its home position when the sequence end
   CHECK(r.trace[A].path_mm == 0);
 }
 
+SCENARIO("an axis in no step keeps its coordinate in later home-alls: jog, home-all, jog does not creep", "[sequence]") {
+  Rig r;
+  r.settings.axes[A] = typical_axis();  // configured, but in no step
+  r.settings.axes[A].mode = HomingMode::manual;
+  r.settings.axes[A].home_position_mm = 7;
+  r.machine.axes[A].actual_position_mm = 42;
+  r.step();
+  REQUIRE(r.home_all());
+  REQUIRE(r.axis(A).position_mm == Approx(7).margin(1e-9));
+  // Jog A 5 mm further, then home-all twice: its coordinate follows the carriage.
+  r.move(A, 12);
+  REQUIRE(r.run_until([&] { return !r.any_moving() && r.axis(A).position_mm > 11.9; }, 30));
+  const double actual_at_12 = r.actual(A);
+  REQUIRE(r.home_all());
+  CHECK(r.axis(A).position_mm == Approx(12).margin(1e-6));
+  REQUIRE(r.home_all());
+  CHECK(r.axis(A).position_mm == Approx(12).margin(1e-6));
+  CHECK(r.axis(A).homed);
+  // The same coordinate still names the same place: back to 7 is where it was assigned.
+  r.move(A, 7);
+  REQUIRE(r.run_until([&] { return !r.any_moving() && r.axis(A).position_mm < 7.1; }, 30));
+  CHECK(r.actual(A) == Approx(42).margin(1e-6));
+  CHECK(actual_at_12 == Approx(47).margin(1e-6));
+  // Named alone, it is assigned afresh where it stands.
+  r.move(A, 10);
+  REQUIRE(r.run_until([&] { return !r.any_moving() && r.axis(A).position_mm > 9.9; }, 30));
+  REQUIRE(r.home_axes(axis_bit(A)));
+  CHECK(r.axis(A).position_mm == Approx(7).margin(1e-9));
+}
+
+SCENARIO("an unhomed axis in no step is assigned again in a home-all", "[sequence]") {
+  Rig r;
+  r.settings.axes[A] = typical_axis();
+  r.settings.axes[A].mode = HomingMode::manual;
+  r.settings.axes[A].home_position_mm = 7;
+  r.step();
+  REQUIRE(r.home_all());
+  r.move(A, 15);
+  REQUIRE(r.run_until([&] { return !r.any_moving() && r.axis(A).position_mm > 14.9; }, 30));
+  // An alarm clears the homed state (global.alarm_clears_homed, default on).
+  r.set_fault(A, sim::Fault::drive_fault);
+  r.run_for(0.05);
+  REQUIRE(r.status().alarm);
+  r.set_fault(A, sim::Fault::none);
+  r.run_for(0.05);
+  r.reset_alarm();
+  r.run_for(0.05);
+  REQUIRE_FALSE(r.status().alarm);
+  REQUIRE_FALSE(r.axis(A).homed);
+  REQUIRE(r.home_all());
+  CHECK(r.axis(A).position_mm == Approx(7).margin(1e-9));
+}
+
 SCENARIO("homing a single axis moves only that axis", "[sequence]") {
   Rig r;
   r.add_axis(Y, 1);

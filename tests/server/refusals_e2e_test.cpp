@@ -117,13 +117,13 @@ TEST_CASE("a write from a client outside --write-allow is refused as client_read
   check_refusal(d, c, before, "axis.x.pull_off", code(RefusalReason::client_read_only), "client_read_only");
 }
 
-TEST_CASE("a simulator write to a moving carriage is refused as carriage_moving") {
+TEST_CASE("a simulator write that moves a moving carriage's cam is refused as carriage_moving naming that register") {
   Daemon d({.time_scale = 1});
   Client c = Client::tcp(d.port());
   const LastRefusal before = last_refusal(c);
   REQUIRE(c.write("cmd.jog_plus.x", 1) == 0);
   REQUIRE(wait_until([&] { return c.read("axis.x.velocity") != 0; }, 5s));
-  CHECK(c.write("sim.x.noise", 5) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
+  CHECK(c.write("sim.x.sensor_max", 5) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
   REQUIRE(c.write("cmd.jog_plus.x", 0) == 0);
-  check_refusal(d, c, before, "sim.x.noise", code(RefusalReason::carriage_moving), "carriage_moving");
+  check_refusal(d, c, before, "sim.x.sensor_max", code(RefusalReason::carriage_moving), "carriage_moving");
 }

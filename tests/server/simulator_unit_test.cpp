@@ -1,7 +1,7 @@
 // The simulator unit (247) of the real homingd over Modbus/TCP (libmodbus):
 // every acknowledged write holds and reads back, whatever the order and rate;
-// a write to a carriage that moves is refused with exception 06 and changes
-// nothing; the simulated machine is wired from the settings (an
+// a write that would move a moving carriage or its cams is refused with
+// exception 06 and changes nothing, while faults strike at any moment; the simulated machine is wired from the settings (an
 // external-commutator slave's carriage is moved by its master's output).
 #include <catch2/catch.hpp>
 
@@ -13,12 +13,19 @@
 #include <vector>
 
 #include "daemon.hpp"
+#include "homing/alarms.hpp"
+#include "homing/sim/config.hpp"
 
 using namespace e2e;
 
 namespace {
 
 constexpr const char* kAllAxes[] = {"x", "y", "z", "a", "b", "c"};
+
+template <class E>
+std::int64_t v(E e) {
+  return static_cast<std::int64_t>(e);
+}
 
 std::string sim(const char* axis, const char* field) { return std::string("sim.") + axis + "." + field; }
 
@@ -110,7 +117,7 @@ TEST_CASE("acknowledged simulator writes hold with two clients writing different
   }
 }
 
-TEST_CASE("a simulator write to a moving carriage is refused with exception 06 and changes nothing") {
+TEST_CASE("a simulator write that moves a moving carriage or its cams is refused with exception 06 and changes nothing") {
   Daemon d;
   Client c = Client::tcp(d.port());
   c.set("sim.z.actual_position", um(200));
@@ -118,15 +125,16 @@ TEST_CASE("a simulator write to a moving carriage is refused with exception 06 a
   REQUIRE(c.write("cmd.jog_plus.z", 1) == 0);
   REQUIRE(wait_until([&] { return c.read("axis.z.velocity") != 0; }, 2s));
   std::map<std::string, std::int64_t> before;
-  for (const char* f : {"noise", "hysteresis", "fault", "sensor_min", "sensor_max", "hard_stop_max", "lose_steps",
-                        "absolute_offset"})
+  for (const char* f : {"sensor_min", "sensor_max", "hard_stop_min", "hard_stop_max", "index_pitch", "index_offset",
+                        "absolute_offset", "drive_home_position"})
     before[sim("z", f)] = c.read(sim("z", f));
-  CHECK(c.write("sim.z.noise", 7) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
-  CHECK(c.write("sim.z.hysteresis", 77) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
-  CHECK(c.write("sim.z.fault", 2) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
+  CHECK(c.write("sim.z.sensor_min", um(-20)) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
   CHECK(c.write("sim.z.hard_stop_max", um(500)) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
-  CHECK(c.write("sim.z.lose_steps", um(3)) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
+  CHECK(c.write("sim.z.hard_stop_min", um(-7)) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
+  CHECK(c.write("sim.z.index_pitch", um(4)) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
+  CHECK(c.write("sim.z.index_offset", um(1)) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
   CHECK(c.write("sim.z.absolute_offset", um(1)) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
+  CHECK(c.write("sim.z.drive_home_position", um(3)) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
   CHECK(c.write("sim.z.actual_position", um(50)) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
   // A request covering two settings of the moving axis: nothing of it is applied.
   const auto& smin = reg("sim.z.sensor_min");
@@ -136,23 +144,60 @@ TEST_CASE("a simulator write to a moving carriage is refused with exception 06 a
   CHECK(modbus_write_registers(c.ctx(), smin.address, 4, words) == -1);
   CHECK(exception_of(errno) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
   c.use_unit(1);
-  // Axes at rest and the machine-wide knobs are still written.
-  CHECK(c.write("sim.c.noise", 9) == 0);
-  CHECK(c.read("sim.c.noise") == 9);
-  CHECK(c.write("sim.seed", 99) == 0);
   const std::int64_t z_moving = c.read("sim.z.actual_position");
   for (const auto& [name, value] : before) {
     INFO(name);
     CHECK(c.read(name) == value);
   }
+  // What strikes a moving carriage in a real machine is taken at any moment:
+  // noise, wear, bounce, wiring, a fault, lost steps.
+  CHECK(c.write("sim.z.noise", 7) == 0);
+  CHECK(c.read("sim.z.noise") == 7);
+  CHECK(c.write("sim.z.hysteresis", 77) == 0);
+  CHECK(c.read("sim.z.hysteresis") == 77);
+  CHECK(c.write("sim.z.bounce_ms", 3) == 0);
+  CHECK(c.read("sim.z.bounce_ms") == 3);
+  CHECK(c.write("sim.z.lose_steps", um(3)) == 0);
+  // Axes at rest and the machine-wide knobs are still written.
+  CHECK(c.write("sim.c.noise", 9) == 0);
+  CHECK(c.read("sim.c.noise") == 9);
+  CHECK(c.write("sim.seed", 99) == 0);
   REQUIRE(c.write("cmd.jog_plus.z", 0) == 0);
   REQUIRE(wait_until([&] { return at_rest(c); }, 5s));
   CHECK(c.read("sim.z.actual_position") > z_moving);  // it went on jogging, not placed at 50
-  // At rest the same write is taken.
-  CHECK(c.write("sim.z.noise", 7) == 0);
-  CHECK(c.read("sim.z.noise") == 7);
+  // At rest the geometry writes are taken.
+  CHECK(c.write("sim.z.sensor_min", um(-20)) == 0);
+  CHECK(c.read("sim.z.sensor_min") == um(-20));
   CHECK(c.write("sim.z.actual_position", um(50)) == 0);
   CHECK(c.read("sim.z.actual_position") == um(50));
+}
+
+TEST_CASE("a fault written to the simulator while an axis homes strikes mid-cycle with the alarm it causes") {
+  Daemon d({.time_scale = 2});
+  Client c = Client::tcp(d.port());
+  c.set("axis.x.mode", 0);
+  c.set("axis.y.mode", 0);
+  c.set("sequence.step1", 0b100);
+  c.set("sequence.step2", 0);
+  c.set("sim.z.actual_position", um(150));
+  REQUIRE(c.write("cmd.home_all", 1) == 0);
+  // Z seeks toward its cam (150 mm away): the drive fails while it moves.
+  REQUIRE(wait_until([&] { return c.read("axis.z.velocity") != 0; }, 5s));
+  CHECK(c.read("status.homing") == 1);
+  REQUIRE(c.write("sim.z.fault", v(homing::sim::Fault::drive_fault)) == 0);
+  REQUIRE(wait_until([&] { return c.read("status.alarm") != 0; }, 5s));
+  CHECK(c.read("axis.z.alarm") == v(homing::AlarmCode::drive_fault));
+  CHECK(c.read("axis.z.homed") == 0);
+  REQUIRE(wait_until([&] { return at_rest(c); }, 5s));
+  // The fault cleared, the alarm resets and the axis homes.
+  REQUIRE(c.write("sim.z.fault", 0) == 0);
+  REQUIRE(c.write("cmd.reset_alarm", 1) == 0);
+  REQUIRE(wait_until([&] { return c.read("status.alarm") == 0; }, 2s));
+  c.set("sim.z.actual_position", um(10));
+  REQUIRE(c.write("cmd.home_all", 1) == 0);
+  REQUIRE(wait_until([&] { return c.read("axis.z.homed") == 1 || c.read("status.alarm") != 0; }, 30s));
+  CHECK(c.read("status.alarm") == 0);
+  CHECK(c.read("axis.z.homed") == 1);
 }
 
 TEST_CASE("the simulator wires an external-commutator slave to its master's output from the settings") {
@@ -175,8 +220,8 @@ TEST_CASE("the simulator wires an external-commutator slave to its master's outp
     const std::int64_t x0 = c.read("sim.x.actual_position"), y0 = c.read("sim.y.actual_position");
     REQUIRE(c.write("cmd.jog_plus.x", 1) == 0);
     REQUIRE(wait_until([&] { return c.read("sim.x.actual_position") > x0 + 1000; }, 5s));
-    // The slave's carriage moves with X's output: its simulator registers are busy too.
-    CHECK(c.write("sim.y.noise", 5) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
+    // The slave's carriage moves with X's output: its cams are busy too.
+    CHECK(c.write("sim.y.sensor_max", 5) == MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
     REQUIRE(c.write("cmd.jog_plus.x", 0) == 0);
     REQUIRE(wait_until([&] { return at_rest(c); }, 5s));
     const std::int64_t dx = c.read("sim.x.actual_position") - x0, dy = c.read("sim.y.actual_position") - y0;

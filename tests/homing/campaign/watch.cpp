@@ -46,6 +46,19 @@ double Watch::accel_limit(std::size_t a) const { return eff_[a].acceleration_mm_
 void Watch::begin_window(const CyclePlan& p, bool is_refused) {
   in_window = true;
   plan = p;
+  // An unsequenced axis homed when the cycle starts keeps its coordinate
+  // (README "Sequence"): only one whose coordinate is its absolute encoder's is
+  // read again. A gantry pair is kept or assigned together.
+  AxisMask kept = 0;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if ((p.unsequenced & axis_bit(a)) && r_.status().axes[a].homed && !mode_is_absolute(effective(r_.settings, a).mode))
+      kept |= axis_bit(a);
+  for (std::size_t s = 0; s < kAxisCount; ++s) {
+    if (m_.plan[s].role != Role::slave) continue;
+    const std::size_t m = static_cast<std::size_t>(m_.plan[s].partner);
+    if (((kept >> s) & 1u) != ((kept >> m) & 1u)) kept &= static_cast<AxisMask>(~(axis_bit(s) | axis_bit(m)));
+  }
+  plan.unsequenced &= static_cast<AxisMask>(~kept);
   refused = is_refused;
   flipped = 0;
   tampered = 0;
@@ -55,7 +68,7 @@ void Watch::begin_window(const CyclePlan& p, bool is_refused) {
     window_start_x[a] = r_.actual(a);
     has_release_[a] = has_trigger_[a] = false;
     // The cycle assigns these again: the old truth no longer holds.
-    if (!refused && ((p.covered | p.unsequenced) & axis_bit(a))) truth[a].valid = false;
+    if (!refused && ((plan.covered | plan.unsequenced) & axis_bit(a))) truth[a].valid = false;
   }
   for (std::size_t s = 0; s < kAxisCount; ++s)
     if (m_.plan[s].role == Role::slave) rel_ref_[s] = r_.actual(s) - r_.actual(static_cast<std::size_t>(m_.plan[s].partner));
