@@ -93,6 +93,17 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
                          "axis came to rest", X, s.lock_timeout_ms);
     case AlarmCode::lock_engaged:
       return fmt::format("{}: locking indexer reported locked during {} while the unlock output was on", X, ph);
+    case AlarmCode::cam_not_found:
+      return fmt::format("{}: home cam not found: the search reversed at one limit switch and met the other "
+                         "after {:.3f} {} without the cam", X, a.value, u);
+    case AlarmCode::limit_in_homing:
+      return fmt::format("{}: {} limit switch met during {} at {:.3f} {}", X, a.rule == 1 ? "negative" : "positive",
+                         ph, a.value, u);
+    case AlarmCode::both_limits_active:
+      return fmt::format("{}: both limit switches read active at once (during {})", X, ph);
+    case AlarmCode::limit_switch:
+      return fmt::format("{}: {} limit switch tripped during {} at {:.3f} {}", X,
+                         a.rule == 1 ? "negative" : "positive", ph, a.value, u);
   }
   return "?";
 }

@@ -41,8 +41,12 @@ enum class AlarmCode : std::uint8_t {
   unlock_not_confirmed = 25,   // locking indexer: not unlocked within lock_timeout_ms
   lock_not_confirmed = 26,     // locking indexer: not locked again within lock_timeout_ms of rest
   lock_engaged = 27,           // locking indexer: reported locked while unlocked for motion
+  cam_not_found = 28,          // home cam: both limit switches met without the cam
+  limit_in_homing = 29,        // a limit switch met in a homing phase that must not reach one
+  both_limits_active = 30,     // both limit switches active at once (wiring, polarity)
+  limit_switch = 31,           // an end-of-travel limit switch tripped outside homing (hard limit)
 };
-inline constexpr std::uint8_t kAlarmCodeCount = 28;
+inline constexpr std::uint8_t kAlarmCodeCount = 32;
 
 // The alarm table: per code its name, what happened (text) and what a
 // maintenance technician checks (what_to_check). describe_alarm() says what
@@ -119,8 +123,21 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
     {AlarmCode::lock_engaged, "lock_engaged", "locking indexer reported locked while unlocked for motion",
      "check the indexer's air or hydraulic pressure, the unlock valve and the unlocked sensor and its wiring "
      "(a flickering sensor), and the axis for damage; then reset and home again"},
+    {AlarmCode::cam_not_found, "cam_not_found", "home cam not found between the limit switches",
+     "check the home cam's sensor and its wiring and polarity (sensor_nc), and that the cam lies between "
+     "the limit switches; then reset and home again"},
+    {AlarmCode::limit_in_homing, "limit_in_homing", "a limit switch was met during a homing phase that must not reach one",
+     "check that the home cam lies well inside the limit switches (max_backoff, pull_off and the final "
+     "position must not reach a limit), and the limit switches' wiring; reset, jog off the limit switch and home "
+     "again"},
+    {AlarmCode::both_limits_active, "both_limits_active", "both limit switches read active at once",
+     "check the limit switches' wiring (a broken wire on NC switches), their polarity (limits_nc) and supply; "
+     "then reset"},
+    {AlarmCode::limit_switch, "limit_switch", "end-of-travel limit switch tripped",
+     "reset, jog the axis off the limit switch (only away from it is allowed) and find why it ran there "
+     "(soft limits, lost steps, a move before homing); re-home if it was homed"},
 };
-static_assert(lists_every_value(kAlarmInfo, AlarmCode::lock_engaged));
+static_assert(lists_every_value(kAlarmInfo, AlarmCode::limit_switch));
 static_assert(std::size(kAlarmInfo) == kAlarmCodeCount);
 constexpr std::span<const AlarmInfo> enum_table(AlarmCode) { return kAlarmInfo; }
 
@@ -129,7 +146,7 @@ struct Alarm {
   Phase phase = Phase::idle;        // phase the axis was in when it was raised
   AxisField field = AxisField::none;  // for settings faults: the setting at fault
   double value = 0;                 // a figure for the text (distance, limit...)
-  std::uint8_t rule = 0;            // settings faults: the CheckRule broken
+  std::uint8_t rule = 0;            // settings faults: the CheckRule broken; limit alarms: 1 negative, 2 positive limit
   explicit operator bool() const { return code != AlarmCode::none; }
 };
 

@@ -53,6 +53,10 @@ void PhaseRunner::dispatch() {
     case Phase::waiting: return waiting();
     case Phase::align_slave: return align_slave();
     case Phase::drive_homing: return drive_homing();
+    case Phase::cam_seek: return cam_seek();
+    case Phase::limit_reversal: return limit_reversal();
+    case Phase::cam_stop: return cam_stop();
+    case Phase::cam_latch: return cam_latch();
     case Phase::done:
       run.entered = true;
       return;

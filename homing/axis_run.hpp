@@ -52,6 +52,9 @@ struct PushToStop {
   double start_s = 0;           // engine time the push began
   bool stalled = false;         // the drive reported the stall: braking at the stop
 };
+struct LimitReversal {
+  bool braked = false;        // at rest after meeting the limit switch: the search runs back
+};
 struct DriveHoming {
   double request_s = 0;       // engine time the home request was raised
   bool done_seen_off = false; // home done was seen off since the request: the drive began homing
@@ -60,7 +63,8 @@ struct DriveHoming {
 
 using PhaseData = std::variant<std::monostate, phase_data::Seek, phase_data::Stop,
                                phase_data::BackOff, phase_data::Index, phase_data::Waiting, phase_data::Jog,
-                               phase_data::PushToStop, phase_data::DriveHoming>;
+                               phase_data::PushToStop, phase_data::DriveHoming,
+                               phase_data::LimitReversal>;
 
 // How far this axis has come in the running homing cycle, in order. The
 // gantry partner waits on it.
@@ -100,6 +104,10 @@ struct AxisReadings {
   double absolute_mm = 0;  // absolute encoder reading
   bool stall = false;      // the drive reports a stall (torque limit reached)
   bool drive_done = false;  // the drive's home done
+  bool limit_min = false;   // the negative end's limit switch is active (limits fitted, polarity applied)
+  bool limit_max = false;   // the positive end's
+  // The limit switch at the end `toward` points to (-1 negative, +1 positive) is active.
+  bool limit_toward(double toward) const { return toward < 0 ? limit_min : limit_max; }
 };
 
 struct AxisRun {
@@ -120,7 +128,10 @@ struct AxisRun {
   bool push_output = false;
   bool commutator_output = false;
   std::int8_t prev_jog_request = 0;  // the jog input of the last period (a jog starts on a change)
-  bool limit_tripped = false;   // shared limit tripped: jog away until it releases
+  bool limit_tripped = false;   // shared limit or limit switch tripped: jog away until it releases
+  // Which: 0 the shared home sensor (it lies toward `direction`), -1/+1 the
+  // limit switch at the negative/positive end.
+  std::int8_t limit_side = 0;
   double pair_rel0_mm = 0;      // gantry slave: slave - master motor position at cycle start
   // Homed by its drive (drive mode): from then on the drive's home done must
   // stay on, or the drive has lost the reference the coordinate rests on.

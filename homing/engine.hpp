@@ -38,6 +38,7 @@ class Engine {
   void read_inputs(const Settings& settings, const Inputs& inputs, double dt_s);  // sensor_inputs.cpp
   void check_safety(const Settings& settings, const Inputs& inputs);              // safety.cpp
   void check_drive_references(const Settings& settings);
+  void check_limit_switches(const Settings& settings);                             // limit_switches.cpp
   void handle_commands(const Settings& settings, const Inputs& inputs);
   void run_cycle(const Settings& settings);                                       // cycle.cpp
   void run_motion(const Settings& settings);                                      // jog_move.cpp

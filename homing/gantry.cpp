@@ -54,6 +54,9 @@ Settings motion_settings(const Settings& settings) {
     slave.slave_mode = own.slave_mode;
     slave.indexer_lock = own.indexer_lock;  // an indexer is the slave's own hardware
     slave.lock_timeout_ms = own.lock_timeout_ms;
+    slave.limits_fitted = own.limits_fitted;  // limit switches at the slave carriage's own ends
+    slave.limits_nc = own.limits_nc;
+    slave.limit_overtravel_mm = own.limit_overtravel_mm;
     if (planted(Mutant::slave_keeps_own_direction)) slave.direction = own.direction;
     const double pair_accel = std::min(own.acceleration_mm_per_s2, master.acceleration_mm_per_s2);
     slave.acceleration_mm_per_s2 = master.acceleration_mm_per_s2 = pair_accel;

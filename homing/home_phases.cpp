@@ -14,7 +14,7 @@ double PhaseRunner::rest_offset_mm() const {
 
 void PhaseRunner::pull_off() {
   if (entry()) {
-    run.target_mm = run.reference_mm - dir * rest_offset_mm();
+    run.target_mm = run.reference_mm + away_from_reference() * rest_offset_mm();
     // The master holds where its braking left it, a little past its own
     // edge: the slave stands as far past its own, so the pull-off made
     // together leaves both at the same distance from their edges.

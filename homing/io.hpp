@@ -35,6 +35,10 @@ struct AxisInputs {
   // Locking indexer: the pin is fully out (LinuxCNC joint.N.is-unlocked).
   // Only read on an axis with axis.<a>.indexer_lock.
   bool indexer_unlocked = false;
+  // End-of-travel limit switches: electrical levels (before limits_nc). Only
+  // read on an axis with axis.<a>.limits_fitted.
+  bool limit_min_level = false;
+  bool limit_max_level = false;
 };
 
 // Commands arrive as one-period requests (the runtime turns a coil write into

@@ -37,11 +37,27 @@ CommandResult Engine::motion_refusal(const Settings& settings, std::size_t axis)
 
 // A jog is a motion command, except that an axis on a tripped shared limit
 // may always jog away from its sensor (only away) until it releases.
+// Limit switches: a jog into an active one is refused, tripped or not.
 CommandResult Engine::jog_refusal(const Settings& settings, std::size_t axis, std::int8_t dir) const {
   const CommandResult r = motion_refusal(settings, axis);
+  if (r == CommandResult::accepted && settings.axes[axis].limits_fitted &&
+      axes_[axis].readings.limit_toward(dir))
+    return CommandResult::refused_hard_limit;
   if (r != CommandResult::refused_hard_limit) return r;
-  const double toward = settings.axes[axis].direction == Direction::positive ? 1.0 : -1.0;
-  return dir * toward < 0 ? CommandResult::accepted : CommandResult::refused_hard_limit;
+  // Every tripped limit of the axis and its gantry partner must lie behind the
+  // jog: a limit switch at its own end, a shared home sensor toward direction.
+  const double seek_toward = settings.axes[axis].direction == Direction::positive ? 1.0 : -1.0;
+  const int partner = gantry_partner(settings, axis);
+  for (const int a : {static_cast<int>(axis), partner}) {
+    if (a < 0) continue;
+    const AxisRun& t = axes_[static_cast<std::size_t>(a)];
+    if (!t.limit_tripped) continue;
+    const double toward = t.limit_side != 0 ? static_cast<double>(t.limit_side) : seek_toward;
+    if (dir * toward >= 0) return CommandResult::refused_hard_limit;
+  }
+  if (settings.axes[axis].limits_fitted && axes_[axis].readings.limit_toward(dir))
+    return CommandResult::refused_hard_limit;
+  return CommandResult::accepted;
 }
 
 // A jog is a level: it starts on a press (a change of the request), runs
@@ -98,6 +114,10 @@ void Engine::move_commands(const Settings& settings, const Commands& c) {
     if (r == CommandResult::accepted && homed && s.soft_limits_enable &&
         (target < s.soft_limit_min_mm || target > s.soft_limit_max_mm))
       r = CommandResult::refused_soft_limit;
+    // A move toward an active limit switch would trip it at once.
+    if (r == CommandResult::accepted && s.limits_fitted && std::isfinite(target) &&
+        target != run.machine_position_mm() && run.readings.limit_toward(target - run.machine_position_mm()))
+      r = CommandResult::refused_hard_limit;
     if (r == CommandResult::accepted && run.phase == Phase::jog) r = CommandResult::refused_busy;
     if (r == CommandResult::accepted && s.jog_feedrate_mm_per_min <= 0) r = CommandResult::refused_invalid;
     last_result_ = r;

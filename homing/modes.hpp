@@ -29,6 +29,7 @@ enum class HomingMode : std::uint8_t {
   pushing_reapproach = 8,
   hard_stop = 9,
   drive = 10,
+  home_cam = 11,
 };
 
 // What a method needs wired to the axis, one bit each.
@@ -41,6 +42,8 @@ enum class Signal : std::uint16_t {
   stall = 1u << 5,             // the drive's stall / torque-limit output
   drive_request = 1u << 6,     // output: asks the drive to run its own homing procedure
   drive_done = 1u << 7,        // input: the drive reports its homing done (its reference is valid)
+  limit_min = 1u << 8,         // input: end-of-travel limit switch at the negative end
+  limit_max = 1u << 9,         // input: end-of-travel limit switch at the positive end
 };
 using Signals = std::uint16_t;
 constexpr Signals operator|(Signal a, Signal b) {
@@ -66,6 +69,10 @@ inline constexpr SignalInfo kSignalInfo[] = {
     {Signal::stall, "stall", "the drive's stall or torque-limit output", "homes on the drive's stall output", true},
     {Signal::drive_request, "home_request", "home request output to the drive", "has the drive home itself", true},
     {Signal::drive_done, "home_done", "home done input from the drive", "waits for the drive's home done", true},
+    {Signal::limit_min, "limit_min", "end-of-travel limit switch at the negative end",
+     "reverses its search at the limit switches", true},
+    {Signal::limit_max, "limit_max", "end-of-travel limit switch at the positive end",
+     "reverses its search at the limit switches", true},
 };
 
 // The coordinate a method gives the axis once homed.
@@ -144,6 +151,8 @@ inline constexpr std::array<Phase, kMaxModePhases> push_reapproach{P::pre_move, 
                                                                    P::push,       P::back_off, P::reapproach,
                                                                    P::pull_off,   P::assign,   P::final_move};
 inline constexpr std::array<Phase, kMaxModePhases> drive{P::drive_homing, P::assign, P::final_move};
+inline constexpr std::array<Phase, kMaxModePhases> home_cam{P::cam_seek,  P::limit_reversal, P::cam_stop, P::cam_latch,
+                                                            P::pull_off,  P::assign,         P::final_move};
 }  // namespace mode_phases
 
 inline constexpr ModeRow kModeTable[] = {
@@ -187,10 +196,20 @@ inline constexpr ModeRow kModeTable[] = {
     {HomingMode::drive, "drive", "the drive homes itself on request; home_position where it reports done",
      Signal::step_output | Signal::drive_request | Signal::drive_done, mode_phases::drive, 3,
      Coordinate::drive_reference, FinalMove::if_enabled, false, false, true},
+    // A home cam in mid-travel between two limit switches (CiA 402 methods
+    // 7-14 and 23-30, Beckhoff MC_StepLimitSwitch): the search reverses at
+    // the limit switch it meets first. limit_reversal runs only when it does.
+    // The cam is not at an end of travel, so it cannot be a hard limit; the
+    // limit switches are. No gantry: one side reversing alone would rack it.
+    {HomingMode::home_cam, "home_cam",
+     "seek the home cam, reversing at the limit switch if met first; the configured edge of the cam "
+     "(cam_edge) is the reference",
+     Signal::step_output | Signal::home_sensor | Signal::limit_min | Signal::limit_max, mode_phases::home_cam, 7,
+     Coordinate::reference_edge, FinalMove::if_enabled, false, false, false},
     // clang-format on
 };
 inline constexpr std::uint8_t kHomingModeCount = std::size(kModeTable);
-static_assert(lists_every_value(kModeTable, HomingMode::drive));
+static_assert(lists_every_value(kModeTable, HomingMode::home_cam));
 constexpr std::span<const ModeRow> enum_table(HomingMode) { return kModeTable; }
 
 // Each row's phase count matches its list, and every method that moves to
@@ -203,7 +222,8 @@ constexpr bool rows_are_consistent() {
     if (r.coordinate != Coordinate::none && !r.runs(Phase::assign)) return false;
     if (r.runs(Phase::final_move) != (r.final_move != FinalMove::never)) return false;
     if (r.coordinate == Coordinate::reference_edge &&
-        !(r.needs_signal(Signal::home_sensor) && r.runs(Phase::seek) && r.runs(Phase::pull_off)))
+        !(r.needs_signal(Signal::home_sensor) && (r.runs(Phase::seek) || r.runs(Phase::cam_seek)) &&
+          r.runs(Phase::pull_off)))
       return false;
     if (r.runs(Phase::index) != r.needs_signal(Signal::index)) return false;
     if (r.runs(Phase::push) && !r.needs_signal(Signal::push_output)) return false;
@@ -213,6 +233,10 @@ constexpr bool rows_are_consistent() {
     if (r.runs(Phase::drive_homing) != r.needs_signal(Signal::drive_request)) return false;
     if (r.needs_signal(Signal::drive_request) != r.needs_signal(Signal::drive_done)) return false;
     if ((r.coordinate == Coordinate::drive_reference) != r.runs(Phase::drive_homing)) return false;
+    // A search that reverses at the limit switches needs both of them.
+    if (r.runs(Phase::limit_reversal) !=
+        (r.needs_signal(Signal::limit_min) && r.needs_signal(Signal::limit_max)))
+      return false;
   }
   return true;
 }

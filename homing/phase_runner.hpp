@@ -112,6 +112,17 @@ struct PhaseRunner {
   void waiting();
   void align_slave();
   void drive_homing();  // drive_phases.cpp
+  // Home cam in mid-travel (cam_phases.cpp).
+  void cam_seek();
+  void limit_reversal();
+  void cam_stop();
+  void cam_latch();
+  void cam_triggered();
+  void fail_limit(AlarmCode code, double toward);
+  // The side of the cam its reference edge lies on, as a direction.
+  double cam_side() const { return s.cam_edge == CamEdge::ahead ? dir : -dir; }
+  // Pull-off: away from the reference edge (from the sensor; a home cam's off the cam on its reference side).
+  double away_from_reference() const { return row().runs(Phase::cam_latch) ? cam_side() : -dir; }
   void begin();
   void dispatch();
 };

@@ -31,6 +31,10 @@ enum class Phase : std::uint8_t {
   drive_homing = 19,  // the drive homes itself: home request on, waiting for its home done
   unlock = 20,        // locking indexer: unlock output on, motion held until it reports unlocked
   lock = 21,          // locking indexer: at rest, unlock output off, waiting for it to lock
+  cam_seek = 22,      // home cam in mid-travel: seeking the cam, reversing at the limit switch ahead
+  limit_reversal = 23,  // home cam: braking at the limit switch, then seeking the cam the other way
+  cam_stop = 24,      // home cam: decelerating after the cam's trigger; the cam must stay active
+  cam_latch = 25,     // home cam: leaving the cam at latch_feedrate toward its reference edge
 };
 
 inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
@@ -59,8 +63,14 @@ inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
      "the drive homes itself: home request on, waiting for its home done within drive_home_timeout"},
     {Phase::unlock, "unlock", "locking indexer: unlocking before the axis moves (motion held until unlocked)"},
     {Phase::lock, "lock", "locking indexer: at rest, locking again"},
+    {Phase::cam_seek, "cam_seek",
+     "home cam in mid-travel: seeking the cam at seek_feedrate in direction (reverses at the limit switch)"},
+    {Phase::limit_reversal, "limit_reversal",
+     "home cam: met the limit switch first; braking, then seeking the cam the other way"},
+    {Phase::cam_stop, "cam_stop", "home cam: decelerating on the cam after its trigger"},
+    {Phase::cam_latch, "cam_latch", "home cam: leaving the cam at latch_feedrate across its reference edge"},
 };
-static_assert(lists_every_value(kPhaseInfo, Phase::lock));
+static_assert(lists_every_value(kPhaseInfo, Phase::cam_latch));
 constexpr std::span<const EnumInfo<Phase>> enum_table(Phase) { return kPhaseInfo; }
 
 std::string_view phase_name(Phase phase);

@@ -34,6 +34,7 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
   }
 
   check_drive_references(settings);
+  check_limit_switches(settings);
 
   comm_lost_ = inputs.communication_lost;
   if (comm_lost_ && any_motion()) {
@@ -62,12 +63,13 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
     // A tripped shared limit stays "tripped" until its sensor releases: the
     // reset is taken and the jog away from it allowed without re-latching.
     const bool sensor_active = inputs_[a].sensor_active;
-    if (run.limit_tripped && !sensor_active) run.limit_tripped = false;
+    if (run.limit_tripped && run.limit_side == 0 && !sensor_active) run.limit_tripped = false;
     if (run.alarm || run.in_cycle || !run.homed()) continue;
     const double pos = run.machine_position_mm();
     if (s.shared_limit && sensor_active && !run.limit_tripped && sensor_channel(settings, a) == static_cast<int>(a)) {
       raise(settings, axis_bit(a), Alarm{AlarmCode::hard_limit, Phase::idle, AxisField::shared_limit, pos, 0});
       run.limit_tripped = true;
+      run.limit_side = 0;
       continue;
     }
     const double tol = 1e-6;

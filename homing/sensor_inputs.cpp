@@ -63,8 +63,12 @@ void Engine::read_inputs(const Settings& settings, const Inputs& inputs, double 
       }
     }
     channel.sensor_active = filter.stable() != nc;
+    // Limit switches belong to the carriage of the axis, whatever the commutator routes.
+    const AxisSettings& own = settings.axes[c];
     axes_[c].readings =
-        AxisReadings{in.drive_fault, in.absolute_valid, in.absolute_position_mm, in.stall, in.drive_done};
+        AxisReadings{in.drive_fault, in.absolute_valid, in.absolute_position_mm, in.stall, in.drive_done,
+                     own.limits_fitted && in.limit_min_level != own.limits_nc,
+                     own.limits_fitted && in.limit_max_level != own.limits_nc};
   }
 }
 

@@ -65,6 +65,16 @@ static_assert(lists_every_value(kAxisAllowedWithoutHomingInfo, AxisAllowedWithou
 constexpr std::span<const EnumInfo<AxisAllowedWithoutHoming>> enum_table(AxisAllowedWithoutHoming) {
   return kAxisAllowedWithoutHomingInfo;
 }
+// Which edge of a home cam in mid-travel is the reference (home_cam mode),
+// named from the homing direction: the axis always leaves the cam across
+// that edge at latch feedrate, whichever way it found the cam.
+enum class CamEdge : std::uint8_t { behind = 0, ahead = 1 };
+inline constexpr EnumInfo<CamEdge> kCamEdgeInfo[] = {
+    {CamEdge::behind, "behind", "the cam's edge facing away from direction (the one a seek from the start side meets)"},
+    {CamEdge::ahead, "ahead", "the cam's edge toward direction (the far side of the cam)"},
+};
+static_assert(lists_every_value(kCamEdgeInfo, CamEdge::ahead));
+constexpr std::span<const EnumInfo<CamEdge>> enum_table(CamEdge) { return kCamEdgeInfo; }
 
 // What an axis is: it names the unit of every length, feedrate and
 // acceleration of the axis (mm or degrees). X, Y and Z are linear only; A, B
@@ -122,6 +132,12 @@ struct AxisSettings {
   bool indexer_lock = false;
   double lock_timeout_ms = 0;
   AxisAllowedWithoutHoming allowed_without_homing = AxisAllowedWithoutHoming::as_global;
+  // End-of-travel limit switches, one at each end (docs/limit-switches.md):
+  // hard limits outside homing, and where a home_cam search reverses.
+  bool limits_fitted = false;
+  bool limits_nc = false;
+  CamEdge cam_edge = CamEdge::behind;   // home_cam: the reference edge of the cam
+  double limit_overtravel_mm = 0;       // travel past a limit switch before the mechanical stop
   friend bool operator==(const AxisSettings&, const AxisSettings&) = default;
 };
 
@@ -192,6 +208,10 @@ enum class AxisField : std::uint8_t {
   indexer_lock,
   lock_timeout_ms,
   allowed_without_homing,
+  limits_fitted,
+  limits_nc,
+  cam_edge,
+  limit_overtravel,
 };
 // The name of each: the suffix of its register name (axis.<a>.<name>).
 struct AxisFieldInfo {
@@ -233,8 +253,12 @@ inline constexpr AxisFieldInfo kAxisFieldInfo[] = {
     {AxisField::indexer_lock, "indexer_lock"},
     {AxisField::lock_timeout_ms, "lock_timeout_ms"},
     {AxisField::allowed_without_homing, "allowed_without_homing"},
+    {AxisField::limits_fitted, "limits_fitted"},
+    {AxisField::limits_nc, "limits_nc"},
+    {AxisField::cam_edge, "cam_edge"},
+    {AxisField::limit_overtravel, "limit_overtravel"},
 };
-static_assert(lists_every_value(kAxisFieldInfo, AxisField::allowed_without_homing));
+static_assert(lists_every_value(kAxisFieldInfo, AxisField::limit_overtravel));
 constexpr std::span<const AxisFieldInfo> enum_table(AxisField) { return kAxisFieldInfo; }
 
 std::string_view field_name(AxisField field);

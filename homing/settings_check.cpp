@@ -146,6 +146,17 @@ std::optional<SettingsFault> check_indexer(const Settings& settings, std::size_t
   return std::nullopt;
 }
 
+// End-of-travel limit switches: the axis must come to rest before the
+// mechanical stop beyond them; home_cam cannot search without them.
+std::optional<SettingsFault> check_limit_switches(const AxisSettings& s, std::size_t axis) {
+  if (mode_row(s.mode).runs(Phase::limit_reversal) && !s.limits_fitted)
+    return fault(axis, AxisField::limits_fitted, CheckRule::cam_needs_limits, 0);
+  if (!s.limits_fitted) return std::nullopt;
+  if (const double needed = limit_stop_distance_mm(s); needed >= s.limit_overtravel_mm)
+    return fault(axis, AxisField::limit_overtravel, CheckRule::limit_overtravel_too_short, needed);
+  return std::nullopt;
+}
+
 std::optional<SettingsFault> check_axis_in(const Settings& settings, const Settings& pair, std::size_t axis) {
   // Checked on the axis's own setting, whatever it moves with: a rotary X
   // is wrong even while X is a slave.
@@ -158,7 +169,8 @@ std::optional<SettingsFault> check_axis_in(const Settings& settings, const Setti
   const ModeRow& row = mode_row(s.mode);
   if (s.shared_limit && !row.shares_limit)
     return fault(axis, AxisField::shared_limit, CheckRule::shared_limit_without_sensor, 1);
-  if (row.runs(Phase::seek)) return check_motion(s, axis);
+  if (auto f = check_limit_switches(s, axis)) return f;
+  if (row.runs(Phase::seek) || row.runs(Phase::cam_seek)) return check_motion(s, axis);
   if (row.runs(Phase::push_to_stop)) return check_stop_search(s, axis);
   if (row.runs(Phase::drive_homing) && !(s.drive_home_timeout_s > 0))
     return fault(axis, AxisField::drive_home_timeout, CheckRule::missing_time_limit, s.drive_home_timeout_s);
@@ -185,6 +197,11 @@ double backoff_needed_mm(const AxisSettings& s) {
 double gantry_stop_distance_mm(const AxisSettings& s) {
   const double v = mm_per_min_to_mm_per_s(std::max(s.seek_feedrate_mm_per_min, s.jog_feedrate_mm_per_min));
   return stop_distance_mm(v, s.acceleration_mm_per_s2);
+}
+
+double limit_stop_distance_mm(const AxisSettings& s) {
+  const double v = mm_per_min_to_mm_per_s(std::max(s.seek_feedrate_mm_per_min, s.jog_feedrate_mm_per_min));
+  return stop_distance_mm(v, s.acceleration_mm_per_s2) + v * kBrakingHorizon_s;
 }
 
 bool final_move_wanted(const AxisSettings& s) {
@@ -292,6 +309,16 @@ std::string describe_fault(const SettingsFault& f, const Settings& settings) {
       return fmt::format("{}: a locking indexer holds one axis; on a gantry one side would be held while the "
                          "other moves; switch indexer_lock off or take the axis out of the gantry (slave_of)",
                          name);
+    case CheckRule::cam_needs_limits:
+      return fmt::format("axis.{}.mode = {}: the search reverses at the end-of-travel limit switches; set "
+                         "{} = 1 and wire limit_min and limit_max", letter, mode_name(s.mode), name);
+    case CheckRule::limit_overtravel_too_short:
+      return fmt::format("stopping from {:g} {}/min (the faster of seek_feedrate and jog_feedrate) at acceleration "
+                         "{:g} {}/s² after a limit switch trips takes {:.3f} {} (one 20 ms period included), not "
+                         "less than {} = {:g} {}: the axis would reach the mechanical stop; lower the feedrates, "
+                         "raise acceleration or measure the overtravel again",
+                         std::max(s.seek_feedrate_mm_per_min, s.jog_feedrate_mm_per_min), unit,
+                         s.acceleration_mm_per_s2, unit, f.value, unit, name, s.limit_overtravel_mm, unit);
     case CheckRule::shared_limit_rests_on_sensor:
       return fmt::format("{}: the axis would rest {:g} {} from its edge (pull-off, plus a slave's "
                          "switch_compensation); a shared home/limit sensor needs more than 0 so the axis "

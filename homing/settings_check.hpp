@@ -34,6 +34,8 @@ enum class CheckRule : std::uint8_t {
   kind_linear_only,         // X, Y and Z cannot be rotary
   missing_time_limit,       // drive mode needs drive_home_timeout_s > 0
   indexer_in_gantry,        // a locking indexer on a gantry master or slave
+  cam_needs_limits,         // home_cam reverses at limit switches: limits_fitted must be on
+  limit_overtravel_too_short,  // the axis cannot stop within limit_overtravel past a limit switch
 };
 
 // Each rule in words, for the refusal codes a PLC reads
@@ -73,8 +75,12 @@ inline constexpr EnumInfo<CheckRule> kCheckRuleInfo[] = {
      "drive-performed homing needs drive_home_timeout_s greater than 0"},
     {CheckRule::indexer_in_gantry, "indexer_in_gantry",
      "a locking indexer (indexer_lock) is for an axis of its own, not a gantry master or slave"},
+    {CheckRule::cam_needs_limits, "cam_needs_limits",
+     "home_cam reverses its search at the limit switches: it needs limits_fitted"},
+    {CheckRule::limit_overtravel_too_short, "limit_overtravel_too_short",
+     "the axis cannot stop within limit_overtravel past a limit switch from its seek or jog feedrate"},
 };
-static_assert(lists_every_value(kCheckRuleInfo, CheckRule::indexer_in_gantry));
+static_assert(lists_every_value(kCheckRuleInfo, CheckRule::limit_overtravel_too_short));
 constexpr std::span<const EnumInfo<CheckRule>> enum_table(CheckRule) { return kCheckRuleInfo; }
 
 struct SettingsFault {
@@ -113,6 +119,10 @@ double backoff_needed_mm(const AxisSettings& s);
 // pair's acceleration: one side stalled by a drive fault, the other must
 // come to rest within max_misalignment.
 double gantry_stop_distance_mm(const AxisSettings& pair_motion);
+// Travel past a limit switch before the axis can rest: the stop from its
+// fastest speed (seek or jog feedrate) plus a 20 ms control period of travel
+// before the switch is seen.
+double limit_stop_distance_mm(const AxisSettings& s);
 // The final move of a cycle is made for this axis.
 bool final_move_wanted(const AxisSettings& s);
 // How far the index phase searches from the release edge before

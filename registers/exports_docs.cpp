@@ -77,6 +77,19 @@ constexpr AlarmConfirm kAlarmConfirm[] = {
      "off"},
     {homing::AlarmCode::lock_engaged,
      "`axis.<a>.alarm_phase` is the phase the axis moved in; the unlocked input went to 0 during the motion"},
+    {homing::AlarmCode::cam_not_found,
+     "`axis.<a>.alarm_phase` is `cam_seek` after a `limit_reversal`: the axis met both limit switches and "
+     "`axis.<a>.sensor` never went to 1 on the way; move the carriage onto the cam by hand and watch "
+     "`axis.<a>.sensor`"},
+    {homing::AlarmCode::limit_in_homing,
+     "`axis.<a>.alarm_phase` names the phase that ran into the limit switch (not `cam_seek`); "
+     "`axis.<a>.alarm_value` is where it stood"},
+    {homing::AlarmCode::both_limits_active,
+     "with the carriage between the ends, both limit inputs read active (`homingctl status`, or the GPIO lines "
+     "`limit_min`/`limit_max`); on NC switches, a wire is open"},
+    {homing::AlarmCode::limit_switch,
+     "`axis.<a>.alarm_phase` is `jog`, `move` or `idle`; the limit input of that end reads active and "
+     "`axis.<a>.alarm_value` is the position where it tripped"},
 };
 
 std::string registers_reference() {

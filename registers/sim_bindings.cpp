@@ -32,6 +32,8 @@ auto length_field(A& a, Key k) -> decltype(&a.noise_mm) {
     case Key::sim_drive_answer_ms: return &a.drive_answer_ms;
     case Key::sim_unlock_delay_ms: return &a.unlock_delay_ms;
     case Key::sim_lock_delay_ms: return &a.lock_delay_ms;
+    case Key::sim_limit_min: return &a.limit_min_mm;
+    case Key::sim_limit_max: return &a.limit_max_mm;
     default: return nullptr;
   }
 }
@@ -50,6 +52,7 @@ void set_config_raw(MachineConfig& config, SimSwitches& switches, const Register
     }
     switch (reg.key) {
       case Key::sim_sensor_nc: a.sensor_nc = raw != 0; return;
+      case Key::sim_limits_nc: a.limits_nc = raw != 0; return;
       case Key::sim_fault: a.fault = static_cast<homing::sim::Fault>(raw); return;
       case Key::sim_lose_steps: return;  // an action, not a setting
       default: unbound(reg);
@@ -94,6 +97,9 @@ std::int64_t sim_raw(const Register& reg, const MachineConfig& config, const Sim
       case Key::sim_indexer_locked: return readback.indexer_locked[i] ? 1 : 0;
       case Key::sim_lose_steps: return 0;
       case Key::sim_sensor_nc: return a.sensor_nc ? 1 : 0;
+      case Key::sim_limits_nc: return a.limits_nc ? 1 : 0;
+      case Key::sim_limit_min_active: return readback.limit_min[i] ? 1 : 0;
+      case Key::sim_limit_max_active: return readback.limit_max[i] ? 1 : 0;
       case Key::sim_fault: return static_cast<std::int64_t>(a.fault);
       default: break;
     }

@@ -27,6 +27,8 @@ struct SimReadback {
   std::array<bool, homing::kAxisCount> at_hard_stop{};          // Simulator::at_hard_stop
   std::array<std::uint8_t, homing::kAxisCount> driven_by{};     // 0 own output, m + 1: Simulator::driving_output
   std::array<bool, homing::kAxisCount> indexer_locked{};        // Simulator::indexer_locked
+  std::array<bool, homing::kAxisCount> limit_min{};             // Simulator::limit_active(a, false)
+  std::array<bool, homing::kAxisCount> limit_max{};             // Simulator::limit_active(a, true)
 };
 
 // The table's defaults for the simulated machine (a home-all with

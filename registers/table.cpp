@@ -96,6 +96,7 @@ constexpr auto kSlaveModes = values_of(homing::kSlaveModeInfo);
 constexpr auto kAllowed = values_of(homing::kAllowedWithoutHomingInfo);
 constexpr auto kAxisAllowed = values_of(homing::kAxisAllowedWithoutHomingInfo);
 constexpr auto kKinds = values_of(homing::kAxisKindInfo);
+constexpr auto kCamEdges = values_of(homing::kCamEdgeInfo);
 constexpr auto kStates = values_of(homing::kMachineStateInfo);
 constexpr auto kCommandResults = values_of(homing::kCommandResultInfo);
 constexpr auto kInterlocks = bits_of(homing::interlock::kInfo);
@@ -136,6 +137,7 @@ constexpr ValueList kValueLists[] = {
     {"allowed_without_homing", kAllowed},
     {"axis_allowed_without_homing", kAxisAllowed},
     {"kind", kKinds},
+    {"cam_edge", kCamEdges},
     {"axis_mask", kAxisBits},
     {"state", kStates},
     {"command_result", kCommandResults},
@@ -239,6 +241,11 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     {.pattern = "axis.<a>.switch_compensation", .offset = 40, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .fills = fills<&A::switch_compensation_mm>, .description = "gantry: fine correction added to the slave's edge"},
     {.pattern = "axis.<a>.soft_limit_min", .offset = 42, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = -1'000'000, .fills = fills<&A::soft_limit_min_mm>, .description = "lowest position allowed once homed"},
     {.pattern = "axis.<a>.soft_limit_max", .offset = 44, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = 1'000'000, .fills = fills<&A::soft_limit_max_mm>, .description = "highest position allowed once homed"},
+    {.pattern = "axis.<a>.limits_fitted", .offset = 46, .max = 1, .fills = fills<&A::limits_fitted>, .description = "flag (0/1): end-of-travel limit switches at both ends (limit_min, limit_max): hard limits outside homing, reversal points of home_cam (docs/limit-switches.md)"},
+    // Offset 50 stays unmapped: the exception tests probe it as a gap (address 150).
+    {.pattern = "axis.<a>.limits_nc", .offset = 47, .max = 1, .fills = fills<&A::limits_nc>, .description = "flag (0/1): the limit switches are normally closed (a broken wire reads as a tripped limit)"},
+    {.pattern = "axis.<a>.cam_edge", .offset = 51, .type = Type::enumeration, .max = 1, .fills = fills<&A::cam_edge>, .values = kCamEdges, .description = "home_cam: the edge of the cam that is the reference, behind (facing away from direction) or ahead (toward direction)"},
+    {.pattern = "axis.<a>.limit_overtravel", .offset = 48, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 10'000, .fills = fills<&A::limit_overtravel_mm>, .description = "travel past a limit switch before the mechanical stop: the axis must stop within it from its seek and jog feedrates"},
     {.pattern = "axis.<a>.stall_timeout_ms", .offset = 52, .type = Type::u32, .quantity = Quantity::time_ms, .max = 3'600'000, .def = 30'000, .fills = fills<&A::stall_timeout_ms>, .description = "hard-stop homing: the drive must report a stall within this time of pushing toward the stop (stall_timeout alarm)"},
     {.pattern = "axis.<a>.target", .offset = 60, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::host_target, .description = "target of cmd.move.<a> (not persisted)"},
     // input registers: per-axis status
@@ -293,9 +300,14 @@ constexpr auto kSimAxisRows = std::to_array<Row>({
     {.pattern = "sim.<a>.drive_answer_ms", .offset = 27, .quantity = Quantity::time_ms, .max = 60'000, .def = 100, .key = Key::sim_drive_answer_ms, .description = "drive mode: time the drive takes after reaching its home before it reports home done"},
     {.pattern = "sim.<a>.unlock_delay_ms", .offset = 28, .quantity = Quantity::time_ms, .max = 60'000, .def = 100, .key = Key::sim_unlock_delay_ms, .description = "locking indexer (fitted when axis.<a>.indexer_lock is on): time from the unlock output to the pin being out"},
     {.pattern = "sim.<a>.lock_delay_ms", .offset = 29, .quantity = Quantity::time_ms, .max = 60'000, .def = 100, .key = Key::sim_lock_delay_ms, .description = "locking indexer: time from the unlock output going off to the pin being in"},
+    {.pattern = "sim.<a>.limit_min", .offset = 30, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = -kLengthMax, .key = Key::sim_limit_min, .description = "the negative end's limit switch is active with the carriage at or below this (its cam runs on to the mechanical stop); the default lies beyond any stop"},
+    {.pattern = "sim.<a>.limit_max", .offset = 32, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = kLengthMax, .key = Key::sim_limit_max, .description = "the positive end's limit switch is active with the carriage at or above this"},
+    {.pattern = "sim.<a>.limits_nc", .offset = 34, .max = 1, .key = Key::sim_limits_nc, .description = "flag (0/1): the simulated limit switches are wired normally closed"},
     {.pattern = "sim.<a>.sensor", .table = DI, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::sim_sensor, .description = "the simulated switch is active (raw, before polarity and debounce)"},
     {.pattern = "sim.<a>.at_hard_stop", .table = DI, .offset = 1, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::sim_at_hard_stop, .description = "the carriage rests against a mechanical stop"},
     {.pattern = "sim.<a>.indexer_locked", .table = DI, .offset = 2, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::sim_indexer_locked, .description = "the simulated locking indexer's pin is in and holds the carriage"},
+    {.pattern = "sim.<a>.limit_min_active", .table = DI, .offset = 3, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::sim_limit_min_active, .description = "the simulated negative-end limit switch is active (raw, before polarity)"},
+    {.pattern = "sim.<a>.limit_max_active", .table = DI, .offset = 4, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::sim_limit_max_active, .description = "the simulated positive-end limit switch is active (raw, before polarity)"},
     {.pattern = "sim.<a>.driven_by", .table = IR, .access = Access::r, .max = 6, .key = Key::sim_driven_by, .description = "the step output that moves this carriage: 0 its own; 1..6 that of master X..C, through an external commutator (from axis.<a>.slave_of and slave_mode)"},
 });
 

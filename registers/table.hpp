@@ -75,6 +75,7 @@ enum class Key : std::uint8_t {
   sim_sensor, sim_at_hard_stop, sim_driven_by,
   sim_drive_home_position, sim_drive_speed, sim_drive_answer_ms,
   sim_unlock_delay_ms, sim_lock_delay_ms, sim_indexer_locked,
+  sim_limit_min, sim_limit_max, sim_limits_nc, sim_limit_min_active, sim_limit_max_active,
 };
 
 struct Register;

@@ -20,6 +20,8 @@ registers::SimReadback readback_of(const homing::sim::SimulatorView& sim) {
     r.at_hard_stop[a] = sim.axes[a].at_hard_stop;
     r.driven_by[a] = sim.axes[a].driven_by;
     r.indexer_locked[a] = sim.axes[a].indexer_locked;
+    r.limit_min[a] = sim.axes[a].limit_min;
+    r.limit_max[a] = sim.axes[a].limit_max;
   }
   return r;
 }

@@ -95,7 +95,8 @@ std::expected<void, std::string> parse_axis(const Ctx& ctx, std::size_t a, const
       {"commutator", &AxisLines::commutator}, {"home", &AxisLines::home},
       {"index", &AxisLines::index},     {"drive_fault", &AxisLines::drive_fault},
       {"stall", &AxisLines::stall},     {"home_request", &AxisLines::home_request},
-      {"home_done", &AxisLines::home_done}, {"unlock", &AxisLines::unlock}, {"unlocked", &AxisLines::unlocked}};
+      {"home_done", &AxisLines::home_done}, {"unlock", &AxisLines::unlock}, {"unlocked", &AxisLines::unlocked},
+      {"limit_min", &AxisLines::limit_min}, {"limit_max", &AxisLines::limit_max}};
   for (const auto& [k, v] : t) {
     const std::string key(k.str());
     if (key == "steps_per_unit") {
@@ -118,7 +119,7 @@ std::expected<void, std::string> parse_axis(const Ctx& ctx, std::size_t a, const
     if (!known)
       return Error(fmt::format("{}: [{}] unknown key '{}' (known: steps_per_unit, step, dir, enable, push, "
                                "commutator, home, index, drive_fault, stall, home_request, home_done, unlock, "
-                               "unlocked)",
+                               "unlocked, limit_min, limit_max)",
                                ctx.origin, section, key));
   }
   // Neither: an axis with no output of its own (an external-commutator slave,
@@ -148,7 +149,8 @@ std::expected<void, std::string> check_unique(const BackendConfig& c, const std:
     if (*o) all.push_back(&**o);
   for (const AxisLines& a : c.axes)
     for (const auto* o : {&a.step, &a.dir, &a.enable, &a.push, &a.commutator, &a.home, &a.index, &a.drive_fault,
-                          &a.stall, &a.home_request, &a.home_done, &a.unlock, &a.unlocked})
+                          &a.stall, &a.home_request, &a.home_done, &a.unlock, &a.unlocked,
+                          &a.limit_min, &a.limit_max})
       if (*o) all.push_back(&**o);
   for (std::size_t i = 0; i < all.size(); ++i)
     for (std::size_t j = i + 1; j < all.size(); ++j)
@@ -243,6 +245,8 @@ bool has_line(const AxisLines& lines, homing::Signal signal) {
     case homing::Signal::stall: return lines.stall.has_value();
     case homing::Signal::drive_request: return lines.home_request.has_value();
     case homing::Signal::drive_done: return lines.home_done.has_value();
+    case homing::Signal::limit_min: return lines.limit_min.has_value();
+    case homing::Signal::limit_max: return lines.limit_max.has_value();
   }
   return false;
 }
@@ -261,6 +265,13 @@ std::optional<std::string> check_wiring(const BackendConfig& config, const homin
                          "both 'unlock' (output) and 'unlocked' (input) or set axis.{0}.indexer_lock = 0",
                          lower(a), letter(a), lines.unlock ? "unlocked" : "unlock",
                          lines.unlock ? "input that reports the indexer unlocked" : "output that unlocks the indexer");
+    // Without both lines a limit switch could never trip: the axis would run into its stop.
+    if (s.limits_fitted && (!lines.limit_min || !lines.limit_max))
+      return fmt::format("axis.{0}.limits_fitted is on but [gpiod.axes.{1}] has no '{2}' line (the end-of-travel "
+                         "limit switch at the {3} end); wire both 'limit_min' and 'limit_max' or set "
+                         "axis.{0}.limits_fitted = 0",
+                         lower(a), letter(a), lines.limit_min ? "limit_max" : "limit_min",
+                         lines.limit_min ? "positive" : "negative");
     if (s.mode == HomingMode::disabled) continue;
     const int m = homing::master_of(s);
     const bool commutator_slave = s.slave_mode == homing::SlaveMode::external_commutator && m >= 0 &&

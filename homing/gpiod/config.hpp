@@ -32,6 +32,9 @@ struct AxisLines {
   // Locking indexer (axis.<a>.indexer_lock): the output that pulls the pin
   // out, and the input that reports it out.
   std::optional<LineSpec> unlock, unlocked;
+  // End-of-travel limit switches (axis.<a>.limits_fitted; home_cam needs
+  // them): inputs read as levels, polarity from axis.<a>.limits_nc.
+  std::optional<LineSpec> limit_min, limit_max;
   // A step/dir output of its own. Without one the axis can only be an
   // external-commutator slave (moved by its master's output) or never move.
   bool has_output() const { return step.has_value(); }
@@ -58,7 +61,8 @@ std::expected<BackendConfig, std::string> load_config(const std::string& path);
 // own, unless it is an external-commutator slave; a commutator slave's master
 // needs step/dir and a `commutator` line; an axis homing on a switch needs a
 // `home` line (a commutator slave's switch is read on its master's); an axis
-// with axis.<a>.indexer_lock needs its `unlock` and `unlocked` lines. The
+// with axis.<a>.indexer_lock needs its `unlock` and `unlocked` lines; one
+// with axis.<a>.limits_fitted (home_cam) its `limit_min` and `limit_max`. The
 // first problem in words, or nullopt.
 std::optional<std::string> check_wiring(const BackendConfig& config, const homing::Settings& settings);
 

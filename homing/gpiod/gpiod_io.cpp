@@ -82,7 +82,8 @@ std::expected<void, std::string> GpiodIo::request_all(const BackendConfig& c) {
                    output(cfg.push, a.push), output(cfg.commutator, a.commutator), edges(cfg.home, a.home),
                    edges(cfg.index, a.index), level(cfg.drive_fault, 0, a.drive_fault), level(cfg.stall, 0, a.stall),
                    output(cfg.home_request, a.home_request), level(cfg.home_done, input_debounce_ns_, a.home_done),
-                   output(cfg.unlock, a.unlock), level(cfg.unlocked, 0, a.unlocked)})
+                   output(cfg.unlock, a.unlock), level(cfg.unlocked, 0, a.unlocked),
+                   level(cfg.limit_min, 0, a.limit_min), level(cfg.limit_max, 0, a.limit_max)})
       if (!r) return r;
     if (step.id && dir.id)  // an axis without an output of its own has no pulses to make
       a.generator = std::make_unique<StepGenerator>(api, *step.id, *dir.id, cfg.steps_per_unit, dir_setup_ns_);
@@ -178,6 +179,8 @@ Inputs GpiodIo::read() {
     ai.stall = sample(a.stall);
     ai.drive_done = sample(a.home_done);
     ai.indexer_unlocked = sample(a.unlocked);
+    ai.limit_min_level = sample(a.limit_min);
+    ai.limit_max_level = sample(a.limit_max);
     if (a.generator && a.generator->failed()) {
       // A step or dir write failed: the motor no longer follows the count.
       ai.drive_fault = true;

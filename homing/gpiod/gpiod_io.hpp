@@ -68,7 +68,7 @@ class GpiodIo final : public MachineIo {
     std::unique_ptr<StepGenerator> generator;
     OutputLine enable, push, commutator, home_request, unlock;
     std::unique_ptr<EdgeInput> home, index;
-    std::unique_ptr<LevelInput> drive_fault, stall, home_done, unlocked;
+    std::unique_ptr<LevelInput> drive_fault, stall, home_done, unlocked, limit_min, limit_max;
     std::string reported_failure;
   };
 

@@ -24,6 +24,8 @@ enum class Fault : std::uint8_t {
   drive_done_lost = 9,         // drive mode: home done held off (lost reference, broken wire)
   indexer_stuck_locked = 10, // the indexer's pin goes in and stays in, whatever the unlock output says
   indexer_never_locks = 11,  // the pin stays out once out: the indexer never reports locked again
+  limits_dead = 12,          // neither limit switch ever reports (NO wiring cut, switches jammed open)
+  limits_stuck = 13,         // both limit switches report active everywhere
 };
 inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::none, "none", "no fault"},
@@ -41,8 +43,10 @@ inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::indexer_stuck_locked, "indexer_stuck_locked",
      "the locking indexer's pin goes in (at once, even under motion) and never comes out"},
     {Fault::indexer_never_locks, "indexer_never_locks", "the locking indexer's pin, once out, never goes in again"},
+    {Fault::limits_dead, "limits_dead", "neither end-of-travel limit switch ever turns active"},
+    {Fault::limits_stuck, "limits_stuck", "both end-of-travel limit switches read active everywhere"},
 };
-static_assert(lists_every_value(kFaultInfo, Fault::indexer_never_locks));
+static_assert(lists_every_value(kFaultInfo, Fault::limits_stuck));
 constexpr std::span<const EnumInfo<Fault>> enum_table(Fault) { return kFaultInfo; }
 
 struct AxisConfig {
@@ -72,6 +76,11 @@ struct AxisConfig {
   // unlock output's change to the pin being out / in.
   double unlock_delay_ms = 0;
   double lock_delay_ms = 0;
+  // End-of-travel limit switches: active with the carriage at or below
+  // limit_min_mm, at or above limit_max_mm (their cams run on to the
+  // mechanical stops). Outside the stops they never trip.
+  double limit_min_mm = -1e9, limit_max_mm = 1e9;
+  bool limits_nc = false;         // how the simulated limit switches are wired
 };
 
 struct MachineConfig {

@@ -40,6 +40,7 @@ Simulator::Simulator(const MachineConfig& config) : config_(config) {
     own_[i].drive_done = ax.drive.done(c);
     ax.pin_in = config_.indexer[i];
     own_[i].indexer_unlocked = false;
+    set_limit_levels(i);
   }
   route_sensors(Outputs{});
 }
@@ -124,7 +125,9 @@ bool Simulator::electrical_level(std::size_t axis) const {
     case Fault::drive_answers_at_once:
     case Fault::drive_done_lost: break;
     case Fault::indexer_stuck_locked:
-    case Fault::indexer_never_locks: break;
+    case Fault::indexer_never_locks:
+    case Fault::limits_dead:
+    case Fault::limits_stuck: break;
   }
   return c.sensor_nc ? !contact : contact;
 }
@@ -144,7 +147,9 @@ bool Simulator::reports_edges(std::size_t axis) const {
     case Fault::drive_answers_at_once:
     case Fault::drive_done_lost:
     case Fault::indexer_stuck_locked:
-    case Fault::indexer_never_locks: break;
+    case Fault::indexer_never_locks:
+    case Fault::limits_dead:
+    case Fault::limits_stuck: break;
   }
   return true;
 }
@@ -257,6 +262,22 @@ void Simulator::advance_axis(std::size_t i, std::size_t output, const AxisOutput
   in.drive_fault = c.fault == Fault::drive_fault;
   in.stall = stall_output(i, carriage, out.motor.position_mm, motor.end.position_mm);
   in.drive_done = ax.drive.done(c);
+  set_limit_levels(i);
+}
+
+bool Simulator::limit_active(std::size_t axis, bool max_end) const {
+  const AxisConfig& c = config_.axes[axis];
+  if (c.fault == Fault::limits_stuck) return true;
+  if (c.fault == Fault::limits_dead) return false;
+  const double x = axes_[axis].actual_mm;
+  return max_end ? x >= c.limit_max_mm : x <= c.limit_min_mm;
+}
+
+// Levels at the end of the period (the engine reads limit switches by level).
+void Simulator::set_limit_levels(std::size_t axis) {
+  const bool nc = config_.axes[axis].limits_nc;
+  own_[axis].limit_min_level = limit_active(axis, false) != nc;
+  own_[axis].limit_max_level = limit_active(axis, true) != nc;
 }
 
 namespace {

@@ -72,6 +72,9 @@ class Simulator {
   // The physical switch: no fault, polarity or bounce.
   bool sensor_active(std::size_t axis) const { return axes_[axis].sensor.active(); }
   bool at_hard_stop(std::size_t axis) const;
+  // The physical limit switch at the negative (max_end false) or positive end
+  // is active: carriage at or beyond it, or forced by a limits fault.
+  bool limit_active(std::size_t axis, bool max_end) const;
   // The output driving this carriage is still running at the end of the last
   // period and is connected to it (a drive fault does not count: the motor runs),
   // or a drive homing itself moved it in the last period.
@@ -128,6 +131,7 @@ class Simulator {
   bool stall_output(std::size_t axis, const CarriagePath& path, double motor_start_mm, double motor_end_mm);
   bool reports_edges(std::size_t axis) const;
   void route_sensors(const Outputs& outputs);
+  void set_limit_levels(std::size_t axis);
   void advance_indexer(std::size_t axis, bool unlock_output, double dt_s);
 
   MachineConfig config_;

@@ -26,6 +26,8 @@ SimulatorView SimulatorControls::view() const {
     const std::size_t o = sim_.driving_output(a);
     axis.driven_by = o == a ? 0 : static_cast<std::uint8_t>(o + 1);
     axis.indexer_locked = sim_.indexer_locked(a);
+    axis.limit_min = sim_.limit_active(a, false);
+    axis.limit_max = sim_.limit_active(a, true);
   }
   v.estop = sim_.inputs().estop;
   v.start_button = sim_.inputs().start_button;

@@ -25,6 +25,8 @@ struct AxisView {
   bool moving = false;         // Simulator::moving
   std::uint8_t driven_by = 0;  // 0 its own output, m + 1: master m's (external commutator)
   bool indexer_locked = false; // a fitted locking indexer's pin is in (holds the carriage)
+  bool limit_min = false;      // the limit switch at the negative end is active (physical, with faults)
+  bool limit_max = false;
 };
 
 // The whole simulated machine at one instant, copied out for a reader.

@@ -29,6 +29,16 @@ Rig rig_for(const ModeRow& row) {
   r.machine.axes[0].index_offset_mm = 0.3;
   r.machine.axes[0].absolute_offset_mm = 7;
   r.machine.axes[0].actual_position_mm = 40;
+  if (row.runs(Phase::limit_reversal)) {
+    // Home cam: seeking positive from 40 it meets the limit switch at 60
+    // first, reverses, finds the cam below 0 and leaves it upward (cam_edge
+    // ahead): the same release at 0.05 and pull-off above it as the others.
+    s.limits_fitted = true;
+    s.direction = Direction::positive;
+    s.cam_edge = CamEdge::ahead;
+    s.limit_overtravel_mm = 10;
+    r.machine.axes[0].limit_max_mm = 60;
+  }
   return r;
 }
 
@@ -100,6 +110,7 @@ TEST_CASE("a mode cannot home without an input its row names, and homes without 
       {Signal::absolute_encoder, "absolute encoder",
        [](Rig& r) { r.tweak_inputs = [](Inputs& in) { in.axes[0].absolute_valid = false; }; }},
       {Signal::stall, "stall output", [](Rig& r) { r.machine.axes[0].fault = sim::Fault::stall_dead; }},
+      {Signal::limit_max, "limit switches", [](Rig& r) { r.machine.axes[0].fault = sim::Fault::limits_dead; }},
       {Signal::drive_done, "drive's home done",
        [](Rig& r) { r.tweak_inputs = [](Inputs& in) { in.axes[0].drive_done = false; }; }},
   };
@@ -150,7 +161,10 @@ TEST_CASE("every mode gives the axis the coordinate its row defines", "[modes][t
           break;
         case Coordinate::reference_edge: {
           // Negative homing: home_position lies pull_off above the reference edge.
-          const double rest = rest_point_mm(s, reference_edge_mm(row));
+          // (A home cam pulls off away from the cam on its reference side, here upward too.)
+          const double away = row.runs(Phase::cam_latch) ? (s.cam_edge == CamEdge::ahead) == (s.direction == Direction::positive) ? 1.0 : -1.0 : 0.0;
+          const double rest = row.runs(Phase::cam_latch) ? reference_edge_mm(row) + away * s.pull_off_mm
+                                                         : rest_point_mm(s, reference_edge_mm(row));
           CHECK(offset == Approx(s.home_position_mm - rest).margin(edge_tolerance_mm(s, r.dt_s)));
           break;
         }

@@ -163,7 +163,7 @@ void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
     c.fault = f;
     r_.sim().set_axis_config(e.axis, c);
     if (present == sim::Fault::indexer_stuck_locked || present == sim::Fault::indexer_never_locks) {
-      const std::uint32_t indexer_codes =
+      const AlarmBits indexer_codes =
           code_bits({AlarmCode::unlock_not_confirmed, AlarmCode::lock_not_confirmed, AlarmCode::lock_engaged});
       for (Cause& k : causes.list)
         if ((k.axes & axis_bit(e.axis)) && (k.codes & indexer_codes) && k.must) {

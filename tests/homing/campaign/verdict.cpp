@@ -9,9 +9,9 @@
 
 namespace campaign {
 
-std::uint32_t code_bits(std::initializer_list<AlarmCode> codes) {
-  std::uint32_t bits = 0;
-  for (AlarmCode c : codes) bits |= 1u << static_cast<unsigned>(c);
+AlarmBits code_bits(std::initializer_list<AlarmCode> codes) {
+  AlarmBits bits = 0;
+  for (AlarmCode c : codes) bits |= alarm_bit(c);
   return bits;
 }
 
@@ -43,10 +43,10 @@ bool Causes::any_must() const {
   return std::any_of(list.begin(), list.end(), [](const Cause& c) { return c.must; });
 }
 
-std::string alarm_list(std::uint32_t bits) {
+std::string alarm_list(AlarmBits bits) {
   std::string out;
   for (unsigned c = 1; c < kAlarmCodeCount; ++c)
-    if (bits & (1u << c)) out += (out.empty() ? "" : ", ") + std::string(alarm_name(static_cast<AlarmCode>(c)));
+    if (bits & alarm_bit(static_cast<AlarmCode>(c))) out += (out.empty() ? "" : ", ") + std::string(alarm_name(static_cast<AlarmCode>(c)));
   return out.empty() ? "none" : out;
 }
 
@@ -301,7 +301,7 @@ void indexer_cause(Causes& c, const Event& e, const Settings& s, const Status& s
 std::optional<Unexplained> explain(const Watch& w, const Causes& causes, const Settings& s) {
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     for (unsigned code = 1; code < kAlarmCodeCount; ++code) {
-      const std::uint32_t bit = 1u << code;
+      const AlarmBits bit = alarm_bit(static_cast<AlarmCode>(code));
       if (!(w.axis_alarms[a] & bit)) continue;
       const bool explained = std::any_of(causes.list.begin(), causes.list.end(), [&](const Cause& c) {
         return (c.codes & bit) && (c.axes & axis_bit(a));
@@ -312,8 +312,8 @@ std::optional<Unexplained> explain(const Watch& w, const Causes& causes, const S
       return Unexplained{"alarm " + alarm_list(bit) + " without a cause on its axis", letter(a) + ": " + o.str()};
     }
   }
-  if (const std::uint32_t stray = w.global_alarms & ~[&] {
-        std::uint32_t g = 0;
+  if (const AlarmBits stray = w.global_alarms & ~[&] {
+        AlarmBits g = 0;
         for (const Cause& c : causes.list) g |= c.global;
         return g;
       }())
@@ -337,7 +337,7 @@ std::optional<Unexplained> explain(const Watch& w, const Causes& causes, const S
     if (c.phase_axis) {
       const std::size_t a = *c.phase_axis;
       const Alarm& first = w.first_alarm[a];
-      if ((c.codes & (1u << static_cast<unsigned>(first.code))) && first.phase != c.phase && first.phase != c.phase_seen) {
+      if ((c.codes & alarm_bit(first.code)) && first.phase != c.phase && first.phase != c.phase_seen) {
         std::ostringstream o;
         o << c.what << " struck in phase " << phase_name(c.phase) << " (" << phase_name(c.phase_seen)
           << " when the engine read it), its alarm says phase " << phase_name(first.phase);
@@ -402,11 +402,10 @@ double time_bound(rig::Rig& r, const Machine& m, const CyclePlan& plan) {
 void verdict(Watch& w, rig::Rig& r, const Machine& m, const Causes& causes, std::uint32_t cycles_before) {
   const CyclePlan& plan = w.plan;
   const Status& st = r.status();
-  const std::uint32_t seen = w.alarms_seen;
+  const AlarmBits seen = w.alarms_seen;
   if (auto u = explain(w, causes, r.settings)) w.fail(u->what, u->detail);
   if (w.refused) {
-    const std::uint32_t settings_codes = (1u << static_cast<unsigned>(AlarmCode::settings_fault)) |
-                                         (1u << static_cast<unsigned>(AlarmCode::slave_sensor_missing));
+    const AlarmBits settings_codes = code_bits({AlarmCode::settings_fault, AlarmCode::slave_sensor_missing});
     if (!(seen & settings_codes)) w.fail("a cycle the configuration check refuses ended without a settings alarm", alarm_list(seen));
     if (st.last_command_result != CommandResult::refused_settings_fault)
       w.fail("a cycle the configuration check refuses was not refused", std::string(command_result_name(st.last_command_result)));

@@ -20,16 +20,16 @@ namespace campaign {
 struct Cause {
   std::string what;          // this instance, with its axis
   std::string kind;          // the failure class when it does not show ("" = what)
-  std::uint32_t codes = 0;   // bit per AlarmCode, on `axes`
+  AlarmBits codes = 0;   // bit per AlarmCode, on `axes`
   AxisMask axes = 0;
-  std::uint32_t global = 0;  // bit per AlarmCode, as the global alarm
+  AlarmBits global = 0;  // bit per AlarmCode, as the global alarm
   bool must = false;
   std::optional<std::size_t> phase_axis;
   Phase phase = Phase::idle;       // the axis's phase when it struck
   Phase phase_seen = Phase::idle;  // ... and in the period the engine first read it
 };
 
-std::uint32_t code_bits(std::initializer_list<AlarmCode> codes);
+AlarmBits code_bits(std::initializer_list<AlarmCode> codes);
 
 struct Causes {
   std::vector<Cause> list;
@@ -70,7 +70,7 @@ double time_bound(rig::Rig& r, const Machine& m, const CyclePlan& plan);
 // The end of a cycle, the machine at rest.
 void verdict(Watch& w, rig::Rig& r, const Machine& m, const Causes& causes, std::uint32_t cycles_before);
 
-std::string alarm_list(std::uint32_t bits);
+std::string alarm_list(AlarmBits bits);
 std::string axis_letters(AxisMask m);
 
 }  // namespace campaign

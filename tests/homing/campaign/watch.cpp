@@ -115,13 +115,13 @@ void Watch::period() {
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const Alarm& al = st.axes[a].alarm;
     if (!al) continue;
-    alarms_seen |= 1u << static_cast<unsigned>(al.code);
+    alarms_seen |= alarm_bit(al.code);
     if (!axis_alarms[a]) first_alarm[a] = al;
-    axis_alarms[a] |= 1u << static_cast<unsigned>(al.code);
+    axis_alarms[a] |= alarm_bit(al.code);
   }
   if (st.global_alarm != AlarmCode::none) {
-    alarms_seen |= 1u << static_cast<unsigned>(st.global_alarm);
-    global_alarms |= 1u << static_cast<unsigned>(st.global_alarm);
+    alarms_seen |= alarm_bit(st.global_alarm);
+    global_alarms |= alarm_bit(st.global_alarm);
   }
   if (st.alarm && !alarm_prev_) {
     alarm_periods_ = 0;

@@ -11,6 +11,11 @@
 
 namespace campaign {
 
+// A set of alarm codes, one bit per AlarmCode.
+using AlarmBits = std::uint64_t;
+static_assert(kAlarmCodeCount <= 64, "AlarmBits holds one bit per alarm code");
+constexpr AlarmBits alarm_bit(AlarmCode code) { return AlarmBits{1} << static_cast<unsigned>(code); }
+
 // What the racking check allows beyond max_misalignment besides the travel
 // of periods later than the guard looks ahead (README "Gantries: racking"):
 // the simulation's floating-point arithmetic.
@@ -55,9 +60,9 @@ class Watch {
   AxisMask tampered = 0;        // a sensor fault during this window: its edges are not the cam's
   AxisMask stuck_on = 0;        // a sensor forced active (stuck active, an open NC circuit)
   AxisMask lock_struck = 0;     // an indexer's pin went in under an axis unlocked for motion (until recovered)
-  std::uint32_t alarms_seen = 0;  // bit per AlarmCode, any axis or global, since clear_alarms_seen()
-  std::array<std::uint32_t, kAxisCount> axis_alarms{};  // ... per axis
-  std::uint32_t global_alarms = 0;                      // ... as the global alarm
+  AlarmBits alarms_seen = 0;  // bit per AlarmCode, any axis or global, since clear_alarms_seen()
+  std::array<AlarmBits, kAxisCount> axis_alarms{};  // ... per axis
+  AlarmBits global_alarms = 0;                      // ... as the global alarm
   std::array<Alarm, kAxisCount> first_alarm{};          // the first each axis latched, with its phase
   void clear_alarms_seen();
   AxisMask flipped = 0;         // axes the engine marked homed during the window

@@ -1,0 +1,52 @@
+// End-of-travel limit switches as hard limits (docs/limit-switches.md): an
+// axis with limits_fitted that moves toward an active limit switch stops
+// with an alarm at its acceleration, in every phase except the home cam's
+// search, which reverses there itself (cam_phases.cpp). The trip is
+// recovered as a shared limit's is: the reset is taken while the axis still
+// stands on the switch, and a jog away from it (only away) is allowed until
+// it releases (limit_tripped, limit_side; jog_move.cpp).
+#include "engine.hpp"
+
+namespace homing {
+namespace {
+
+// The phases that meet a limit switch on purpose.
+bool reverses_at_limits(Phase p) { return p == Phase::cam_seek || p == Phase::limit_reversal; }
+
+}  // namespace
+
+void Engine::check_limit_switches(const Settings& settings) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    AxisRun& run = axes_[a];
+    const AxisSettings& s = settings.axes[a];
+    const AxisReadings& in = run.readings;
+    if (run.limit_tripped && run.limit_side != 0 && !in.limit_toward(run.limit_side)) {
+      run.limit_tripped = false;
+      run.limit_side = 0;
+    }
+    if (!s.limits_fitted || run.alarm) continue;
+    const double pos = run.machine_position_mm();
+    // Both ends at once cannot be: a broken wire (NC) or a wrong limits_nc.
+    // Only judged while the axis would move, so a module wired wrongly can
+    // still be set right at rest.
+    if (in.limit_min && in.limit_max) {
+      if (run.busy())
+        raise(settings, axis_bit(a), Alarm{AlarmCode::both_limits_active, Phase::idle, AxisField::none, pos, 0});
+      continue;
+    }
+    if (run.in_cycle && reverses_at_limits(run.phase)) continue;
+    const double v = run.motor.velocity_mm_per_s;
+    if (v == 0) continue;
+    const std::int8_t toward = v < 0 ? -1 : 1;
+    if (!in.limit_toward(toward)) continue;
+    // Reset while still braking onto it: the trip is known, no second alarm.
+    if (run.limit_tripped && run.limit_side == toward) continue;
+    const AlarmCode code = run.in_cycle ? AlarmCode::limit_in_homing : AlarmCode::limit_switch;
+    raise(settings, axis_bit(a),
+          Alarm{code, Phase::idle, AxisField::none, pos, static_cast<std::uint8_t>(toward < 0 ? 1 : 2)});
+    run.limit_tripped = true;
+    run.limit_side = toward;
+  }
+}
+
+}  // namespace homing

@@ -1,0 +1,150 @@
+// Home cam in mid-travel with limit-switch reversal (home_cam) and the
+// end-of-travel limit switches as hard limits (docs/limit-switches.md).
+#include <catch2/catch.hpp>
+
+#include "homing/settings_check.hpp"
+#include "rig.hpp"
+
+using namespace rig;
+
+namespace {
+
+// X between limit switches at -100 and +100 (mechanical stops 10 mm beyond),
+// homing negative; the cam covers [cam_min, cam_max], 0.05 mm hysteresis.
+Rig cam_rig(double start_mm, double cam_min, double cam_max, CamEdge edge = CamEdge::behind) {
+  Rig r;
+  AxisSettings& s = r.settings.axes[0];
+  s.mode = HomingMode::home_cam;
+  s.limits_fitted = true;
+  s.limit_overtravel_mm = 10;
+  s.cam_edge = edge;
+  s.max_backoff_mm = 30;  // covers the cam's length: the far edge may be the reference
+  s.soft_limit_min_mm = -1000;
+  s.max_seek_travel_mm = 300;
+  sim::AxisConfig& m = r.machine.axes[0];
+  m.actual_position_mm = start_mm;
+  m.sensor_min_mm = cam_min;
+  m.sensor_max_mm = cam_max;
+  m.limit_min_mm = -100;
+  m.limit_max_mm = 100;
+  m.hard_stop_min_mm = -110;
+  m.hard_stop_max_mm = 110;
+  return r;
+}
+
+bool ran(Rig& r, Phase p, const std::function<void()>& go) {
+  bool seen = false;
+  r.on_period = [&](Rig& rig) { seen = seen || rig.axis(0).phase == p; };
+  go();
+  r.on_period = nullptr;
+  return seen;
+}
+
+}  // namespace
+
+SCENARIO("home cam ahead of the start: found without reversal, its behind edge is the reference", "[limits][home_cam]") {
+  Rig r = cam_rig(50, 10, 20);
+  r.step();
+  bool homed = false;
+  const bool reversed = ran(r, Phase::limit_reversal, [&] { homed = r.home_all(); });
+  REQUIRE(homed);
+  CHECK_FALSE(reversed);
+  // Behind edge (facing away from negative): the top of the cam, left upward at 20.05, pull-off 1 above.
+  CHECK(r.axis(0).position_mm == Approx(r.actual(0) - 21.05).margin(0.01));
+}
+
+SCENARIO("home cam behind the start: the search reverses at the limit switch and finds it", "[limits][home_cam]") {
+  Rig r = cam_rig(50, 60, 70);
+  r.step();
+  bool homed = false;
+  const bool reversed = ran(r, Phase::limit_reversal, [&] { homed = r.home_all(); });
+  REQUIRE(homed);
+  CHECK(reversed);
+  // Never further past the limit switch than the stop from seek feedrate (plus a period).
+  CHECK(r.actual(0) > -110);
+  CHECK(r.axis(0).position_mm == Approx(r.actual(0) - 71.05).margin(0.01));
+}
+
+SCENARIO("home cam: the reference edge is the same whichever side the cam was found from", "[limits][home_cam]") {
+  for (const CamEdge edge : {CamEdge::behind, CamEdge::ahead}) {
+    Rig direct = cam_rig(50, 10, 20, edge);
+    Rig reversed = cam_rig(-50, 10, 20, edge);
+    direct.step();
+    reversed.step();
+    REQUIRE(direct.home_all());
+    REQUIRE(reversed.home_all());
+    // Machine coordinate of the same carriage place agrees within edge precision.
+    CHECK(direct.axis(0).position_mm - direct.actual(0) ==
+          Approx(reversed.axis(0).position_mm - reversed.actual(0)).margin(0.01));
+    const double rest = edge == CamEdge::ahead ? 10 - 0.05 - 1 : 20 + 0.05 + 1;
+    CHECK(direct.actual(0) == Approx(rest).margin(0.01));
+  }
+}
+
+SCENARIO("home cam not between the limit switches: cam_not_found", "[limits][home_cam][alarms]") {
+  Rig r = cam_rig(50, 500, 600);  // the cam lies beyond the positive stop
+  r.step();
+  CHECK_FALSE(r.home_all());
+  CHECK(r.axis(0).alarm.code == AlarmCode::cam_not_found);
+  CHECK(r.axis(0).alarm.phase == Phase::limit_reversal);
+}
+
+SCENARIO("both limit switches active at once: both_limits_active, nothing searched", "[limits][home_cam][alarms]") {
+  Rig r = cam_rig(50, 10, 20);
+  r.machine.axes[0].fault = sim::Fault::limits_stuck;
+  r.step();
+  CHECK_FALSE(r.home_all());
+  CHECK(r.axis(0).alarm.code == AlarmCode::both_limits_active);
+  CHECK(r.actual(0) == Approx(50).margin(1e-6));
+}
+
+SCENARIO("a limit switch met in a phase that must not reach one: limit_in_homing", "[limits][home_cam][alarms]") {
+  // The cam right at the negative limit, its far edge the reference: the latch runs into the limit switch.
+  Rig r = cam_rig(50, -95, -90, CamEdge::ahead);
+  r.machine.axes[0].limit_min_mm = -93;
+  r.step();
+  CHECK_FALSE(r.home_all());
+  CHECK(r.axis(0).alarm.code == AlarmCode::limit_in_homing);
+  CHECK(r.axis(0).alarm.phase == Phase::cam_latch);
+}
+
+SCENARIO("home_cam without limit switches is refused before anything moves", "[limits][home_cam][rules]") {
+  Rig r = cam_rig(50, 10, 20);
+  r.settings.axes[0].limits_fitted = false;
+  const auto f = check_axis(r.settings, 0);
+  REQUIRE(f);
+  CHECK(f->rule == CheckRule::cam_needs_limits);
+  r.settings.axes[0].limits_fitted = true;
+  r.settings.axes[0].limit_overtravel_mm = 0.1;
+  const auto g = check_axis(r.settings, 0);
+  REQUIRE(g);
+  CHECK(g->rule == CheckRule::limit_overtravel_too_short);
+}
+
+SCENARIO("a jog onto a limit switch stops with limit_switch, within its acceleration, and jogs away only",
+         "[limits][hard_limit][alarms]") {
+  Rig r = cam_rig(95, 10, 20);
+  r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+  r.step();
+  r.jog(0, +1);
+  r.run_until([&] { return r.status().alarm; }, 10);
+  r.release_jogs();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(r.axis(0).alarm.code == AlarmCode::limit_switch);
+  CHECK(r.actual(0) >= 100);
+  CHECK(r.actual(0) < 110);  // stopped before the mechanical stop
+  r.reset_alarm();
+  CHECK_FALSE(r.status().alarm);
+  r.jog(0, +1);  // further in: refused
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::refused_hard_limit);
+  r.release_jogs();
+  r.step();
+  r.jog(0, -1);  // away: allowed until the switch releases
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  r.run_until([&] { return r.actual(0) < 99; }, 20);
+  r.release_jogs();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK_FALSE(r.status().alarm);
+}
