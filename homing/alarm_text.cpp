@@ -4,6 +4,7 @@
 
 #include "alarms.hpp"
 #include "gantry.hpp"
+#include "health.hpp"
 #include "settings_check.hpp"
 
 namespace homing {
@@ -93,6 +94,9 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
                          "axis came to rest", X, s.lock_timeout_ms);
     case AlarmCode::lock_engaged:
       return fmt::format("{}: locking indexer reported locked during {} while the unlock output was on", X, ph);
+    case AlarmCode::switch_not_repeatable:
+      return fmt::format("{}: switch not repeatable: spread {:.3f} {} over {} passes, limit {:.3f} {}", X, a.value,
+                         u, latch_passes_of(s.latch_passes), s.max_latch_spread_mm, u);
   }
   return "?";
 }

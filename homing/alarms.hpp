@@ -41,8 +41,10 @@ enum class AlarmCode : std::uint8_t {
   unlock_not_confirmed = 25,   // locking indexer: not unlocked within lock_timeout_ms
   lock_not_confirmed = 26,     // locking indexer: not locked again within lock_timeout_ms of rest
   lock_engaged = 27,           // locking indexer: reported locked while unlocked for motion
+  // Pre-assigned 32 (issue 23); 28 here until the limit-switch alarms (28-31) are merged.
+  switch_not_repeatable = 28,  // the latch passes' spread exceeded max_latch_spread
 };
-inline constexpr std::uint8_t kAlarmCodeCount = 28;
+inline constexpr std::uint8_t kAlarmCodeCount = 29;
 
 // The alarm table: per code its name, what happened (text) and what a
 // maintenance technician checks (what_to_check). describe_alarm() says what
@@ -119,8 +121,11 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
     {AlarmCode::lock_engaged, "lock_engaged", "locking indexer reported locked while unlocked for motion",
      "check the indexer's air or hydraulic pressure, the unlock valve and the unlocked sensor and its wiring "
      "(a flickering sensor), and the axis for damage; then reset and home again"},
+    {AlarmCode::switch_not_repeatable, "switch_not_repeatable",
+     "the latch passes found the reference edge further apart than max_latch_spread",
+     "check the switch's mounting, the cam, and the latch feedrate"},
 };
-static_assert(lists_every_value(kAlarmInfo, AlarmCode::lock_engaged));
+static_assert(lists_every_value(kAlarmInfo, AlarmCode::switch_not_repeatable));
 static_assert(std::size(kAlarmInfo) == kAlarmCodeCount);
 constexpr std::span<const AlarmInfo> enum_table(AlarmCode) { return kAlarmInfo; }
 

@@ -19,6 +19,8 @@ PhaseRunner::PhaseRunner(const PhaseContext& context, const Settings& st, std::s
 }
 
 void PhaseRunner::begin() {
+  run.latch = {};
+  run.health = {};
   run.entered = false;
   run.phase_start_mm = run.motor.position_mm;
   if (commutator_slave()) {

@@ -41,9 +41,24 @@ void PhaseRunner::back_off() {
 
 void PhaseRunner::reapproach() {
   if (entry()) run.target_mm = run.phase_start_mm + dir * s.max_backoff_mm;
-  if (edge_to(true)) return reference_found(edge_mm());
+  if (edge_to(true)) return latch_edge_found(edge_mm());
   move_to(run.target_mm, latch_v);
   if (arrived()) fail(AlarmCode::reapproach_not_found, s.max_backoff_mm);
+}
+
+// One slow approach found the edge. With several latch passes the axis backs
+// off to the release and approaches again until it has them all; the
+// reference is their median, refused when they disagree beyond the limit.
+void PhaseRunner::latch_edge_found(double edge_mm) {
+  run.latch.add(edge_mm);
+  const int passes = latch_passes_of(s.latch_passes);
+  if (run.latch.count < passes) return enter(Phase::back_off);
+  const EdgeStats st = edge_stats(run.latch.edges());
+  run.health.latch_passes = run.latch.count;
+  run.health.latch_spread_mm = st.spread_mm;
+  run.health.latch_sigma_mm = st.sigma_mm;
+  if (passes > 1 && st.spread_mm > s.max_latch_spread_mm) return fail(AlarmCode::switch_not_repeatable, st.spread_mm);
+  reference_found(st.median_mm);
 }
 
 void PhaseRunner::index() {

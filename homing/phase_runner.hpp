@@ -97,6 +97,7 @@ struct PhaseRunner {
   void push_to_stop();  // hard-stop homing (stop_phases.cpp)
   void back_off();
   void reapproach();
+  void latch_edge_found(double edge_mm);
   // The index search runs away from the sensor (-dir) from the release edge.
   bool beyond(double release_mm, double x_mm) const { return (x_mm - release_mm) * -dir > 0; }
   void index();

@@ -106,6 +106,11 @@ struct AxisSettings {
   // this axis, lock again once it rests, each confirmed within lock_timeout_ms.
   bool indexer_lock = false;
   double lock_timeout_ms = 0;
+  // Several latch passes (docs/health.md): in a method that re-approaches its
+  // switch, this many slow approaches; the reference is their median. 0 or 1
+  // is one approach, as before.
+  std::uint8_t latch_passes = 1;
+  double max_latch_spread_mm = 0;  // their spread above this: switch_not_repeatable
   friend bool operator==(const AxisSettings&, const AxisSettings&) = default;
 };
 
@@ -172,6 +177,8 @@ enum class AxisField : std::uint8_t {
   drive_home_timeout,
   indexer_lock,
   lock_timeout_ms,
+  latch_passes,
+  max_latch_spread,
 };
 // The name of each: the suffix of its register name (axis.<a>.<name>).
 struct AxisFieldInfo {
@@ -212,8 +219,10 @@ inline constexpr AxisFieldInfo kAxisFieldInfo[] = {
     {AxisField::drive_home_timeout, "drive_home_timeout_s"},
     {AxisField::indexer_lock, "indexer_lock"},
     {AxisField::lock_timeout_ms, "lock_timeout_ms"},
+    {AxisField::latch_passes, "latch_passes"},
+    {AxisField::max_latch_spread, "max_latch_spread"},
 };
-static_assert(lists_every_value(kAxisFieldInfo, AxisField::lock_timeout_ms));
+static_assert(lists_every_value(kAxisFieldInfo, AxisField::max_latch_spread));
 constexpr std::span<const AxisFieldInfo> enum_table(AxisField) { return kAxisFieldInfo; }
 
 std::string_view field_name(AxisField field);

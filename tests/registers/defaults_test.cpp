@@ -41,9 +41,9 @@ TEST_CASE("a new module allows only a reduced-speed jog before homing, in the ta
 
 TEST_CASE("persisted defaults hold every persisted register and no runtime value") {
   const auto rows = persisted_defaults();
-  // 6 sequence steps + 5 global settings, 32 settings per axis (30, plus indexer_lock and
-  // lock_timeout_ms of the locking indexer)
-  CHECK(rows.size() == 6 + 5 + 32 * homing::kAxisCount);
+  // 6 sequence steps + 5 global settings, 34 settings per axis (30, plus indexer_lock and
+  // lock_timeout_ms of the locking indexer, latch_passes and max_latch_spread)
+  CHECK(rows.size() == 6 + 5 + 34 * homing::kAxisCount);
   for (const auto& [name, raw] : rows) {
     const Register* r = find_register(name);
     REQUIRE(r);

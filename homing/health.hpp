@@ -1,0 +1,44 @@
+#pragma once
+// How good the reference of one homing cycle is: the figures measured from
+// the edges the phases already see (README "Switch health", docs/health.md).
+// Pure arithmetic; the phases feed it, publish() reports it.
+#include <array>
+#include <cstddef>
+#include <span>
+
+namespace homing {
+
+// axis.<a>.latch_passes is bounded by this (the register's max).
+inline constexpr int kMaxLatchPasses = 9;
+// The approaches a setting asks for: 0 (settings made by hand) is one.
+constexpr int latch_passes_of(int setting) {
+  return setting < 1 ? 1 : setting > kMaxLatchPasses ? kMaxLatchPasses : setting;
+}
+
+// The trigger edges of this cycle's slow approaches, in the order found.
+struct LatchEdges {
+  std::array<double, kMaxLatchPasses> edge_mm{};
+  int count = 0;
+  void add(double x_mm) {
+    if (count < kMaxLatchPasses) edge_mm[static_cast<std::size_t>(count++)] = x_mm;
+  }
+  std::span<const double> edges() const { return {edge_mm.data(), static_cast<std::size_t>(count)}; }
+};
+
+// The reference of several passes and how far they disagree.
+struct EdgeStats {
+  double median_mm = 0;  // the reference: one wild pass does not move it
+  double spread_mm = 0;  // max - min
+  double sigma_mm = 0;   // population standard deviation
+};
+EdgeStats edge_stats(std::span<const double> edges_mm);
+
+// What one homing cycle measured of its axis's switch; 0 where this cycle's
+// method does not cross the edge that figure needs.
+struct SwitchHealth {
+  int latch_passes = 0;         // slow approaches made this cycle
+  double latch_spread_mm = 0;   // max - min of their edges
+  double latch_sigma_mm = 0;    // their standard deviation
+};
+
+}  // namespace homing
