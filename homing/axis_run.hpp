@@ -137,6 +137,7 @@ struct AxisRun {
   double trigger_position_mm = 0;  // reported: reference edge in the coordinates believed before
   double home_correction_mm = 0;   // reported: assigned - believed at the reference edge
   bool homed_at_cycle_start = false;  // reported: homed when its last cycle started
+  CycleEdges edges{};           // this cycle's seek trigger and first release
   LatchEdges latch{};           // this cycle's slow approaches to the reference edge
   SwitchHealth health{};        // reported: what the last cycle measured of the switch
 

@@ -14,6 +14,10 @@ void PhaseRunner::back_off() {
   }
   if (edge_to(false)) {
     const double release_mm = edge_mm();
+    if (!run.edges.release_seen) {
+      run.edges.release_seen = true;
+      run.edges.release_mm = release_mm;
+    }
     run.reach(Reached::released);
     const Phase next = row().after(Phase::back_off);
     if (next == Phase::reapproach) {
@@ -74,6 +78,7 @@ void PhaseRunner::index() {
 // slave aligns on its own edge from this point); everyone else pulls off.
 void PhaseRunner::reference_found(double reference_mm) {
   run.reference_mm = reference_mm;
+  measure_switch(run.health, run.edges, run.latch, dir, ctx.input.filter.transitions(), ctx.input.filter.accepted());
   run.reach(Reached::reference);
   if (commutator_master()) {
     run.command = stop_command(accel);

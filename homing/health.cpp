@@ -25,4 +25,16 @@ EdgeStats edge_stats(std::span<const double> edges_mm) {
   return st;
 }
 
+void measure_switch(SwitchHealth& h, const CycleEdges& e, const LatchEdges& latch, double dir,
+                    unsigned long transitions, unsigned long accepted) {
+  const bool latched = latch.count > 0;
+  // The trigger next to the release: the first slow approach, else the seek's.
+  if (e.release_seen && (latched || e.seek_seen))
+    h.hysteresis_mm = std::abs((latched ? latch.edge_mm[0] : e.seek_mm) - e.release_mm);
+  if (e.seek_seen && latched) h.seek_latch_mm = (e.seek_mm - latch.edge_mm[0]) * dir;
+  const long swallowed = static_cast<long>(transitions - e.transitions_at_start) -
+                         static_cast<long>(accepted - e.accepted_at_start);
+  h.chatter_edges = swallowed > 0 ? static_cast<int>(swallowed) : 0;
+}
+
 }  // namespace homing

@@ -39,6 +39,24 @@ struct SwitchHealth {
   int latch_passes = 0;         // slow approaches made this cycle
   double latch_spread_mm = 0;   // max - min of their edges
   double latch_sigma_mm = 0;    // their standard deviation
+  double hysteresis_mm = 0;     // trigger edge vs the release edge next to it
+  double seek_latch_mm = 0;     // seek edge minus latch edge, along the seek (input latency x speed)
+  int chatter_edges = 0;        // raw transitions the debounce time swallowed this cycle
 };
+
+// The edges one cycle crossed, as the phases find them.
+struct CycleEdges {
+  bool seek_seen = false;
+  double seek_mm = 0;           // the trigger found by the seek
+  bool release_seen = false;
+  double release_mm = 0;        // the first release found by the back-off
+  unsigned long transitions_at_start = 0;  // the input's counts when the cycle began
+  unsigned long accepted_at_start = 0;
+};
+
+// The switch figures of a cycle whose reference was just found: dir is +1 or
+// -1 toward the sensor; the transitions and accepted changes are the input's now.
+void measure_switch(SwitchHealth& h, const CycleEdges& e, const LatchEdges& latch, double dir,
+                    unsigned long transitions, unsigned long accepted);
 
 }  // namespace homing
