@@ -32,7 +32,10 @@ void PhaseRunner::back_off() {
     if (next == Phase::index) {
       // The release is accepted only after the debounce time: an index pulse
       // may already have passed beyond the release edge. It is the next one.
-      if (seen.index_seen && beyond(release_mm, seen.index_seen_mm)) return reference_found(seen.index_seen_mm);
+      if (seen.index_seen && beyond(release_mm, seen.index_seen_mm)) {
+        note_index(release_mm, seen.index_seen_mm);
+        return reference_found(seen.index_seen_mm);
+      }
       enter(Phase::index);
       run.phase_data<phase_data::Index>().release_mm = release_mm;
       return;
@@ -69,9 +72,18 @@ void PhaseRunner::index() {
   if (entry()) run.target_mm = run.phase_start_mm - dir * index_search_mm(s);
   // A pulse in the same period but before the release edge is not the next one.
   const double release_mm = run.phase_data<phase_data::Index>().release_mm;
-  if (event().index && beyond(release_mm, event().index_mm)) return reference_found(event().index_mm);
+  if (event().index && beyond(release_mm, event().index_mm)) {
+    note_index(release_mm, event().index_mm);
+    return reference_found(event().index_mm);
+  }
   move_to(run.target_mm, latch_v);
   if (arrived()) fail(AlarmCode::index_not_found, index_search_mm(s));
+}
+
+// How far the index pulse taken lies from the switch edge it was searched from.
+void PhaseRunner::note_index(double release_mm, double index_mm) {
+  run.health.index_distance_mm = std::abs(index_mm - release_mm);
+  run.health.index_near_edge = index_near_edge(run.health.index_distance_mm, s.index_pitch_mm);
 }
 
 // The reference edge is located. A commutator master holds there (its

@@ -42,7 +42,18 @@ struct SwitchHealth {
   double hysteresis_mm = 0;     // trigger edge vs the release edge next to it
   double seek_latch_mm = 0;     // seek edge minus latch edge, along the seek (input latency x speed)
   int chatter_edges = 0;        // raw transitions the debounce time swallowed this cycle
+  double index_distance_mm = 0; // switch + index: release edge to the index pulse taken
+  bool index_near_edge = false; // that distance is within kIndexMarginOfPitch of 0 or one pitch
 };
+
+// Switch + index: an index pulse this close (as a fraction of the pitch) to
+// the switch edge, or to one pitch from it, may be missed or taken one pulse
+// early when the switch edge moves by its noise: home one revolution off.
+inline constexpr double kIndexMarginOfPitch = 0.1;
+constexpr bool index_near_edge(double distance_mm, double pitch_mm) {
+  return pitch_mm > 0 &&
+         (distance_mm < kIndexMarginOfPitch * pitch_mm || distance_mm > (1 - kIndexMarginOfPitch) * pitch_mm);
+}
 
 // The edges one cycle crossed, as the phases find them.
 struct CycleEdges {

@@ -101,6 +101,7 @@ struct PhaseRunner {
   // The index search runs away from the sensor (-dir) from the release edge.
   bool beyond(double release_mm, double x_mm) const { return (x_mm - release_mm) * -dir > 0; }
   void index();
+  void note_index(double release_mm, double index_mm);
   void reference_found(double reference_mm);
   double rest_offset_mm() const;
   void pull_off();

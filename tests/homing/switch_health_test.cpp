@@ -68,3 +68,24 @@ SCENARIO("a chattering contact: transitions swallowed by the debounce time are c
     }
   }
 }
+
+SCENARIO("an index pulse 0.02 pitch from the switch edge is published with its distance and flagged",
+         "[health]") {
+  struct Case {
+    double pulse_after_release_mm;
+    bool near;
+  };
+  // Pitch 5 mm; the release edge lies at the cam's end plus the hysteresis (0.05 mm).
+  for (const Case k : {Case{0.1, true}, Case{2.5, false}, Case{4.9, true}}) {
+    DYNAMIC_SECTION("pulse " << k.pulse_after_release_mm << " mm after the release") {
+      Rig r;
+      AxisSettings& s = r.settings.axes[0];
+      s.mode = HomingMode::switch_index;
+      r.machine.axes[0].index_pitch_mm = s.index_pitch_mm;
+      r.machine.axes[0].index_offset_mm = 0.05 + k.pulse_after_release_mm;
+      REQUIRE(r.home_all());
+      CHECK(r.axis(0).health.index_distance_mm == Approx(k.pulse_after_release_mm).margin(0.002));
+      CHECK(r.axis(0).health.index_near_edge == k.near);
+    }
+  }
+}
