@@ -4,6 +4,7 @@
 
 #include "alarms.hpp"
 #include "gantry.hpp"
+#include "health.hpp"
 #include "settings_check.hpp"
 
 namespace homing {
@@ -104,6 +105,9 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
     case AlarmCode::limit_switch:
       return fmt::format("{}: {} limit switch tripped during {} at {:.3f} {}", X,
                          a.rule == 1 ? "negative" : "positive", ph, a.value, u);
+    case AlarmCode::switch_not_repeatable:
+      return fmt::format("{}: switch not repeatable: spread {:.3f} {} over {} passes, limit {:.3f} {}", X, a.value,
+                         u, latch_passes_of(s.latch_passes), s.max_latch_spread_mm, u);
   }
   return "?";
 }

@@ -45,8 +45,9 @@ enum class AlarmCode : std::uint8_t {
   limit_in_homing = 29,        // a limit switch met in a homing phase that must not reach one
   both_limits_active = 30,     // both limit switches active at once (wiring, polarity)
   limit_switch = 31,           // an end-of-travel limit switch tripped outside homing (hard limit)
+  switch_not_repeatable = 32,  // the latch passes' spread exceeded max_latch_spread
 };
-inline constexpr std::uint8_t kAlarmCodeCount = 32;
+inline constexpr std::uint8_t kAlarmCodeCount = 33;
 
 // The alarm table: per code its name, what happened (text) and what a
 // maintenance technician checks (what_to_check). describe_alarm() says what
@@ -136,8 +137,11 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
     {AlarmCode::limit_switch, "limit_switch", "end-of-travel limit switch tripped",
      "reset, jog the axis off the limit switch (only away from it is allowed) and find why it ran there "
      "(soft limits, lost steps, a move before homing); re-home if it was homed"},
+    {AlarmCode::switch_not_repeatable, "switch_not_repeatable",
+     "the latch passes found the reference edge further apart than max_latch_spread",
+     "check the switch's mounting, the cam, and the latch feedrate"},
 };
-static_assert(lists_every_value(kAlarmInfo, AlarmCode::limit_switch));
+static_assert(lists_every_value(kAlarmInfo, AlarmCode::switch_not_repeatable));
 static_assert(std::size(kAlarmInfo) == kAlarmCodeCount);
 constexpr std::span<const AlarmInfo> enum_table(AlarmCode) { return kAlarmInfo; }
 

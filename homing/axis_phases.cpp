@@ -19,6 +19,11 @@ PhaseRunner::PhaseRunner(const PhaseContext& context, const Settings& st, std::s
 }
 
 void PhaseRunner::begin() {
+  run.latch = {};
+  run.health = {};
+  run.edges = {};
+  run.edges.transitions_at_start = ctx.input.filter.transitions();
+  run.edges.accepted_at_start = ctx.input.filter.accepted();
   run.entered = false;
   run.phase_start_mm = run.motor.position_mm;
   if (commutator_slave()) {

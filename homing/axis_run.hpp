@@ -7,6 +7,7 @@
 #include <variant>
 
 #include "alarms.hpp"
+#include "health.hpp"
 #include "home_frame.hpp"
 #include "motion.hpp"
 #include "phases.hpp"
@@ -147,6 +148,9 @@ struct AxisRun {
   double trigger_position_mm = 0;  // reported: reference edge in the coordinates believed before
   double home_correction_mm = 0;   // reported: assigned - believed at the reference edge
   bool homed_at_cycle_start = false;  // reported: homed when its last cycle started
+  CycleEdges edges{};           // this cycle's seek trigger and first release
+  LatchEdges latch{};           // this cycle's slow approaches to the reference edge
+  SwitchHealth health{};        // reported: what the last cycle measured of the switch
 
   bool homed() const { return home.has_value(); }
   // Homed, or its method does not home (disabled): what jogs, moves and the

@@ -10,6 +10,7 @@ void Debouncer::reset(bool level, double now_s) {
 
 void Debouncer::transition(double t_s, double x_mm) {
   raw_ = !raw_;
+  ++transitions_;
   if (!pending_ && raw_ != stable_) {
     pending_ = true;
     first_t_ = t_s;
@@ -26,6 +27,7 @@ bool Debouncer::settle(double now_s, double debounce_s, AcceptedEdge& out) {
   pending_ = false;
   if (raw_ == stable_) return false;  // a glitch that came back: rejected
   stable_ = raw_;
+  ++accepted_;
   out = AcceptedEdge{stable_, first_t_, first_x_};
   return true;
 }

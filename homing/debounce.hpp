@@ -21,6 +21,10 @@ class Debouncer {
   bool raw() const { return raw_; }
   // Engine time of the last raw transition (or of the reset).
   double last_change_s() const { return last_change_t_; }
+  // Raw transitions and accepted changes so far: their difference is the
+  // contact's chatter (transitions the debounce time swallowed).
+  unsigned long transitions() const { return transitions_; }
+  unsigned long accepted() const { return accepted_; }
 
  private:
   bool stable_ = false;
@@ -29,6 +33,8 @@ class Debouncer {
   double first_t_ = 0;
   double first_x_ = 0;
   double last_change_t_ = 0;
+  unsigned long transitions_ = 0;
+  unsigned long accepted_ = 0;
 };
 
 }  // namespace homing

@@ -14,6 +14,10 @@ void PhaseRunner::back_off() {
   }
   if (edge_to(false)) {
     const double release_mm = edge_mm();
+    if (!run.edges.release_seen) {
+      run.edges.release_seen = true;
+      run.edges.release_mm = release_mm;
+    }
     run.reach(Reached::released);
     const Phase next = row().after(Phase::back_off);
     if (next == Phase::reapproach) {
@@ -28,7 +32,10 @@ void PhaseRunner::back_off() {
     if (next == Phase::index) {
       // The release is accepted only after the debounce time: an index pulse
       // may already have passed beyond the release edge. It is the next one.
-      if (seen.index_seen && beyond(release_mm, seen.index_seen_mm)) return reference_found(seen.index_seen_mm);
+      if (seen.index_seen && beyond(release_mm, seen.index_seen_mm)) {
+        note_index(release_mm, seen.index_seen_mm);
+        return reference_found(seen.index_seen_mm);
+      }
       enter(Phase::index);
       run.phase_data<phase_data::Index>().release_mm = release_mm;
       return;
@@ -41,24 +48,49 @@ void PhaseRunner::back_off() {
 
 void PhaseRunner::reapproach() {
   if (entry()) run.target_mm = run.phase_start_mm + dir * s.max_backoff_mm;
-  if (edge_to(true)) return reference_found(edge_mm());
+  if (edge_to(true)) return latch_edge_found(edge_mm());
   move_to(run.target_mm, latch_v);
   if (arrived()) fail(AlarmCode::reapproach_not_found, s.max_backoff_mm);
+}
+
+// One slow approach found the edge. With several latch passes the axis backs
+// off to the release and approaches again until it has them all; the
+// reference is their median, refused when they disagree beyond the limit.
+void PhaseRunner::latch_edge_found(double edge_mm) {
+  run.latch.add(edge_mm);
+  const int passes = latch_passes_of(s.latch_passes);
+  if (run.latch.count < passes) return enter(Phase::back_off);
+  const EdgeStats st = edge_stats(run.latch.edges());
+  run.health.latch_passes = run.latch.count;
+  run.health.latch_spread_mm = st.spread_mm;
+  run.health.latch_sigma_mm = st.sigma_mm;
+  if (passes > 1 && st.spread_mm > s.max_latch_spread_mm) return fail(AlarmCode::switch_not_repeatable, st.spread_mm);
+  reference_found(st.median_mm);
 }
 
 void PhaseRunner::index() {
   if (entry()) run.target_mm = run.phase_start_mm - dir * index_search_mm(s);
   // A pulse in the same period but before the release edge is not the next one.
   const double release_mm = run.phase_data<phase_data::Index>().release_mm;
-  if (event().index && beyond(release_mm, event().index_mm)) return reference_found(event().index_mm);
+  if (event().index && beyond(release_mm, event().index_mm)) {
+    note_index(release_mm, event().index_mm);
+    return reference_found(event().index_mm);
+  }
   move_to(run.target_mm, latch_v);
   if (arrived()) fail(AlarmCode::index_not_found, index_search_mm(s));
+}
+
+// How far the index pulse taken lies from the switch edge it was searched from.
+void PhaseRunner::note_index(double release_mm, double index_mm) {
+  run.health.index_distance_mm = std::abs(index_mm - release_mm);
+  run.health.index_near_edge = index_near_edge(run.health.index_distance_mm, s.index_pitch_mm);
 }
 
 // The reference edge is located. A commutator master holds there (its
 // slave aligns on its own edge from this point); everyone else pulls off.
 void PhaseRunner::reference_found(double reference_mm) {
   run.reference_mm = reference_mm;
+  measure_switch(run.health, run.edges, run.latch, dir, ctx.input.filter.transitions(), ctx.input.filter.accepted());
   run.reach(Reached::reference);
   if (commutator_master()) {
     run.command = stop_command(accel);

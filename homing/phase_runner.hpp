@@ -97,9 +97,11 @@ struct PhaseRunner {
   void push_to_stop();  // hard-stop homing (stop_phases.cpp)
   void back_off();
   void reapproach();
+  void latch_edge_found(double edge_mm);
   // The index search runs away from the sensor (-dir) from the release edge.
   bool beyond(double release_mm, double x_mm) const { return (x_mm - release_mm) * -dir > 0; }
   void index();
+  void note_index(double release_mm, double index_mm);
   void reference_found(double reference_mm);
   double rest_offset_mm() const;
   void pull_off();

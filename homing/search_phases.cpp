@@ -46,6 +46,8 @@ void PhaseRunner::seek() {
   }
   if (edge_to(true)) {
     const phase_data::Stop trigger{edge_mm(), dt()};
+    run.edges.seek_seen = true;
+    run.edges.seek_mm = edge_mm();
     enter(Phase::stop);
     run.phase_data<phase_data::Stop>() = trigger;
     return;

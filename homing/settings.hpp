@@ -138,6 +138,11 @@ struct AxisSettings {
   bool limits_nc = false;
   CamEdge cam_edge = CamEdge::behind;   // home_cam: the reference edge of the cam
   double limit_overtravel_mm = 0;       // travel past a limit switch before the mechanical stop
+  // Several latch passes (docs/health.md): in a method that re-approaches its
+  // switch, this many slow approaches; the reference is their median. 0 or 1
+  // is one approach, as before.
+  std::uint8_t latch_passes = 1;
+  double max_latch_spread_mm = 0;  // their spread above this: switch_not_repeatable
   friend bool operator==(const AxisSettings&, const AxisSettings&) = default;
 };
 
@@ -212,6 +217,8 @@ enum class AxisField : std::uint8_t {
   limits_nc,
   cam_edge,
   limit_overtravel,
+  latch_passes,
+  max_latch_spread,
 };
 // The name of each: the suffix of its register name (axis.<a>.<name>).
 struct AxisFieldInfo {
@@ -257,8 +264,10 @@ inline constexpr AxisFieldInfo kAxisFieldInfo[] = {
     {AxisField::limits_nc, "limits_nc"},
     {AxisField::cam_edge, "cam_edge"},
     {AxisField::limit_overtravel, "limit_overtravel"},
+    {AxisField::latch_passes, "latch_passes"},
+    {AxisField::max_latch_spread, "max_latch_spread"},
 };
-static_assert(lists_every_value(kAxisFieldInfo, AxisField::limit_overtravel));
+static_assert(lists_every_value(kAxisFieldInfo, AxisField::max_latch_spread));
 constexpr std::span<const AxisFieldInfo> enum_table(AxisField) { return kAxisFieldInfo; }
 
 std::string_view field_name(AxisField field);

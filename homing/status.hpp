@@ -9,6 +9,7 @@
 #include "alarms.hpp"
 #include "axes.hpp"
 #include "enum_info.hpp"
+#include "health.hpp"
 #include "phases.hpp"
 
 namespace homing {
@@ -139,6 +140,7 @@ struct AxisStatus {
   bool homed_at_cycle_start = false;
   double stop_distance_mm = 0;      // v²/2a of the seek
   double phase_distance_mm = 0;     // travelled in the current phase
+  SwitchHealth health{};            // what the last homing cycle measured of the switch (health.hpp)
 };
 
 struct Status {

@@ -162,6 +162,14 @@ std::int64_t read_raw(const Register& reg, const ModuleView& view) {
       case Key::axis_phase_distance: return to_raw(reg, a.phase_distance_mm);
       case Key::axis_correction_mean: return to_raw(reg, view.extras.correction_mean_mm[i]);
       case Key::axis_correction_spread: return to_raw(reg, view.extras.correction_spread_mm[i]);
+      case Key::axis_latch_spread: return to_raw(reg, a.health.latch_spread_mm);
+      case Key::axis_latch_sigma: return to_raw(reg, a.health.latch_sigma_mm);
+      case Key::axis_latch_passes_done: return a.health.latch_passes;
+      case Key::axis_hysteresis: return to_raw(reg, a.health.hysteresis_mm);
+      case Key::axis_seek_latch_difference: return to_raw(reg, a.health.seek_latch_mm);
+      case Key::axis_chatter_edges: return std::min(a.health.chatter_edges, 65535);
+      case Key::axis_index_distance: return to_raw(reg, a.health.index_distance_mm);
+      case Key::axis_index_near_edge: return a.health.index_near_edge ? 1 : 0;
       case Key::axis_homed: return a.homed ? 1 : 0;
       case Key::axis_sensor: return a.sensor ? 1 : 0;
       case Key::axis_busy: return a.busy ? 1 : 0;

@@ -90,6 +90,9 @@ constexpr AlarmConfirm kAlarmConfirm[] = {
     {homing::AlarmCode::limit_switch,
      "`axis.<a>.alarm_phase` is `jog`, `move` or `idle`; the limit input of that end reads active and "
      "`axis.<a>.alarm_value` is the position where it tripped"},
+    {homing::AlarmCode::switch_not_repeatable,
+     "`axis.<a>.latch_spread` (the figure in `axis.<a>.alarm_value`) is above `axis.<a>.max_latch_spread` over "
+     "`axis.<a>.latch_passes_done` passes; home again and watch the spread and `axis.<a>.latch_sigma`"},
 };
 
 std::string registers_reference() {

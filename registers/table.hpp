@@ -59,7 +59,8 @@ enum class Key : std::uint8_t {
   status_unlock_lockout_s, status_wrong_unlock_codes,
   axis_phase, axis_alarm, axis_alarm_phase, axis_position, axis_velocity, axis_home_correction,
   axis_stop_distance, axis_trigger_position, axis_phase_distance, axis_correction_mean,
-  axis_correction_spread,
+  axis_correction_spread, axis_latch_spread, axis_latch_sigma, axis_latch_passes_done,
+  axis_hysteresis, axis_seek_latch_difference, axis_chatter_edges, axis_index_distance, axis_index_near_edge,
   // discrete inputs, module
   status_alarm, status_homing, status_estop, axis_homed, axis_sensor, axis_busy,
   // coils, module

@@ -653,3 +653,25 @@ SCENARIO("drive_reference_lost: home done goes off while the axis is homed", "[a
     }
   }
 }
+
+SCENARIO("switch_not_repeatable: the latch passes of a noisy switch disagree beyond max_latch_spread",
+         "[alarms]") {
+  Rig r;
+  AxisSettings& s = r.settings.axes[0];
+  s.mode = HomingMode::switch_reapproach;
+  s.latch_passes = 5;
+  s.max_latch_spread_mm = 0.01;
+  r.machine.axes[0].noise_mm = 0.05;
+  r.home_all();
+  CHECK(r.axis(0).alarm.code == AlarmCode::switch_not_repeatable);
+  CHECK(r.axis(0).alarm.phase == Phase::reapproach);
+  CHECK_FALSE(r.axis(0).homed);
+  CHECK(r.axis(0).health.latch_passes == 5);
+  CHECK(r.axis(0).alarm.value == r.axis(0).health.latch_spread_mm);
+  CHECK(r.axis(0).alarm.value > 0.01);
+  const std::string text = text_of(r, 0);
+  CHECK(text.find("X: switch not repeatable: spread ") == 0);
+  CHECK(text.find(" mm over 5 passes, limit 0.010 mm; check the switch's mounting, the cam, and the latch "
+                  "feedrate") != std::string::npos);
+  check_latched_until_reset(r, 0, AlarmCode::switch_not_repeatable);
+}

@@ -143,7 +143,7 @@ TEST_CASE("homingctl usage errors exit 2, an unreachable module exits 3, --help 
   auto r = ctl_plain({"--help"});
   CHECK(r.code() == 0);
   for (const char* sub : {"status", "watch", "home", "abort", "reset", "jog", "move", "get", "set", "check", "export",
-                          "import", "history", "trace"})
+                          "import", "history", "trace", "health"})
     CHECK(r.out.find(sub) != std::string::npos);
   r = ctl_plain({"home", "--help"});
   CHECK(r.code() == 0);
@@ -387,4 +387,37 @@ TEST_CASE("homingctl exits 3 when no device answers at its unit id (exception 0B
   // Nothing was written through another unit id by mistake.
   Client c = Client::tcp(d.port());
   CHECK(c.read_mm("axis.x.pull_off") != Approx(2.0));
+}
+
+TEST_CASE("homingctl health: the last cycle's switch figures per axis, and the index warning with its fix") {
+  Daemon d;
+  auto r = ctl(d, {"set", "axis.x.mode=switch_reapproach", "axis.x.latch_passes=3", "axis.x.max_latch_spread=1",
+                   "sim.x.hysteresis=0.08", "sim.x.actual_position=5"});
+  REQUIRE(r.code() == 0);
+  REQUIRE(ctl(d, {"home", "x"}).code() == 0);
+  r = ctl(d, {"health"});
+  SHOW(r);
+  REQUIRE(r.code() == 0);
+  CHECK(r.out.find("hysteresis") != std::string::npos);
+  CHECK(r.out.find("\nX ") != std::string::npos);
+  auto j = json_of(ctl(d, {"--json", "health"}));
+  CHECK(j["x"]["latch_passes"] == 3);
+  CHECK(j["x"]["hysteresis"].get<double>() == Approx(0.08).margin(0.01));
+  CHECK(j["x"]["latch_spread"].get<double>() < 0.05);
+  CHECK(j["x"]["unit"] == "mm");
+  CHECK(j["x"]["warnings"].empty());
+  CHECK_FALSE(j.contains("a"));  // A does not home on a new module
+
+  // An index pulse 0.02 pitch (0.1 mm) beyond the release edge (the cam's end + 0.08 mm).
+  r = ctl(d, {"set", "axis.x.mode=switch_index", "axis.x.index_pitch=5", "sim.x.index_pitch=5",
+              "sim.x.index_offset=0.18", "sim.x.noise=0"});
+  REQUIRE(r.code() == 0);
+  REQUIRE(ctl(d, {"home", "x"}).code() == 0);
+  r = ctl(d, {"health"});
+  SHOW(r);
+  CHECK(r.out.find("index pulse 0.100 mm from the switch edge (index_pitch 5 mm)") != std::string::npos);
+  CHECK(r.out.find("move the cam or the encoder's index by about half a pitch") != std::string::npos);
+  j = json_of(ctl(d, {"--json", "health"}));
+  CHECK(j["x"]["index_distance"].get<double>() == Approx(0.1).margin(0.005));
+  CHECK(j["x"]["warnings"].size() == 1);
 }

@@ -8,6 +8,9 @@
 #include <thread>
 
 #include "cli.hpp"
+#include "homing/gantry.hpp"
+#include "registers/codec.hpp"
+#include "registers/lookup.hpp"
 #include "settings_io.hpp"
 #include "status_view.hpp"
 
@@ -81,11 +84,56 @@ int watch(Context& ctx, const WatchOptions& o) {
   }
 }
 
+// The switch figures of the last cycle of each homing axis (docs/health.md),
+// read from their registers, with the warnings they raise.
+int health(Context& ctx) {
+  Connection& c = ctx.connection();
+  const auto settings = read_settings(c);
+  nlohmann::json j = nlohmann::json::object();
+  if (!ctx.json)
+    fmt::print("{:<4} {:>6} {:>10} {:>10} {:>10} {:>7} {:>10} {:>10}  {}\n", "axis", "passes", "spread", "sigma",
+               "hysteresis", "chatter", "seek-latch", "index", "warnings");
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    const homing::AxisSettings& s = settings.axes[a];
+    if (!homing::mode_homes(s.mode)) continue;
+    const std::string_view letter = homing::kAxisLetters[a];
+    auto value = [&](std::string_view suffix) {
+      const registers::Register* r = registers::find_register(fmt::format("axis.{}.{}", letter, suffix));
+      return registers::to_engineering(*r, c.read(*r));
+    };
+    const auto u = homing::axis_unit(settings, a);
+    const double passes = value("latch_passes_done"), spread = value("latch_spread"), sigma = value("latch_sigma");
+    const double hysteresis = value("hysteresis"), seek_latch = value("seek_latch_difference");
+    const double chatter = value("chatter_edges"), index = value("index_distance");
+    const bool near = value("index_near_edge") != 0;
+    std::vector<std::string> warnings;
+    if (near)
+      warnings.push_back(fmt::format("index pulse {:.3f} {} from the switch edge (index_pitch {:g} {}): switch noise can "
+                                     "home one pitch off; move the cam or the encoder's index by about half a pitch",
+                                     index, u, s.index_pitch_mm, u));
+    if (ctx.json) {
+      j[std::string(letter)] = {{"latch_passes", passes}, {"latch_spread", spread}, {"latch_sigma", sigma},
+                                {"hysteresis", hysteresis}, {"chatter_edges", chatter},
+                                {"seek_latch_difference", seek_latch}, {"index_distance", index},
+                                {"unit", std::string(u)}, {"warnings", warnings}};
+      continue;
+    }
+    fmt::print("{:<4} {:>6g} {:>10.4f} {:>10.4f} {:>10.4f} {:>7g} {:>10.4f} {:>10.4f}  {}\n", homing::kAxisUpper[a],
+               passes, spread, sigma, hysteresis, chatter, seek_latch, index,
+               warnings.empty() ? "-" : fmt::format("{}", fmt::join(warnings, "; ")));
+  }
+  if (ctx.json) print_json(j);
+  else fmt::print("figures of the last homing cycle, in each axis's unit (docs/health.md)\n");
+  return kOk;
+}
+
 }  // namespace
 
 void add_view_commands(Commands& commands, Context&) {
   commands.add("status", "one table: every axis (mode, phase, position, homed, sensor, alarm), "
                          "the machine state and what blocks motion", status);
+  commands.add("health", "switch health per axis from the last homing cycle: latch passes, spread, sigma, "
+                         "hysteresis, chatter, seek-latch difference, index distance, with their warnings", health);
   auto o = std::make_shared<WatchOptions>();
   auto* sub = commands.add("watch", "status refreshed live with progress bars during homing; exits when a "
                                     "homing cycle ends (0 homed, 1 alarm)",
