@@ -28,9 +28,28 @@ std::vector<MetricDef> node_metrics() {
   std::vector<MetricDef> out;
   for (const auto& reg : registers::registers_of(registers::Unit::module)) {
     if (reg.table != registers::Table::input_register && reg.table != registers::Table::discrete_input) continue;
+    // The heartbeat changes every control period: on MQTT the broker's
+    // keep-alive and NDEATH tell a host the module is alive.
+    if (reg.key == registers::Key::status_heartbeat) continue;
     out.push_back(MetricDef{metric_name(reg), out.size() + 1, data_type(reg), &reg});
   }
   return out;
+}
+
+bool is_diagnostic(const registers::Register& reg) {
+  switch (reg.key) {
+    case registers::Key::diag_loop_periods:
+    case registers::Key::diag_late_p50_us:
+    case registers::Key::diag_late_p99_us:
+    case registers::Key::diag_late_p999_us:
+    case registers::Key::diag_late_max_us:
+    case registers::Key::diag_engine_step_ns:
+    case registers::Key::diag_rss_kb:
+    case registers::Key::diag_tcp_clients:
+      return true;
+    default:
+      return false;
+  }
 }
 
 }  // namespace sparkplug

@@ -33,7 +33,10 @@ std::string metric_name(const registers::Register& reg);
 // Datatype on the wire: a scaled quantity (lengths, velocities) is sent in
 // engineering units as Double, every other register as its raw integer type.
 DataType data_type(const registers::Register& reg);
-// Every metric of the node, in table order, aliases 1..n.
+// Loop timing and resource figures: they move all the time, so they are
+// published at most every ReportPolicy::diagnostics_min_interval_ms.
+bool is_diagnostic(const registers::Register& reg);
+// Every metric of the node (status.heartbeat excepted), in table order, aliases 1..n.
 std::vector<MetricDef> node_metrics();
 
 }  // namespace sparkplug

@@ -65,6 +65,7 @@ Payload EdgeNode::birth(std::uint64_t bd_seq, const RawReader& read, std::uint64
 bool EdgeNode::changed(std::size_t i, std::int64_t raw, std::uint64_t now_ms) const {
   if (raw == sent_raw_[i]) return false;
   const auto& reg = *metrics_[i].reg;
+  if (is_diagnostic(reg)) return now_ms - sent_at_ms_[i] >= policy_.diagnostics_min_interval_ms;
   if (reg.quantity != registers::Quantity::length_um) return true;
   if (now_ms - sent_at_ms_[i] < policy_.length_min_interval_ms) return false;
   const double moved = std::abs(registers::to_engineering(reg, raw) - registers::to_engineering(reg, sent_raw_[i]));

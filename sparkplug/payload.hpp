@@ -25,6 +25,8 @@ struct ReportPolicy {
   double length_deadband = 0.01;
   // ...and not more often than this per metric: a moving axis is sampled, not streamed.
   std::uint64_t length_min_interval_ms = 100;
+  // Diagnostics (is_diagnostic) change every period: any change, at most this often.
+  std::uint64_t diagnostics_min_interval_ms = 10000;
 };
 
 class EdgeNode {

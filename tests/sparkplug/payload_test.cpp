@@ -43,7 +43,9 @@ TEST_CASE("every input register and discrete input of the module is a metric wit
   EdgeNode node;
   std::size_t expected = 0;
   for (const auto& reg : registers::registers_of(registers::Unit::module))
-    if (reg.table == registers::Table::input_register || reg.table == registers::Table::discrete_input) ++expected;
+    if ((reg.table == registers::Table::input_register || reg.table == registers::Table::discrete_input) &&
+        reg.key != registers::Key::status_heartbeat)
+      ++expected;
   REQUIRE(node.metrics().size() == expected);
   std::set<std::uint64_t> aliases;
   std::set<std::string> names;
@@ -160,13 +162,13 @@ TEST_CASE("seq counts 1 to 255 after the birth then wraps to 0 and a rebirth res
   EdgeNode node;
   node.birth(0, module.reader(), 0);
   for (int n = 1; n <= 256; ++n) {
-    module.raw["status.heartbeat"] = n;
+    module.raw["status.command_count"] = n;
     const auto data = node.data(module.reader(), n);
     REQUIRE(data.has_value());
     REQUIRE(data->seq() == static_cast<std::uint64_t>(n % 256));
   }
   CHECK(node.birth(1, module.reader(), 1000).seq() == 0);
-  module.raw["status.heartbeat"] = 1;
+  module.raw["status.command_count"] = 1;
   CHECK(node.data(module.reader(), 1001)->seq() == 1);
 }
 
@@ -188,4 +190,21 @@ TEST_CASE("a payload survives the wire") {
   REQUIRE(back.ParseFromString(birth.SerializeAsString()));
   CHECK(back.metrics_size() == birth.metrics_size());
   CHECK(by_name(back, "status/state")->int_value() == 1);
+}
+
+TEST_CASE("loop diagnostics are published at most every diagnostics interval and the heartbeat not at all") {
+  sparkplug::ReportPolicy policy;
+  policy.diagnostics_min_interval_ms = 10000;
+  FakeModule module;
+  EdgeNode node(policy);
+  for (const auto& def : node.metrics()) CHECK(def.name != "status/heartbeat");
+  node.birth(0, module.reader(), 1000);
+  module.raw["status.heartbeat"] = 5;
+  CHECK_FALSE(node.data(module.reader(), 1100).has_value());
+  module.raw["diag.loop_late_p99_us"] = 17;
+  CHECK_FALSE(node.data(module.reader(), 5000).has_value());
+  const auto data = node.data(module.reader(), 11000);
+  REQUIRE(data.has_value());
+  REQUIRE(data->metrics_size() == 1);
+  CHECK(data->metrics(0).alias() == alias_of(node, "diag/loop_late_p99_us"));
 }
