@@ -17,6 +17,7 @@
 #include "homing/sim/simulator_io.hpp"
 #include "modbus_service.hpp"
 #include "monitor.hpp"
+#include "mqtt_node.hpp"
 #include "registers/defaults.hpp"
 #include "registers/sim_bindings.hpp"
 #include "rtu_server.hpp"
@@ -199,6 +200,11 @@ void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, Modbu
     return static_cast<std::uint32_t>((t.tcp ? t.tcp->active_clients() : 0) + (t.tls ? t.tls->active_clients() : 0));
   });
   monitor.start();
+  std::unique_ptr<MqttNode> mqtt;  // Sparkplug B edge node: its own threads, never in the loop's way
+  if (opt.mqtt_enabled) {
+    mqtt = std::make_unique<MqttNode>(mqtt_config(opt), service);
+    mqtt->start();
+  }
   std::thread tcp_thread, tls_thread, rtu_thread;
   if (t.tcp) tcp_thread = std::thread([&] { t.tcp->run(); });
   if (t.tls) tls_thread = std::thread([&] { t.tls->run(); });
@@ -219,6 +225,7 @@ void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, Modbu
   if (rtu_thread.joinable()) rtu_thread.join();
   loop.stop();
   log_stop(loop.stop_report());
+  if (mqtt) mqtt->stop();  // after the stop, so the last values are published; then NDEATH
   monitor.stop();
   t.tcp.reset();
   t.tls.reset();

@@ -180,6 +180,24 @@ Reply ModbusService::apply(Target target, const Request& request, const ClientIn
   return device_identification(std::get<DeviceIdRequest>(request.body), config_.identity);
 }
 
+registers::StatusExtras ModbusService::extras_now() {
+  registers::StatusExtras extras = extras_;
+  const std::uint64_t refusal = last_refusal_.load();
+  extras.refusal_count = static_cast<std::uint16_t>(refusal & 0xFFFF);
+  extras.last_refused_register = static_cast<std::uint16_t>((refusal >> 16) & 0xFFFF);
+  extras.last_refusal_reason = static_cast<std::uint16_t>((refusal >> 32) & 0xFFFF);
+  extras.unlock_lockout_s = static_cast<std::uint16_t>(std::min<std::int64_t>(unlock_guard_.remaining(now()).count(), 0xFFFF));
+  extras.wrong_unlock_codes = static_cast<std::uint16_t>(std::min<std::uint32_t>(unlock_guard_.wrong_in_a_row(), 0xFFFF));
+  return extras;
+}
+
+void ModbusService::with_module_view(const std::function<void(const registers::ModuleView&)>& use) {
+  const Snapshot snap = loop_.snapshot();
+  std::lock_guard lock(mutex_);
+  const registers::StatusExtras extras = extras_now();
+  use(registers::ModuleView{settings_, host_, snap.status, extras});
+}
+
 Reply ModbusService::read(Target target, std::uint8_t fc, const ReadRequest& r) {
   const Snapshot snap = loop_.snapshot();
   const bool bits = r.table == Table::coil || r.table == Table::discrete_input;
@@ -188,13 +206,7 @@ Reply ModbusService::read(Target target, std::uint8_t fc, const ReadRequest& r) 
   std::optional<registers::Refusal> refused;
   if (target == Target::module) {
     std::lock_guard lock(mutex_);
-    registers::StatusExtras extras = extras_;
-    const std::uint64_t refusal = last_refusal_.load();
-    extras.refusal_count = static_cast<std::uint16_t>(refusal & 0xFFFF);
-    extras.last_refused_register = static_cast<std::uint16_t>((refusal >> 16) & 0xFFFF);
-    extras.last_refusal_reason = static_cast<std::uint16_t>((refusal >> 32) & 0xFFFF);
-    extras.unlock_lockout_s = static_cast<std::uint16_t>(std::min<std::int64_t>(unlock_guard_.remaining(now()).count(), 0xFFFF));
-    extras.wrong_unlock_codes = static_cast<std::uint16_t>(std::min<std::uint32_t>(unlock_guard_.wrong_in_a_row(), 0xFFFF));
+    const registers::StatusExtras extras = extras_now();
     const registers::ModuleView view{settings_, host_, snap.status, extras};
     refused = bits ? registers::read_module_bits(r.table, r.start, flags, view)
                    : registers::read_module_words(r.table, r.start, words, config_.word_order, view);

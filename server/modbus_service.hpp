@@ -66,6 +66,9 @@ class ModbusService final : public RequestHandler {
   // Called by the monitor with the history summary.
   void set_extras(const registers::StatusExtras& extras);
   homing::Settings settings() const;
+  // Calls use with the module unit as a Modbus read would see it now (the MQTT
+  // edge node reads its metrics through it: the same values, the same codec).
+  void with_module_view(const std::function<void(const registers::ModuleView&)>& use);
 
  private:
   enum class Target { module, simulator };
@@ -73,6 +76,7 @@ class ModbusService final : public RequestHandler {
   Reply dispatch(Target target, std::span<const std::uint8_t> pdu, const ClientInfo& client);
   Reply apply(Target target, const Request& request, const ClientInfo& client);
   Reply read(Target target, std::uint8_t fc, const ReadRequest& request);
+  registers::StatusExtras extras_now();  // under mutex_
   // Validates and applies a write; nullopt when accepted.
   std::optional<Reply> write(Target target, std::uint8_t fc, const WriteRequest& request, const ClientInfo& client);
   std::optional<Reply> write_module(std::uint8_t fc, registers::Table table, std::uint16_t start,

@@ -87,6 +87,7 @@ struct OptionParser::Table {
   Options o;
   std::string tcp = "127.0.0.1:1502";
   std::string tls;  // empty: no Modbus/TCP Security
+  std::string mqtt;  // empty: no MQTT
   std::string parity = "E";
   std::string word_order = "high-first";
   // A bool flag: CLI11 2.1's integer flag callback throws std::invalid_argument
@@ -99,6 +100,7 @@ struct OptionParser::Table {
     o = Options{};
     tcp = "127.0.0.1:1502";
     tls.clear();
+    mqtt.clear();
     parity = "E";
     word_order = "high-first";
     no_tcp = false;
@@ -115,6 +117,18 @@ const CLI::Validator identity_text(
       return {};
     },
     "TEXT");
+
+// Sparkplug ids are topic levels: no wildcards, no separators, not empty.
+const CLI::Validator sparkplug_id(
+    [](const std::string& text) -> std::string {
+      if (text.empty()) return "must not be empty";
+      if (text.size() > 64) return "at most 64 characters";
+      for (unsigned char ch : text)
+        if (ch == '/' || ch == '+' || ch == '#' || ch < 0x21 || ch > 0x7E)
+          return "printable ASCII without '/', '+', '#' or spaces (it is an MQTT topic level)";
+      return {};
+    },
+    "ID");
 
 OptionParser::Table::Table() {
   app.set_version_flag("--version", "homingd " HOMING_VERSION);
@@ -210,6 +224,16 @@ OptionParser::Table::Table() {
   app.add_option("--machine-name,--machine_name", o.machine_name,
                  "The machine's name, reported as the user application name (FC 43 object 6, FC 17)")
       ->check(identity_text);
+  app.add_option("--mqtt", mqtt,
+                 "Publish to this MQTT broker as a Sparkplug B edge node: mqtt://HOST[:PORT] (default port 1883)");
+  app.add_option("--mqtt-group,--mqtt_group", o.mqtt_group, "Sparkplug group id")->check(sparkplug_id)->capture_default_str();
+  app.add_option("--mqtt-node,--mqtt_node", o.mqtt_node,
+                 "Sparkplug edge node id (default: --machine-name, else the host name)")
+      ->check(sparkplug_id);
+  app.add_option("--mqtt-keepalive-s,--mqtt_keepalive_s", o.mqtt_keepalive_s,
+                 "MQTT keep-alive: the broker publishes the death certificate this long (x1.5) after the module falls silent")
+      ->check(CLI::Range(5, 3600))
+      ->capture_default_str();
   app.add_option("--export-settings,--export_settings", o.export_settings,
                  "Write every setting of --db to this TOML file and exit (no server)");
   app.add_option("--import-settings,--import_settings", o.import_settings,
@@ -263,6 +287,21 @@ std::expected<ParseOutcome, std::string> OptionParser::parse(int argc, char** ar
     o.tls_port = where->port;
   }
   if (auto r = check_tls(o, app); !r) return std::unexpected(r.error());
+  if (!t.mqtt.empty()) {
+    if (t.mqtt.starts_with("mqtts://"))
+      return std::unexpected("--mqtt " + t.mqtt + ": mqtts:// (TLS to the broker) is not supported yet; use mqtt://HOST:PORT");
+    if (!t.mqtt.starts_with("mqtt://"))
+      return std::unexpected("--mqtt " + t.mqtt + ": expected mqtt://HOST[:PORT], e.g. mqtt://broker.plant:1883");
+    auto where = split_host_port("--mqtt", t.mqtt.substr(7), 1883);
+    if (!where) return std::unexpected(where.error());
+    o.mqtt_enabled = true;
+    o.mqtt_host = where->host;
+    o.mqtt_port = where->port;
+  } else {
+    for (const char* name : {"--mqtt-node", "--mqtt-group", "--mqtt-keepalive-s"})
+      if (app.get_option(name)->count() > 0)
+        return std::unexpected(std::string(name) + " is set but --mqtt is not: add --mqtt mqtt://HOST:PORT to publish");
+  }
   o.parity = t.parity.empty() ? 'E' : t.parity[0];
   o.word_order = t.word_order == "low-first" ? registers::WordOrder::low_first : registers::WordOrder::high_first;
   for (const auto& entry : o.write_allow)

@@ -54,6 +54,13 @@ struct Options {
   std::string vendor_url;
   std::string product_name;
   std::string machine_name;
+  // MQTT / Sparkplug B edge node (docs/mqtt-sparkplug.md): off unless --mqtt is given.
+  bool mqtt_enabled = false;
+  std::string mqtt_host;
+  int mqtt_port = 1883;
+  std::string mqtt_group = "homing";  // Sparkplug group id
+  std::string mqtt_node;              // edge node id; empty: --machine-name, else the host name
+  int mqtt_keepalive_s = 30;
   // Offline settings transfer: act on --db and exit without serving.
   std::string export_settings;
   std::string import_settings;

@@ -9,6 +9,8 @@ packages=(
   libmodbus-dev libgpiod-dev libsqlite3-dev sqlite3 libsystemd-dev
   catch2 libcli11-dev libtomlplusplus-dev libspdlog-dev libfmt-dev
   libssl-dev openssl
+  # MQTT / Sparkplug B (sparkplug/): client, broker for the tests, payloads, test subscriber
+  libmosquitto-dev mosquitto protobuf-compiler libprotobuf-dev python3-paho-mqtt python3-protobuf
   nlohmann-json3-dev libbenchmark-dev
   mbpoll socat python3-pymodbus python3-serial python3-serial-asyncio python3-yaml
   clang-16 libclang-rt-16-dev

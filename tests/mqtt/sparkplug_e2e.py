@@ -1,0 +1,115 @@
+#!/usr/bin/python3
+"""End-to-end: homingd --mqtt against Debian's mosquitto on loopback, watched by
+an independent Sparkplug subscriber (paho-mqtt, payloads decoded by
+python3-protobuf from the project's sparkplug_b.proto).
+
+usage: sparkplug_e2e.py HOMINGD PYTHON_DIR"""
+import os, signal, socket, subprocess, sys, tempfile, time
+
+homingd, pydir = sys.argv[1], sys.argv[2]
+sys.path.insert(0, pydir)
+import sparkplug_b_pb2 as spb  # noqa: E402
+import paho.mqtt.client as paho  # noqa: E402
+from pymodbus.client import ModbusTcpClient  # noqa: E402
+
+failures = []
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what)
+    if not cond:
+        failures.append(what)
+
+def free_port():
+    s = socket.socket(); s.bind(("127.0.0.1", 0)); p = s.getsockname()[1]; s.close(); return p
+
+def wait_until(pred, timeout=10.0):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if pred(): return True
+        time.sleep(0.05)
+    return pred()
+
+work = tempfile.mkdtemp(prefix="mqtt-e2e-")
+broker_port, modbus_port = free_port(), free_port()
+conf = os.path.join(work, "mosquitto.conf")
+with open(conf, "w") as f:
+    f.write(f"listener {broker_port} 127.0.0.1\nallow_anonymous true\npersistence false\n")
+broker = subprocess.Popen(["/usr/sbin/mosquitto", "-c", conf], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+messages = []  # (type, Payload)
+sub = paho.Client(client_id="e2e-host")
+def on_message(_c, _u, msg):
+    p = spb.Payload(); p.ParseFromString(msg.payload)
+    messages.append((msg.topic.split("/")[2], p))
+sub.on_message = on_message
+def try_connect():
+    try:
+        return sub.connect("127.0.0.1", broker_port) == 0
+    except OSError:
+        return False
+assert wait_until(try_connect, 10), "mosquitto did not start"
+sub.subscribe("spBv1.0/plant/#", qos=1)
+sub.loop_start()
+
+def of(kind): return [p for t, p in messages if t == kind]
+def start_homingd():
+    return subprocess.Popen([homingd, "--tcp", f"127.0.0.1:{modbus_port}", "--db", os.path.join(work, "h.db"),
+                             "--rt-priority", "0", "--time-scale", "20", "--mqtt", f"mqtt://127.0.0.1:{broker_port}",
+                             "--mqtt-group", "plant", "--mqtt-node", "m1"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+daemon = start_homingd()
+try:
+    check(wait_until(lambda: len(of("NBIRTH")) == 1), "NBIRTH arrives")
+    birth = of("NBIRTH")[0]
+    names = {m.name: m for m in birth.metrics}
+    check(birth.seq == 0, "birth has seq 0")
+    check("bdSeq" in names and names["bdSeq"].datatype == spb.Int64, "birth carries bdSeq as Int64")
+    check(names.get("Node Control/Rebirth") is not None and names["Node Control/Rebirth"].datatype == spb.Boolean,
+          "birth carries Node Control/Rebirth")
+    csv = open(os.path.join(os.path.dirname(__file__), "..", "..", "hmi_maps", "registers.csv")).read().splitlines()
+    expected = {}
+    for line in csv[1:]:
+        c = line.split(",")
+        if c[1] in ("input_register", "discrete_input"):
+            expected[c[0].replace(".", "/")] = c[4]
+    expected.pop("status/heartbeat", None)  # left out on purpose (keep-alive and NDEATH say the module is alive)
+    missing = [n for n in expected if n not in names]
+    check(not missing, f"birth has every input register and discrete input ({len(expected)}), missing {missing[:5]}")
+    typemap = {"bool": spb.Boolean, "u16": spb.UInt16, "i16": spb.Int16, "u32": spb.UInt32, "i32": spb.Int32,
+               "enum": spb.UInt16, "bitmask": spb.UInt16}
+    wrong = [n for n, t in expected.items() if n in names and names[n].datatype not in (typemap[t], spb.Double)]
+    check(not wrong, f"datatypes follow the register types, wrong: {wrong[:5]}")
+    check(all(m.HasField("alias") for n, m in names.items() if n in expected), "every metric has an alias")
+    pos = names["axis/x/position"]
+    check(pos.datatype == spb.Double, "positions are Double (mm)")
+
+    # Homing all axes: data by exception, seq continuing from the birth.
+    mb = ModbusTcpClient("127.0.0.1", port=modbus_port, timeout=2, retries=0)
+    check(wait_until(lambda: mb.connect(), 5), "Modbus connects")
+    before = len(of("NDATA"))
+    mb.write_coil(0, True, slave=1)  # cmd.home_all
+    homed_aliases = {names[f"axis/{a}/homed"].alias for a in "xyz"}
+    def homed_seen():
+        return any(m.alias in homed_aliases and m.boolean_value for p in of("NDATA") for m in p.metrics)
+    check(wait_until(homed_seen, 60), "NDATA reports axes homed during the cycle")
+    data = of("NDATA")
+    check(len(data) > before, "NDATA published during homing")
+    check(all(not m.name for p in data for m in p.metrics), "NDATA uses aliases, no names")
+    seqs = [p.seq for t, p in messages if t in ("NBIRTH", "NDATA")]
+    check(all((b - a) % 256 == 1 for a, b in zip(seqs, seqs[1:])), f"seq continuous from the birth: {seqs[:10]}...")
+
+    # Rebirth on command.
+    cmd = spb.Payload(); m = cmd.metrics.add(); m.name = "Node Control/Rebirth"; m.datatype = spb.Boolean; m.boolean_value = True
+    sub.publish("spBv1.0/plant/NCMD/m1", cmd.SerializeToString(), qos=1)
+    check(wait_until(lambda: len(of("NBIRTH")) == 2), "rebirth answered with a new NBIRTH")
+    check(of("NBIRTH")[1].seq == 0, "the new birth restarts seq at 0")
+    bd = names["bdSeq"].long_value
+    daemon.send_signal(signal.SIGKILL); daemon.wait()
+    check(wait_until(lambda: len(of("NDEATH")) >= 1, 15), "NDEATH (the Will) arrives after SIGKILL")
+    if of("NDEATH"):
+        death = {m.name: m for m in of("NDEATH")[0].metrics}
+        check(death.get("bdSeq") is not None and death["bdSeq"].long_value == bd, "NDEATH carries the birth's bdSeq")
+finally:
+    if daemon.poll() is None:
+        daemon.send_signal(signal.SIGKILL); daemon.wait()
+    sub.loop_stop()
+    broker.send_signal(signal.SIGTERM); broker.wait()
+sys.exit(1 if failures else 0)
