@@ -1,6 +1,6 @@
 # Each layer includes only what is below it: engine and simulator/backends
-# (homing/) <- register table (registers/) <- persistence, runtime, transports,
-# tools. Run by ctest (tests/CMakeLists.txt) as
+# (homing/) <- register table (registers/) <- Sparkplug B payloads (sparkplug/)
+# <- persistence, runtime, transports, tools. Run by ctest (tests/CMakeLists.txt) as
 #   cmake -D SOURCE_DIR=<source tree> -P check_layer_includes.cmake
 # Every #include "..." or <...> of the .hpp/.cpp files under each checked
 # layer is resolved (a path starting with '.', or one that exists beside the
@@ -15,14 +15,16 @@ if(NOT SOURCE_DIR)
 endif()
 
 # The project's parts (top-level directories whose headers code may include).
-set(parts homing registers persistence server tools bench fuzz tests tls)
+set(parts homing registers persistence server tools bench fuzz tests tls sparkplug)
 # What each checked layer may include, itself first.
 set(may_include_homing homing)
 set(may_include_registers registers homing)
+# Sparkplug B payloads are built from the register table, never from the runtime.
+set(may_include_sparkplug sparkplug registers homing)
 
 set(problems "")
 set(checked 0)
-foreach(layer IN ITEMS homing registers)
+foreach(layer IN ITEMS homing registers sparkplug)
   file(GLOB_RECURSE sources LIST_DIRECTORIES false RELATIVE "${SOURCE_DIR}"
        "${SOURCE_DIR}/${layer}/*.hpp" "${SOURCE_DIR}/${layer}/*.cpp" "${SOURCE_DIR}/${layer}/*.h"
        "${SOURCE_DIR}/${layer}/*.c")
@@ -60,4 +62,4 @@ endforeach()
 if(problems)
   message(FATAL_ERROR "includes across the layers, the wrong way:\n${problems}")
 endif()
-message(STATUS "${checked} includes of homing/ and registers/ checked: none reaches a layer above")
+message(STATUS "${checked} includes of homing/, registers/ and sparkplug/ checked: none reaches a layer above")
