@@ -66,20 +66,10 @@ void PhaseRunner::limit_reversal() {
   if (arrived()) fail(AlarmCode::sensor_not_found, travelled());
 }
 
-// As the stop after a seek's trigger (search_phases.cpp), in whichever
+// The stop after a seek's trigger (search_phases.cpp), in whichever
 // direction the search ran: the cam must hold the sensor through the stop.
 void PhaseRunner::cam_stop() {
-  if (entry()) run.command = stop_command(accel);
-  if (edge_to(false)) return fail(AlarmCode::overrun_during_stop);
-  if (!at_rest()) return;
-  const Debouncer& filter = ctx.input.filter;
-  if (filter.raw() != filter.stable()) return;
-  const phase_data::Stop& trigger = run.phase_data<phase_data::Stop>();
-  const double past = std::abs(run.motor.position_mm - trigger.trigger_mm);
-  if (past > s.max_stop_distance_mm + seek_v * trigger.trigger_period_s + 1e-9)
-    return fail(AlarmCode::stop_distance_exceeded, past);
-  run.reach(Reached::stopped_on_sensor);
-  enter(Phase::cam_latch);
+  if (stopped_on_sensor()) enter(Phase::cam_latch);
 }
 
 // Off the cam at latch feedrate toward its reference side, bounded by

@@ -92,6 +92,7 @@ struct PhaseRunner {
   void clear_sensors();  // a gantry on its sensors
   void seek();
   void stop();
+  bool stopped_on_sensor();
   void after_stop();
   void push();
   void push_to_stop();  // hard-stop homing (stop_phases.cpp)

@@ -64,23 +64,35 @@ void PhaseRunner::seek() {
 }
 
 void PhaseRunner::stop() {
+  if (stopped_on_sensor()) after_stop();
+}
+
+// The stop after a trigger, for every method that seeks a sensor: true in the
+// period the axis rests on the sensor within max_stop_distance; an alarm when
+// the sensor released during the stop or the stop ran too far.
+bool PhaseRunner::stopped_on_sensor() {
   if (entry()) run.command = stop_command(accel);
-  if (edge_to(false)) return fail(AlarmCode::overrun_during_stop);
-  if (!at_rest()) return;
+  if (edge_to(false)) {
+    fail(AlarmCode::overrun_during_stop);
+    return false;
+  }
+  if (!at_rest()) return false;
   // A release during the stop may still be in its debounce time when the
   // axis comes to rest: wait for the verdict, or back-off would take that
   // release (inside the stop) for its reference edge.
   const Debouncer& filter = ctx.input.filter;
-  if (filter.raw() != filter.stable()) return;
+  if (filter.raw() != filter.stable()) return false;
   // One control period of travel is allowed on top: the trigger cannot be
   // seen before the period in which it happened has ended. That is the
   // period the trigger was seen in (possibly a late one), not the current.
   const phase_data::Stop& trigger = run.phase_data<phase_data::Stop>();
   const double past = std::abs(run.motor.position_mm - trigger.trigger_mm);
-  if (past > s.max_stop_distance_mm + seek_v * trigger.trigger_period_s + 1e-9)
-    return fail(AlarmCode::stop_distance_exceeded, past);
+  if (past > s.max_stop_distance_mm + seek_v * trigger.trigger_period_s + 1e-9) {
+    fail(AlarmCode::stop_distance_exceeded, past);
+    return false;
+  }
   run.reach(Reached::stopped_on_sensor);
-  after_stop();
+  return true;
 }
 
 void PhaseRunner::after_stop() {
