@@ -1,11 +1,13 @@
 // Writes (or, with --check, verifies) every generated file of hmi_maps/ from
 // the register table, and with --docs the generated parts of docs/ (the
-// register reference and the alarm list of the troubleshooting guide). Run
+// register reference, the alarm list of the troubleshooting guide and the
+// register tables of every guide). Run
 // from the repository root:
 //   build/bin/gen_hmi_maps --out hmi_maps --docs docs
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -20,7 +22,7 @@ int main(int argc, char** argv) {
   bool check = false;
   app.add_option("--out", out_dir, "directory to write into (default hmi_maps)");
   app.add_option("--docs", docs_dir, "also the generated parts of this docs directory (registers.md, the alarm list "
-                                     "of troubleshooting.md)");
+                                     "of troubleshooting.md, every guide's register tables)");
   app.add_flag("--check", check, "write nothing; exit 1 if a file differs from what would be generated");
   CLI11_PARSE(app, argc, argv);
 
@@ -66,6 +68,23 @@ int main(int argc, char** argv) {
         return 2;
       }
       if (!put(path, *spliced)) return 2;
+    }
+    // Every guide's register tables (marker lines naming the registers).
+    std::vector<fs::path> guides;
+    for (const auto& entry : fs::directory_iterator(docs_dir))
+      if (entry.path().extension() == ".md") guides.push_back(entry.path());
+    std::sort(guides.begin(), guides.end());
+    for (const fs::path& path : guides) {
+      std::ifstream in(path, std::ios::binary);
+      std::stringstream have;
+      have << in.rdbuf();
+      const auto doc = registers::splice_register_sections(path.filename().string(), have.str());
+      if (!doc.text) {
+        fmt::print(stderr, "{}\n", doc.error);
+        return 2;
+      }
+      if (*doc.text != have.str() || check)
+        if (!put(path, *doc.text)) return 2;
     }
   }
   if (stale)

@@ -2,7 +2,9 @@
 // what a technician reads there for every alarm.
 #include <catch2/catch.hpp>
 
+#include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -41,6 +43,66 @@ TEST_CASE("docs/registers.md and the alarm list of docs/troubleshooting.md are f
                  << (want ? " is stale" : " has no marker lines") << "; regenerate with: " << registers::kDocsCommand);
     REQUIRE(want.has_value());
     CHECK(have == *want);
+  }
+}
+
+TEST_CASE("every register table in the guides of docs/ is what the register table generates today") {
+  int tables = 0;
+  std::set<std::string> files;
+  for (const auto& entry : std::filesystem::directory_iterator(DOCS_DIR)) {
+    if (entry.path().extension() != ".md") continue;
+    const std::string name = entry.path().filename().string();
+    const std::string have = committed(name);
+    const auto found = registers::register_sections(name, have);
+    INFO(found.error);
+    REQUIRE(found.error.empty());
+    const auto want = registers::splice_register_sections(name, have);
+    REQUIRE(want.text.has_value());
+    INFO("docs/" << name << ": a generated register table is stale; regenerate with: " << registers::kDocsCommand);
+    CHECK(have == *want.text);
+    tables += static_cast<int>(found.sections.size());
+    if (!found.sections.empty()) files.insert(name);
+  }
+  // The guides whose register tables were typed by hand before.
+  for (const char* guide : {"homing-methods.md", "limit-switches.md", "health.md"}) {
+    INFO(guide);
+    CHECK(files.count(guide) == 1);
+  }
+  CHECK(tables >= 3);
+}
+
+TEST_CASE("a register table naming a register the table lacks is refused with the marker and the name") {
+  const std::string marker = "registers axis.<a>.limits_nc axis.<a>.no_such_setting";
+  const std::string doc = "# Guide\n\n" + registers::begin_marker(marker) + "\nold\n" + registers::end_marker(marker) + "\n";
+  const auto found = registers::register_sections("fixture.md", doc);
+  CHECK(found.sections.empty());
+  CHECK(found.error.find("docs/fixture.md") != std::string::npos);
+  CHECK(found.error.find("'axis.<a>.no_such_setting'") != std::string::npos);
+  const auto spliced = registers::splice_register_sections("fixture.md", doc);
+  CHECK_FALSE(spliced.text.has_value());
+  CHECK(spliced.error == found.error);
+}
+
+TEST_CASE("a register table shows each named register's offset, unit, range and default from the table") {
+  const std::string marker = "registers axis.<a>.limit_overtravel global.watchdog_ms";
+  const std::string doc = registers::begin_marker(marker) + "\n| typed by hand |\n" + registers::end_marker(marker) + "\n";
+  const auto spliced = registers::splice_register_sections("fixture.md", doc);
+  REQUIRE(spliced.text.has_value());
+  CHECK(spliced.text->find("typed by hand") == std::string::npos);
+  for (const char* name : {"axis.<a>.limit_overtravel", "global.watchdog_ms"}) {
+    const registers::Register* r = nullptr;
+    for (const registers::Register& row : registers::all_registers())
+      if (row.pattern == name && row.axis <= 0) r = &row;
+    REQUIRE(r != nullptr);
+    INFO(name);
+    const auto at = spliced.text->find("| `" + std::string(name) + "` |");
+    REQUIRE(at != std::string::npos);
+    const std::string line = spliced.text->substr(at, spliced.text->find('\n', at) - at);
+    const std::string address = r->per_axis() ? "+" + std::to_string(r->offset) : std::to_string(r->address);
+    CHECK(line.find(" " + address) != std::string::npos);
+    CHECK(line.find("| " + std::string(r->unit_text(registers::AxisKinds{})) + " |") != std::string::npos);
+    CHECK(line.find("| " + registers::exports_detail::engineering_text(*r, r->default_raw) + " |") != std::string::npos);
+    CHECK(line.find(registers::exports_detail::engineering_text(*r, r->max) + " |") != std::string::npos);
   }
 }
 
