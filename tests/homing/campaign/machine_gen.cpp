@@ -447,6 +447,14 @@ void Gen::limit_switches() {
     c.hard_stop_min_mm = c.limit_min_mm - s.limit_overtravel_mm - lim.u(0, 2);
     c.hard_stop_max_mm = c.limit_max_mm + s.limit_overtravel_mm + lim.u(0, 2);
     m.plan[a].limits = true;
+    // Both switches stuck active from power-up (limits_stuck), on an axis no
+    // event of the first cycle gives another fault.
+    bool evented = false;
+    for (const Event& e : m.events) evented = evented || e.axis == a;
+    if (m.plan[a].start_fault == sim::Fault::none && !evented && lim.chance(0.15)) {
+      m.plan[a].start_fault = sim::Fault::limits_stuck;
+      c.fault = sim::Fault::limits_stuck;
+    }
   }
 }
 
