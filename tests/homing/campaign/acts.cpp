@@ -15,8 +15,10 @@ void Run::exercise_motion() {
     const bool on_limit = (r_.settings.axes[a].shared_limit && r_.axis(a).sensor) ||
                           (sl >= 0 && r_.settings.axes[static_cast<std::size_t>(sl)].shared_limit &&
                            r_.axis(static_cast<std::size_t>(sl)).sensor);
+    // Nor one whose limit switches a fault holds active: it may not move at all.
+    const bool limits_stuck = r_.sim().axis_config(a).fault == sim::Fault::limits_stuck;
     if (master_index(r_.settings, a) < 0 && homed_axis(a) && e.soft_limits_enable && e.mode != HomingMode::disabled &&
-        !on_limit)
+        !on_limit && !limits_stuck)
       cand.push_back(a);
   }
   if (cand.empty() || r_.status().alarm) return;
@@ -117,6 +119,8 @@ void Run::limit_sensor_faults(Causes& causes) {
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const sim::Fault f = r_.sim().axis_config(a).fault;
     const bool held_active = f == sim::Fault::sensor_stuck_active || (f == sim::Fault::wire_break && r_.settings.axes[a].sensor_nc);
+    if (f == sim::Fault::limits_stuck && r_.settings.axes[a].limits_fitted)
+      causes.add(std::string(1, kAxisUpper[a]) + "'s limit switches stuck active", {AlarmCode::both_limits_active}, axis_bit(a));
     if (held_active && r_.settings.axes[a].shared_limit)
       causes.add(std::string(1, kAxisUpper[a]) + "'s shared-limit sensor held active by a fault", {AlarmCode::hard_limit}, axis_bit(a));
   }

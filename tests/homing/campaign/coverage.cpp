@@ -48,6 +48,8 @@ constexpr Floor kFloors[] = {
     {"mode pushing_release", 0.03, 0.02, 0.003, 0},
     {"mode pushing_reapproach", 0.03, 0.02, 0.003, 0},
     {"mode drive", 0.03, 0.02, 0.003, 0},
+    {"limit switches fitted", 0.05, 0.03, 0.003, 0},
+    {"cause an axis's limit switches stuck active", 0.01, 0, 0.005, 0},
     {"cause an axis's drive never reporting home done", 0.002, 0, 0.001, 0},
     {"cause an axis's drive answering at once", 0.001, 0, 0.0005, 0},
     {"cause an axis's drive answering after its time limit", 0.001, 0, 0.0005, 0},

@@ -78,6 +78,7 @@ struct Gen {
   double axis_time_estimate(std::size_t a) const;
   void events();
   void indexers();
+  void limit_switches();
   Machine build();
 };
 

@@ -91,6 +91,7 @@ struct AxisPlan {
   bool encoder_invalid = false;
   bool late_drive = false;     // drive mode: the drive answers after its time limit
   bool indexer = false;        // a locking indexer (axis.<a>.indexer_lock, fitted on the simulator)
+  bool limits = false;         // end-of-travel limit switches fitted (axis.<a>.limits_fitted, on the simulator)
 };
 
 struct Machine {

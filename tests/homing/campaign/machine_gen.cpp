@@ -6,6 +6,7 @@
 
 #include "gen.hpp"
 #include "homing/motion.hpp"
+#include "homing/settings_check.hpp"
 
 namespace campaign {
 namespace gen {
@@ -421,6 +422,42 @@ void Gen::sequence() {
   }
 }
 
+// End-of-travel limit switches on plain switch-mode axes (no gantry, no
+// shared limit, no pushing), with their own dice so that every other draw
+// stays as it was: the switches where the stops were drawn (beyond anything
+// a cycle, jog or move of this machine reaches), NO or NC, an overtravel the
+// rule limit_overtravel_too_short accepts, the stops moved out past it.
+void Gen::limit_switches() {
+  Dice lim(m.seed, 11);  // 7: indexers; 2, 3, 8: the run's own
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    AxisSettings& s = m.settings.axes[a];
+    bool linked = s.slave_of != 0;
+    for (const AxisSettings& o : m.settings.axes) linked = linked || o.slave_of == a + 1;
+    const bool eligible = m.plan[a].role == Role::plain && !linked && !s.shared_limit &&
+                          (s.mode == HomingMode::switch_release || s.mode == HomingMode::switch_reapproach ||
+                           s.mode == HomingMode::switch_index);
+    // Not the axis made wrong on purpose: its own refusal must stay the one expected.
+    if (!eligible || (m.invalid != Invalid::none && m.invalid_axis == a) || !lim.chance(0.3)) continue;
+    sim::AxisConfig& c = m.sim.axes[a];
+    s.limits_fitted = true;
+    s.limits_nc = c.limits_nc = lim.chance(0.4);
+    s.limit_overtravel_mm = limit_stop_distance_mm(s) * lim.u(1.05, 2.0) + lim.u(0.1, 5);
+    c.limit_min_mm = c.hard_stop_min_mm;
+    c.limit_max_mm = c.hard_stop_max_mm;
+    c.hard_stop_min_mm = c.limit_min_mm - s.limit_overtravel_mm - lim.u(0, 2);
+    c.hard_stop_max_mm = c.limit_max_mm + s.limit_overtravel_mm + lim.u(0, 2);
+    m.plan[a].limits = true;
+    // Both switches stuck active from power-up (limits_stuck), on an axis no
+    // event of the first cycle gives another fault.
+    bool evented = false;
+    for (const Event& e : m.events) evented = evented || e.axis == a;
+    if (m.plan[a].start_fault == sim::Fault::none && !evented && lim.chance(0.15)) {
+      m.plan[a].start_fault = sim::Fault::limits_stuck;
+      c.fault = sim::Fault::limits_stuck;
+    }
+  }
+}
+
 Machine Gen::build() {
   // One period in ten comes late, by up to the 20 ms the README promises.
   m.max_dt_s = d.chance(0.3) ? 0.002 : d.u(0.005, 0.020);
@@ -437,6 +474,7 @@ Machine Gen::build() {
   causes();
   events();
   indexers();
+  limit_switches();
   m.start_held_at_powerup = d.chance(0.15);
   m.powerup_periods = d.integer(1, 50);
   m.start_by_button = d.chance(0.25);

@@ -362,6 +362,7 @@ void Run::mark_machine() {
     } else if (m_.settings.axes[a].mode != HomingMode::disabled) {
       mark("mode " + std::string(mode_name(m_.settings.axes[a].mode)), seen::present);
     }
+    if (m_.plan[a].limits) mark("limit switches fitted", seen::present);
   }
 }
 
@@ -388,6 +389,7 @@ void Run::mark_cycle(const CyclePlan& plan, const Causes& causes, bool clean) {
     } else if (m_.settings.axes[a].mode != HomingMode::disabled) {
       mark("mode " + std::string(mode_name(m_.settings.axes[a].mode)), bits);
     }
+    if (m_.plan[a].limits) mark("limit switches fitted", bits);
   }
 }
 

@@ -202,6 +202,10 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
     if (f == sim::Fault::indexer_never_locks)
       c.add(letter(a) + "'s indexer that never locks", {AlarmCode::lock_not_confirmed}, bit,
             mover && mode_uses_switch(e.mode));
+    // Both limit switches stuck active: the axis may not move at all.
+    if (f == sim::Fault::limits_stuck)
+      c.add(letter(a) + "'s limit switches stuck active", {AlarmCode::both_limits_active}, bit,
+            mover && e.limits_fitted);
     if ((encoder_invalid & bit) && mode_is_absolute(e.mode))
       c.add(letter(a) + "'s invalid absolute encoder", {AlarmCode::encoder_fault}, bit,
             (plan.covered & bit) || (plan.unsequenced & bit));

@@ -1,5 +1,6 @@
 #include "watch.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
@@ -287,9 +288,41 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
     }
   }
 
+  const double ran_dt = r_.ran_dt_s > 0 ? r_.ran_dt_s : 1e-3;
+  limit_overrun(a, x, std::max({std::abs(v_prev_[a]), std::abs(v), step / ran_dt}));
+
   x_prev_[a] = x;
   v_prev_[a] = v;
   phase_prev_[a] = as.phase;
+}
+
+// No carriage passes a limit switch by more than its stopping distance: the
+// stop at the axis's acceleration from the speed it had when the switch
+// tripped, one late control period of travel and the simulator's tolerance.
+// The switches are where the simulated machine has them (not what the engine
+// believes); a switch a fault keeps from ever tripping is not held to it.
+void Watch::limit_overrun(std::size_t a, double x, double speed) {
+  if (!m_.plan[a].limits || r_.sim().axis_config(a).fault == sim::Fault::limits_dead) {
+    past_limit_[a] = false;
+    return;
+  }
+  const sim::AxisConfig& c = m_.sim.axes[a];
+  const double beyond = std::max(c.limit_min_mm - x, x - c.limit_max_mm);
+  if (beyond < 0) {
+    past_limit_[a] = false;
+    return;
+  }
+  if (!past_limit_[a]) trip_speed_[a] = speed;
+  past_limit_[a] = true;
+  const double v0 = trip_speed_[a];
+  const double allowed = stop_distance_mm(v0, accel_limit(a)) + v0 * m_.max_dt_s + kLimitTolerance_mm;
+  if (beyond > allowed) {
+    std::ostringstream o;
+    o << fmt_axis(a, r_, x) << "; " << beyond << " past the limit switch at "
+      << (x < c.limit_min_mm ? c.limit_min_mm : c.limit_max_mm) << ", tripped at " << v0 << " mm/s, allowed "
+      << allowed;
+    fail("a carriage passed a limit switch by more than its stopping distance", o.str());
+  }
 }
 
 void Watch::racking(double engine_dt) {

@@ -20,6 +20,9 @@ constexpr AlarmBits alarm_bit(AlarmCode code) { return AlarmBits{1} << static_ca
 // of periods later than the guard looks ahead (README "Gantries: racking"):
 // the simulation's floating-point arithmetic.
 inline constexpr double kRackingTolerance_mm = 1e-3;
+// What the limit-switch check allows past a switch besides the stop from the
+// speed the carriage had when it tripped and one late period of travel.
+inline constexpr double kLimitTolerance_mm = 1e-3;
 
 struct Failure {
   std::string what;    // short and stable: the failure's class
@@ -84,6 +87,7 @@ class Watch {
   void on_flip(std::size_t a, double x);
   bool reference_edge(std::size_t a, double& ref);
   void track_edges(std::size_t a);
+  void limit_overrun(std::size_t a, double x, double speed);
 
   rig::Rig& r_;
   const Machine& m_;
@@ -110,6 +114,9 @@ class Watch {
   std::array<bool, kAxisCount> has_release_{}, has_trigger_{};
   std::array<Phase, kAxisCount> traced_{};
   std::array<Phase, kAxisCount> phase_prev_{};
+  // Limit switches: past one since the period it tripped, at that speed.
+  std::array<bool, kAxisCount> past_limit_{};
+  std::array<double, kAxisCount> trip_speed_{};
 };
 
 }  // namespace campaign
