@@ -92,6 +92,15 @@ std::string ascii_text(std::string_view utf8) {
   return out;
 }
 
+std::string md_escape(std::string_view s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '|' || c == '<' || c == '>' || c == '*' || c == '_') out += '\\';
+    out += c;
+  }
+  return out;
+}
+
 std::uint8_t default_unit_id(Unit unit) {
   return unit == Unit::module ? kDefaultModuleUnitId : kDefaultSimUnitId;
 }

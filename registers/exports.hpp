@@ -43,6 +43,7 @@ std::string csv_field(std::string_view s);      // RFC 4180 quoting when needed
 std::string scale_text(const Register& reg);    // "1", "0.001"
 std::string engineering_text(const Register& reg, std::int64_t raw);
 std::string flat_name(const Register& reg);     // "axis_x_seek_feedrate"
+std::string md_escape(std::string_view s);     // a Markdown table cell: | < > * _ escaped
 // With <a> replaced by the axis letter; in maps made without settings, a
 // value of an axis that may be rotary says its unit follows axis.<a>.kind.
 std::string description(const Register& reg, const MapUnits& units);

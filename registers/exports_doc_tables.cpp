@@ -12,16 +12,9 @@
 namespace registers {
 namespace {
 
-constexpr std::string_view kPrefix = "registers ";
+using exports_detail::md_escape;
 
-std::string md_escape(std::string_view s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '|' || c == '<' || c == '>' || c == '*' || c == '_') out += '\\';
-    out += c;
-  }
-  return out;
-}
+constexpr std::string_view kPrefix = "registers ";
 
 std::string_view table_word(Table t) {
   switch (t) {

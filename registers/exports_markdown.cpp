@@ -11,6 +11,7 @@ namespace registers {
 namespace {
 
 using exports_detail::engineering_text;
+using exports_detail::md_escape;
 
 std::string_view table_title(Table t) {
   switch (t) {
@@ -20,15 +21,6 @@ std::string_view table_title(Table t) {
     case Table::holding_register: return "Holding registers (4x, FC 3/6/16/23)";
   }
   return "?";
-}
-
-std::string md_escape(std::string_view s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '|' || c == '<' || c == '>' || c == '*' || c == '_') out += '\\';
-    out += c;
-  }
-  return out;
 }
 
 // The per-axis rows are shown once, by the X row: in the units of a linear
