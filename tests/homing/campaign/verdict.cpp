@@ -185,7 +185,12 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
         c.add(letter(a) + "'s drive never reporting home done", {AlarmCode::drive_no_answer}, bit, true);
       if (f == sim::Fault::drive_answers_at_once)
         c.add(letter(a) + "'s drive answering at once", {AlarmCode::drive_answered_at_once}, bit, true);
-      if (f == sim::Fault::none || f == sim::Fault::drive_fault) {
+      // Any drive that answers at all (whatever else is wrong with the axis,
+      // such as an indexer that never locks once it is done) may answer late;
+      // one that the stuck pin never lets start is the indexer's cause.
+      const bool answers = f != sim::Fault::drive_never_answers && f != sim::Fault::drive_done_lost &&
+                           f != sim::Fault::drive_answers_at_once && f != sim::Fault::indexer_stuck_locked;
+      if (answers) {
         const double takes = std::abs(cfg.drive_home_position_mm - r.actual(a)) / (cfg.drive_speed_mm_per_min / 60) +
                              cfg.drive_answer_ms / 1000;
         // Within a few late periods of the limit either may happen.
