@@ -1,9 +1,13 @@
 #include "mqtt_node.hpp"
 
 #include <mosquitto.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
+#include <fstream>
 #include <spdlog/spdlog.h>
 
 #include "sparkplug/payload.hpp"
@@ -31,8 +35,32 @@ struct LibInit {
 
 }  // namespace
 
-MqttConfig mqtt_config(const Options& o) {
+// The first line of the file, without its line end: what `echo secret > file` writes.
+std::expected<std::string, std::string> read_password(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return std::unexpected("--mqtt-password-file " + path + ": cannot be read (" + std::strerror(errno) + ")");
+  std::string line;
+  std::getline(in, line);
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  if (line.empty()) return std::unexpected("--mqtt-password-file " + path + ": the first line is empty; write the password there");
+  struct stat st{};
+  if (stat(path.c_str(), &st) == 0 && (st.st_mode & (S_IRWXG | S_IRWXO)))
+    spdlog::warn("mqtt: {} can be read by others (mode {:o}); chmod 600 it", path, st.st_mode & 0777);
+  return line;
+}
+
+std::expected<MqttConfig, std::string> mqtt_config(const Options& o) {
   MqttConfig c;
+  c.tls = o.mqtt_tls;
+  c.ca = o.mqtt_ca;
+  c.cert = o.mqtt_cert;
+  c.key = o.mqtt_key;
+  c.user = o.mqtt_user;
+  if (!o.mqtt_password_file.empty()) {
+    auto pw = read_password(o.mqtt_password_file);
+    if (!pw) return std::unexpected(pw.error());
+    c.password = *pw;
+  }
   c.host = o.mqtt_host;
   c.port = o.mqtt_port;
   c.group = o.mqtt_group;
@@ -57,7 +85,23 @@ MqttNode::MqttNode(MqttConfig config, ModbusService& service) : config_(std::mov
   mosquitto_connect_callback_set(mosq_, &MqttNode::on_connect);
   mosquitto_disconnect_callback_set(mosq_, &MqttNode::on_disconnect);
   mosquitto_message_callback_set(mosq_, &MqttNode::on_message);
+  mosquitto_log_callback_set(mosq_, &MqttNode::on_log);
   mosquitto_reconnect_delay_set(mosq_, 1, 30, true);
+  if (!config_.user.empty()) {
+    const int rc = mosquitto_username_pw_set(mosq_, config_.user.c_str(),
+                                             config_.password.empty() ? nullptr : config_.password.c_str());
+    if (rc != MOSQ_ERR_SUCCESS) throw std::runtime_error(std::string("mqtt: user name: ") + mosquitto_strerror(rc));
+  }
+  if (config_.tls) {
+    // The broker's certificate is checked against the CA and its name or IP
+    // against the host of --mqtt (libmosquitto's default; never turned off).
+    const int rc = mosquitto_tls_set(mosq_, config_.ca.c_str(), nullptr, config_.cert.empty() ? nullptr : config_.cert.c_str(),
+                                     config_.key.empty() ? nullptr : config_.key.c_str(), nullptr);
+    if (rc != MOSQ_ERR_SUCCESS)
+      throw std::runtime_error("mqtt: TLS files (--mqtt-ca " + config_.ca + (config_.cert.empty() ? "" : ", --mqtt-cert " + config_.cert) +
+                               (config_.key.empty() ? "" : ", --mqtt-key " + config_.key) + "): " + mosquitto_strerror(rc) +
+                               " (are they PEM, and the key unencrypted?)");
+  }
 }
 
 MqttNode::~MqttNode() {
@@ -86,7 +130,8 @@ void MqttNode::start() {
     throw std::runtime_error("mqtt: cannot start the MQTT network thread");
   started_ = true;
   publisher_ = std::thread([this] { publish_loop(); });
-  spdlog::info("mqtt: Sparkplug B edge node {} on {}:{}", topic("NBIRTH"), config_.host, config_.port);
+  spdlog::info("mqtt: Sparkplug B edge node {} on {}://{}:{}{}", topic("NBIRTH"), config_.tls ? "mqtts" : "mqtt",
+               config_.host, config_.port, config_.user.empty() ? "" : " as user " + config_.user);
 }
 
 void MqttNode::stop() {
@@ -112,6 +157,10 @@ void MqttNode::on_connect(mosquitto* m, void* self_ptr, int rc) {
   mosquitto_subscribe(m, nullptr, self->topic("NCMD").c_str(), 1);
   self->connected_ = true;
   self->need_birth_ = true;
+  {
+    std::lock_guard lock(self->log_mutex_);
+    self->last_lib_error_.clear();
+  }
   spdlog::info("mqtt: connected to {}:{} (bdSeq {})", self->config_.host, self->config_.port, self->bd_seq_.load());
 }
 
@@ -123,6 +172,18 @@ void MqttNode::on_disconnect(mosquitto*, void* self_ptr, int rc) {
   self->bd_seq_ = (self->bd_seq_.load() + 1) % 256;
   self->set_will();
   if (was && rc != 0) spdlog::warn("mqtt: lost the broker ({}); reconnecting", mosquitto_strerror(rc));
+}
+
+// libmosquitto's own errors (a TLS handshake the broker refused, a
+// certificate that does not verify): the why of a connection that fails. A
+// line repeated on each reconnect attempt is logged once until another one.
+void MqttNode::on_log(mosquitto*, void* self_ptr, int level, const char* text) {
+  if (!(level & (MOSQ_LOG_ERR | MOSQ_LOG_WARNING)) || !text) return;
+  auto* self = static_cast<MqttNode*>(self_ptr);
+  std::lock_guard lock(self->log_mutex_);
+  if (self->last_lib_error_ == text) return;
+  self->last_lib_error_ = text;
+  spdlog::warn("mqtt: {}:{}: {}", self->config_.host, self->config_.port, text);
 }
 
 void MqttNode::on_message(mosquitto*, void* self_ptr, const mosquitto_message* msg) {

@@ -7,7 +7,9 @@
 // a slow or absent broker only delays this node's own messages.
 #include <atomic>
 #include <cstdint>
+#include <expected>
 #include <string>
+#include <mutex>
 #include <thread>
 
 #include "modbus_service.hpp"
@@ -25,9 +27,14 @@ struct MqttConfig {
   std::string node;
   int keepalive_s = 30;
   int sample_ms = 50;  // how often the publisher looks for changes
+  bool tls = false;
+  std::string ca, cert, key;  // PEM files (cert and key: a client certificate, both or neither)
+  std::string user, password;  // empty user: no user name sent
 };
-// From the daemon's options; the node id defaults to the machine name, else the host name.
-MqttConfig mqtt_config(const Options& options);
+// From the daemon's options; the node id defaults to the machine name, else
+// the host name. The password is read from its file here: an unreadable or
+// empty file is an error that names it.
+std::expected<MqttConfig, std::string> mqtt_config(const Options& options);
 
 class MqttNode {
  public:
@@ -47,6 +54,7 @@ class MqttNode {
   static void on_connect(mosquitto*, void* self, int rc);
   static void on_disconnect(mosquitto*, void* self, int rc);
   static void on_message(mosquitto*, void* self, const mosquitto_message* msg);
+  static void on_log(mosquitto*, void* self, int level, const char* text);
   void set_will();
   void publish_loop();
   bool publish(std::string_view type, const std::string& bytes);
@@ -60,6 +68,8 @@ class MqttNode {
   std::atomic<bool> stop_{false};
   bool started_ = false;
   std::thread publisher_;
+  std::mutex log_mutex_;
+  std::string last_lib_error_;  // the last libmosquitto error logged
 };
 
 }  // namespace server
