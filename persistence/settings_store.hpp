@@ -190,6 +190,9 @@ class SettingsStore {
   Result<std::int64_t> record_homing_run(const HomingRun& run);
   Result<std::vector<HomingRun>> recent_runs(std::size_t n) const;
   Result<std::vector<AuditEntry>> recent_changes(std::size_t n) const;
+  // The audit rows after this id, oldest first, at most n; and the newest id (0: none).
+  Result<std::vector<AuditEntry>> changes_after(std::int64_t id, std::size_t n) const;
+  Result<std::int64_t> last_change_id() const;
   Result<CorrectionSummary> correction_summary(std::size_t axis, std::size_t last_n) const;
 
   // Backups: `<db>.bak` (newest) and `<db>.bak.1`.

@@ -122,6 +122,28 @@ Result<std::vector<AuditEntry>> SettingsStore::recent_changes(std::size_t n) con
   return out;
 }
 
+Result<std::vector<AuditEntry>> SettingsStore::changes_after(std::int64_t id, std::size_t n) const {
+  std::lock_guard lock(impl_->mu);
+  auto st = impl_->db.prepare(
+      "SELECT id, time_ms, transport, client, name, old_value, new_value FROM audit WHERE id > ? ORDER BY id LIMIT ?");
+  if (!st) return std::unexpected(st.error());
+  st->bind(1, id).bind(2, static_cast<std::int64_t>(n));
+  std::vector<AuditEntry> out;
+  for (;;) {
+    auto row = st->step("reading the audit log");
+    if (!row) return std::unexpected(row.error());
+    if (!*row) break;
+    out.push_back({st->int_at(0), st->int_at(1), st->text_at(2), st->text_at(3), st->text_at(4), st->int_at(5),
+                   st->int_at(6)});
+  }
+  return out;
+}
+
+Result<std::int64_t> SettingsStore::last_change_id() const {
+  std::lock_guard lock(impl_->mu);
+  return impl_->db.query_int("SELECT coalesce(max(id), 0) FROM audit", "reading the audit log");
+}
+
 Result<CorrectionSummary> SettingsStore::correction_summary(std::size_t axis, std::size_t last_n) const {
   if (axis >= kHistoryAxes)
     return fail(ErrorKind::invalid, fmt::format("axis index {} out of range (0..{})", axis, kHistoryAxes - 1));

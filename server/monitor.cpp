@@ -68,6 +68,7 @@ void Monitor::housekeeping(std::int64_t now_ms) {
   service_.flush_refusal_log();
   if (store_)
     if (auto r = store_->backup_if_due(); !r) spdlog::warn("settings backup not written: {}", r.error().message);
+  if (events_) events_->settings_changes();
 }
 
 Monitor::~Monitor() { stop(); }
@@ -112,6 +113,7 @@ void Monitor::poll(std::int64_t now_ms) {
     first_ = false;
   }
   const homing::Settings settings = service_.settings();
+  if (events_) events_->observe(last_, st, settings, now_ms);
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     const auto& now = st.axes[a].alarm;
     if (now.code != last_.axes[a].alarm.code && now) {
@@ -160,6 +162,7 @@ void Monitor::poll(std::int64_t now_ms) {
     else spdlog::warn("homing ended with alarm {}", homing::alarm_name(static_cast<homing::AlarmCode>(run.result)));
     if (store_)
       if (auto r = store_->record_homing_run(run); !r) spdlog::error("history not recorded: {}", r.error().message);
+    if (events_) events_->cycle_ended(run, st, settings);
     refresh_summary();
   }
   last_ = st;

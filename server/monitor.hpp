@@ -10,6 +10,7 @@
 #include "control_loop.hpp"
 #include "modbus_service.hpp"
 #include "persistence/settings_store.hpp"
+#include "plant_events.hpp"
 
 namespace server {
 
@@ -20,6 +21,8 @@ class Monitor {
   Monitor(ControlLoop& loop, ModbusService& service, persistence::SettingsStore* store,
           std::function<std::uint32_t()> tcp_clients = {});
   ~Monitor();
+  // Homing cycles, alarms and settings changes for the plant (MQTT); before start().
+  void set_plant_events(PlantEvents* events) { events_ = events; }
   void start();
   void stop();
   // One look at the status (tests call it directly).
@@ -40,6 +43,7 @@ class Monitor {
   bool first_ = true;
   std::int64_t run_start_ms_ = 0;
   homing::AxisMask run_axes_ = 0;
+  PlantEvents* events_ = nullptr;
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };

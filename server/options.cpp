@@ -59,7 +59,8 @@ std::expected<void, std::string> check_mqtt(const std::string& url, Options& o, 
   const auto given = [&](const char* name) { return app.get_option(name)->count() > 0; };
   if (url.empty()) {
     for (const char* name : {"--mqtt-node", "--mqtt-group", "--mqtt-keepalive-s", "--mqtt-ca", "--mqtt-cert",
-                             "--mqtt-key", "--mqtt-user", "--mqtt-password-file"})
+                             "--mqtt-key", "--mqtt-user", "--mqtt-password-file", "--mqtt-outbox", "--mqtt-outbox-max",
+                             "--mqtt-primary-host"})
       if (given(name))
         return std::unexpected(std::string(name) + " is set but --mqtt is not: add --mqtt mqtt://HOST:PORT to publish");
     return {};
@@ -284,6 +285,17 @@ OptionParser::Table::Table() {
   app.add_option("--mqtt-password-file,--mqtt_password_file", o.mqtt_password_file,
                  "File whose first line is the MQTT password of --mqtt-user (keep it readable by the service only)")
       ->check(CLI::ExistingFile);
+  app.add_option("--mqtt-primary-host,--mqtt_primary_host", o.mqtt_primary_host,
+                 "Sparkplug primary host id: be born and publish only while spBv1.0/STATE/<id> says online "
+                 "(events wait in the outbox meanwhile)")
+      ->check(sparkplug_id);
+  app.add_option("--mqtt-outbox,--mqtt_outbox", o.mqtt_outbox,
+                 "SQLite file keeping homing cycles, alarms and settings changes until the broker has them "
+                 "(default: the --db path + .mqtt-events)");
+  app.add_option("--mqtt-outbox-max,--mqtt_outbox_max", o.mqtt_outbox_max,
+                 "Events kept at most while the broker is away; past it the oldest are dropped and counted")
+      ->check(CLI::Range(100, 10000000))
+      ->capture_default_str();
   app.add_option("--export-settings,--export_settings", o.export_settings,
                  "Write every setting of --db to this TOML file and exit (no server)");
   app.add_option("--import-settings,--import_settings", o.import_settings,

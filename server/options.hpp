@@ -67,6 +67,10 @@ struct Options {
   std::string mqtt_key;
   std::string mqtt_user;              // MQTT user name; its password comes from mqtt_password_file
   std::string mqtt_password_file;
+  std::string mqtt_outbox;            // events owed to the broker; empty: <db>.mqtt-events
+  int mqtt_outbox_max = 10000;        // events kept at most while the broker is away (oldest dropped)
+  std::string mqtt_primary_host;      // Sparkplug primary host id: publish only while its STATE says online
+  bool mqtt_commands = false;         // NCMD cmd.* accepted (off: refused and reported)
   // Offline settings transfer: act on --db and exit without serving.
   std::string export_settings;
   std::string import_settings;
