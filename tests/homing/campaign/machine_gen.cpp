@@ -111,10 +111,14 @@ void Gen::place_switch(std::size_t a, double hyst_pair, double slack, bool share
   const double hyst = std::max(c.hysteresis_mm, hyst_pair);
   s.max_backoff_mm += slack;
   const double edge_f = d.u(-50, 50);
-  const double cam_len = over + hyst + 2 * slack + d.u(0.5, 30);
+  const bool pushing = mode_is_pushing(s.mode);
+  // A pushing axis pushes its sensor's actuator against the mechanical stop
+  // (placed within the push below): the cam reaches past the push, else the
+  // carriage would leave the sensor's far side before it meets the stop.
+  double cam_len = over + hyst + 2 * slack + d.u(0.5, 30);
+  if (pushing) cam_len = std::max(cam_len, over + s.push_distance_mm + hyst + 1);
   // Off the sensor by more than a slave's start may differ from this one's.
   double gap = d.u(0.5, 25) + slack;
-  const bool pushing = mode_is_pushing(s.mode);
   if (!pushing && d.chance(0.15)) {
     const double depth_room = std::min(cam_len, s.max_backoff_mm - hyst - slack - 0.2) * 0.8;
     if (depth_room > 0.05) gap = -d.u(0, depth_room);
