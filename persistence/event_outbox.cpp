@@ -39,6 +39,7 @@ std::string_view event_kind_name(EventKind kind) {
     case EventKind::alarm_raised: return "alarm_raised";
     case EventKind::alarms_reset: return "alarms_reset";
     case EventKind::setting_changed: return "setting_changed";
+    case EventKind::command: return "command";
   }
   return "unknown";
 }

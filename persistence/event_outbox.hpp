@@ -21,6 +21,7 @@ enum class EventKind : std::int32_t {
   alarm_raised = 3,
   alarms_reset = 4,
   setting_changed = 5,
+  command = 6,  // a command over MQTT (NCMD): code 0 = accepted, else the refusal reason (status.last_refusal_reason)
 };
 std::string_view event_kind_name(EventKind kind);
 

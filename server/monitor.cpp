@@ -113,7 +113,7 @@ void Monitor::poll(std::int64_t now_ms) {
     first_ = false;
   }
   const homing::Settings settings = service_.settings();
-  if (events_) events_->observe(last_, st, settings, now_ms);
+  if (events_) events_->take(snap.events, settings);
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     const auto& now = st.axes[a].alarm;
     if (now.code != last_.axes[a].alarm.code && now) {
@@ -162,7 +162,6 @@ void Monitor::poll(std::int64_t now_ms) {
     else spdlog::warn("homing ended with alarm {}", homing::alarm_name(static_cast<homing::AlarmCode>(run.result)));
     if (store_)
       if (auto r = store_->record_homing_run(run); !r) spdlog::error("history not recorded: {}", r.error().message);
-    if (events_) events_->cycle_ended(run, st, settings);
     refresh_summary();
   }
   last_ = st;

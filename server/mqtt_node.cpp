@@ -13,6 +13,8 @@
 
 #include <algorithm>
 
+#include "registers/errors.hpp"
+#include "registers/lookup.hpp"
 #include "sparkplug/payload.hpp"
 
 namespace server {
@@ -60,6 +62,7 @@ std::expected<MqttConfig, std::string> mqtt_config(const Options& o) {
   c.key = o.mqtt_key;
   c.user = o.mqtt_user;
   c.primary_host = o.mqtt_primary_host;
+  c.commands = o.mqtt_commands;
   c.outbox = o.mqtt_outbox.empty() ? o.db_path + ".mqtt-events" : o.mqtt_outbox;
   c.outbox_max = static_cast<std::size_t>(o.mqtt_outbox_max);
   if (!o.mqtt_password_file.empty()) {
@@ -262,6 +265,74 @@ void MqttNode::take_host_state(const mosquitto_message* msg) {
   else host_gone_ = true;
 }
 
+// An NCMD command: a momentary command coil of the module (cmd/home_all,
+// cmd/home/x, cmd/abort, cmd/reset_alarm, ...) written through the same path
+// as a Modbus write, so the same interlocks and refusals. Held commands (jog,
+// the homing permit) are not taken: a broker's latency must not keep an axis
+// moving. Every command is answered as an event (kind command): accepted, or
+// the refusal with its reason.
+// How the control loop judged the commands so far: status.command_count and
+// status.last_command_result, read as a Modbus client reads them.
+std::pair<std::int64_t, std::int64_t> MqttNode::judged() {
+  static const registers::Register* count = registers::find_register("status.command_count");
+  static const registers::Register* result = registers::find_register("status.last_command_result");
+  std::pair<std::int64_t, std::int64_t> out{0, 0};
+  service_.with_module_view([&](const registers::ModuleView& v) {
+    out = {registers::read_raw(*count, v), registers::read_raw(*result, v)};
+  });
+  return out;
+}
+
+void MqttNode::take_command(const std::string& metric, bool on) {
+  std::string name = metric;
+  std::ranges::replace(name, '/', '.');
+  // event/code: the command result (status.last_command_result, 0 = never
+  // judged); event/new_value: the refusal reason of the write (status.last_refusal_reason, 0 = none).
+  persistence::Event answer{.time_ms = now_ms(), .kind = persistence::EventKind::command, .name = name};
+  const registers::Register* reg = registers::find_register(name);
+  const bool momentary = reg && reg->unit == registers::Unit::module && reg->table == registers::Table::coil &&
+                         reg->access == registers::Access::w;
+  if (!config_.commands) {
+    answer.new_value = static_cast<std::int64_t>(registers::RefusalReason::client_read_only);
+    answer.text = fmt::format("NCMD {} refused: commands over MQTT are off (homingd --mqtt-commands turns them on)", metric);
+  } else if (!momentary) {
+    answer.new_value = static_cast<std::int64_t>(registers::RefusalReason::not_mapped);
+    answer.text = fmt::format("NCMD {} refused: not a command of this module over MQTT (the momentary cmd.* coils only: "
+                              "home, abort, reset, unhome, move, lock settings; no jog, no settings)", metric);
+  } else if (!on) {
+    answer.new_value = static_cast<std::int64_t>(registers::RefusalReason::out_of_range);
+    answer.text = fmt::format("NCMD {} refused: a command is carried out by writing true", metric);
+  } else {
+    const ClientInfo client(0, Transport::mqtt, config_.host + ":" + std::to_string(config_.port));
+    const auto before = judged();
+    if (const auto refusal = service_.command(*reg, true, client)) {
+      answer.new_value = refusal->reason_code();
+      answer.text = fmt::format("NCMD {} refused: {} ({}): {}", metric, homing::name_of(refusal->reason),
+                                registers::exception_name(refusal->code), refusal->message);
+    } else {
+      // The loop judges a command within a period or two; the network thread
+      // may wait that long (the control loop never waits for it).
+      auto now = before;
+      for (int i = 0; i < 500 && now.first == before.first; ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        now = judged();
+      }
+      if (now.first != before.first) {
+        const auto result = static_cast<homing::CommandResult>(now.second);
+        answer.code = static_cast<std::int32_t>(now.second);
+        answer.text = fmt::format("NCMD {}: {}: {}", metric, homing::command_result_name(result),
+                                  homing::text_of(result));
+      } else {
+        answer.text = fmt::format("NCMD {} taken; the control loop did not judge it within 0.5 s: see status/last_command_result", metric);
+      }
+    }
+  }
+  if (answer.new_value != 0 || (answer.code > 1)) spdlog::warn("mqtt: {}", answer.text);
+  if (!outbox_) return;
+  if (auto r = outbox_->push(std::move(answer)); !r)
+    spdlog::error("mqtt: the answer to an NCMD could not be kept ({}): {}", outbox_->path(), r.error().message);
+}
+
 bool MqttNode::may_publish() {
   if (!connected_) return false;
   if (config_.primary_host.empty()) return true;
@@ -284,8 +355,11 @@ void MqttNode::on_message(mosquitto*, void* self_ptr, const mosquitto_message* m
     if (metric.name() == sparkplug::kRebirthName && metric.boolean_value()) {
       spdlog::info("mqtt: rebirth requested");
       self->need_birth_ = true;
+    } else if (metric.name().starts_with("cmd/") && metric.datatype() == static_cast<std::uint32_t>(sparkplug::DataType::boolean)) {
+      self->take_command(metric.name(), metric.boolean_value());
     } else {
-      spdlog::warn("mqtt: NCMD metric '{}' ignored: MQTT commands are not supported", metric.name());
+      spdlog::warn("mqtt: NCMD metric '{}' ignored: only Node Control/Rebirth and Boolean cmd/... metrics are taken",
+                   metric.name());
     }
   }
 }

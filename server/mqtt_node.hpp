@@ -35,6 +35,7 @@ struct MqttConfig {
   std::string ca, cert, key;  // PEM files (cert and key: a client certificate, both or neither)
   std::string user, password;  // empty user: no user name sent
   std::string primary_host;    // empty: publish whenever connected
+  bool commands = false;       // NCMD cmd.* carried out (else refused and reported)
   std::string outbox;          // the event outbox's file
   std::size_t outbox_max = 10000;
 };
@@ -71,6 +72,8 @@ class MqttNode {
   void log_once(const std::string& text);
   bool may_publish();  // connected, and the primary host (if any) online
   void take_host_state(const mosquitto_message* msg);
+  void take_command(const std::string& metric, bool on);
+  std::pair<std::int64_t, std::int64_t> judged();
   void publish_loop();
   bool publish(std::string_view type, const std::string& bytes);
 

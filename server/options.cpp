@@ -60,7 +60,7 @@ std::expected<void, std::string> check_mqtt(const std::string& url, Options& o, 
   if (url.empty()) {
     for (const char* name : {"--mqtt-node", "--mqtt-group", "--mqtt-keepalive-s", "--mqtt-ca", "--mqtt-cert",
                              "--mqtt-key", "--mqtt-user", "--mqtt-password-file", "--mqtt-outbox", "--mqtt-outbox-max",
-                             "--mqtt-primary-host"})
+                             "--mqtt-primary-host", "--mqtt-commands"})
       if (given(name))
         return std::unexpected(std::string(name) + " is set but --mqtt is not: add --mqtt mqtt://HOST:PORT to publish");
     return {};
@@ -289,6 +289,9 @@ OptionParser::Table::Table() {
                  "Sparkplug primary host id: be born and publish only while spBv1.0/STATE/<id> says online "
                  "(events wait in the outbox meanwhile)")
       ->check(sparkplug_id);
+  app.add_flag("--mqtt-commands,--mqtt_commands", o.mqtt_commands,
+               "Carry out commands sent as NCMD (cmd/home_all, cmd/abort, cmd/reset_alarm, ...) through the same "
+               "interlocks as Modbus; off: refused and answered as an event");
   app.add_option("--mqtt-outbox,--mqtt_outbox", o.mqtt_outbox,
                  "SQLite file keeping homing cycles, alarms and settings changes until the broker has them "
                  "(default: the --db path + .mqtt-events)");

@@ -21,43 +21,41 @@ void PlantEvents::keep(persistence::Event event, std::optional<std::int64_t> aud
     spdlog::error("mqtt: an event could not be kept for the broker ({}): {}", outbox_.path(), r.error().message);
 }
 
-void PlantEvents::observe(const homing::Status& before, const homing::Status& now, const homing::Settings& settings,
-                          std::int64_t now_ms) {
-  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-    const homing::Alarm& alarm = now.axes[a].alarm;
-    if (alarm && alarm.code != before.axes[a].alarm.code)
-      keep({.time_ms = now_ms, .kind = persistence::EventKind::alarm_raised, .axis = static_cast<std::int32_t>(a),
-            .code = static_cast<std::int32_t>(alarm.code), .text = homing::describe_alarm(a, alarm, settings)});
+void PlantEvents::take(const StatusEvents& ring, const homing::Settings& settings) {
+  for (std::uint64_t seq = taken_ + 1; seq <= ring.written(); ++seq) {
+    const StatusEvent* e = ring.find(seq);
+    if (!e) {
+      spdlog::error("mqtt: status event {} was overwritten before it was kept (more than {} in one look)", seq,
+                    StatusEvents::kRing);
+      continue;
+    }
+    const std::size_t axis = e->axis >= 0 ? static_cast<std::size_t>(e->axis) : 0;
+    switch (e->kind) {
+      case StatusEventKind::alarm_raised:
+        keep({.time_ms = e->time_ms, .kind = persistence::EventKind::alarm_raised, .axis = e->axis,
+              .code = static_cast<std::int32_t>(e->code),
+              .text = homing::describe_alarm(axis, e->axis >= 0 ? e->alarm : homing::Alarm{e->code}, settings)});
+        break;
+      case StatusEventKind::alarms_reset:
+        keep({.time_ms = e->time_ms, .kind = persistence::EventKind::alarms_reset, .text = "alarms reset"});
+        break;
+      case StatusEventKind::cycle_started:
+        keep({.time_ms = e->time_ms, .kind = persistence::EventKind::cycle_started, .axes = e->axes,
+              .text = "homing started"});
+        break;
+      case StatusEventKind::cycle_ended: {
+        std::string text = fmt::format("homing done in {} ms", e->duration_ms);
+        if (e->code != homing::AlarmCode::none)
+          text = fmt::format("homing ended after {} ms with alarm {}: {}", e->duration_ms, homing::alarm_name(e->code),
+                             homing::describe_alarm(axis, e->axis >= 0 ? e->alarm : homing::Alarm{e->code}, settings));
+        keep({.time_ms = e->time_ms, .kind = persistence::EventKind::cycle_ended, .axis = e->axis,
+              .code = static_cast<std::int32_t>(e->code), .duration_ms = e->duration_ms, .axes = e->axes,
+              .text = std::move(text)});
+        break;
+      }
+    }
   }
-  if (now.global_alarm != homing::AlarmCode::none && now.global_alarm != before.global_alarm)
-    keep({.time_ms = now_ms, .kind = persistence::EventKind::alarm_raised,
-          .code = static_cast<std::int32_t>(now.global_alarm),
-          .text = homing::describe_alarm(0, homing::Alarm{now.global_alarm}, settings)});
-  if (before.alarm && !now.alarm)
-    keep({.time_ms = now_ms, .kind = persistence::EventKind::alarms_reset, .text = "alarms reset"});
-  if (now.homing && !before.homing) {
-    std::int32_t axes = 0;
-    for (std::size_t a = 0; a < homing::kAxisCount; ++a)
-      if (now.axes[a].busy) axes |= homing::axis_bit(a);
-    keep({.time_ms = now_ms, .kind = persistence::EventKind::cycle_started, .axes = axes, .text = "homing started"});
-  }
-}
-
-void PlantEvents::cycle_ended(const persistence::HomingRun& run, const homing::Status& now,
-                              const homing::Settings& settings) {
-  const std::int64_t took = run.end_ms - run.start_ms;
-  std::string text = fmt::format("homing done in {} ms", took);
-  if (run.result != 0) {
-    const auto code = static_cast<homing::AlarmCode>(run.result);
-    if (run.alarm_axis >= 0)
-      text = fmt::format("homing ended after {} ms with alarm {}: {}", took, homing::alarm_name(code),
-                         homing::describe_alarm(static_cast<std::size_t>(run.alarm_axis),
-                                                now.axes[static_cast<std::size_t>(run.alarm_axis)].alarm, settings));
-    else
-      text = fmt::format("homing ended after {} ms with alarm {}", took, homing::alarm_name(code));
-  }
-  keep({.time_ms = run.end_ms, .kind = persistence::EventKind::cycle_ended, .axis = run.alarm_axis,
-        .code = run.result, .duration_ms = took, .axes = run.axes, .text = std::move(text)});
+  taken_ = ring.written();
 }
 
 void PlantEvents::settings_changes() {

@@ -9,6 +9,7 @@
 #include "homing/status.hpp"
 #include "persistence/event_outbox.hpp"
 #include "persistence/settings_store.hpp"
+#include "status_events.hpp"
 
 namespace server {
 
@@ -18,17 +19,16 @@ class PlantEvents {
   // log); nullptr: settings changes are not reported.
   PlantEvents(persistence::EventOutbox& outbox, persistence::SettingsStore* store);
 
-  // Alarms raised, alarms reset, a homing cycle started: from one status to the next.
-  void observe(const homing::Status& before, const homing::Status& now, const homing::Settings& settings,
-               std::int64_t now_ms);
-  // A homing cycle ended, as the history records it.
-  void cycle_ended(const persistence::HomingRun& run, const homing::Status& now, const homing::Settings& settings);
+  // Alarms raised, alarms reset, homing cycles started and ended, as the
+  // control loop recorded them period by period (the snapshot's ring).
+  void take(const StatusEvents& ring, const homing::Settings& settings);
   // Settings changes committed since the last call (the audit log's new rows).
   void settings_changes();
 
  private:
   void keep(persistence::Event event, std::optional<std::int64_t> audit_id = std::nullopt);
 
+  std::uint64_t taken_ = 0;  // the last ring event kept
   persistence::EventOutbox& outbox_;
   persistence::SettingsStore* store_;
 };

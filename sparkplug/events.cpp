@@ -57,6 +57,7 @@ void add_event(org::eclipse::tahu::protobuf::Payload& p, const persistence::Even
       add(p, duration_ms, first_alias, t, historical).set_long_value(static_cast<std::uint64_t>(e.duration_ms));
       add(p, axes, first_alias, t, historical).set_int_value(static_cast<std::uint32_t>(e.axes));
       break;
+    case persistence::EventKind::command:
     case persistence::EventKind::setting_changed:
       add(p, setting, first_alias, t, historical).set_string_value(e.name);
       add(p, old_value, first_alias, t, historical).set_long_value(static_cast<std::uint64_t>(e.old_value));

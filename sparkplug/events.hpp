@@ -21,12 +21,12 @@ struct EventMetric {
 // In alias order, right after the register metrics.
 inline constexpr std::array kEventMetrics = {
     EventMetric{"event/id", DataType::int64},          // increasing; a gap = events dropped by the bound
-    EventMetric{"event/kind", DataType::string},       // cycle_started, cycle_ended, alarm_raised, alarms_reset, setting_changed
+    EventMetric{"event/kind", DataType::string},       // cycle_started, cycle_ended, alarm_raised, alarms_reset, setting_changed, command
     EventMetric{"event/axis", DataType::string},       // X..C, empty for the machine
-    EventMetric{"event/code", DataType::uint16},       // the alarm code; a cycle's result (0 = homed)
+    EventMetric{"event/code", DataType::uint16},       // the alarm code; a cycle's result (0 = homed); a command's refusal reason (0 = accepted)
     EventMetric{"event/duration_ms", DataType::int64}, // cycle_ended
     EventMetric{"event/axes", DataType::uint16},       // a cycle's axes, bit 0 = X
-    EventMetric{"event/setting", DataType::string},    // setting_changed: the register name
+    EventMetric{"event/setting", DataType::string},    // setting_changed, command: the register name
     EventMetric{"event/old_value", DataType::int64},   // setting_changed: raw register values
     EventMetric{"event/new_value", DataType::int64},
     EventMetric{"event/text", DataType::string},       // what a technician reads
