@@ -216,6 +216,7 @@ TEST_CASE("homingctl home waits for the result, a failing homing exits 1 with th
     SHOW(r);
     CHECK(r.code() == 1);
     CHECK(r.err.find("still present") != std::string::npos);
+    CHECK(r.err.find("reset refused: reset refused") == std::string::npos);  // said once
   }
   REQUIRE(ctl(d, {"set", "sim.y.fault=none"}).code() == 0);
   CHECK(ctl(d, {"reset"}).code() == 0);
