@@ -44,6 +44,12 @@ struct SwitchHealth {
   int chatter_edges = 0;        // raw transitions the debounce time swallowed this cycle
   double index_distance_mm = 0; // switch + index: release edge to the index pulse taken
   bool index_near_edge = false; // that distance is within kIndexMarginOfPitch of 0 or one pitch
+  // Gantry slave (software-slaved or commutator): its reference edge minus
+  // its master's, each taken from where its side stood when the cycle
+  // started: the pair's squaring before the switch compensation. Set once
+  // both edges are found (gantry_skew_measured).
+  bool gantry_skew_measured = false;
+  double gantry_skew_mm = 0;
 };
 
 // Switch + index: an index pulse this close (as a fraction of the pitch) to
