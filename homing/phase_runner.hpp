@@ -104,6 +104,7 @@ struct PhaseRunner {
   void index();
   void note_index(double release_mm, double index_mm);
   void reference_found(double reference_mm);
+  void note_gantry_skew();
   double rest_offset_mm() const;
   void pull_off();
   void aligned();

@@ -143,6 +143,10 @@ struct AxisSettings {
   // is one approach, as before.
   std::uint8_t latch_passes = 1;
   double max_latch_spread_mm = 0;  // their spread above this: switch_not_repeatable
+  // Not used by the engine: a gantry slave's skew that differs from the
+  // trend cycles' by more than this raises the runtime's health warning
+  // gantry_skew_changed (docs/health.md); 0 = not checked.
+  double max_skew_change_mm = 0;
   friend bool operator==(const AxisSettings&, const AxisSettings&) = default;
 };
 
@@ -159,6 +163,13 @@ struct GlobalSettings {
   // Not used by the engine: the runtime bounds the audit log and the homing
   // history with it (oldest rows pruned).
   std::uint32_t history_max_rows = 10000;
+  // Not used by the engine: the runtime's trend check of the health figures
+  // kept in the homing history (docs/health.md). Over an axis's last
+  // trend_cycles cycles (0 = off), a figure that grew by more than
+  // trend_growth_pct percent, and by at least trend_min_change_mm, warns.
+  std::uint16_t trend_cycles = 0;
+  std::uint16_t trend_growth_pct = 0;
+  double trend_min_change_mm = 0;
   friend bool operator==(const GlobalSettings&, const GlobalSettings&) = default;
 };
 
@@ -219,6 +230,7 @@ enum class AxisField : std::uint8_t {
   limit_overtravel,
   latch_passes,
   max_latch_spread,
+  max_skew_change,
 };
 // The name of each: the suffix of its register name (axis.<a>.<name>).
 struct AxisFieldInfo {
@@ -266,8 +278,9 @@ inline constexpr AxisFieldInfo kAxisFieldInfo[] = {
     {AxisField::limit_overtravel, "limit_overtravel"},
     {AxisField::latch_passes, "latch_passes"},
     {AxisField::max_latch_spread, "max_latch_spread"},
+    {AxisField::max_skew_change, "max_skew_change"},
 };
-static_assert(lists_every_value(kAxisFieldInfo, AxisField::max_latch_spread));
+static_assert(lists_every_value(kAxisFieldInfo, AxisField::max_skew_change));
 constexpr std::span<const AxisFieldInfo> enum_table(AxisField) { return kAxisFieldInfo; }
 
 std::string_view field_name(AxisField field);

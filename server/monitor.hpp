@@ -1,7 +1,8 @@
 #pragma once
 // Watches the published status from outside the control loop: logs alarms
-// and command results, records each homing run in the history and refreshes
-// the home-correction summary that the input registers show.
+// and command results, records each homing run in the history, refreshes
+// the home-correction summary that the input registers show, and after each
+// run judges the health trend of its axes (health_trend.hpp).
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -30,6 +31,7 @@ class Monitor {
 
  private:
   void refresh_summary();
+  void judge_health(std::size_t axis, const homing::Settings& settings);
   void refresh_diagnostics();
   void housekeeping(std::int64_t now_ms);
 
@@ -52,7 +54,7 @@ std::int64_t unix_ms();
 
 // What the history records of one axis of a finished run: its correction
 // only when the cycle succeeded and the axis was homed when it started,
-// otherwise why not.
+// otherwise why not; its health figures whenever it ended homed.
 persistence::AxisRun axis_record(bool cycle_ok, const homing::AxisStatus& axis, std::int64_t duration_ms);
 
 }  // namespace server
