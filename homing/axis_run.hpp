@@ -52,6 +52,9 @@ struct Jog {
 struct PushToStop {
   double start_s = 0;           // engine time the push began
   bool stalled = false;         // the drive reported the stall: braking at the stop
+  // Following-error detection: motor position and encoder reading as the push began.
+  double motor_start_mm = 0;
+  double encoder_start_mm = 0;
 };
 struct LimitReversal {
   bool braked = false;        // at rest after meeting the limit switch: the search runs back
