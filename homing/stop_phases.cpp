@@ -5,6 +5,7 @@
 // max_following_error. The carriage then rests against the stop, whatever
 // steps the motor lost meanwhile, so the motor position at rest is the
 // reference. Bounded by max_seek_travel and by stall_timeout_ms.
+#include "mutation.hpp"
 #include "phase_runner.hpp"
 
 namespace homing {
@@ -53,7 +54,7 @@ void PhaseRunner::push_to_stop() {
     // An encoder lost or counting the wrong way tells nothing of the stop.
     if (!run.readings.absolute_valid) return fail(AlarmCode::encoder_fault);
     const Following f = following(push);
-    if (f.followed_mm < -kReversedShare * s.max_following_error_mm)
+    if (f.followed_mm < -kReversedShare * s.max_following_error_mm && !planted(Mutant::reversed_encoder_unchecked))
       return fail(AlarmCode::encoder_reversed, -f.followed_mm);
   }
   const bool told = by_encoder ? following(push).error_mm > s.max_following_error_mm : run.readings.stall;
