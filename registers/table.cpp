@@ -97,6 +97,7 @@ constexpr auto kAllowed = values_of(homing::kAllowedWithoutHomingInfo);
 constexpr auto kAxisAllowed = values_of(homing::kAxisAllowedWithoutHomingInfo);
 constexpr auto kKinds = values_of(homing::kAxisKindInfo);
 constexpr auto kCamEdges = values_of(homing::kCamEdgeInfo);
+constexpr auto kStallDetects = values_of(homing::kStallDetectInfo);
 constexpr auto kStates = values_of(homing::kMachineStateInfo);
 constexpr auto kCommandResults = values_of(homing::kCommandResultInfo);
 constexpr auto kInterlocks = bits_of(homing::interlock::kInfo);
@@ -139,6 +140,7 @@ constexpr ValueList kValueLists[] = {
     {"axis_allowed_without_homing", kAxisAllowed},
     {"kind", kKinds},
     {"cam_edge", kCamEdges},
+    {"stall_detect", kStallDetects},
     {"axis_mask", kAxisBits},
     {"state", kStates},
     {"command_result", kCommandResults},
@@ -256,6 +258,9 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     {.pattern = "axis.<a>.latch_passes", .offset = 54, .min = 1, .max = homing::kMaxLatchPasses, .def = 1, .fills = fills<&A::latch_passes>, .description = "re-approach methods: slow approaches to the reference edge in one cycle; the reference is their median, their spread and sigma are published (1 = one approach; docs/health.md)"},
     {.pattern = "axis.<a>.max_latch_spread", .offset = 56, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 50, .fills = fills<&A::max_latch_spread_mm>, .description = "with several latch passes: their spread (max - min) above this raises switch_not_repeatable"},
     {.pattern = "axis.<a>.max_skew_change", .offset = 58, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 100, .fills = fills<&A::max_skew_change_mm>, .description = "gantry slave: the last cycle's skew (axis.<a>.gantry_skew) this much away from what it was over the trend cycles raises the health warning gantry_skew_changed; 0 = not checked (docs/health.md)"},
+    // Hard-stop homing by the encoder (docs/homing-methods.md "Hard-stop homing by following error").
+    {.pattern = "axis.<a>.stall_detect", .offset = 64, .type = Type::enumeration, .max = last_value(kStallDetects), .fills = fills<&A::stall_detect>, .values = kStallDetects, .description = "hard-stop homing: how the stop is told, the drive's stall input (0) or the encoder's following error (1: the carriage falls behind its steps by more than max_following_error)"},
+    {.pattern = "axis.<a>.max_following_error", .offset = 62, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 200, .fills = fills<&A::max_following_error_mm>, .description = "hard-stop homing by following error: the commanded position may lead the encoder by this much before the carriage counts as stopped against the stop"},
     {.pattern = "axis.<a>.target", .offset = 60, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::host_target, .description = "target of cmd.move.<a> (not persisted)"},
     // input registers: per-axis status
     {.pattern = "axis.<a>.phase", .table = IR, .type = Type::enumeration, .access = Access::r, .max = last_value(kPhases), .key = Key::axis_phase, .values = kPhases, .description = "what the axis is doing"},

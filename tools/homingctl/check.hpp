@@ -26,6 +26,9 @@ struct AxisCheck {
   double seek_worst_s = 0;           // over max_seek_travel
   double after_trigger_s = 0;        // stop, back-off, re-approach, index, pull-off, final move
   std::vector<std::pair<std::string, double>> phases;  // phase name, seconds (estimate)
+  std::vector<std::string> signals;  // what its method needs wired (kSignalInfo names), its stop detection included
+  std::string stop_detection;        // how a method that pushes to a stop tells it (stall_detect); "" otherwise
+  double max_following_error_mm = 0;  // with stop_detection following_error
   std::vector<std::string> warnings;
 };
 

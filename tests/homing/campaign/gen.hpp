@@ -79,6 +79,7 @@ struct Gen {
   void events();
   void indexers();
   void limit_switches();
+  void following_error();
   Machine build();
 };
 

@@ -92,6 +92,7 @@ struct AxisPlan {
   bool late_drive = false;     // drive mode: the drive answers after its time limit
   bool indexer = false;        // a locking indexer (axis.<a>.indexer_lock, fitted on the simulator)
   bool limits = false;         // end-of-travel limit switches fitted (axis.<a>.limits_fitted, on the simulator)
+  bool following_error = false;  // hard-stop axis telling its stop by its encoder (stall_detect following_error)
 };
 
 struct Machine {

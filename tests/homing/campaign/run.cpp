@@ -363,6 +363,7 @@ void Run::mark_machine() {
       mark("mode " + std::string(mode_name(m_.settings.axes[a].mode)), seen::present);
     }
     if (m_.plan[a].limits) mark("limit switches fitted", seen::present);
+    if (m_.plan[a].following_error) mark("hard_stop by following error", seen::present);
   }
 }
 
@@ -390,6 +391,7 @@ void Run::mark_cycle(const CyclePlan& plan, const Causes& causes, bool clean) {
       mark("mode " + std::string(mode_name(m_.settings.axes[a].mode)), bits);
     }
     if (m_.plan[a].limits) mark("limit switches fitted", bits);
+    if (m_.plan[a].following_error) mark("hard_stop by following error", bits);
   }
 }
 

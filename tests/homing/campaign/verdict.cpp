@@ -122,17 +122,32 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
             mover && overruns);
     }
     // Hard-stop homing: a stall output that never comes or is on all the
-    // time, or a stop further than the push reaches (README).
+    // time, or a stop further than the push reaches (README). An axis that
+    // tells its stop by its encoder (docs/homing-methods.md) reads no stall
+    // input: it needs the stop within the push's reach less its limit.
     if (mover && e.mode == HomingMode::hard_stop) {
-      if (f == sim::Fault::stall_dead)
+      const bool by_encoder = e.stall_detect == StallDetect::following_error;
+      if (f == sim::Fault::stall_dead && !by_encoder)
         c.add(letter(a) + "'s dead stall output", {AlarmCode::stop_not_found, AlarmCode::stall_timeout}, bit, true);
-      if (f == sim::Fault::stall_stuck) c.add(letter(a) + "'s stall output stuck on", {AlarmCode::stall_at_start}, bit, true);
+      if (f == sim::Fault::stall_stuck && !by_encoder)
+        c.add(letter(a) + "'s stall output stuck on", {AlarmCode::stall_at_start}, bit, true);
       const auto& cfg = r.sim().axis_config(a);
       const double stop = dir_of(e) < 0 ? cfg.hard_stop_min_mm : cfg.hard_stop_max_mm;
       const double reach = e.max_seek_travel_mm - (e.pre_move_mode == PreMove::always ? e.pre_move_distance_mm : 0);
       const double gap = std::abs(r.actual(a) - stop);
-      // Near the end of the reach the stall's detection time decides.
-      if (gap > reach - 1) c.add(letter(a) + "'s stop beyond the push's reach", {AlarmCode::stop_not_found, AlarmCode::stall_timeout}, bit, gap > reach + 1e-3);
+      // Near the end of the reach the stall's detection time decides; the
+      // encoder's resolution and noise decide when the lag passes the limit.
+      const double needed = gap + (by_encoder ? e.max_following_error_mm : 0.0);
+      const double settled = by_encoder ? 2 * (cfg.encoder_resolution_mm + 5 * cfg.encoder_noise_mm) + 1e-3 : 1e-3;
+      if (needed > reach - 1)
+        c.add(letter(a) + "'s stop beyond the push's reach", {AlarmCode::stop_not_found, AlarmCode::stall_timeout}, bit,
+              needed > reach + settled);
+      // An encoder counting the wrong way shows once the carriage has moved a
+      // quarter of the limit toward the stop; a carriage already closer
+      // reaches the stop first and homes on it.
+      if (by_encoder && f == sim::Fault::encoder_reversed)
+        c.add(letter(a) + "'s reversed encoder", {AlarmCode::encoder_reversed}, bit,
+              gap > 0.25 * e.max_following_error_mm + settled && needed < reach - 1);
     }
     if (p.rest_on_sensor) c.add(letter(a) + "'s shared limit resting on its sensor", {AlarmCode::settings_fault, AlarmCode::not_released}, bit);
     // A cycle that starts deeper in the cam than max_backoff can release (a
@@ -214,6 +229,9 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
     if ((encoder_invalid & bit) && mode_is_absolute(e.mode))
       c.add(letter(a) + "'s invalid absolute encoder", {AlarmCode::encoder_fault}, bit,
             (plan.covered & bit) || (plan.unsequenced & bit));
+    // Hard-stop homing by the encoder reads it as the push begins.
+    if ((encoder_invalid & bit) && e.mode == HomingMode::hard_stop && e.stall_detect == StallDetect::following_error)
+      c.add(letter(a) + "'s invalid encoder for the stop", {AlarmCode::encoder_fault}, bit, mover);
   }
   return c;
 }
