@@ -313,7 +313,7 @@ void MqttNode::take_command(const std::string& metric, bool on) {
       // The loop judges a command within a period or two; the network thread
       // may wait that long (the control loop never waits for it).
       auto now = before;
-      for (int i = 0; i < 500 && now.first == before.first; ++i) {
+      for (int i = 0; i < 2000 && now.first == before.first; ++i) {
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
         now = judged();
       }
@@ -323,7 +323,7 @@ void MqttNode::take_command(const std::string& metric, bool on) {
         answer.text = fmt::format("NCMD {}: {}: {}", metric, homing::command_result_name(result),
                                   homing::text_of(result));
       } else {
-        answer.text = fmt::format("NCMD {} taken; the control loop did not judge it within 0.5 s: see status/last_command_result", metric);
+        answer.text = fmt::format("NCMD {} taken; the control loop did not judge it within 2 s: see status/last_command_result", metric);
       }
     }
   }

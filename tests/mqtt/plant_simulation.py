@@ -79,20 +79,39 @@ try:
     clients = {node: ModbusTcpClient("127.0.0.1", port=port, timeout=2, retries=0) for node, port, _ in modules}
     for c in clients.values():
         wait_until(lambda: c.connect(), 10)
+    def read(c, address, count):
+        """Input registers, or None; a connection the module closed (idle while
+        the others were waited for) is opened again."""
+        try:
+            r = c.read_input_registers(address, count, slave=1)
+            return None if r.isError() else r.registers
+        except Exception:  # pymodbus raises on a closed connection
+            c.close()
+            c.connect()
+            return None
     def cycles_done(c):
-        r = c.read_input_registers(3, 2, slave=1)
-        return -1 if r.isError() else (r.registers[0] << 16) | r.registers[1]
+        r = read(c, 3, 2)
+        return -1 if r is None else (r[0] << 16) | r[1]
+    def state(c):
+        r = read(c, 1, 1)
+        return None if r is None else r[0]
     ran = {node: 0 for node, _, _ in modules}
     for k in range(args.cycles):
-        before = {node: cycles_done(c) for node, c in clients.items()}
+        before = {}
+        for node, c in clients.items():
+            wait_until(lambda: cycles_done(c) >= 0, 10)
+            before[node] = cycles_done(c)
         for node, c in clients.items():
             if k % 2 == 0:
                 cmd = spb.Payload(); m = cmd.metrics.add(); m.name = "cmd/home_all"; m.datatype = spb.Boolean; m.boolean_value = True
                 sub.publish(f"spBv1.0/plant/NCMD/{node}", cmd.SerializeToString(), qos=1)
             else:
-                c.write_coil(0, True, slave=1)
+                try:
+                    c.write_coil(0, True, slave=1)
+                except Exception:
+                    c.close(); c.connect(); c.write_coil(0, True, slave=1)
         for node, c in clients.items():
-            if wait_until(lambda: cycles_done(c) > before[node] and c.read_input_registers(1, 1, slave=1).registers[0] != 1, 60):
+            if wait_until(lambda: cycles_done(c) > before[node] and state(c) not in (None, 1), 60):
                 ran[node] += 1
         if time.monotonic() - started > args.time_limit_s:
             print("[plant] time limit reached"); break

@@ -109,11 +109,10 @@ try:
           "and is answered as accepted (command result 1)")
 
     # Homing blocked by a latched alarm: the same refusal as over Modbus.
-    mb.write_coil(0, True, slave=1)
-    time.sleep(0.02)
-    mb.write_coil(1, True, slave=1)  # cmd.abort: alarm aborted (the cycle may be over already: then none)
-    if not wait_until(lambda: ir(mb, 1) == 3, 5):
-        ncmd("on", "cmd/abort")  # an abort at rest: raise the alarm the way the module does
+    # The simulator's e-stop pressed and released: the alarm stays latched.
+    mb.write_coil(0, True, slave=247)  # sim.estop
+    wait_until(lambda: ir(mb, 1) == 3, 10)
+    mb.write_coil(0, False, slave=247)
     check(wait_until(lambda: ir(mb, 1) == 3, 10), "an alarm is latched")
     n = len(answers("on"))
     ncmd("on", "cmd/home_all")
