@@ -265,7 +265,7 @@ void ControlLoop::run_period(double wall_dt_s) {
   s.status = engine_.status();
   s.outputs = outputs_;
   s.periods = loop_stats_.periods;
-  s.events = status_events_;
+  if (s.events.written() != status_events_.written()) s.events = status_events_;  // rare: no copy per period
   if (++stats_publish_tick_ % 64 == 0) stats_ = loop_stats_;  // the histogram is 32 KiB: copy it now and then
   publish_sim(s);
   const bool edits_shown = s.sim_edits_applied != edits_applied_;
