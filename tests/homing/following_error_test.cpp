@@ -269,3 +269,24 @@ TEST_CASE("the hard-stop row needs the stall input or the encoder, as the axis's
     CHECK(by_stall == row.needs);
   }
 }
+
+SCENARIO("hard-stop homing by following error: a reversed encoder on a carriage already near the stop homes on the "
+         "stop, the travel counted as lag",
+         "[modes][hard_stop][following_error]") {
+  // Campaign seed 2258828930: 0.3 mm from the stop with a 2 mm limit, the
+  // carriage reaches the stop before it has moved the quarter of the limit
+  // that shows a reversal; its 0.3 mm then count twice against the steps.
+  Rig r = following_error_rig();
+  r.settings.axes[0].max_following_error_mm = 2;
+  r.machine.axes[0].actual_position_mm = -4.7;
+  r.machine.axes[0].fault = sim::Fault::encoder_reversed;
+  Push push;
+  watch_push(r, push);
+  REQUIRE(r.home_all());
+  CHECK(r.trace[0].min_actual == Approx(-5).margin(1e-9));
+  CHECK(r.actual(0) == Approx(-4).margin(kResolution_mm));
+  CHECK(r.axis(0).position_mm == Approx(0).margin(kResolution_mm));
+  // Told after the limit less the gap of steps, not the limit plus the gap.
+  CHECK(push.motor_travel() > 2 - 0.3 - 2 * kResolution_mm);
+  CHECK(push.motor_travel() < 2 - 0.3 + 0.05);
+}

@@ -137,17 +137,29 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
       const double gap = std::abs(r.actual(a) - stop);
       // Near the end of the reach the stall's detection time decides; the
       // encoder's resolution and noise decide when the lag passes the limit.
-      const double needed = gap + (by_encoder ? e.max_following_error_mm : 0.0);
       const double settled = by_encoder ? 2 * (cfg.encoder_resolution_mm + 5 * cfg.encoder_noise_mm) + 1e-3 : 1e-3;
-      if (needed > reach - 1)
-        c.add(letter(a) + "'s stop beyond the push's reach", {AlarmCode::stop_not_found, AlarmCode::stall_timeout}, bit,
-              needed > reach + settled);
-      // An encoder counting the wrong way shows once the carriage has moved a
-      // quarter of the limit toward the stop; a carriage already closer
-      // reaches the stop first and homes on it.
-      if (by_encoder && f == sim::Fault::encoder_reversed)
+      // The steps needed until the stop is told (or the reversal shows):
+      // lo and hi differ only where two outcomes are equally likely.
+      double needed_lo = gap;
+      double needed_hi = gap;
+      const bool reversed = by_encoder && f == sim::Fault::encoder_reversed;
+      if (by_encoder && !reversed) needed_lo = needed_hi = gap + e.max_following_error_mm;
+      if (reversed) {
+        // A reversed encoder counts the travel as lag: a carriage more than a
+        // quarter of the limit from the stop shows the reversal after that
+        // quarter; one closer rests on the stop, and the limit is passed
+        // after the limit less the gap (seed 2258828930).
+        const double quarter = 0.25 * e.max_following_error_mm;
+        const double shows = quarter;
+        const double passes = e.max_following_error_mm - gap;
+        needed_lo = gap > quarter + settled ? shows : gap < quarter - settled ? passes : std::min(shows, passes);
+        needed_hi = gap > quarter + settled ? shows : gap < quarter - settled ? passes : std::max(shows, passes);
         c.add(letter(a) + "'s reversed encoder", {AlarmCode::encoder_reversed}, bit,
-              gap > 0.25 * e.max_following_error_mm + settled && needed < reach - 1);
+              gap > quarter + settled && needed_hi < reach - 1);
+      }
+      if (needed_hi > reach - 1)
+        c.add(letter(a) + "'s stop beyond the push's reach", {AlarmCode::stop_not_found, AlarmCode::stall_timeout}, bit,
+              needed_lo > reach + settled);
     }
     if (p.rest_on_sensor) c.add(letter(a) + "'s shared limit resting on its sensor", {AlarmCode::settings_fault, AlarmCode::not_released}, bit);
     // A cycle that starts deeper in the cam than max_backoff can release (a
