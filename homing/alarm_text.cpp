@@ -131,4 +131,11 @@ std::string describe_alarm(std::size_t axis, const Alarm& a, const Settings& set
   return fmt::format("{}; {}", what_happened(axis, a, settings), alarm_what_to_check(a.code));
 }
 
+std::string describe_global_alarm(AlarmCode code, const Settings& settings) {
+  // An e-stop pressed at rest belongs to the machine, not to axis X.
+  if (code == AlarmCode::emergency_stop)
+    return fmt::format("emergency stop pressed; {}", alarm_what_to_check(code));
+  return describe_alarm(0, Alarm{code}, settings);
+}
+
 }  // namespace homing

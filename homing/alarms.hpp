@@ -167,5 +167,8 @@ std::string_view alarm_what_to_check(AlarmCode code);
 // A sentence a technician can act on, e.g.
 // "X: home sensor not found within 200 mm of travel; check the sensor wiring and direction".
 std::string describe_alarm(std::size_t axis, const Alarm& alarm, const Settings& settings);
+// The same for an alarm not tied to one axis (status.global_alarm): no axis
+// letter in front of it.
+std::string describe_global_alarm(AlarmCode code, const Settings& settings);
 
 }  // namespace homing

@@ -176,7 +176,7 @@ void Monitor::poll(std::int64_t now_ms) {
   }
   if (st.global_alarm != last_.global_alarm && st.global_alarm != homing::AlarmCode::none)
     spdlog::error("alarm {}: {}", homing::alarm_name(st.global_alarm),
-                  homing::describe_alarm(0, homing::Alarm{st.global_alarm}, settings));
+                  homing::describe_global_alarm(st.global_alarm, settings));
   if (st.alarm != last_.alarm && !st.alarm) spdlog::info("alarms reset");
   if (st.last_command_result != last_.last_command_result || st.heartbeat == 0)
     spdlog::info("command result: {}", homing::command_result_name(st.last_command_result));

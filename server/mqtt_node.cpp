@@ -74,6 +74,10 @@ std::expected<MqttConfig, std::string> mqtt_config(const Options& o) {
   c.port = o.mqtt_port;
   c.group = o.mqtt_group;
   c.keepalive_s = o.mqtt_keepalive_s;
+  c.sample_ms = o.mqtt_sample_ms;
+  c.report.length_deadband = o.mqtt_deadband;
+  c.report.length_min_interval_ms = static_cast<std::uint64_t>(o.mqtt_min_interval_ms);
+  c.report.diagnostics_min_interval_ms = static_cast<std::uint64_t>(o.mqtt_diagnostics_interval_ms);
   if (!o.mqtt_node.empty()) {
     c.node = o.mqtt_node;
   } else if (!o.machine_name.empty()) {
@@ -288,7 +292,7 @@ void MqttNode::take_command(const std::string& metric, bool on) {
   std::ranges::replace(name, '/', '.');
   // event/code: the command result (status.last_command_result, 0 = never
   // judged); event/new_value: the refusal reason of the write (status.last_refusal_reason, 0 = none).
-  persistence::Event answer{.time_ms = now_ms(), .kind = persistence::EventKind::command, .name = name};
+  persistence::Event answer{.time_ms = now_ms(), .kind = persistence::EventKind::command, .name = name, .text = {}};
   const registers::Register* reg = registers::find_register(name);
   const bool momentary = reg && reg->unit == registers::Unit::module && reg->table == registers::Table::coil &&
                          reg->access == registers::Access::w;
@@ -416,7 +420,7 @@ void MqttNode::send_events(sparkplug::EdgeNode& node) {
 }
 
 void MqttNode::publish_loop() {
-  sparkplug::EdgeNode node;
+  sparkplug::EdgeNode node(config_.report);
   while (!stop_) {
     if (host_gone_.exchange(false) && connected_) {
       const std::string bytes = sparkplug::EdgeNode::death(bd_seq_.load()).SerializeAsString();
@@ -425,7 +429,9 @@ void MqttNode::publish_loop() {
     }
     if (may_publish()) {
       service_.with_module_view([&](const registers::ModuleView& view) {
-        const sparkplug::RawReader read = [&](const registers::Register& reg) { return registers::read_raw(reg, view); };
+        const sparkplug::ModuleReader read{
+            [&](const registers::Register& reg) { return registers::read_raw(reg, view); },
+            [&](const registers::Register& code) { return sparkplug::alarm_text(code, view); }};
         if (need_birth_.exchange(false)) {
           const auto now = static_cast<std::uint64_t>(now_ms());
           const std::int64_t dropped = outbox_ ? outbox_->dropped() : 0;

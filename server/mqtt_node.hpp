@@ -31,6 +31,7 @@ struct MqttConfig {
   std::string node;
   int keepalive_s = 30;
   int sample_ms = 50;  // how often the publisher looks for changes
+  sparkplug::ReportPolicy report;  // what counts as a change worth publishing
   bool tls = false;
   std::string ca, cert, key;  // PEM files (cert and key: a client certificate, both or neither)
   std::string user, password;  // empty user: no user name sent

@@ -60,7 +60,8 @@ std::expected<void, std::string> check_mqtt(const std::string& url, Options& o, 
   if (url.empty()) {
     for (const char* name : {"--mqtt-node", "--mqtt-group", "--mqtt-keepalive-s", "--mqtt-ca", "--mqtt-cert",
                              "--mqtt-key", "--mqtt-user", "--mqtt-password-file", "--mqtt-outbox", "--mqtt-outbox-max",
-                             "--mqtt-primary-host", "--mqtt-commands"})
+                             "--mqtt-primary-host", "--mqtt-commands", "--mqtt-deadband",
+                             "--mqtt-min-interval-ms", "--mqtt-diagnostics-interval-ms", "--mqtt-sample-ms"})
       if (given(name))
         return std::unexpected(std::string(name) + " is set but --mqtt is not: add --mqtt mqtt://HOST:PORT to publish");
     return {};
@@ -298,6 +299,23 @@ OptionParser::Table::Table() {
   app.add_option("--mqtt-outbox-max,--mqtt_outbox_max", o.mqtt_outbox_max,
                  "Events kept at most while the broker is away; past it the oldest are dropped and counted")
       ->check(CLI::Range(100, 10000000))
+      ->capture_default_str();
+  app.add_option("--mqtt-deadband,--mqtt_deadband", o.mqtt_deadband,
+                 "Positions and other lengths are published again once they moved this far from the value last "
+                 "published (mm; deg on rotary axes)")
+      ->check(CLI::Range(0.001, 1000.0))
+      ->capture_default_str();
+  app.add_option("--mqtt-min-interval-ms,--mqtt_min_interval_ms", o.mqtt_min_interval_ms,
+                 "A moving position is published at most this often (ms); other values as they change")
+      ->check(CLI::Range(0, 60000))
+      ->capture_default_str();
+  app.add_option("--mqtt-diagnostics-interval-ms,--mqtt_diagnostics_interval_ms", o.mqtt_diagnostics_interval_ms,
+                 "Loop timing and resource figures (diag.*) are published at most this often (ms)")
+      ->check(CLI::Range(1000, 3600000))
+      ->capture_default_str();
+  app.add_option("--mqtt-sample-ms,--mqtt_sample_ms", o.mqtt_sample_ms,
+                 "How often the edge node looks at the module for changes and events to publish (ms)")
+      ->check(CLI::Range(10, 10000))
       ->capture_default_str();
   app.add_option("--export-settings,--export_settings", o.export_settings,
                  "Write every setting of --db to this TOML file and exit (no server)");

@@ -71,6 +71,14 @@ struct Options {
   int mqtt_outbox_max = 10000;        // events kept at most while the broker is away (oldest dropped)
   std::string mqtt_primary_host;      // Sparkplug primary host id: publish only while its STATE says online
   bool mqtt_commands = false;         // NCMD cmd.* accepted (off: refused and reported)
+  // Report by exception (sparkplug::ReportPolicy): positions and other lengths
+  // move this far (mm, deg on rotary axes) before they are published again,
+  // at most every mqtt_min_interval_ms; diagnostics at most every
+  // mqtt_diagnostics_interval_ms; the module is looked at every mqtt_sample_ms.
+  double mqtt_deadband = 0.01;
+  int mqtt_min_interval_ms = 100;
+  int mqtt_diagnostics_interval_ms = 10000;
+  int mqtt_sample_ms = 50;
   // Offline settings transfer: act on --db and exit without serving.
   std::string export_settings;
   std::string import_settings;

@@ -6,6 +6,15 @@
 #include "homing/alarms.hpp"
 
 namespace server {
+namespace {
+
+// An axis's alarm whole; the machine's (e-stop at rest, settings lost) by its code.
+std::string alarm_text(const StatusEvent& e, const homing::Settings& settings) {
+  if (e.axis < 0) return homing::describe_global_alarm(e.code, settings);
+  return homing::describe_alarm(static_cast<std::size_t>(e.axis), e.alarm, settings);
+}
+
+}  // namespace
 
 PlantEvents::PlantEvents(persistence::EventOutbox& outbox, persistence::SettingsStore* store)
     : outbox_(outbox), store_(store) {
@@ -29,12 +38,11 @@ void PlantEvents::take(const StatusEvents& ring, const homing::Settings& setting
                     StatusEvents::kRing);
       continue;
     }
-    const std::size_t axis = e->axis >= 0 ? static_cast<std::size_t>(e->axis) : 0;
     switch (e->kind) {
       case StatusEventKind::alarm_raised:
         keep({.time_ms = e->time_ms, .kind = persistence::EventKind::alarm_raised, .axis = e->axis,
               .code = static_cast<std::int32_t>(e->code),
-              .text = homing::describe_alarm(axis, e->axis >= 0 ? e->alarm : homing::Alarm{e->code}, settings)});
+              .text = alarm_text(*e, settings)});
         break;
       case StatusEventKind::alarms_reset:
         keep({.time_ms = e->time_ms, .kind = persistence::EventKind::alarms_reset, .text = "alarms reset"});
@@ -47,7 +55,7 @@ void PlantEvents::take(const StatusEvents& ring, const homing::Settings& setting
         std::string text = fmt::format("homing done in {} ms", e->duration_ms);
         if (e->code != homing::AlarmCode::none)
           text = fmt::format("homing ended after {} ms with alarm {}: {}", e->duration_ms, homing::alarm_name(e->code),
-                             homing::describe_alarm(axis, e->axis >= 0 ? e->alarm : homing::Alarm{e->code}, settings));
+                             alarm_text(*e, settings));
         keep({.time_ms = e->time_ms, .kind = persistence::EventKind::cycle_ended, .axis = e->axis,
               .code = static_cast<std::int32_t>(e->code), .duration_ms = e->duration_ms, .axes = e->axes,
               .text = std::move(text)});

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "homing/alarms.hpp"
+
 namespace sparkplug {
 
 std::string metric_name(const registers::Register& reg) {
@@ -34,6 +36,25 @@ std::vector<MetricDef> node_metrics() {
     out.push_back(MetricDef{metric_name(reg), out.size() + 1, data_type(reg), &reg});
   }
   return out;
+}
+
+std::vector<TextMetricDef> alarm_text_metrics(std::uint64_t first_alias) {
+  std::vector<TextMetricDef> out;
+  for (const auto& reg : registers::registers_of(registers::Unit::module)) {
+    if (reg.key != registers::Key::axis_alarm && reg.key != registers::Key::status_global_alarm) continue;
+    out.push_back(TextMetricDef{metric_name(reg) + "_text", first_alias + out.size(), &reg});
+  }
+  return out;
+}
+
+std::string alarm_text(const registers::Register& code, const registers::ModuleView& view) {
+  if (code.key == registers::Key::status_global_alarm) {
+    const homing::AlarmCode global = view.status.global_alarm;
+    return global == homing::AlarmCode::none ? std::string{} : homing::describe_global_alarm(global, view.settings);
+  }
+  const auto axis = static_cast<std::size_t>(code.axis);
+  const homing::Alarm& alarm = view.status.axes[axis].alarm;
+  return alarm ? homing::describe_alarm(axis, alarm, view.settings) : std::string{};
 }
 
 bool is_diagnostic(const registers::Register& reg) {

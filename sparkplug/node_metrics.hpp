@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "registers/codec.hpp"
 #include "registers/table.hpp"
 
 namespace sparkplug {
@@ -38,5 +39,18 @@ DataType data_type(const registers::Register& reg);
 bool is_diagnostic(const registers::Register& reg);
 // Every metric of the node (status.heartbeat excepted), in table order, aliases 1..n.
 std::vector<MetricDef> node_metrics();
+
+// The text of a latched alarm, beside its code: one String metric per alarm
+// code register (axis.<a>.alarm, status.global_alarm), named after it with
+// "_text" ("axis/X/alarm_text"); "" while no alarm is latched. The text is
+// the one the log and the alarm events carry (homing::describe_alarm).
+struct TextMetricDef {
+  std::string name;
+  std::uint64_t alias = 0;
+  const registers::Register* code = nullptr;  // the alarm code register it describes
+};
+std::vector<TextMetricDef> alarm_text_metrics(std::uint64_t first_alias);
+// The text of the alarm `code` holds in this view of the module, "" for none.
+std::string alarm_text(const registers::Register& code, const registers::ModuleView& view);
 
 }  // namespace sparkplug

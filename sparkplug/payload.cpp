@@ -10,12 +10,15 @@ namespace sparkplug {
 EdgeNode::EdgeNode(ReportPolicy policy)
     : policy_(policy),
       metrics_(node_metrics()),
+      texts_(alarm_text_metrics(metrics_.size() + 1)),
+      sent_text_(texts_.size()),
       sent_raw_(metrics_.size(), 0),
       sent_at_ms_(metrics_.size(), 0) {}
 
 void set_value(Payload::Metric& metric, const MetricDef& def, std::int64_t raw) {
   metric.set_datatype(static_cast<std::uint32_t>(def.type));
   switch (def.type) {
+    case DataType::string: break;  // no register is a string (alarm texts: set_text)
     case DataType::dbl: metric.set_double_value(registers::to_engineering(*def.reg, raw)); break;
     case DataType::boolean: metric.set_boolean_value(raw != 0); break;
     case DataType::int64: metric.set_long_value(static_cast<std::uint64_t>(raw)); break;
@@ -29,12 +32,17 @@ void set_value(Payload::Metric& metric, const MetricDef& def, std::int64_t raw) 
   }
 }
 
+void set_text(Payload::Metric& metric, const std::string& text) {
+  metric.set_datatype(static_cast<std::uint32_t>(DataType::string));
+  metric.set_string_value(text);
+}
+
 std::uint64_t EdgeNode::next_seq() {
   seq_ = static_cast<std::uint8_t>(seq_ + 1);  // 255 + 1 wraps to 0 as the specification wants
   return seq_;
 }
 
-Payload EdgeNode::birth(std::uint64_t bd_seq, const RawReader& read, std::uint64_t now_ms, std::int64_t events_dropped) {
+Payload EdgeNode::birth(std::uint64_t bd_seq, const ModuleReader& read, std::uint64_t now_ms, std::int64_t events_dropped) {
   Payload p;
   p.set_timestamp(now_ms);
   seq_ = 0;
@@ -51,13 +59,21 @@ Payload EdgeNode::birth(std::uint64_t bd_seq, const RawReader& read, std::uint64
   rebirth->set_boolean_value(false);
   for (std::size_t i = 0; i < metrics_.size(); ++i) {
     const auto& def = metrics_[i];
-    const std::int64_t raw = read(*def.reg);
+    const std::int64_t raw = read.raw(*def.reg);
     auto* m = p.add_metrics();
     m->set_name(def.name);
     m->set_alias(def.alias);
     m->set_timestamp(now_ms);
     set_value(*m, def, raw);
     remember(i, raw, now_ms);
+  }
+  for (std::size_t i = 0; i < texts_.size(); ++i) {
+    sent_text_[i] = read.alarm_text(*texts_[i].code);
+    auto* m = p.add_metrics();
+    m->set_name(texts_[i].name);
+    m->set_alias(texts_[i].alias);
+    m->set_timestamp(now_ms);
+    set_text(*m, sent_text_[i]);
   }
   add_event_metrics(p, first_event_alias(), now_ms, events_dropped);
   born_ = true;
@@ -89,17 +105,28 @@ void EdgeNode::remember(std::size_t i, std::int64_t raw, std::uint64_t now_ms) {
   sent_at_ms_[i] = now_ms;
 }
 
-std::optional<Payload> EdgeNode::data(const RawReader& read, std::uint64_t now_ms) {
+std::optional<Payload> EdgeNode::data(const ModuleReader& read, std::uint64_t now_ms) {
   if (!born_) return std::nullopt;
   Payload p;
   for (std::size_t i = 0; i < metrics_.size(); ++i) {
-    const std::int64_t raw = read(*metrics_[i].reg);
+    const std::int64_t raw = read.raw(*metrics_[i].reg);
     if (!changed(i, raw, now_ms)) continue;
     auto* m = p.add_metrics();
     m->set_alias(metrics_[i].alias);
     m->set_timestamp(now_ms);
     set_value(*m, metrics_[i], raw);
     remember(i, raw, now_ms);
+  }
+  // An alarm's text goes out as it changes: alarms are rare, and a host
+  // showing the code must not show the text of the one before.
+  for (std::size_t i = 0; i < texts_.size(); ++i) {
+    std::string text = read.alarm_text(*texts_[i].code);
+    if (text == sent_text_[i]) continue;
+    auto* m = p.add_metrics();
+    m->set_alias(texts_[i].alias);
+    m->set_timestamp(now_ms);
+    set_text(*m, text);
+    sent_text_[i] = std::move(text);
   }
   if (p.metrics_size() == 0) return std::nullopt;
   p.set_timestamp(now_ms);

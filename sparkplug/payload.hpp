@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "persistence/event_outbox.hpp"
@@ -18,6 +19,13 @@ namespace sparkplug {
 using Payload = org::eclipse::tahu::protobuf::Payload;
 // A metric's current raw register value (registers::read_raw over a snapshot).
 using RawReader = std::function<std::int64_t(const registers::Register&)>;
+// The text of the alarm its code register holds ("" while none is latched).
+using TextReader = std::function<std::string(const registers::Register& code)>;
+// The module as one sample of the publisher sees it.
+struct ModuleReader {
+  RawReader raw;
+  TextReader alarm_text;
+};
 
 // What counts as a change worth publishing.
 struct ReportPolicy {
@@ -35,21 +43,22 @@ class EdgeNode {
   explicit EdgeNode(ReportPolicy policy = {});
 
   const std::vector<MetricDef>& metrics() const { return metrics_; }
+  const std::vector<TextMetricDef>& alarm_texts() const { return texts_; }
 
   // NBIRTH: seq restarts at 0; bdSeq first, then every metric with name,
   // alias, datatype and current value. Also the answer to a rebirth request.
-  // The event metrics (events.hpp) follow the register metrics, with the
-  // outbox's count of dropped events.
-  Payload birth(std::uint64_t bd_seq, const RawReader& read, std::uint64_t now_ms, std::int64_t events_dropped = 0);
+  // The alarm texts follow the register metrics, then the event metrics
+  // (events.hpp) with the outbox's count of dropped events.
+  Payload birth(std::uint64_t bd_seq, const ModuleReader& read, std::uint64_t now_ms, std::int64_t events_dropped = 0);
   // NDATA with the metrics that changed since they were last published
   // (aliases only, no names); nothing before a birth or when nothing changed.
-  std::optional<Payload> data(const RawReader& read, std::uint64_t now_ms);
+  std::optional<Payload> data(const ModuleReader& read, std::uint64_t now_ms);
   // NDATA of one plant event, at the time it happened; historical when it is
   // sent late (it happened before this session's birth); the payload's own
   // timestamp is when it is sent. Only after a birth.
   std::optional<Payload> event(const persistence::Event& event, bool historical, std::int64_t events_dropped,
                                std::uint64_t now_ms);
-  std::uint64_t first_event_alias() const { return metrics_.size() + 1; }
+  std::uint64_t first_event_alias() const { return metrics_.size() + texts_.size() + 1; }
   // NDEATH (the MQTT Will): bdSeq only, no seq, as the specification says.
   static Payload death(std::uint64_t bd_seq);
 
@@ -60,6 +69,8 @@ class EdgeNode {
 
   ReportPolicy policy_;
   std::vector<MetricDef> metrics_;
+  std::vector<TextMetricDef> texts_;
+  std::vector<std::string> sent_text_;
   std::vector<std::int64_t> sent_raw_;
   std::vector<std::uint64_t> sent_at_ms_;
   bool born_ = false;
@@ -68,5 +79,6 @@ class EdgeNode {
 
 // The value of a metric on the wire in the field its datatype names.
 void set_value(Payload::Metric& metric, const MetricDef& def, std::int64_t raw);
+void set_text(Payload::Metric& metric, const std::string& text);
 
 }  // namespace sparkplug

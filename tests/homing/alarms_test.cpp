@@ -271,6 +271,21 @@ SCENARIO("emergency_stop: e-stop during a cycle stops within the deceleration di
   }
 }
 
+SCENARIO("emergency_stop at rest is the machine's alarm and its text names no axis", "[alarms]") {
+  Rig r;
+  r.sim().set_estop(true);
+  r.step();
+  CHECK(r.status().global_alarm == AlarmCode::emergency_stop);
+  CHECK_FALSE(r.axis(0).alarm);
+  const std::string text = describe_global_alarm(AlarmCode::emergency_stop, r.settings);
+  CHECK(text.find("emergency stop pressed; ") == 0);
+  CHECK(text.find("X:") == std::string::npos);
+  CHECK(text.find(std::string(alarm_what_to_check(AlarmCode::emergency_stop))) != std::string::npos);
+  // settings_lost never had an axis letter: the same text either way.
+  CHECK(describe_global_alarm(AlarmCode::settings_lost, r.settings) ==
+        describe_alarm(0, Alarm{AlarmCode::settings_lost}, r.settings));
+}
+
 SCENARIO("drive_fault: a faulted drive raises its alarm and motion stops", "[alarms][stop]") {
   Rig r;
   run_to_full_seek(r);

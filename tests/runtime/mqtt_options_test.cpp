@@ -121,3 +121,41 @@ TEST_CASE("an empty password file is refused naming the file") {
   CHECK(c.error().find(f.pw) != std::string::npos);
   CHECK(c.error().find("empty") != std::string::npos);
 }
+
+TEST_CASE("the deadband, the rate limits and the sample period reach the edge node's report policy") {
+  const auto r = parse({"--mqtt", "mqtt://b", "--mqtt-deadband", "0.5", "--mqtt-min-interval-ms", "1000",
+                        "--mqtt-diagnostics-interval-ms", "60000", "--mqtt-sample-ms", "20"});
+  REQUIRE(r);
+  const auto c = server::mqtt_config(r->options);
+  REQUIRE(c);
+  CHECK(c->report.length_deadband == 0.5);
+  CHECK(c->report.length_min_interval_ms == 1000);
+  CHECK(c->report.diagnostics_min_interval_ms == 60000);
+  CHECK(c->sample_ms == 20);
+}
+
+TEST_CASE("without report options the edge node keeps its documented defaults") {
+  const auto r = parse({"--mqtt", "mqtt://b"});
+  REQUIRE(r);
+  const auto c = server::mqtt_config(r->options);
+  REQUIRE(c);
+  CHECK(c->report.length_deadband == 0.01);
+  CHECK(c->report.length_min_interval_ms == 100);
+  CHECK(c->report.diagnostics_min_interval_ms == 10000);
+  CHECK(c->sample_ms == 50);
+}
+
+TEST_CASE("a report option out of its range or without --mqtt is refused naming it") {
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"--mqtt", "mqtt://b", "--mqtt-deadband", "0"},
+        {"--mqtt", "mqtt://b", "--mqtt-sample-ms", "5"},
+        {"--mqtt", "mqtt://b", "--mqtt-diagnostics-interval-ms", "10"},
+        {"--mqtt", "mqtt://b", "--mqtt-min-interval-ms", "-1"}}) {
+    const auto r = parse(args);
+    REQUIRE_FALSE(r);
+    CHECK(r.error().find(args[2]) != std::string::npos);
+  }
+  const auto r = parse({"--mqtt-deadband", "0.5"});
+  REQUIRE_FALSE(r);
+  CHECK(r.error().find("--mqtt-deadband is set but --mqtt is not") != std::string::npos);
+}

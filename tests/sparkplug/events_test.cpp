@@ -9,7 +9,8 @@
 
 namespace {
 
-std::int64_t zero(const registers::Register&) { return 0; }
+const sparkplug::ModuleReader zero{[](const registers::Register&) { return std::int64_t{0}; },
+                                   [](const registers::Register&) { return std::string{}; }};
 
 }  // namespace
 
@@ -26,7 +27,7 @@ TEST_CASE("every birth declares the event metrics with names, aliases after the 
     CHECK(by_name[std::string(def.name)]->datatype() == static_cast<std::uint32_t>(def.type));
   }
   CHECK(by_name["event/dropped"]->long_value() == 7);
-  CHECK(node.first_event_alias() == node.metrics().size() + 1);
+  CHECK(node.first_event_alias() == node.metrics().size() + node.alarm_texts().size() + 1);
 }
 
 TEST_CASE("an event is one NDATA stamped with its own time, historical when sent late, seq continuing") {

@@ -14,14 +14,20 @@ using sparkplug::DataType;
 using sparkplug::EdgeNode;
 using sparkplug::Payload;
 
-// A module whose registers read what the test put there (0 otherwise).
+// A module whose registers read what the test put there (0 otherwise), and
+// whose alarm code registers have the texts the test gave them ("" otherwise).
 struct FakeModule {
   std::map<std::string, std::int64_t> raw;
-  sparkplug::RawReader reader() const {
-    return [this](const registers::Register& reg) {
-      auto it = raw.find(reg.name());
-      return it == raw.end() ? std::int64_t{0} : it->second;
-    };
+  std::map<std::string, std::string> text;
+  sparkplug::ModuleReader reader() const {
+    return {[this](const registers::Register& reg) {
+              auto it = raw.find(reg.name());
+              return it == raw.end() ? std::int64_t{0} : it->second;
+            },
+            [this](const registers::Register& code) {
+              auto it = text.find(code.name());
+              return it == text.end() ? std::string{} : it->second;
+            }};
   }
 };
 
@@ -92,8 +98,10 @@ TEST_CASE("birth carries seq 0, bdSeq, the rebirth control and every metric with
   REQUIRE(rebirth != nullptr);
   CHECK(rebirth->datatype() == static_cast<std::uint32_t>(DataType::boolean));
   CHECK_FALSE(rebirth->boolean_value());
-  // bdSeq, Rebirth, the register metrics, then the event metrics (events_test.cpp).
-  CHECK(static_cast<std::size_t>(birth.metrics_size()) == node.metrics().size() + 2 + sparkplug::kEventMetrics.size());
+  // bdSeq, Rebirth, the register metrics, the alarm texts, then the event
+  // metrics (events_test.cpp).
+  CHECK(static_cast<std::size_t>(birth.metrics_size()) ==
+        node.metrics().size() + 2 + node.alarm_texts().size() + sparkplug::kEventMetrics.size());
   for (const auto& def : node.metrics()) {
     const auto* m = by_name(birth, def.name);
     REQUIRE(m != nullptr);
@@ -209,4 +217,54 @@ TEST_CASE("loop diagnostics are published at most every diagnostics interval and
   REQUIRE(data.has_value());
   REQUIRE(data->metrics_size() == 1);
   CHECK(data->metrics(0).alias() == alias_of(node, "diag/loop_late_p99_us"));
+}
+
+TEST_CASE("each axis and the module have an alarm text metric beside the alarm code, in the birth as String") {
+  EdgeNode node;
+  std::set<std::string> names;
+  for (const auto& def : node.alarm_texts()) {
+    CHECK(def.alias > node.metrics().size());
+    CHECK(def.alias < node.first_event_alias());
+    names.insert(def.name);
+  }
+  CHECK(names == std::set<std::string>{"axis/x/alarm_text", "axis/y/alarm_text", "axis/z/alarm_text", "axis/a/alarm_text",
+                                       "axis/b/alarm_text", "axis/c/alarm_text", "status/global_alarm_text"});
+  FakeModule module;
+  module.text["axis.y.alarm"] = "Y: sensor not found within 500.000 mm";
+  const Payload birth = node.birth(1, module.reader(), 1000);
+  const auto* y = by_name(birth, "axis/y/alarm_text");
+  REQUIRE(y != nullptr);
+  CHECK(y->datatype() == static_cast<std::uint32_t>(DataType::string));
+  CHECK(y->string_value() == "Y: sensor not found within 500.000 mm");
+  REQUIRE(by_name(birth, "axis/x/alarm_text") != nullptr);
+  CHECK(by_name(birth, "axis/x/alarm_text")->string_value().empty());
+}
+
+TEST_CASE("an alarm text is published when it changes, also when it is cleared, and not again while it stays") {
+  FakeModule module;
+  EdgeNode node;
+  node.birth(0, module.reader(), 1000);
+  module.raw["axis.z.alarm"] = 3;
+  module.text["axis.z.alarm"] = "Z: not released";
+  const auto raised = node.data(module.reader(), 1010);
+  REQUIRE(raised.has_value());
+  std::map<std::uint64_t, const Payload::Metric*> by_alias;
+  for (const auto& m : raised->metrics()) by_alias[m.alias()] = &m;
+  const std::uint64_t text_alias = [&] {
+    for (const auto& def : node.alarm_texts())
+      if (def.name == "axis/z/alarm_text") return def.alias;
+    return std::uint64_t{0};
+  }();
+  REQUIRE(by_alias.count(text_alias));
+  CHECK(by_alias[text_alias]->string_value() == "Z: not released");
+  CHECK(by_alias.count(alias_of(node, "axis/z/alarm")));
+  CHECK_FALSE(node.data(module.reader(), 1020).has_value());  // unchanged: quiet
+  module.raw["axis.z.alarm"] = 0;
+  module.text.erase("axis.z.alarm");
+  const auto cleared = node.data(module.reader(), 1030);
+  REQUIRE(cleared.has_value());
+  bool text_cleared = false;
+  for (const auto& m : cleared->metrics())
+    if (m.alias() == text_alias) text_cleared = m.string_value().empty();
+  CHECK(text_cleared);
 }
