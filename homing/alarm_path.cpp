@@ -9,9 +9,10 @@ namespace homing {
 
 // The one way an axis alarm is latched. Each axis of `axes` that has none
 // yet takes `alarm`, stamped with the phase it is in: the first alarm on an
-// axis names the cause and later ones change nothing. Once any axis has
-// latched (all of `axes` first, so each keeps the phase it was in), every
-// axis stops and global.alarm_clears_homed applies.
+// axis names the cause and later ones change nothing; the first axis to
+// latch one stays the machine's first (status.alarm_axis) until a reset.
+// Once any axis has latched (all of `axes` first, so each keeps the phase it
+// was in), every axis stops and global.alarm_clears_homed applies.
 void Engine::raise(const Settings& settings, AxisMask axes, Alarm alarm) {
   bool latched = false;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
@@ -19,6 +20,7 @@ void Engine::raise(const Settings& settings, AxisMask axes, Alarm alarm) {
     if (!(axes & axis_bit(a)) || run.alarm) continue;
     run.alarm = alarm;
     run.alarm.phase = run.shown_phase();
+    if (first_alarm_axis_ < 0) first_alarm_axis_ = static_cast<int>(a);
     latched = true;
   }
   if (latched) halt(settings);
@@ -60,6 +62,7 @@ void Engine::stop_all(const Settings& settings) {
 
 void Engine::clear_alarms() {
   global_alarm_ = AlarmCode::none;
+  first_alarm_axis_ = -1;
   for (AxisRun& run : axes_) run.alarm = Alarm{};
 }
 

@@ -120,6 +120,7 @@ class Engine {
   AxisMask cycle_requested_ = 0;
   CyclePlan plan_{};
   int step_index_ = -1;          // index into plan_.steps of the running step
+  int first_alarm_axis_ = -1;    // the axis that latched the first alarm since the last reset
   AlarmCode global_alarm_ = AlarmCode::none;
   bool estop_ = false;
   bool prev_start_button_ = false;

@@ -40,6 +40,7 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
   st.homing = cycle_active_;
   st.estop = inputs.estop;
   st.global_alarm = global_alarm_;
+  st.first_alarm_axis = static_cast<std::int8_t>(first_alarm_axis_);
   st.sequence_step = cycle_active_ && step_index_ >= 0 ? static_cast<std::uint8_t>(step_index_ + 1) : 0;
   st.homing_cycles = homing_cycles_;
   st.heartbeat = heartbeat_;

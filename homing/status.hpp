@@ -152,10 +152,26 @@ struct Status {
   std::uint32_t command_count = 0;  // commands judged so far: last_command_result belongs to the latest
   std::uint16_t interlocks = 0;
   AlarmCode global_alarm = AlarmCode::none;  // alarm not tied to one axis (e-stop at rest, settings lost)
+  // The axis that latched the first alarm since the last reset (-1: none or
+  // not known): later alarms on other axes, while a failure policy winds a
+  // cycle down or the axes brake, never take its place (status.alarm_axis).
+  std::int8_t first_alarm_axis = -1;
   bool alarm = false;
   bool homing = false;
   bool estop = false;
   std::array<AxisStatus, kAxisCount> axes{};
 };
+
+// The axis whose alarm the machine reports (status.alarm_axis, a cycle's
+// result in the history and its end event): the one that latched the first
+// alarm since the last reset, else (a status not from the engine) the first
+// axis with an alarm; -1 when none has one.
+inline int reported_alarm_axis(const Status& st) {
+  const auto first = static_cast<std::size_t>(st.first_alarm_axis);
+  if (st.first_alarm_axis >= 0 && first < kAxisCount && st.axes[first].alarm) return st.first_alarm_axis;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (st.axes[a].alarm) return static_cast<int>(a);
+  return -1;
+}
 
 }  // namespace homing

@@ -187,10 +187,7 @@ std::int64_t read_raw(const Register& reg, const ModuleView& view) {
     case Key::status_last_command_result: return raw_of(st.last_command_result);
     case Key::status_interlocks: return st.interlocks;
     case Key::status_global_alarm: return raw_of(st.global_alarm);
-    case Key::status_alarm_axis:
-      for (std::size_t i = 0; i < st.axes.size(); ++i)
-        if (st.axes[i].alarm) return static_cast<std::int64_t>(i) + 1;
-      return 0;
+    case Key::status_alarm_axis: return homing::reported_alarm_axis(st) + 1;
     case Key::status_settings_locked: return view.extras.settings_locked ? 1 : 0;
     case Key::status_command_count: return st.command_count & 0xFFFFu;
     case Key::diag_loop_periods: return static_cast<std::int64_t>(view.extras.loop_periods & 0xFFFFFFFFu);

@@ -195,12 +195,9 @@ void Monitor::poll(std::int64_t now_ms) {
     run.end_ms = now_ms;
     run.axes = run_axes_;
     run.result = 0;
-    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-      if (st.axes[a].alarm) {
-        run.result = static_cast<int>(st.axes[a].alarm.code);
-        run.alarm_axis = static_cast<int>(a);
-        break;
-      }
+    if (const int a = homing::reported_alarm_axis(st); a >= 0) {
+      run.result = static_cast<int>(st.axes[static_cast<std::size_t>(a)].alarm.code);
+      run.alarm_axis = a;
     }
     if (run.result == 0 && st.global_alarm != homing::AlarmCode::none) run.result = static_cast<int>(st.global_alarm);
     for (std::size_t a = 0; a < homing::kAxisCount; ++a) {

@@ -39,12 +39,11 @@ void StatusEvents::observe(const homing::Status& now, std::int64_t now_ms) {
   if (!now.homing && last_.homing) {
     StatusEvent e{.kind = StatusEventKind::cycle_ended, .axes = cycle_axes_, .time_ms = now_ms,
                   .duration_ms = now_ms - cycle_start_ms_};
-    for (std::size_t a = 0; a < homing::kAxisCount && e.code == homing::AlarmCode::none; ++a)
-      if (now.axes[a].alarm) {
-        e.code = now.axes[a].alarm.code;
-        e.alarm = now.axes[a].alarm;
-        e.axis = static_cast<std::int8_t>(a);
-      }
+    if (const int a = homing::reported_alarm_axis(now); a >= 0) {
+      e.code = now.axes[static_cast<std::size_t>(a)].alarm.code;
+      e.alarm = now.axes[static_cast<std::size_t>(a)].alarm;
+      e.axis = static_cast<std::int8_t>(a);
+    }
     if (e.code == homing::AlarmCode::none) e.code = now.global_alarm;
     add(e);
   }

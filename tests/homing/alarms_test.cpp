@@ -715,3 +715,28 @@ SCENARIO("encoder_reversed: hard-stop homing by following error with an encoder 
   r.set_fault(0, sim::Fault::none);
   check_latched_until_reset(r, 0, AlarmCode::encoder_reversed);
 }
+
+SCENARIO("the axis that latched the first alarm stays the one reported when a lower axis latches one later",
+         "[alarms]") {
+  // Y fails first (its sensor out of its seek's reach); while it rests, X's drive faults.
+  Rig r;
+  r.add_axis(1, 1);
+  r.settings.axes[1].max_seek_travel_mm = 50;
+  r.pending.home_all = true;
+  r.step();
+  REQUIRE(r.run_until([&] { return bool(r.axis(1).alarm); }, 30));
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(r.status().first_alarm_axis == 1);
+  r.set_fault(0, sim::Fault::drive_fault);
+  r.step();
+  r.step();
+  REQUIRE(r.axis(0).alarm.code == AlarmCode::drive_fault);
+  CHECK(r.axis(1).alarm.code == AlarmCode::sensor_not_found);
+  CHECK(r.status().first_alarm_axis == 1);
+  CHECK(reported_alarm_axis(r.status()) == 1);
+  r.set_fault(0, sim::Fault::none);
+  r.step();
+  r.reset_alarm();
+  CHECK(r.status().first_alarm_axis == -1);
+  CHECK(reported_alarm_axis(r.status()) == -1);
+}
