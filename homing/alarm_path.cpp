@@ -1,5 +1,6 @@
 // The alarm path: the only code that latches or clears an alarm, and what an
-// alarm does (every axis stops, alarm_clears_homed). Abort and reset are the
+// alarm does (alarm_clears_homed; every axis stops, or the failure policy
+// winds the cycle down: failure_policy.cpp). Abort and reset are the
 // commands that act on it.
 #include <algorithm>
 
@@ -12,7 +13,8 @@ namespace homing {
 // axis names the cause and later ones change nothing; the first axis to
 // latch one stays the machine's first (status.alarm_axis) until a reset.
 // Once any axis has latched (all of `axes` first, so each keeps the phase it
-// was in), every axis stops and global.alarm_clears_homed applies.
+// was in), global.alarm_clears_homed applies and every axis stops, or the
+// failure policy says what the running cycle does instead.
 void Engine::raise(const Settings& settings, AxisMask axes, Alarm alarm) {
   bool latched = false;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
@@ -23,7 +25,7 @@ void Engine::raise(const Settings& settings, AxisMask axes, Alarm alarm) {
     if (first_alarm_axis_ < 0) first_alarm_axis_ = static_cast<int>(a);
     latched = true;
   }
-  if (latched) halt(settings);
+  if (latched) after_alarm(settings, alarm.code);
 }
 
 // An alarm not tied to one axis (e-stop, settings lost): latched once, and
@@ -34,30 +36,39 @@ void Engine::raise_global(const Settings& settings, AlarmCode code) {
 }
 
 void Engine::halt(const Settings& settings) {
-  if (settings.global.alarm_clears_homed) {
-    for (AxisRun& run : axes_) run.home.reset();
-  }
+  unhome_on_alarm(settings);
   stop_all(settings);
 }
 
+// global.alarm_clears_homed: every axis but those a failure policy lets
+// finish their homing (failure_policy.cpp) is no longer homed.
+void Engine::unhome_on_alarm(const Settings& settings, AxisMask spared) {
+  if (!settings.global.alarm_clears_homed) return;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (!(spared & axis_bit(a))) axes_[a].home.reset();
+}
+
 void Engine::stop_all(const Settings& settings) {
-  for (std::size_t a = 0; a < kAxisCount; ++a) {
-    AxisRun& run = axes_[a];
-    run.command = stop_command(settings.axes[a].acceleration_mm_per_s2);
-    const bool moving = run.motor.velocity_mm_per_s != 0;
-    // A push cut short brakes on toward (or into) the stop it was pushing
-    // into: the current stays reduced until the motor rests (phase stopping).
-    if (!moving) run.push_output = false;
-    // The commutator is switched back by release_commutators once the slave
-    // motor is at rest: switching it under a moving motor would hand the
-    // pulses to the other motor.
-    run.in_cycle = false;
-    run.aligning = false;
-    if (moving) run.set_phase(Phase::stopping);
-    else if (run.phase != Phase::done) run.set_phase(Phase::idle);
-  }
+  for (std::size_t a = 0; a < kAxisCount; ++a) stop_axis(settings, a);
   cycle_active_ = false;
   step_index_ = -1;
+  wind_down_ = WindDown::none;
+}
+
+void Engine::stop_axis(const Settings& settings, std::size_t a) {
+  AxisRun& run = axes_[a];
+  run.command = stop_command(settings.axes[a].acceleration_mm_per_s2);
+  const bool moving = run.motor.velocity_mm_per_s != 0;
+  // A push cut short brakes on toward (or into) the stop it was pushing
+  // into: the current stays reduced until the motor rests (phase stopping).
+  if (!moving) run.push_output = false;
+  // The commutator is switched back by release_commutators once the slave
+  // motor is at rest: switching it under a moving motor would hand the
+  // pulses to the other motor.
+  run.in_cycle = false;
+  run.aligning = false;
+  if (moving) run.set_phase(Phase::stopping);
+  else if (run.phase != Phase::done) run.set_phase(Phase::idle);
 }
 
 void Engine::clear_alarms() {
@@ -66,25 +77,35 @@ void Engine::clear_alarms() {
   for (AxisRun& run : axes_) run.alarm = Alarm{};
 }
 
-// Abort during homing is an alarm on every axis still homing; abort of a
-// jog or move just stops it.
+// Abort during homing is an alarm on every axis still homing, and the
+// failure policy applies to it as to any failure: every axis brakes at once
+// (no axis is left to finish: each is the aborted one), and under
+// return_to_start the axes then go back. An abort while a failed cycle winds
+// down stops it where it is, with no alarm of its own (the first stays the
+// one reported). Abort of a jog or move just stops it.
 void Engine::abort_command(const Settings& settings) {
   ++command_count_;
-  if (cycle_active_) {
+  const bool winding_down = wind_down_ != WindDown::none;
+  if (cycle_active_ && !winding_down) {
     AxisMask homing = 0;
     for (std::size_t a = 0; a < kAxisCount; ++a)
       if (axes_[a].in_cycle && axes_[a].phase != Phase::done) homing |= axis_bit(a);
     raise(settings, homing, Alarm{AlarmCode::aborted});
   }
-  stop_all(settings);
+  const bool goes_back = !winding_down && wind_down_ == WindDown::returning;
+  if (!goes_back) stop_all(settings);
   last_result_ = CommandResult::accepted;
 }
 
-// Reset is refused while its cause is still present.
+// Reset is refused while its cause is still present, and while a failed
+// cycle winds down (the alarm that started it stays until the axes rest;
+// abort stops it).
 void Engine::reset_command() {
   ++command_count_;
   if (estop_ || any_drive_fault() || comm_lost_) {
     last_result_ = CommandResult::refused_cause_present;
+  } else if (wind_down_ != WindDown::none) {
+    last_result_ = CommandResult::refused_busy;
   } else {
     clear_alarms();
     last_result_ = CommandResult::accepted;

@@ -71,6 +71,7 @@ void PhaseRunner::dispatch() {
     case Phase::stopping:
     case Phase::unlock:  // shown for a held axis only (AxisRun::shown_phase), never its own phase
     case Phase::lock:
+    case Phase::return_to_start:  // after a failure (failure_policy.cpp), never a step's
       // Not a homing phase while a cycle runs: a bug. Stop rather than guess.
       return fail(AlarmCode::aborted);
   }

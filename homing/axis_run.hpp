@@ -59,6 +59,9 @@ struct PushToStop {
 struct LimitReversal {
   bool braked = false;        // at rest after meeting the limit switch: the search runs back
 };
+struct Return {
+  bool under_way = false;     // every axis came to rest: moving back to where the cycle found it
+};
 struct DriveHoming {
   double request_s = 0;       // engine time the home request was raised
   bool done_seen_off = false; // home done was seen off since the request: the drive began homing
@@ -68,7 +71,7 @@ struct DriveHoming {
 using PhaseData = std::variant<std::monostate, phase_data::Seek, phase_data::Stop,
                                phase_data::BackOff, phase_data::Index, phase_data::Waiting, phase_data::Jog,
                                phase_data::PushToStop, phase_data::DriveHoming,
-                               phase_data::LimitReversal>;
+                               phase_data::LimitReversal, phase_data::Return>;
 
 // How far this axis has come in the running homing cycle, in order. The
 // gantry partner waits on it.
@@ -151,6 +154,11 @@ struct AxisRun {
   double trigger_position_mm = 0;  // reported: reference edge in the coordinates believed before
   double home_correction_mm = 0;   // reported: assigned - believed at the reference edge
   bool homed_at_cycle_start = false;  // reported: homed when its last cycle started
+  double cycle_start_mm = 0;    // motor position as its cycle started (failure policy return_to_start)
+  bool moved_in_cycle = false;  // its motor ran in this cycle
+  // In this cycle it pushed into its mechanical stop or its drive homed it:
+  // its counted steps no longer say how far its carriage went.
+  bool steps_off_carriage = false;
   CycleEdges edges{};           // this cycle's seek trigger and first release
   LatchEdges latch{};           // this cycle's slow approaches to the reference edge
   SwitchHealth health{};        // reported: what the last cycle measured of the switch

@@ -88,6 +88,9 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
     run.homed_at_cycle_start = run.homed();
     if (!(covered & axis_bit(a))) continue;
     run.in_cycle = true;
+    run.cycle_start_mm = run.motor.position_mm;
+    run.steps_off_carriage = false;
+    run.moved_in_cycle = false;
     run.home.reset();
     run.drive_referenced = false;
     run.set_phase(Phase::waiting);  // for its step
@@ -106,24 +109,32 @@ bool Engine::start_step(const Settings& settings) {
   while (++step_index_ < static_cast<int>(plan_.steps.size())) {
     const AxisMask mask = plan_.steps[static_cast<std::size_t>(step_index_)];
     if (!mask) continue;
-    for (std::size_t a = 0; a < kAxisCount; ++a)
-      if (mask & axis_bit(a)) begin_axis(settings, a);
+    // An alarm raised as an axis begins may have stopped others of the step.
+    for (std::size_t a = 0; a < kAxisCount && steps_run(); ++a)
+      if ((mask & axis_bit(a)) && axes_[a].in_cycle) begin_axis(settings, a);
     return true;
   }
   finish_cycle(settings);
   return false;
 }
 
+// The running step's axes each run their phase. Once all of them are done
+// the next step starts; after a failure under finish_independent (the axes
+// the failure stopped have left the cycle) the cycle ends there instead, and
+// under return_to_start the axes go back (failure_policy.cpp).
 void Engine::run_cycle(const Settings& settings) {
   if (!cycle_active_ || step_index_ < 0) return;
+  if (wind_down_ == WindDown::returning) return run_return(settings);
   const AxisMask mask = plan_.steps[static_cast<std::size_t>(step_index_)];
-  for (std::size_t a = 0; a < kAxisCount && cycle_active_; ++a)
-    if (mask & axis_bit(a)) run_axis(settings, a);
-  if (!cycle_active_) return;
+  for (std::size_t a = 0; a < kAxisCount && steps_run(); ++a)
+    if ((mask & axis_bit(a)) && axes_[a].in_cycle) run_axis(settings, a);
+  if (!steps_run()) return;
   bool all_done = true;
   for (std::size_t a = 0; a < kAxisCount; ++a)
-    if ((mask & axis_bit(a)) && axes_[a].phase != Phase::done) all_done = false;
-  if (all_done) start_step(settings);
+    if ((mask & axis_bit(a)) && axes_[a].in_cycle && axes_[a].phase != Phase::done) all_done = false;
+  if (!all_done) return;
+  if (wind_down_ == WindDown::finishing) end_wind_down();
+  else start_step(settings);
 }
 
 // An unsequenced axis already homed keeps its coordinate in a home-all: were it
@@ -162,10 +173,14 @@ void Engine::assign_unsequenced(const Settings& settings, std::size_t a) {
   run.set_phase(Phase::done);
 }
 
+// The steps are done: the axes in no step are given their coordinate. A
+// failure here (an absolute axis's invalid encoder) fails the cycle as one in
+// its last step would: its failure policy applies from the last step.
 void Engine::finish_cycle(const Settings& settings) {
-  for (std::size_t a = 0; a < kAxisCount && cycle_active_; ++a)
+  step_index_ = static_cast<int>(plan_.steps.size()) - 1;
+  for (std::size_t a = 0; a < kAxisCount && cycle_active_ && wind_down_ == WindDown::none; ++a)
     if (plan_.unsequenced & axis_bit(a)) assign_unsequenced(settings, a);
-  if (!cycle_active_) return;  // an encoder fault ended the cycle
+  if (!cycle_active_ || wind_down_ != WindDown::none) return;  // an encoder fault failed the cycle
   for (AxisRun& run : axes_) run.in_cycle = false;
   cycle_active_ = false;
   step_index_ = -1;

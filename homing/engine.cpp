@@ -45,6 +45,13 @@ void Engine::advance_motion(double dt_s) {
     run.period_start = run.motor;
     run.last_command = run.command;
     run.motor = integrate(run.motor, run.command, dt_s);
+    // A period run pushing into the mechanical stop may lose steps, and a
+    // drive homing itself moves its carriage without any: from then on the
+    // counted steps no longer say how far the carriage went (no way back by
+    // them: failure_policy.cpp).
+    const bool off = run.phase == Phase::push || run.phase == Phase::push_to_stop || run.phase == Phase::drive_homing;
+    if (run.in_cycle && off) run.steps_off_carriage = true;
+    if (run.in_cycle && run.motor.position_mm != run.period_start.position_mm) run.moved_in_cycle = true;
   }
 }
 

@@ -54,10 +54,29 @@ class Engine {
   void raise(const Settings& settings, AxisMask axes, Alarm alarm);
   void raise_global(const Settings& settings, AlarmCode code);
   void halt(const Settings& settings);
+  void unhome_on_alarm(const Settings& settings, AxisMask spared = 0);
   void stop_all(const Settings& settings);
+  void stop_axis(const Settings& settings, std::size_t axis);
   void clear_alarms();
   void reset_command();
   void abort_command(const Settings& settings);
+
+  // What a failed cycle does next, by global.failure_policy (failure_policy.cpp).
+  enum class WindDown : std::uint8_t {
+    none,       // no failed cycle winding down
+    finishing,  // finish_independent: the running step's independent axes finish
+    returning,  // return_to_start: the axes that moved go back, the last step first
+  };
+  WindDown wind_down_for(const Settings& settings, AlarmCode code) const;
+  void after_alarm(const Settings& settings, AlarmCode code);
+  void finish_independent(const Settings& settings);
+  void begin_return(const Settings& settings);
+  AxisMask returning_axes(const Settings& settings) const;
+  bool may_return(const Settings& settings, std::size_t axis) const;
+  void run_return(const Settings& settings);
+  bool next_return_step();
+  bool return_axis(const Settings& settings, std::size_t axis, bool all_at_rest);
+  void end_wind_down();
 
   // Homing (cycle.cpp; the phases of one axis in axis_phases.cpp).
   CommandResult homing_refusal(const Settings& settings) const;
@@ -70,7 +89,8 @@ class Engine {
   void finish_cycle(const Settings& settings);
   void begin_axis(const Settings& settings, std::size_t axis);
   void run_axis(const Settings& settings, std::size_t axis);
-  bool cycle_runs(std::size_t axis) const { return cycle_active_ && axes_[axis].in_cycle; }
+  bool steps_run() const { return cycle_active_ && wind_down_ != WindDown::returning; }
+  bool cycle_runs(std::size_t axis) const { return steps_run() && axes_[axis].in_cycle; }
 
   // Jog and move (jog_move.cpp).
   CommandResult motion_refusal(const Settings& settings, std::size_t axis) const;
@@ -119,7 +139,8 @@ class Engine {
   bool cycle_all_ = false;
   AxisMask cycle_requested_ = 0;
   CyclePlan plan_{};
-  int step_index_ = -1;          // index into plan_.steps of the running step
+  int step_index_ = -1;          // index into plan_.steps of the running (or returning) step
+  WindDown wind_down_ = WindDown::none;
   int first_alarm_axis_ = -1;    // the axis that latched the first alarm since the last reset
   AlarmCode global_alarm_ = AlarmCode::none;
   bool estop_ = false;

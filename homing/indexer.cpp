@@ -18,7 +18,8 @@ bool wants_to_move(const AxisRun& run) {
     case Phase::stopping: return true;
     default: break;
   }
-  return run.in_cycle && run.phase != Phase::waiting && run.phase != Phase::done;
+  // (An axis back at its start after a failed cycle rests idle in it: failure_policy.cpp.)
+  return run.in_cycle && run.phase != Phase::waiting && run.phase != Phase::done && run.phase != Phase::idle;
 }
 
 // One period of one indexer: what it sees, and what it asks of the engine.

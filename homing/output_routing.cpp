@@ -31,8 +31,7 @@ void Engine::route_outputs(const Settings& settings) {
     out.push_output = run.push_output;
     out.commutator_output = run.commutator_output;
     // On exactly while the drive homes in a running cycle: an alarm, abort or
-    // e-stop drops it in the same period (an alarm raised while a step
-    // begins may leave a later axis showing its first phase, out of the cycle).
+    // e-stop drops it in the same period.
     // A locking indexer not yet unlocked holds it back, as it holds steps.
     out.drive_request = run.phase == Phase::drive_homing && run.in_cycle && !estop_ && run.indexer.lets_move();
     out.indexer_unlock = run.indexer.unlock_output();

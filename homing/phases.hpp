@@ -35,11 +35,13 @@ enum class Phase : std::uint8_t {
   limit_reversal = 23,  // home cam: braking at the limit switch, then seeking the cam the other way
   cam_stop = 24,      // home cam: decelerating after the cam's trigger; the cam must stay active
   cam_latch = 25,     // home cam: leaving the cam at latch_feedrate toward its reference edge
+  return_to_start = 26,  // failure policy return_to_start: braking, then back to where the cycle found it
 };
 
 inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
     {Phase::idle, "idle", "at rest, no command running"},
-    {Phase::waiting, "waiting", "waiting for a later sequence step or for its gantry partner"},
+    {Phase::waiting, "waiting",
+     "waiting for a later sequence step or for its gantry partner (after a failure: for its step's turn to return)"},
     {Phase::pre_move, "pre_move", "moving pre_move_distance away from the sensor before the seek"},
     {Phase::seek, "seek", "searching for the home sensor at seek_feedrate"},
     {Phase::stop, "stop", "decelerating after the trigger"},
@@ -69,8 +71,11 @@ inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
      "home cam: met the limit switch first; braking, then seeking the cam the other way"},
     {Phase::cam_stop, "cam_stop", "home cam: decelerating on the cam after its trigger"},
     {Phase::cam_latch, "cam_latch", "home cam: leaving the cam at latch_feedrate across its reference edge"},
+    {Phase::return_to_start, "return_to_start",
+     "the cycle failed (global.failure_policy return_to_start): braking, then moving back to where the cycle found "
+     "the axis, at the lower of jog_feedrate and seek_feedrate"},
 };
-static_assert(lists_every_value(kPhaseInfo, Phase::cam_latch));
+static_assert(lists_every_value(kPhaseInfo, Phase::return_to_start));
 constexpr std::span<const EnumInfo<Phase>> enum_table(Phase) { return kPhaseInfo; }
 
 std::string_view phase_name(Phase phase);

@@ -51,6 +51,22 @@ constexpr std::span<const EnumInfo<AllowedWithoutHoming>> enum_table(AllowedWith
   return kAllowedWithoutHomingInfo;
 }
 
+// What the rest of a homing cycle does when one axis fails (an alarm) or the
+// cycle is aborted (docs/homing-methods.md "Failure policy"). An e-stop, a
+// lost host link, a withdrawn permit and lost settings always stop everything.
+enum class FailurePolicy : std::uint8_t { stop_all = 0, finish_independent = 1, return_to_start = 2 };
+inline constexpr EnumInfo<FailurePolicy> kFailurePolicyInfo[] = {
+    {FailurePolicy::stop_all, "stop_all", "every axis stops at once"},
+    {FailurePolicy::finish_independent, "finish_independent",
+     "the failed axis and its gantry partner stop; the other axes of the running step finish their homing; "
+     "no later step starts"},
+    {FailurePolicy::return_to_start, "return_to_start",
+     "every axis stops, then each axis that moved in the cycle and may move safely goes back to where the cycle "
+     "found it, the last step first"},
+};
+static_assert(lists_every_value(kFailurePolicyInfo, FailurePolicy::return_to_start));
+constexpr std::span<const EnumInfo<FailurePolicy>> enum_table(FailurePolicy) { return kFailurePolicyInfo; }
+
 // Per axis, beside global.allowed_without_homing (Repetier's MOVE_<axis>_WHEN_HOMED):
 // an axis that must never move unhomed (a Z over the work) or may always move
 // (a rotary table nobody crashes) says so itself.
@@ -161,6 +177,8 @@ struct GlobalSettings {
   bool alarm_clears_homed = true;
   std::uint32_t watchdog_ms = 0;
   bool permit_required = false;
+  // When an axis fails or the cycle is aborted: what the other axes do.
+  FailurePolicy failure_policy = FailurePolicy::stop_all;
   // Off: only home-all homes (RosettaCNC "homing of all axes only"), so a
   // machine whose axes must home in order is never homed piecemeal.
   bool single_axis_homing = true;

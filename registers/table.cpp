@@ -95,6 +95,7 @@ constexpr auto kPreMoves = values_of(homing::kPreMoveInfo);
 constexpr auto kSlaveModes = values_of(homing::kSlaveModeInfo);
 constexpr auto kAllowed = values_of(homing::kAllowedWithoutHomingInfo);
 constexpr auto kAxisAllowed = values_of(homing::kAxisAllowedWithoutHomingInfo);
+constexpr auto kFailurePolicies = values_of(homing::kFailurePolicyInfo);
 constexpr auto kKinds = values_of(homing::kAxisKindInfo);
 constexpr auto kCamEdges = values_of(homing::kCamEdgeInfo);
 constexpr auto kStallDetects = values_of(homing::kStallDetectInfo);
@@ -138,6 +139,7 @@ constexpr ValueList kValueLists[] = {
     {"slave_mode", kSlaveModes},
     {"allowed_without_homing", kAllowed},
     {"axis_allowed_without_homing", kAxisAllowed},
+    {"failure_policy", kFailurePolicies},
     {"kind", kKinds},
     {"cam_edge", kCamEdges},
     {"stall_detect", kStallDetects},
@@ -171,6 +173,7 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "global.trend_growth_pct", .offset = 42, .min = 1, .max = 1000, .def = 50, .fills = fills<&G::trend_growth_pct>, .description = "health trend: hysteresis, latch spread, seek-latch difference or chatter grown by more than this percentage over the trend cycles raises axis.<a>.health_warning"},
     {.pattern = "global.trend_min_change", .offset = 43, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 10, .fills = fills<&G::trend_min_change_mm>, .description = "health trend: a length figure must also have grown by at least this much, in the axis's unit (switch noise does not warn)"},
     {.pattern = "global.single_axis_homing", .offset = 60, .max = 1, .def = 1, .fills = fills<&G::single_axis_homing>, .description = "flag (0/1): axes may be homed alone (cmd.home.<a>, cmd.home_axes); 0 = only cmd.home_all homes, so axes that must home in order are never homed piecemeal"},
+    {.pattern = "global.failure_policy", .offset = 61, .type = Type::enumeration, .max = last_value(kFailurePolicies), .fills = fills<&G::failure_policy>, .values = kFailurePolicies, .description = "what a homing cycle does when an axis fails (an alarm) or it is aborted (docs/homing-methods.md \"Failure policy\"); an e-stop, a lost host link, a withdrawn permit or lost settings always stop everything"},
     {.pattern = "global.permit_required", .offset = 13, .max = 1, .fills = fills<&G::permit_required>, .description = "flag (0/1): homing needs host.homing_permit (or the permit input) on"},
     {.pattern = "security.unlock", .offset = 30, .max = 65535, .key = Key::security_unlock, .description = "write the unlock code (homingd --unlock-code) to allow settings writes; reads 0"},
     {.pattern = "security.unlock32", .offset = 32, .type = Type::u32, .max = 4294967295LL, .key = Key::security_unlock, .description = "the unlock code as one 32-bit value (both words in one request, FC 16): for a --unlock-code above 65535; reads 0"},
@@ -185,7 +188,7 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "status.last_command_result", .table = IR, .offset = 6, .type = Type::enumeration, .access = Access::r, .max = last_value(kCommandResults), .key = Key::status_last_command_result, .values = kCommandResults, .description = "result of the last command coil written"},
     {.pattern = "status.interlocks", .table = IR, .offset = 7, .type = Type::bitmask, .access = Access::r, .max = 511, .key = Key::status_interlocks, .values = kInterlocks, .description = "what now blocks homing or motion; 0 = free to move"},
     {.pattern = "status.global_alarm", .table = IR, .offset = 8, .type = Type::enumeration, .access = Access::r, .max = last_value(kAlarms), .key = Key::status_global_alarm, .values = kAlarms, .description = "alarm not tied to one axis (e-stop at rest, settings lost)"},
-    {.pattern = "status.alarm_axis", .table = IR, .offset = 9, .type = Type::enumeration, .access = Access::r, .max = 6, .key = Key::status_alarm_axis, .values = kAlarmAxis, .description = "first axis with a latched alarm (1 = X ... 6 = C), 0 none"},
+    {.pattern = "status.alarm_axis", .table = IR, .offset = 9, .type = Type::enumeration, .access = Access::r, .max = 6, .key = Key::status_alarm_axis, .values = kAlarmAxis, .description = "the axis that latched the first alarm since the last reset (1 = X ... 6 = C), 0 none: later alarms on other axes do not take its place"},
     {.pattern = "status.command_count", .table = IR, .offset = 11, .access = Access::r, .max = 65535, .key = Key::status_command_count, .description = "commands judged so far (wraps): status.last_command_result is the result of the command that moved it"},
     {.pattern = "status.settings_locked", .table = IR, .offset = 10, .access = Access::r, .max = 1, .key = Key::status_settings_locked, .description = "1 while settings writes are locked (write the unlock code to security.unlock)"},
     {.pattern = "status.refusal_count", .table = IR, .offset = 12, .access = Access::r, .max = 65535, .key = Key::status_refusal_count, .description = "writes refused since start (wraps): when it moves, the two registers below say which and why"},

@@ -39,14 +39,23 @@ TEST_CASE("a new module allows only a reduced-speed jog before homing, in the ta
         static_cast<std::int64_t>(homing::AllowedWithoutHoming::jog_reduced));
 }
 
+TEST_CASE("a new module's failure policy stops every axis, in the table and in the engine alike") {
+  CHECK(default_settings().global.failure_policy == homing::FailurePolicy::stop_all);
+  CHECK(homing::GlobalSettings{}.failure_policy == homing::FailurePolicy::stop_all);
+  const Register* r = find_register("global.failure_policy");
+  REQUIRE(r);
+  CHECK(r->address == 61);
+  CHECK(r->default_raw == static_cast<std::int64_t>(homing::FailurePolicy::stop_all));
+}
+
 TEST_CASE("persisted defaults hold every persisted register and no runtime value") {
   const auto rows = persisted_defaults();
-  // 6 sequence steps + 9 global settings (single_axis_homing the sixth, then trend_cycles,
-  // trend_growth_pct and trend_min_change of the health trend), 42 settings per axis (30, plus
+  // 6 sequence steps + 10 global settings (single_axis_homing the sixth, then trend_cycles,
+  // trend_growth_pct and trend_min_change of the health trend, failure_policy), 42 settings per axis (30, plus
   // indexer_lock and lock_timeout_ms of the locking indexer, allowed_without_homing, limits_fitted,
   // limits_nc, cam_edge and limit_overtravel, latch_passes, max_latch_spread, max_skew_change,
   // stall_detect and max_following_error)
-  CHECK(rows.size() == 6 + 9 + 42 * homing::kAxisCount);
+  CHECK(rows.size() == 6 + 10 + 42 * homing::kAxisCount);
   for (const auto& [name, raw] : rows) {
     const Register* r = find_register(name);
     REQUIRE(r);
