@@ -29,7 +29,11 @@
 //     when the check refuses the cycle, a refused jog or move);
 //   - no velocity change beyond the axis's (the pair's lower) acceleration;
 //   - while an alarm is latched, speeds only fall, each axis stops within its
-//     stop distance and stays there;
+//     stop distance and stays there, except as the failure policy drawn
+//     (global.failure_policy, policy_watch.cpp) lets it go on: the independent
+//     axes of the running step finish homing, or the axes that moved go back
+//     to where the cycle found them, the last step first; the first alarm
+//     stays the one reported;
 //   - every cycle ends homed or in a named alarm, within its distance and
 //     time bounds; each alarm is explained by a cause on the axis it names
 //     (or that axis's gantry partner), and each cause that must show raises

@@ -91,6 +91,11 @@ constexpr Floor kFloors[] = {
     {"event aimed at phase final_move", 0.002, 0, 0, 0},
     {"settings written: seek feedrate", 0.01, 0, 0, 0},
     {"settings written: origin moved", 0.02, 0, 0, 0},
+    {"failure policy stop_all", 0.2, 0, 0, 0},
+    {"failure policy finish_independent", 0.2, 0, 0.08, 0},
+    {"failure policy finish_independent: axes finished after a failure", 0.04, 0, 0, 0},
+    {"failure policy return_to_start", 0.2, 0, 0.08, 0},
+    {"failure policy return_to_start: axes went back after a failure", 0.06, 0, 0, 0},
     {"jog interrupted", 0.02, 0, 0.01, 0},
     {"move interrupted", 0.01, 0, 0.005, 0},
 };

@@ -80,6 +80,7 @@ struct Gen {
   void indexers();
   void limit_switches();
   void following_error();
+  void failure_policy();
   Machine build();
 };
 

@@ -500,6 +500,14 @@ void Gen::following_error() {
   }
 }
 
+// The failure policy (global.failure_policy), with its own dice so that
+// every other draw stays as it was: each of the three as often.
+void Gen::failure_policy() {
+  Dice fp(m.seed, 30);  // 7: indexers; 11: limit switches; 12: following error; 2, 3, 8: the run's own
+  m.settings.global.failure_policy =
+      fp.pick({FailurePolicy::stop_all, FailurePolicy::finish_independent, FailurePolicy::return_to_start});
+}
+
 Machine Gen::build() {
   // One period in ten comes late, by up to the 20 ms the README promises.
   m.max_dt_s = d.chance(0.3) ? 0.002 : d.u(0.005, 0.020);
@@ -518,6 +526,7 @@ Machine Gen::build() {
   indexers();
   limit_switches();
   following_error();
+  failure_policy();
   m.start_held_at_powerup = d.chance(0.15);
   m.powerup_periods = d.integer(1, 50);
   m.start_by_button = d.chance(0.25);

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <optional>
 
+#include "homing/alarms.hpp"
 #include "homing/gantry.hpp"
 #include "homing/settings.hpp"
 #include "homing/settings_check.hpp"
@@ -160,6 +161,36 @@ struct CyclePlan {
 inline bool searches(HomingMode m) { return mode_uses_switch(m) || m == HomingMode::hard_stop; }
 // The modes that push into a mechanical stop with the push output on.
 inline bool pushes_into_stop(HomingMode m) { return mode_is_pushing(m) || m == HomingMode::hard_stop; }
+
+// The failure policy (docs/homing-methods.md "Failure policy"), as the
+// campaign reads it. Causes that concern the whole machine stop every axis
+// whatever the policy.
+inline bool stops_everything(AlarmCode c) {
+  return c == AlarmCode::emergency_stop || c == AlarmCode::communication_lost || c == AlarmCode::permit_withdrawn ||
+         c == AlarmCode::settings_lost;
+}
+// return_to_start: an axis with an alarm of its own goes back only after an
+// abort or a search that went wrong away from its sensor, never one that ran
+// on without it (it may have met its mechanical stop).
+inline bool alarm_lets_go_back(AlarmCode c) {
+  switch (c) {
+    case AlarmCode::none:
+    case AlarmCode::aborted:
+    case AlarmCode::not_released:
+    case AlarmCode::index_not_found:
+    case AlarmCode::switch_not_repeatable:
+      return true;
+    default:
+      return false;
+  }
+}
+// The way back runs at the lower of the jog and seek feedrates (mm/s).
+inline double return_speed(const AxisSettings& e) {
+  const double f = e.jog_feedrate_mm_per_min > 0 && e.seek_feedrate_mm_per_min > 0
+                       ? std::min(e.jog_feedrate_mm_per_min, e.seek_feedrate_mm_per_min)
+                       : std::max(e.jog_feedrate_mm_per_min, e.seek_feedrate_mm_per_min);
+  return f / 60.0;
+}
 
 inline bool moves_when_homing(const Settings& s, std::size_t a) {
   const AxisSettings e = effective(s, a);

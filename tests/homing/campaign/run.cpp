@@ -173,7 +173,10 @@ void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
     }
   };
   switch (e.kind) {
-    case EventKind::abort: r_.pending.abort = true; break;
+    case EventKind::abort:
+      r_.pending.abort = true;
+      w_->abort_applied();
+      break;
     case EventKind::estop: r_.sim().set_estop(true); break;
     case EventKind::drive_fault:
       set_fault(sim::Fault::drive_fault);
@@ -365,11 +368,17 @@ void Run::mark_machine() {
     if (m_.plan[a].limits) mark("limit switches fitted", seen::present);
     if (m_.plan[a].following_error) mark("hard_stop by following error", seen::present);
   }
+  mark("failure policy " + std::string(name_of(m_.settings.global.failure_policy)), seen::present);
 }
 
 // What a cycle reached: each cause present, and whether its own alarm showed;
 // each covered mode and gantry homed (a clean cycle) or alarmed.
 void Run::mark_cycle(const CyclePlan& plan, const Causes& causes, bool clean) {
+  // A failure policy at work: axes that went on homing, or back, after a failure.
+  const std::string policy = "failure policy " + std::string(name_of(w_->wind_down));
+  if (w_->finishers) mark(policy + ": axes finished after a failure", seen::present);
+  if (w_->returners) mark(policy + ": axes went back after a failure", seen::present);
+  if (w_->wind_down != FailurePolicy::stop_all) mark(policy, seen::alarmed);
   for (const Cause& c : causes.list) {
     bool shown = (w_->global_alarms & c.global) != 0;
     for (std::size_t a = 0; a < kAxisCount; ++a)

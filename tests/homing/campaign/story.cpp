@@ -79,7 +79,7 @@ std::string story(const Machine& m) {
   o << "seed " << m.seed << ": control periods of about 1 ms, one in ten up to " << m.max_dt_s * 1000
     << " ms; alarm clears homed " << st.global.alarm_clears_homed << ", without homing "
     << static_cast<int>(st.global.allowed_without_homing) << ", permit required " << st.global.permit_required
-    << "\n  sequence:";
+    << ", failure policy " << name_of(st.global.failure_policy) << "\n  sequence:";
   for (std::size_t i = 0; i < 6; ++i) o << " " << (i + 1) << ":" << mask_letters(st.global.sequence_steps[i]);
   const CyclePlan plan = plan_cycle(st, true, 0);
   o << "; so home-all covers " << mask_letters(plan.covered) << ", assigns unsequenced " << mask_letters(plan.unsequenced)

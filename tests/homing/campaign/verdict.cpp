@@ -434,9 +434,40 @@ double time_bound(rig::Rig& r, const Machine& m, const CyclePlan& plan) {
     const double v = mm_per_min_to_mm_per_s(searches(e.mode) ? e.latch_feedrate_mm_per_min : e.seek_feedrate_mm_per_min);
     if (v > 0) t += 2 * path_bound(r, m, a, r.actual(a)) / v;
     if (e.mode == HomingMode::drive) t += e.drive_home_timeout_s;  // at most, whatever the drive does
+    // The way back of return_to_start, one step after the other.
+    if (r.settings.global.failure_policy == FailurePolicy::return_to_start && return_speed(e) > 0)
+      t += 2 * path_bound(r, m, a, r.actual(a)) / return_speed(e);
   }
   return t;
 }
+
+// What the failure policy let go on ended as it says, unless another
+// failure (or an abort) stopped it: under finish_independent each axis still
+// homing at the first alarm ends homed; under return_to_start, after one
+// cause, each axis the rule sends back ends where the cycle found it, no
+// longer homed (the way back undoes the cycle).
+namespace {
+void policy_verdict(Watch& w, rig::Rig& r) {
+  if (w.later_failure) return;
+  const Status& st = r.status();
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const AxisMask bit = axis_bit(a);
+    if (w.wind_down == FailurePolicy::finish_independent && (w.finishers & bit) && !st.axes[a].homed)
+      w.fail("an axis the failure policy let finish its homing did not end homed",
+             letter(a) + " in phase " + std::string(phase_name(st.axes[a].phase)) + "; first alarms " +
+                 alarm_list(w.alarms_seen));
+    if (w.wind_down != FailurePolicy::return_to_start || !w.one_failure || !(w.returners & bit)) continue;
+    const double x = r.actual(a);
+    if (std::abs(x - w.window_start_x[a]) > w.back_tolerance(a) && !w.stop_touched(a)) {
+      std::ostringstream o;
+      o << letter(a) << " carriage " << x << ", the cycle found it at " << w.window_start_x[a] << " (tolerance "
+        << w.back_tolerance(a) << "); alarms " << alarm_list(w.alarms_seen);
+      w.fail("an axis the failure policy sends back did not end where the cycle found it", o.str());
+    }
+    if (st.axes[a].homed) w.fail("an axis the failure policy sent back is still homed", letter(a));
+  }
+}
+}  // namespace
 
 void verdict(Watch& w, rig::Rig& r, const Machine& m, const Causes& causes, std::uint32_t cycles_before) {
   const CyclePlan& plan = w.plan;
@@ -449,14 +480,17 @@ void verdict(Watch& w, rig::Rig& r, const Machine& m, const Causes& causes, std:
     if (st.last_command_result != CommandResult::refused_settings_fault)
       w.fail("a cycle the configuration check refuses was not refused", std::string(command_result_name(st.last_command_result)));
   }
+  // The way back of return_to_start is at most the way out.
+  const double ways = r.settings.global.failure_policy == FailurePolicy::return_to_start ? 2 : 1;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
-    const double bound = path_bound(r, m, a, w.window_start_x[a]);
+    const double bound = ways * path_bound(r, m, a, w.window_start_x[a]);
     if (w.path[a] > bound) {
       std::ostringstream o;
       o << kAxisUpper[a] << " travelled " << w.path[a] << ", bound " << bound;
       w.fail("a cycle travelled beyond its bounded distance", o.str());
     }
   }
+  policy_verdict(w, r);
   if (seen != 0 || w.refused) return;
   if (st.homing_cycles != cycles_before + 1) {
     if (causes.aborted_quietly) return;

@@ -81,6 +81,26 @@ class Watch {
 
   double accel_limit(std::size_t a) const;
 
+  // The failure policy at work since the first alarm of the window
+  // (policy_watch.cpp): what each axis may do while the alarm is latched.
+  enum class After : std::uint8_t {
+    brake,    // stop within its stop distance and stay (stop_all, every axis after a machine-wide cause)
+    finish,   // finish_independent: go on homing (an axis of the running step not linked to a failed one)
+    go_back,  // return_to_start: brake, then back to where the window found it
+  };
+  std::array<After, kAxisCount> after{};
+  FailurePolicy wind_down = FailurePolicy::stop_all;  // what the window's first alarm started
+  AxisMask finishers = 0;      // finish_independent: still homing at the first alarm, going on
+  AxisMask returners = 0;      // return_to_start: the axes the rule sends back
+  bool later_failure = false;  // another alarm, or an abort, came after the first
+  bool one_failure = true;     // the first alarm's period showed one cause (one alarm code)
+  void abort_applied() { abort_pending_ = true; }  // the script aborted: read in the next period
+  // Where an axis sent back may end: within this of where the window found it.
+  double back_tolerance(std::size_t a) const;
+  // Its carriage met a mechanical stop in this window: its motor may have
+  // run on without it (lost steps the engine cannot see).
+  bool stop_touched(std::size_t a) const { return stop_touched_[a]; }
+
  private:
   void axis_period(std::size_t a, double engine_dt);
   void racking(double engine_dt);
@@ -88,6 +108,16 @@ class Watch {
   bool reference_edge(std::size_t a, double& ref);
   void track_edges(std::size_t a);
   void limit_overrun(std::size_t a, double x, double speed);
+  // The failure policy (policy_watch.cpp).
+  void policy_period(const Status& st);
+  void first_failure(const Status& st, AxisMask alarmed);
+  void later_failure_at(const Status& st, AxisMask stopped);
+  AxisMask go_back_rule(const Status& st) const;
+  void brake_from_now(std::size_t a, const Status& st);
+  void after_alarm(std::size_t a, double x, double v, bool moved);
+  void braking(std::size_t a, double x, double v);
+  void going_back(std::size_t a, double x, double v, bool moved);
+  bool back_at_start(std::size_t a, double x) const;
 
   rig::Rig& r_;
   const Machine& m_;
@@ -105,6 +135,19 @@ class Watch {
   std::array<double, kAxisCount> alarm_v0_{}, alarm_x0_{};
   std::array<bool, kAxisCount> rested_{};
   std::array<double, kAxisCount> rest_x_{};
+  std::array<int, kAxisCount> brake_periods_{};
+  // The failure policy.
+  bool homing_prev_ = false;
+  int step_prev_ = 0;
+  AxisMask alarmed_prev_ = 0;
+  AlarmCode global_prev_ = AlarmCode::none;
+  std::array<AlarmCode, kAxisCount> code_prev_{};
+  AxisMask first_axes_ = 0;      // the axes that latched in the first period any axis did
+  bool abort_pending_ = false;
+  std::array<bool, kAxisCount> steps_off_{};  // seen pushing into its stop or homed by its drive in this window
+  std::array<bool, kAxisCount> back_{};       // go_back: at rest where the window found it
+  std::array<bool, kAxisCount> stop_touched_{};
+  std::array<bool, kAxisCount> went_back_{};  // go_back: moved after it had come to rest
   // Gantry racking.
   std::array<double, kAxisCount> rel_ref_{};   // per slave
   std::array<double, kAxisCount> late_allowance_{};
