@@ -14,18 +14,27 @@ namespace homing {
 // latch one stays the machine's first (status.alarm_axis) until a reset.
 // Once any axis has latched (all of `axes` first, so each keeps the phase it
 // was in), global.alarm_clears_homed applies and every axis stops, or the
-// failure policy says what the running cycle does instead.
+// failure policy says what the running cycle does instead. While a failure
+// policy moves an axis that already has its alarm (an aborted axis going
+// back), a new cause on it (a drive fault, a lost link) acts all the same,
+// the axis keeping its first alarm; the same cause raised again (a drive
+// fault still present) does not, nor one on an axis the policy stopped.
 void Engine::raise(const Settings& settings, AxisMask axes, Alarm alarm) {
   bool latched = false;
+  bool new_cause = false;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     AxisRun& run = axes_[a];
-    if (!(axes & axis_bit(a)) || run.alarm) continue;
+    if (!(axes & axis_bit(a))) continue;
+    if (run.alarm) {
+      new_cause = new_cause || (run.in_cycle && run.alarm.code != alarm.code);
+      continue;
+    }
     run.alarm = alarm;
     run.alarm.phase = run.shown_phase();
     if (first_alarm_axis_ < 0) first_alarm_axis_ = static_cast<int>(a);
     latched = true;
   }
-  if (latched) after_alarm(settings, alarm.code);
+  if (latched || (new_cause && wind_down_ != WindDown::none)) after_alarm(settings, alarm.code);
 }
 
 // An alarm not tied to one axis (e-stop, settings lost): latched once, and

@@ -141,6 +141,7 @@ class Engine {
   CyclePlan plan_{};
   int step_index_ = -1;          // index into plan_.steps of the running (or returning) step
   WindDown wind_down_ = WindDown::none;
+  std::uint32_t wind_down_period_ = 0;  // the period (heartbeat_) the failed cycle began to wind down
   int first_alarm_axis_ = -1;    // the axis that latched the first alarm since the last reset
   AlarmCode global_alarm_ = AlarmCode::none;
   bool estop_ = false;

@@ -6,7 +6,8 @@
 // brakes every axis, then sends each axis that moved in the cycle and may
 // move safely back to where the cycle found it, step by step, the last step
 // first. Whatever the policy, a machine-wide cause stops everything, and a
-// failure while the axes go back stops them where they are.
+// failure while the axes go back (after the period of the first) stops them
+// where they are.
 #include <algorithm>
 #include <cmath>
 
@@ -67,10 +68,14 @@ double return_speed_mm_per_s(const AxisSettings& s) {
 
 // The policy for an alarm just latched, as the cycle stands: none (every
 // axis stops) when no step runs, the cause concerns the whole machine, the
-// axes are already going back, or the policy is stop_all.
+// axes are already going back, or the policy is stop_all. Alarms latched in
+// the period the failure came are one failure: the way back is planned
+// again with them all.
 Engine::WindDown Engine::wind_down_for(const Settings& settings, AlarmCode code) const {
   const bool step_runs = cycle_active_ && step_index_ >= 0 && step_index_ < static_cast<int>(plan_.steps.size());
-  if (!step_runs || stops_everything(code) || wind_down_ == WindDown::returning) return WindDown::none;
+  if (!step_runs || stops_everything(code)) return WindDown::none;
+  if (wind_down_ == WindDown::returning)
+    return heartbeat_ == wind_down_period_ ? WindDown::returning : WindDown::none;
   if (wind_down_ == WindDown::finishing) return WindDown::finishing;
   switch (settings.global.failure_policy) {
     case FailurePolicy::stop_all: return WindDown::none;
@@ -85,6 +90,7 @@ Engine::WindDown Engine::wind_down_for(const Settings& settings, AlarmCode code)
 void Engine::after_alarm(const Settings& settings, AlarmCode code) {
   const WindDown next = wind_down_for(settings, code);
   if (next == WindDown::none) return halt(settings);
+  if (wind_down_ == WindDown::none) wind_down_period_ = heartbeat_;
   if (next == WindDown::returning) {
     unhome_on_alarm(settings);
     return begin_return(settings);

@@ -24,7 +24,8 @@ void Engine::check_limit_switches(const Settings& settings) {
       run.limit_tripped = false;
       run.limit_side = 0;
     }
-    if (!s.limits_fitted || run.alarm) continue;
+    // An axis with its alarm only brakes, unless a failure policy sends it back (failure_policy.cpp).
+    if (!s.limits_fitted || (run.alarm && run.phase != Phase::return_to_start)) continue;
     const double pos = run.machine_position_mm();
     // Both ends at once cannot be: a broken wire (NC) or a wrong limits_nc.
     // Only judged while the axis would move, so a module wired wrongly can

@@ -76,7 +76,7 @@ SCENARIO("stop_all, the default: when X fails every axis stops and the following
   }
 }
 
-SCENARIO("finish_independent: when X fails, the Y/A gantry of the same step finishes homing; B's step never starts",
+SCENARIO("finish_independent: when X fails, the Y/A gantry of the same step finishes homing and B's step never starts",
          "[failure_policy]") {
   Rig r = machine(FailurePolicy::finish_independent);
   x_sensor_out_of_reach(r);
@@ -112,7 +112,7 @@ SCENARIO("finish_independent: when X fails, the Y/A gantry of the same step fini
   }
 }
 
-SCENARIO("finish_independent: a gantry side's failure stops its partner; X, independent, finishes", "[failure_policy]") {
+SCENARIO("finish_independent: a gantry side's failure stops its partner while X, independent, finishes", "[failure_policy]") {
   Rig r = machine(FailurePolicy::finish_independent);
   r.step();
   r.set_fault(A, sim::Fault::sensor_stuck_inactive);  // A never finds its sensor: the pair racks
@@ -133,7 +133,7 @@ SCENARIO("finish_independent: a gantry side's failure stops its partner; X, inde
   }
 }
 
-SCENARIO("finish_independent: an axis of the step homed before the failure stays homed; the earlier step's does not",
+SCENARIO("finish_independent: an axis of the step homed before the failure stays homed, the earlier step's does not",
          "[failure_policy]") {
   // X starts near its sensor and is done long before A's dead sensor racks the gantry.
   Rig r = machine(FailurePolicy::finish_independent);
@@ -255,7 +255,7 @@ SCENARIO("return_to_start with alarm_clears_homed off: Z, homed in step 1, goes 
   CHECK_FALSE(r.axis(Z).homed);
 }
 
-SCENARIO("return_to_start: an axis whose drive faulted does not move; the others go back", "[failure_policy]") {
+SCENARIO("return_to_start: an axis whose drive faulted does not move, the others go back", "[failure_policy]") {
   Rig r = machine(FailurePolicy::return_to_start);
   r.step();
   std::array<double, kAxisCount> start{};
@@ -272,7 +272,7 @@ SCENARIO("return_to_start: an axis whose drive faulted does not move; the others
   for (std::size_t a : {Y, A, Z}) CHECK(r.actual(a) == Approx(start[a]).margin(1e-6));
 }
 
-SCENARIO("return_to_start: a racked gantry stays where its guard stopped it; the others go back", "[failure_policy]") {
+SCENARIO("return_to_start: a racked gantry stays where its guard stopped it, the others go back", "[failure_policy]") {
   Rig r = machine(FailurePolicy::return_to_start);
   r.step();
   std::array<double, kAxisCount> start{};
@@ -291,7 +291,7 @@ SCENARIO("return_to_start: a racked gantry stays where its guard stopped it; the
   CHECK(r.trace[B].path_mm == 0);
 }
 
-SCENARIO("return_to_start: an abort brakes every axis at once, they go back; a second abort stops the way back",
+SCENARIO("return_to_start: an abort brakes every axis at once, they go back, a second abort stops the way back",
          "[failure_policy]") {
   Rig r = machine(FailurePolicy::return_to_start);
   r.step();
@@ -337,6 +337,55 @@ SCENARIO("return_to_start: an abort brakes every axis at once, they go back; a s
       CHECK(r.status().first_alarm_axis == static_cast<std::int8_t>(X));
     }
   }
+}
+
+SCENARIO("return_to_start: a drive fault on an aborted axis going back stops every axis and its alarm stays aborted",
+         "[failure_policy]") {
+  Rig r = machine(FailurePolicy::return_to_start);
+  r.pending.home_all = true;
+  r.step();
+  REQUIRE(r.run_until([&] { return r.status().sequence_step == 2 && r.axis(X).phase == Phase::seek; }, 60));
+  r.run_for(1.0);
+  r.pending.abort = true;
+  r.step();
+  REQUIRE(r.run_until([&] { return r.axis(Y).phase == Phase::return_to_start && r.axis(Y).velocity_mm_per_s > 0; }, 5));
+  r.run_for(0.3);
+  r.set_fault(Y, sim::Fault::drive_fault);
+  r.step();
+  r.step();
+  CHECK_FALSE(r.status().homing);
+  std::array<double, kAxisCount> at{};
+  for (std::size_t a = 0; a < kAxisCount; ++a) at[a] = r.actual(a);
+  r.clear_trace();
+  r.run_for(2.0);
+  for (std::size_t a : kAxes) CHECK(std::abs(r.actual(a) - at[a]) <= kStop_mm);
+  CHECK(r.axis(Y).alarm.code == AlarmCode::aborted);
+  CHECK((r.status().interlocks & interlock::drive_fault) != 0);
+  CHECK(r.trace[Z].path_mm == 0);
+}
+
+SCENARIO("return_to_start: axes that fail in the same period are one failure and the others still go back",
+         "[failure_policy]") {
+  // The drives of X and C (a copy of X in step 2) fault in the same period.
+  Rig r = machine(FailurePolicy::return_to_start);
+  constexpr std::size_t C = 5;
+  r.settings.axes[C] = r.settings.axes[X];
+  r.settings.axes[C].kind = AxisKind::linear;
+  r.settings.global.sequence_steps[1] |= axis_bit(C);
+  r.step();
+  std::array<double, kAxisCount> start{};
+  for (std::size_t a = 0; a < kAxisCount; ++a) start[a] = r.actual(a);
+  r.pending.home_all = true;
+  r.step();
+  REQUIRE(r.run_until([&] { return r.status().sequence_step == 2 && r.axis(X).phase == Phase::seek; }, 60));
+  r.run_for(1.0);
+  r.set_fault(X, sim::Fault::drive_fault);
+  r.set_fault(C, sim::Fault::drive_fault);
+  const auto at = until_alarm_on(r, X);
+  CHECK(r.axis(C).alarm.code == AlarmCode::drive_fault);
+  until_cycle_over(r);
+  for (std::size_t a : {X, C}) CHECK(std::abs(r.actual(a) - at[a]) <= kStop_mm);
+  for (std::size_t a : {Y, A, Z}) CHECK(r.actual(a) == Approx(start[a]).margin(1e-6));
 }
 
 SCENARIO("finish_independent: an abort stops every axis (each is the aborted one)", "[failure_policy]") {
