@@ -6,9 +6,10 @@
 // homing; return_to_start sends each axis of the cycle that moved, whose
 // steps count its travel and whose own alarm lets it move, back to where the
 // cycle found it (a gantry both sides or neither), the last step first, no
-// faster than the lower of its jog and seek feedrates. A cause that concerns
-// the whole machine, any alarm during the way back and an abort during
-// either stop everything. The first alarm stays the one reported.
+// faster than the lower of its jog and seek feedrates. Alarms latched in one
+// period are one failure. A cause that concerns the whole machine, any later
+// alarm during the way back and an abort during either stop everything. The
+// first alarm stays the one reported.
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -70,8 +71,10 @@ void Watch::policy_period(const Status& st) {
     // An abort while the policy lets axes go on stops them all, without an alarm of its own.
     if (abort_pending_) everything = true;
     if (newly || everything) later_failure_at(st, everything ? kAllAxes : with_partners(r_.settings, newly));
+    if (event_pending_ && wind_down != FailurePolicy::stop_all) later_failure = true;
   }
   abort_pending_ = false;
+  event_pending_ = false;
   // The first axis to latch stays the one reported until a reset.
   if (st.alarm && !first_axes_) first_axes_ = alarmed;
   if (st.alarm && first_axes_) {
@@ -93,15 +96,12 @@ void Watch::first_failure(const Status& st, AxisMask alarmed) {
   wind_down = FailurePolicy::stop_all;
   finishers = returners = 0;
   later_failure = false;
-  AlarmBits codes = 0;
+  // Every alarm of this period is part of the one failure.
   bool everything = st.global_alarm != AlarmCode::none;
-  for (std::size_t a = 0; a < kAxisCount; ++a) {
-    if (!(alarmed & axis_bit(a))) continue;
-    codes |= alarm_bit(st.axes[a].alarm.code);
-    everything = everything || stops_everything(st.axes[a].alarm.code);
-  }
-  one_failure = (codes & (codes - 1)) == 0;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (alarmed & axis_bit(a)) everything = everything || stops_everything(st.axes[a].alarm.code);
   abort_pending_ = false;
+  event_pending_ = false;
   // A cycle runs: it ran before this period, or it started in it (an alarm
   // as its first step begins, an absolute axis's invalid encoder).
   if (!in_window || refused || !(homing_prev_ || st.homing) || everything) return;
@@ -111,15 +111,23 @@ void Watch::first_failure(const Status& st, AxisMask alarmed) {
     // begins belongs to the new step), else the one it showed before.
     const int step = st.homing ? st.sequence_step : step_prev_;
     const AxisMask stopped = with_partners(r_.settings, alarmed);
-    for (std::size_t a = 0; a < kAxisCount; ++a) {
-      if (plan.step[a] != step || (stopped & axis_bit(a)) || st.axes[a].phase == Phase::done) continue;
-      after[a] = After::finish;
-      finishers |= axis_bit(a);
-    }
+    AxisMask homing_on = 0;
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if (plan.step[a] == step && !(stopped & axis_bit(a)) && st.axes[a].phase != Phase::done) homing_on |= axis_bit(a);
+    // A pair goes on as one: a slave done with its own part rides with its master's final move.
+    finishers = with_partners(r_.settings, homing_on);
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if (finishers & axis_bit(a)) after[a] = After::finish;
   } else if (wind_down == FailurePolicy::return_to_start) {
     returners = go_back_rule(st);
-    for (std::size_t a = 0; a < kAxisCount; ++a)
-      if (returners & axis_bit(a)) after[a] = After::go_back;
+    for (std::size_t a = 0; a < kAxisCount; ++a) {
+      if (!(returners & axis_bit(a))) continue;
+      after[a] = After::go_back;
+      // A locking indexer's fault may stop the way back when its axis
+      // unlocks or locks, on an axis whose alarm it cannot replace.
+      const sim::Fault f = r_.sim().axis_config(a).fault;
+      if (f == sim::Fault::indexer_stuck_locked || f == sim::Fault::indexer_never_locks) later_failure = true;
+    }
   }
 }
 
@@ -212,6 +220,12 @@ void Watch::going_back(std::size_t a, double x, double v, bool moved) {
       << "), at most " << reach;
     fail("an axis sent back by the failure policy went further away from its start", o.str());
   }
+  // At rest once its braking is over: the engine holds every axis still for
+  // a period before any goes back, the way back may start within it.
+  if (!rested_[a] && v == 0) {
+    rested_[a] = true;
+    rest_x_[a] = x;
+  }
   if (rested_[a] && moved) {
     went_back_[a] = true;
     const double vmax = return_speed(eff_[a]);
@@ -227,10 +241,6 @@ void Watch::going_back(std::size_t a, double x, double v, bool moved) {
           << plan.step[b] << ") is not back yet";
         fail("an axis went back before the axes of a later step were back", o.str());
       }
-  }
-  if (!rested_[a] && v == 0 && !r_.sim().moving(a)) {
-    rested_[a] = true;
-    rest_x_[a] = x;
   }
   back_[a] = v == 0 && !r_.sim().moving(a) && (back_at_start(a, x) || (stop_touched_[a] && went_back_[a]));
 }

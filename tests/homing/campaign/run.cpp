@@ -149,6 +149,7 @@ void Run::apply_in_motion(const Event& e, Causes& causes) {
 
 void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
   say(std::string(event_name(e.kind)) + " on " + kAxisUpper[e.axis]);
+  if (e.kind != EventKind::abort && e.kind != EventKind::reset && e.kind != EventKind::home_again) w_->event_applied();
   // The simulated axis has one fault at a time: a new one replaces the old.
   // A locking indexer's fault replaced by another need not show any more;
   // an indexer fault does not replace another (the campaign keeps that one).

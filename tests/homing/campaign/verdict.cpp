@@ -261,6 +261,10 @@ void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st,
     if (as.velocity_mm_per_s != 0 || as.phase == Phase::jog || as.phase == Phase::move || held)
       moving |= with_partner(s, a);
   }
+  // Under return_to_start every axis of the cycle may still move (back)
+  // after a failure: a lost link or a withdrawn permit may stop it then.
+  const AxisMask may_go_back =
+      s.global.failure_policy == FailurePolicy::return_to_start ? plan.covered : AxisMask{0};
   switch (e.kind) {
     case EventKind::abort:
       c.add("the abort", {AlarmCode::aborted}, running, running != 0);
@@ -284,11 +288,12 @@ void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st,
     case EventKind::comm_lost:
       // It stops motion: a carriage moving when it came must show it (one
       // arriving in that very period may end the cycle without it).
-      c.add("the communication loss", {AlarmCode::communication_lost}, static_cast<AxisMask>(running | moving),
-            moving != 0);
+      c.add("the communication loss", {AlarmCode::communication_lost},
+            static_cast<AxisMask>(running | moving | may_go_back), moving != 0);
       break;
     case EventKind::permit_off:
-      c.add("the permit withdrawn", {AlarmCode::permit_withdrawn}, running, s.global.permit_required && running != 0);
+      c.add("the permit withdrawn", {AlarmCode::permit_withdrawn}, static_cast<AxisMask>(running | may_go_back),
+            s.global.permit_required && running != 0);
       break;
     case EventKind::drive_done_lost: {
       // Done already given (homed by its drive): the reference is lost;
@@ -443,9 +448,9 @@ double time_bound(rig::Rig& r, const Machine& m, const CyclePlan& plan) {
 
 // What the failure policy let go on ended as it says, unless another
 // failure (or an abort) stopped it: under finish_independent each axis still
-// homing at the first alarm ends homed; under return_to_start, after one
-// cause, each axis the rule sends back ends where the cycle found it, no
-// longer homed (the way back undoes the cycle).
+// homing at the first alarm ends homed; under return_to_start each axis the
+// rule sends back ends where the cycle found it, no longer homed (the way
+// back undoes the cycle).
 namespace {
 void policy_verdict(Watch& w, rig::Rig& r) {
   if (w.later_failure) return;
@@ -456,7 +461,7 @@ void policy_verdict(Watch& w, rig::Rig& r) {
       w.fail("an axis the failure policy let finish its homing did not end homed",
              letter(a) + " in phase " + std::string(phase_name(st.axes[a].phase)) + "; first alarms " +
                  alarm_list(w.alarms_seen));
-    if (w.wind_down != FailurePolicy::return_to_start || !w.one_failure || !(w.returners & bit)) continue;
+    if (w.wind_down != FailurePolicy::return_to_start || !(w.returners & bit)) continue;
     const double x = r.actual(a);
     if (std::abs(x - w.window_start_x[a]) > w.back_tolerance(a) && !w.stop_touched(a)) {
       std::ostringstream o;

@@ -69,11 +69,11 @@ void Watch::begin_window(const CyclePlan& p, bool is_refused) {
   back_.fill(false);
   stop_touched_.fill(false);
   went_back_.fill(false);
+  for (std::size_t a = 0; a < kAxisCount; ++a) started_at_stop_[a] = r_.sim().at_hard_stop(a);
   after.fill(After::brake);
   wind_down = FailurePolicy::stop_all;
   finishers = returners = 0;
   later_failure = false;
-  one_failure = true;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     window_start_x[a] = r_.actual(a);
     has_release_[a] = has_trigger_[a] = false;
@@ -196,11 +196,15 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
                        (dead_sensor & axis_bit(static_cast<std::size_t>(master)));
     const bool excused = (dead_sensor & bit) || rides;
     if (pushing && (reduced || excused)) pushed_to_stop_[a] = true;
-    if (!(pushing && pushed_to_stop_[a]))
+    // Sent back by the failure policy to where the cycle found it, at its stop.
+    const bool back_to_start = st.alarm && after[a] == After::go_back && started_at_stop_[a] &&
+                               std::abs(x - window_start_x[a]) <= 1e-6;
+    if (back_to_start) pushed_to_stop_[a] = true;
+    if (!(pushing && pushed_to_stop_[a]) && !back_to_start)
       fail(std::string("a carriage ran into a mechanical stop") +
                (m_.plan[a].differs ? " (a slave whose own inherited fields differ)" : ""),
            fmt_axis(a, r_, x));
-    else if (!reduced && !excused && v * dir_of(e) > 0)
+    else if (!reduced && !excused && !back_to_start && v * dir_of(e) > 0)
       fail("a carriage drove into its mechanical stop at full current (push output off)", fmt_axis(a, r_, x));
   } else {
     pushed_to_stop_[a] = false;

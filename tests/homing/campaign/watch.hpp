@@ -93,8 +93,12 @@ class Watch {
   AxisMask finishers = 0;      // finish_independent: still homing at the first alarm, going on
   AxisMask returners = 0;      // return_to_start: the axes the rule sends back
   bool later_failure = false;  // another alarm, or an abort, came after the first
-  bool one_failure = true;     // the first alarm's period showed one cause (one alarm code)
   void abort_applied() { abort_pending_ = true; }  // the script aborted: read in the next period
+  // Any other fault or command the script applied: while a failure policy is
+  // at work it may stop what goes on without a new alarm to show for it (a
+  // drive fault on an axis already aborted, a lost link): from then on the
+  // policy's end is not required (later_failure).
+  void event_applied() { event_pending_ = true; }
   // Where an axis sent back may end: within this of where the window found it.
   double back_tolerance(std::size_t a) const;
   // Its carriage met a mechanical stop in this window: its motor may have
@@ -144,9 +148,11 @@ class Watch {
   std::array<AlarmCode, kAxisCount> code_prev_{};
   AxisMask first_axes_ = 0;      // the axes that latched in the first period any axis did
   bool abort_pending_ = false;
+  bool event_pending_ = false;
   std::array<bool, kAxisCount> steps_off_{};  // seen pushing into its stop or homed by its drive in this window
   std::array<bool, kAxisCount> back_{};       // go_back: at rest where the window found it
   std::array<bool, kAxisCount> stop_touched_{};
+  std::array<bool, kAxisCount> started_at_stop_{};  // the window found the carriage at its mechanical stop
   std::array<bool, kAxisCount> went_back_{};  // go_back: moved after it had come to rest
   // Gantry racking.
   std::array<double, kAxisCount> rel_ref_{};   // per slave
