@@ -52,8 +52,14 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // 9102373: a late drive on an axis whose indexer never locks (the
   // campaign's own verdict left the late answer out); 2258828930: a reversed
   // encoder near the stop homes on it (the verdict counted the wrong reach).
+  // The failure policy (stream 30): 5512019, a drive fault on an aborted
+  // axis going back did not stop the way back, and 2652, two axes failing in
+  // one period stopped it (named scenarios in failure_policy_test.cpp); 33,
+  // 90, 336, 984, 3293, 3639, 5510656, 5512163, 7004079: the campaign's own
+  // model of the policy (see the campaign's commit messages).
   const std::uint64_t seeds[] = {1, 7, 3, 8, 490, 715, 2, 173, 959, 1242, 2054, 84, 4, 103, 1069, 412, 627, 3972, 8001884,
-                                 31342370, 9, 5000422, 5001903, 9001798, 9102373, 2258828930};
+                                 31342370, 9, 5000422, 5001903, 9001798, 9102373, 2258828930, 5512019, 2652, 33,
+                                 90, 336, 984, 3293, 3639, 5510656, 5512163, 7004079};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);
