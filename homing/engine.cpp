@@ -1,6 +1,6 @@
 // The engine's period: motion, inputs, safety, commands, homing phases,
 // gantries, locking indexers, status and outputs, in that order. Each step has its own file:
-// home_frame, sensor_inputs, safety and alarm_path, cycle and axis_phases,
+// home_frame, sensor_inputs, safety, alarm_path and failure_policy, cycle and axis_phases,
 // jog_move, gantry_guard, publish and output_routing.
 #include "engine.hpp"
 
