@@ -154,6 +154,7 @@ struct AxisRun {
   CycleEdges edges{};           // this cycle's seek trigger and first release
   LatchEdges latch{};           // this cycle's slow approaches to the reference edge
   SwitchHealth health{};        // reported: what the last cycle measured of the switch
+  std::uint32_t positions_set = 0;  // reported: set-position commands carried out
 
   bool homed() const { return home.has_value(); }
   // Homed, or its method does not home (disabled): what jogs, moves and the

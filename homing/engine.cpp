@@ -72,12 +72,13 @@ bool Engine::any_motion() const {
   });
 }
 
-// Commands in a fixed order: reset, abort, unhome, home, jog, move.
+// Commands in a fixed order: reset, abort, unhome, set position, home, jog, move.
 void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
   const Commands& c = inputs.commands;
   if (c.reset_alarm) reset_command();
   if (c.abort) abort_command(settings);
   if (c.unhome_axes) unhome_command(settings, c.unhome_axes);
+  if (c.set_position_axes) set_position_commands(settings, c);
   home_command(settings, inputs);
   jog_commands(settings, c);
   move_commands(settings, c);

@@ -63,6 +63,7 @@ class Engine {
   CommandResult homing_refusal(const Settings& settings) const;
   void home_command(const Settings& settings, const Inputs& inputs);
   void unhome_command(const Settings& settings, AxisMask axes);
+  void set_position_commands(const Settings& settings, const Commands& c);
   void start_cycle(const Settings& settings, AxisMask requested, bool all);
   bool start_step(const Settings& settings);
   void assign_unsequenced(const Settings& settings, std::size_t axis);

@@ -27,6 +27,7 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
     as.trigger_position_mm = run.trigger_position_mm;
     as.home_correction_mm = run.home_correction_mm;
     as.homed_at_cycle_start = run.homed_at_cycle_start;
+    as.positions_set = run.positions_set;
     as.health = run.health;
     as.stop_distance_mm = seek_stop_distance_mm(s);  // the figure the configuration check holds to
     if (!std::isfinite(as.stop_distance_mm)) as.stop_distance_mm = 0;

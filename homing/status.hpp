@@ -43,8 +43,9 @@ enum class CommandResult : std::uint8_t {
   refused_settings_fault = 14,  // the configuration check refused the cycle: see the axis alarm
   refused_hard_limit = 15,   // on a tripped shared limit: only a jog away from the sensor is allowed
   refused_home_all_only = 16,  // global.single_axis_homing is off: the machine homes all axes or none
+  refused_homed = 17,        // set position: the axis is homed; its coordinate comes from its reference
 };
-inline constexpr std::uint8_t kCommandResultCount = 17;
+inline constexpr std::uint8_t kCommandResultCount = 18;
 inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
     {CommandResult::none, "none", "no command yet"},
     {CommandResult::accepted, "accepted", "the last command started"},
@@ -69,8 +70,10 @@ inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
      "on a tripped shared limit: only a jog away from the sensor is allowed until it releases"},
     {CommandResult::refused_home_all_only, "refused_home_all_only",
      "global.single_axis_homing is off: this machine homes all axes together (cmd.home_all), never one alone"},
+    {CommandResult::refused_homed, "refused_homed",
+     "the axis is homed: its coordinate comes from its reference; unhome it first (cmd.unhome.<a>) to set it by hand"},
 };
-static_assert(lists_every_value(kCommandResultInfo, CommandResult::refused_home_all_only));
+static_assert(lists_every_value(kCommandResultInfo, CommandResult::refused_homed));
 static_assert(std::size(kCommandResultInfo) == kCommandResultCount);
 constexpr std::span<const EnumInfo<CommandResult>> enum_table(CommandResult) { return kCommandResultInfo; }
 
@@ -141,6 +144,9 @@ struct AxisStatus {
   double stop_distance_mm = 0;      // v²/2a of the seek
   double phase_distance_mm = 0;     // travelled in the current phase
   SwitchHealth health{};            // what the last homing cycle measured of the switch (health.hpp)
+  // Set-position commands carried out on this axis since start: the runtime
+  // audits each one (who set which coordinate).
+  std::uint32_t positions_set = 0;
 };
 
 struct Status {

@@ -206,6 +206,9 @@ class SettingsStore {
 
   bool settings_lost() const;
   Status acknowledge_settings_lost(const ChangeSource& source);
+  // A change made by a service command rather than a settings write (an
+  // axis's coordinate set by hand): one audit row, pruned like the others.
+  Status audit(const Change& change, const ChangeSource& source);
 
   Status set_limits(std::size_t audit_max_rows, std::size_t history_max_rows);
 

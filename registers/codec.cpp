@@ -88,6 +88,7 @@ std::optional<CommandRequest> command_of(const Register& reg, std::int64_t raw) 
     case Key::cmd_home: return CommandRequest{Command::home_axis, axis, true};
     case Key::cmd_unhome: return CommandRequest{Command::unhome_axis, axis, true};
     case Key::cmd_move: return CommandRequest{Command::move, axis, true};
+    case Key::cmd_set_position: return CommandRequest{Command::set_position, axis, true};
     case Key::cmd_jog_plus: return CommandRequest{Command::jog_plus, axis, value};
     case Key::cmd_jog_minus: return CommandRequest{Command::jog_minus, axis, value};
     case Key::host_homing_permit: return CommandRequest{Command::homing_permit, -1, value};

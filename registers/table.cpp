@@ -294,6 +294,7 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     {.pattern = "cmd.jog_plus.<a>", .table = CO, .offset = 1, .type = Type::boolean, .access = Access::rw, .max = 1, .key = Key::cmd_jog_plus, .description = "jog positive while 1; 0 stops (reads back the held state)"},
     {.pattern = "cmd.jog_minus.<a>", .table = CO, .offset = 2, .type = Type::boolean, .access = Access::rw, .max = 1, .key = Key::cmd_jog_minus, .description = "jog negative while 1; 0 stops (reads back the held state)"},
     {.pattern = "cmd.unhome.<a>", .table = CO, .offset = 4, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_unhome, .description = "write 1: forget this axis's reference (and its gantry partner's) without moving; refused while it moves or a cycle runs (reads back 0)"},
+    {.pattern = "cmd.set_position.<a>", .table = CO, .offset = 6, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_set_position, .description = "write 1: this unhomed axis's coordinate becomes axis.<a>.target where it stands, without moving (it stays unhomed); refused while homed, moving or a gantry slave; audited with the client (reads back 0)"},
     {.pattern = "cmd.move.<a>", .table = CO, .offset = 3, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_move, .description = "write 1: move to axis.<a>.target at jog_feedrate (reads back 0)"},
 });
 

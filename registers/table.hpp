@@ -67,7 +67,7 @@ enum class Key : std::uint8_t {
   // coils, module
   cmd_home_all, cmd_abort, cmd_reset_alarm, host_homing_permit, cmd_lock_settings, security_unlock,
   cmd_home, cmd_unhome, cmd_jog_plus,
-  cmd_jog_minus, cmd_move,
+  cmd_jog_minus, cmd_move, cmd_set_position,
   // holding, module: command registers (hold nothing, read 0)
   cmd_home_axes,
   // simulator unit

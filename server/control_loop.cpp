@@ -63,15 +63,7 @@ void ControlLoop::stop() {
 
 void ControlLoop::submit(const homing::Commands& c, bool from_modbus) {
   std::lock_guard lock(mailbox_mutex_);
-  pending_.home_all |= c.home_all;
-  pending_.home_axes |= c.home_axes;
-  pending_.unhome_axes |= c.unhome_axes;
-  pending_.abort |= c.abort;
-  pending_.reset_alarm |= c.reset_alarm;
-  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-    if (c.move_axes & homing::axis_bit(a)) pending_.move_target_mm[a] = c.move_target_mm[a];
-  }
-  pending_.move_axes |= c.move_axes;
+  homing::merge(pending_, c);
   pending_from_modbus_ = pending_from_modbus_ || from_modbus;
 }
 
@@ -178,7 +170,6 @@ LoopStats ControlLoop::stats() const {
   return stats_;
 }
 
-// Never blocks: when the server holds the mailbox, its news waits one period.
 // Never blocks: when the server holds the mailbox, its news waits one period.
 // Taken before the machine advances, so that a simulator edit (a carriage
 // placed, a fault) is already in the inputs the commands are judged on.

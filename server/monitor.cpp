@@ -219,6 +219,9 @@ void Monitor::poll(std::int64_t now_ms) {
       if (run.axis[a].health) judge_health(a, settings);
     refresh_summary();
   }
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+    if (st.axes[a].positions_set != last_.axes[a].positions_set)
+      service_.audit_position_set(a, last_.axes[a].position_mm, st.axes[a].position_mm);
   last_ = st;
 }
 
