@@ -347,13 +347,14 @@ void Run::lost_steps() {
   if (cand.empty() || r_.status().alarm) return;
   const std::size_t a = pick(cand);
   const AxisSettings& s = r_.settings.axes[a];
-  const double dir = dir_of(s);
+  // Away from the cam: where the pull-off went (a home cam's: its cam_edge side).
+  const double away = s.mode == HomingMode::home_cam && s.cam_edge == CamEdge::ahead ? dir_of(s) : -dir_of(s);
   // Never across the cam's edge: a carriage that jumps over it would show the
   // engine an edge where there is none (the simulator reports the jump as one).
   if (r_.sim().sensor_active(a)) return;
   const auto& c = r_.sim().axis_config(a);
-  const double to_cam = dir > 0 ? c.sensor_min_mm - r_.actual(a) : r_.actual(a) - c.sensor_max_mm;
-  const double lost = d_.chance(0.5) ? -dir * d_.u(0, 3) : dir * d_.u(0, std::min(s.pull_off_mm, 0.8 * to_cam));
+  const double to_cam = away < 0 ? c.sensor_min_mm - r_.actual(a) : r_.actual(a) - c.sensor_max_mm;
+  const double lost = d_.chance(0.5) ? away * d_.u(0, 3) : -away * d_.u(0, std::min(s.pull_off_mm, 0.8 * to_cam));
   say(std::string("lose ") + std::to_string(lost) + " on " + kAxisUpper[a]);
   r_.sim().lose_steps(a, lost);
   w_->carriage_jumped(a);

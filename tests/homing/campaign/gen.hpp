@@ -79,6 +79,10 @@ struct Gen {
   void events();
   void indexers();
   void limit_switches();
+  // home_cam axes (home_cam_gen.cpp), from their own dice after everything else.
+  bool may_become_home_cam(std::size_t a) const;
+  void home_cams();
+  void home_cam_axis(std::size_t a, Dice& hc);
   Machine build();
 };
 

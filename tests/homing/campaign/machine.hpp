@@ -13,6 +13,12 @@ namespace campaign {
 
 enum class Role : std::uint8_t { plain, master, slave };
 
+// Where a home_cam axis starts, seen from its seek direction: the cam ahead
+// (found without reversal), behind it (the search meets the limit switch
+// ahead, reverses and finds the cam), or the carriage already on the cam.
+enum class CamStart : std::uint8_t { none, ahead, behind, on_cam };
+const char* cam_start_name(CamStart c);
+
 // Settings made wrong on purpose: the configuration check must refuse them.
 enum class Invalid : std::uint8_t {
   none,
@@ -92,6 +98,7 @@ struct AxisPlan {
   bool late_drive = false;     // drive mode: the drive answers after its time limit
   bool indexer = false;        // a locking indexer (axis.<a>.indexer_lock, fitted on the simulator)
   bool limits = false;         // end-of-travel limit switches fitted (axis.<a>.limits_fitted, on the simulator)
+  CamStart cam_start = CamStart::none;  // home_cam: where its first cycle starts
 };
 
 struct Machine {

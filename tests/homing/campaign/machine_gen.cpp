@@ -475,6 +475,7 @@ Machine Gen::build() {
   events();
   indexers();
   limit_switches();
+  home_cams();
   m.start_held_at_powerup = d.chance(0.15);
   m.powerup_periods = d.integer(1, 50);
   m.start_by_button = d.chance(0.25);

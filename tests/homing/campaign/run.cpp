@@ -115,7 +115,9 @@ void Run::add_indexer_event(std::vector<Event>& events, const CyclePlan& plan, d
 std::vector<Phase> Run::phases_run(std::size_t a) const {
   const AxisSettings e = effective(r_.settings, a);
   std::vector<Phase> p;
-  if (mode_uses_switch(e.mode)) {
+  if (e.mode == HomingMode::home_cam) {
+    p = {Phase::cam_seek, Phase::limit_reversal, Phase::cam_stop, Phase::cam_latch, Phase::pull_off};
+  } else if (mode_uses_switch(e.mode)) {
     p = {Phase::seek, Phase::stop, Phase::back_off, Phase::pull_off};
     if (e.pre_move_mode != PreMove::none) p.push_back(Phase::pre_move);
     if (mode_reapproaches(e.mode)) p.push_back(Phase::reapproach);
@@ -245,6 +247,9 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
   const bool refused = first_fault(r_.settings).has_value();
   Causes causes = standing_causes(r_, m_, plan, refused, encoder_invalid_);
   const std::uint32_t cycles_before = r_.status().homing_cycles;
+  cam_on_start_ = 0;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (r_.sim().sensor_active(a)) cam_on_start_ |= axis_bit(a);
   w_->begin_window(plan, refused);
   w_->clear_alarms_seen();
   {
@@ -326,6 +331,14 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
     o << "cycle ended " << state_name(r_.status().state) << ", alarms " << alarm_list(w_->alarms_seen);
     say(o.str());
   }
+  // A carriage braking after the cycle stopped (another axis's alarm, an
+  // abort, an e-stop) may run onto the limit switch its search was heading
+  // for: a trip outside homing, of that axis alone (campaign seed 571).
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (r_.settings.axes[a].limits_fitted && w_->first_alarm[a].code == AlarmCode::limit_switch &&
+        w_->first_alarm[a].phase == Phase::stopping)
+      causes.add(std::string(1, kAxisUpper[a]) + "'s limit switch met braking after the cycle stopped",
+                 {AlarmCode::limit_switch}, axis_bit(a));
   if (ok()) verdict(*w_, r_, m_, causes, cycles_before);
   mark_cycle(plan, causes, ok() && w_->alarms_seen == 0 && !refused);
   if (r_.status().state == MachineState::homed && w_->alarms_seen == 0 && ok()) {
@@ -363,7 +376,23 @@ void Run::mark_machine() {
       mark("mode " + std::string(mode_name(m_.settings.axes[a].mode)), seen::present);
     }
     if (m_.plan[a].limits) mark("limit switches fitted", seen::present);
+    if (m_.settings.axes[a].mode == HomingMode::home_cam) {
+      for (const std::string& k : home_cam_keys(a)) mark(k, seen::present);
+      mark(std::string("home_cam starting ") + start_key(m_.plan[a].cam_start), seen::present);
+    }
   }
+}
+
+const char* Run::start_key(CamStart c) {
+  return c == CamStart::on_cam ? "on the cam" : c == CamStart::behind ? "with the cam behind" : "with the cam ahead";
+}
+
+// A home_cam axis's coverage rows besides its mode: its cam edge and its switches' wiring.
+std::vector<std::string> Run::home_cam_keys(std::size_t a) const {
+  const AxisSettings& s = r_.settings.axes[a];
+  std::vector<std::string> k{std::string("home_cam cam_edge ") + (s.cam_edge == CamEdge::ahead ? "ahead" : "behind")};
+  if (s.limits_nc) k.push_back("home_cam limit switches NC");
+  return k;
 }
 
 // What a cycle reached: each cause present, and whether its own alarm showed;
@@ -390,7 +419,18 @@ void Run::mark_cycle(const CyclePlan& plan, const Causes& causes, bool clean) {
       mark("mode " + std::string(mode_name(m_.settings.axes[a].mode)), bits);
     }
     if (m_.plan[a].limits) mark("limit switches fitted", bits);
+    if (r_.settings.axes[a].mode == HomingMode::home_cam) {
+      for (const std::string& k : home_cam_keys(a)) mark(k, bits);
+      if (w_->reversal_known & axis_bit(a))
+        mark(std::string("home_cam starting ") +
+                 start_key((cam_on_start_ & axis_bit(a))         ? CamStart::on_cam
+                           : (w_->reversal_expected & axis_bit(a)) ? CamStart::behind
+                                                                   : CamStart::ahead),
+             bits);
+    }
   }
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (w_->reversed & axis_bit(a)) mark("home_cam reversed at a limit switch", seen::present);
 }
 
 // Clear every cause, then reset: the reset must be taken.

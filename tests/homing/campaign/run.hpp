@@ -99,6 +99,8 @@ class Run {
   void mark(const std::string& key, std::uint8_t bits) { coverage_[key] |= bits; }
   void mark_machine();
   void mark_cycle(const CyclePlan& plan, const Causes& causes, bool clean);
+  static const char* start_key(CamStart c);
+  std::vector<std::string> home_cam_keys(std::size_t a) const;
 
   Machine m_;
   rig::Rig r_;
@@ -115,6 +117,7 @@ class Run {
   int homed_cycles_ = 0;
   bool alarm_seen_ = false;
   RunCoverage coverage_;
+  AxisMask cam_on_start_ = 0;  // axes whose carriage stood on its cam as the cycle began
 };
 
 Outcome run_seed(std::uint64_t seed);

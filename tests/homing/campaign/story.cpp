@@ -22,6 +22,8 @@ const char* fault_name(sim::Fault f) {
     case sim::Fault::drive_done_lost: return "drive's home done lost";
     case sim::Fault::indexer_stuck_locked: return "indexer stuck locked";
     case sim::Fault::indexer_never_locks: return "indexer never locks";
+    case sim::Fault::limits_dead: return "limit switches dead";
+    case sim::Fault::limits_stuck: return "limit switches stuck active";
   }
   return "?";
 }
@@ -101,6 +103,14 @@ std::string story(const Machine& m) {
     own(o, s);
     o << "\n     machine: ";
     machine_side(o, m.sim.axes[a], p);
+    if (p.limits) {
+      const sim::AxisConfig& c = m.sim.axes[a];
+      o << "; limit switches at " << c.limit_min_mm << " and " << c.limit_max_mm << " (" << (s.limits_nc ? "NC" : "NO")
+        << "), overtravel " << s.limit_overtravel_mm;
+    }
+    if (s.mode == HomingMode::home_cam)
+      o << "; home cam edge " << (s.cam_edge == CamEdge::ahead ? "ahead" : "behind") << ", starts with "
+        << cam_start_name(p.cam_start);
     if (p.short_cam) o << "; CAM SHORTER THAN THE STOP";
     if (p.rest_on_sensor) o << "; SHARED LIMIT RESTS ON ITS SENSOR";
     if (p.indexer)

@@ -39,6 +39,8 @@ struct Causes {
   Cause& add(std::string what, std::initializer_list<AlarmCode> codes, AxisMask axes, bool must = false);
   // Every alarm a lying sensor can make the edge search raise.
   Cause& sensor_fault(std::string what, AxisMask axes, bool must = false);
+  // ... and, on an axis with limit switches, those a home cam's search or latch can then meet.
+  Cause& sensor_fault(std::string what, AxisMask axes, const Settings& s, bool must = false);
   bool any_must() const;
 };
 

@@ -75,6 +75,36 @@ void Watch::begin_window(const CyclePlan& p, bool is_refused) {
     if (m_.plan[s].role == Role::slave) rel_ref_[s] = r_.actual(s) - r_.actual(static_cast<std::size_t>(m_.plan[s].partner));
   late_allowance_.fill(0);
   slipped_.fill(false);
+  reversed = reversal_expected = reversal_known = 0;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (!(plan.movers & axis_bit(a)) || effective(r_.settings, a).mode != HomingMode::home_cam ||
+        r_.sim().axis_config(a).fault != sim::Fault::none)
+      continue;
+    reversal_known |= axis_bit(a);
+    if (reversal_ahead(a)) reversal_expected |= axis_bit(a);
+  }
+}
+
+// Off the cam, with the cam not between the carriage and the limit switch
+// ahead (behind it, or beyond that switch): the search meets the switch first.
+bool Watch::reversal_ahead(std::size_t a) const {
+  const AxisSettings e = effective(r_.settings, a);
+  const auto& c = r_.sim().axis_config(a);
+  if (r_.sim().sensor_active(a)) return false;
+  const double dir = dir_of(e);
+  const double x = r_.sim().actual_position_mm(a);
+  const double near = dir > 0 ? c.sensor_min_mm : c.sensor_max_mm;
+  const double limit = dir > 0 ? c.limit_max_mm : c.limit_min_mm;
+  const bool cam = c.sensor_max_mm >= c.sensor_min_mm;
+  return !(cam && (near - x) * dir > 0 && (limit - near) * dir > 0);
+}
+
+double rest_from_edge(const AxisSettings& e, double ref, double compensation_mm) {
+  if (e.mode == HomingMode::home_cam) {
+    const double side = e.cam_edge == CamEdge::ahead ? dir_of(e) : -dir_of(e);
+    return ref + side * e.pull_off_mm;
+  }
+  return rig::rest_point_mm(e, ref, compensation_mm);
 }
 
 void Watch::end_window() {
@@ -290,6 +320,7 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
 
   const double ran_dt = r_.ran_dt_s > 0 ? r_.ran_dt_s : 1e-3;
   limit_overrun(a, x, std::max({std::abs(v_prev_[a]), std::abs(v), step / ran_dt}));
+  cam_reversal(a);
 
   x_prev_[a] = x;
   v_prev_[a] = v;
@@ -323,6 +354,29 @@ void Watch::limit_overrun(std::size_t a, double x, double speed) {
       << allowed;
     fail("a carriage passed a limit switch by more than its stopping distance", o.str());
   }
+}
+
+// A home cam's search reverses exactly when it meets the limit switch ahead
+// (docs/limit-switches.md): it enters limit_reversal only in a period whose
+// inputs show that switch active, and never seeks on in cam_seek past a
+// period that showed it (a cam trigger in the same period takes precedence;
+// both switches at once are both_limits_active). The engine runs a phase it
+// enters in the same period, so the period's status shows what it decided.
+void Watch::cam_reversal(std::size_t a) {
+  const AxisSettings& e = eff_[a];
+  const bool read_min = limit_min_read_[a], read_max = limit_max_read_[a];
+  limit_min_read_[a] = r_.sim().limit_active(a, false);
+  limit_max_read_[a] = r_.sim().limit_active(a, true);
+  if (e.mode != HomingMode::home_cam || !e.limits_fitted || !in_window || !(plan.covered & axis_bit(a))) return;
+  const AxisStatus& as = r_.status().axes[a];
+  const bool ahead = dir_of(e) > 0 ? read_max : read_min;
+  const bool both = read_min && read_max;
+  if (as.phase == Phase::limit_reversal && phase_prev_[a] != Phase::limit_reversal) {
+    reversed |= axis_bit(a);
+    if (!ahead) fail("the home cam search reversed without meeting the limit switch ahead", fmt_axis(a, r_, r_.actual(a)));
+  }
+  if (as.phase == Phase::cam_seek && ahead && !both && !r_.status().alarm)
+    fail("the home cam search met the limit switch ahead and sought on", fmt_axis(a, r_, r_.actual(a)));
 }
 
 void Watch::racking(double engine_dt) {
@@ -456,7 +510,7 @@ void Watch::on_flip(std::size_t a, double x) {
       return;
     }
     const double comp = master_index(r_.settings, a) >= 0 ? e.switch_compensation_mm : 0.0;
-    t.rest = rig::rest_point_mm(e, ref, comp);
+    t.rest = rest_from_edge(e, ref, comp);
     t.has_rest = true;
     t.offset = e.home_position_mm - t.rest;
     t.tol = rig::edge_tolerance_mm(e, 0.001) + 1e-9;
