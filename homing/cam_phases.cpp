@@ -15,6 +15,27 @@ void PhaseRunner::fail_limit(AlarmCode code, double toward) {
                                          static_cast<std::uint8_t>(toward < 0 ? 1 : 2)});
 }
 
+// A homing motion never starts toward an active limit switch, as a jog or a
+// move toward one is refused: the alarm comes before a period of motion
+// (else each cycle started on a tripped switch would creep deeper past it).
+// Only the search that reverses at the switches may head for one.
+bool PhaseRunner::starts_into_limit(double target_mm) {
+  const AxisReadings& in = run.readings;
+  const double toward = target_mm - run.motor.position_mm;
+  if (!settings.axes[axis].limits_fitted || !at_rest() || toward == 0 || reverses_at_limits(run.phase) ||
+      !in.limit_toward(toward))
+    return false;
+  run.command = stop_command(accel);
+  if (in.limit_min && in.limit_max) {
+    fail_limit(AlarmCode::both_limits_active, toward);
+    return true;
+  }
+  fail_limit(AlarmCode::limit_in_homing, toward);
+  run.limit_tripped = true;
+  run.limit_side = toward < 0 ? -1 : 1;
+  return true;
+}
+
 void PhaseRunner::cam_triggered() {
   const phase_data::Stop trigger{edge_mm(), dt()};
   enter(Phase::cam_stop);

@@ -8,12 +8,6 @@
 #include "engine.hpp"
 
 namespace homing {
-namespace {
-
-// The phases that meet a limit switch on purpose.
-bool reverses_at_limits(Phase p) { return p == Phase::cam_seek || p == Phase::limit_reversal; }
-
-}  // namespace
 
 void Engine::check_limit_switches(const Settings& settings) {
   for (std::size_t a = 0; a < kAxisCount; ++a) {
@@ -40,7 +34,10 @@ void Engine::check_limit_switches(const Settings& settings) {
     const std::int8_t toward = v < 0 ? -1 : 1;
     if (!in.limit_toward(toward)) continue;
     // Reset while still braking onto it: the trip is known, no second alarm.
-    if (run.limit_tripped && run.limit_side == toward) continue;
+    // Only that braking: a motion started since (a homing phase; jogs and
+    // moves toward it are refused) trips the switch again at once.
+    const bool braking = !run.in_cycle && (run.phase == Phase::stopping || run.phase == Phase::idle);
+    if (run.limit_tripped && run.limit_side == toward && braking) continue;
     const AlarmCode code = run.in_cycle ? AlarmCode::limit_in_homing : AlarmCode::limit_switch;
     raise(settings, axis_bit(a),
           Alarm{code, Phase::idle, AxisField::none, pos, static_cast<std::uint8_t>(toward < 0 ? 1 : 2)});

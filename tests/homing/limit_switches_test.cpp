@@ -2,6 +2,8 @@
 // end-of-travel limit switches as hard limits (docs/limit-switches.md).
 #include <catch2/catch.hpp>
 
+#include <cmath>
+
 #include "homing/settings_check.hpp"
 #include "rig.hpp"
 
@@ -147,4 +149,49 @@ SCENARIO("a jog onto a limit switch stops with limit_switch, within its accelera
   r.release_jogs();
   r.run_until([&] { return !r.any_moving(); }, 5);
   CHECK_FALSE(r.status().alarm);
+}
+
+SCENARIO("a homing cycle started on a tripped limit switch does not drive further onto it",
+         "[limits][home_cam][alarms]") {
+  // The latch of the first cycle runs into the negative limit switch
+  // (limit_in_homing) and brakes past it, still on the cam. After the reset
+  // the switch is still active and tripped; the next cycle, starting on the
+  // cam, latches toward it again: it must stop there with limit_in_homing at
+  // once, not latch on toward the mechanical stop (campaign seed 97).
+  Rig r = cam_rig(50, -95, -90, CamEdge::ahead);
+  r.machine.axes[0].limit_min_mm = -93;
+  r.step();
+  REQUIRE_FALSE(r.home_all());
+  REQUIRE(r.axis(0).alarm.code == AlarmCode::limit_in_homing);
+  REQUIRE(r.actual(0) < -93);
+  r.reset_alarm();
+  REQUIRE_FALSE(r.status().alarm);
+  const double x0 = r.actual(0);
+  CHECK_FALSE(r.home_all());
+  CHECK(r.axis(0).alarm.code == AlarmCode::limit_in_homing);
+  CHECK(r.axis(0).alarm.phase == Phase::cam_latch);
+  // Within the stop from latch feedrate (1 mm/s at 500 mm/s²) and a period of travel.
+  CHECK(x0 - r.actual(0) < 0.01);
+}
+
+SCENARIO("a homing phase never starts toward an active limit switch: limit_in_homing before it moves",
+         "[limits][home_cam][alarms]") {
+  // As a jog or a move toward an active limit switch is refused, a latch,
+  // pull-off or final move that would start toward one raises limit_in_homing
+  // without a period of motion: cycle after cycle started there, the carriage
+  // would otherwise creep deeper past the switch (campaign seed 1602).
+  Rig r = cam_rig(50, -95, -90, CamEdge::ahead);
+  r.machine.axes[0].limit_min_mm = -93;
+  r.step();
+  REQUIRE_FALSE(r.home_all());
+  REQUIRE(r.axis(0).alarm.code == AlarmCode::limit_in_homing);
+  for (int cycle = 0; cycle < 3; ++cycle) {
+    r.reset_alarm();
+    REQUIRE_FALSE(r.status().alarm);
+    const double x0 = r.actual(0);
+    CHECK_FALSE(r.home_all());
+    CHECK(r.axis(0).alarm.code == AlarmCode::limit_in_homing);
+    CHECK(r.axis(0).alarm.phase == Phase::cam_latch);
+    CHECK(std::abs(r.actual(0) - x0) <= 1e-9);
+  }
 }
