@@ -99,6 +99,8 @@ struct AxisPlan {
   bool indexer = false;        // a locking indexer (axis.<a>.indexer_lock, fitted on the simulator)
   bool limits = false;         // end-of-travel limit switches fitted (axis.<a>.limits_fitted, on the simulator)
   CamStart cam_start = CamStart::none;  // home_cam: where its first cycle starts
+  bool cam_missing = false;    // home_cam: its cam lies beyond the limit switches
+  bool cam_at_limit = false;   // home_cam: the limit switch on its reference side lies within its latch or pull-off
 };
 
 struct Machine {

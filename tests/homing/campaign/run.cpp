@@ -224,6 +224,12 @@ void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
     case EventKind::count: break;
   }
   event_cause(causes, e, r_.settings, r_.status(), plan);
+  if (e.kind == EventKind::stuck_active || e.kind == EventKind::stuck_inactive || e.kind == EventKind::wire_break)
+    for (Cause& c : causes.list)
+      if (c.needs_true_sensor && c.must && (c.axes & axis_bit(e.axis))) {
+        c.must = false;
+        c.what += " (its sensor lies since: it need not show)";
+      }
   // What no engine can see, named: a slave's sensor blinded (stuck inactive,
   // an open NO circuit) while the slave searches off it looks exactly like
   // its release edge, so the engine squares there, short of a skew it can no

@@ -103,6 +103,43 @@ std::string cause_list(const Causes& causes) {
 
 }  // namespace
 
+// What a home cam's search must end in, from where the cycle finds it
+// (docs/limit-switches.md): a dead cam sensor or no cam between the limit
+// switches: cam_not_found, once the search has reversed at one switch and met
+// the other; a cam sensor stuck active: the latch never releases
+// (not_released, or limit_in_homing where a switch lies within max_backoff);
+// limit switches that never trip with the cam behind: the search runs on
+// into the stop, to sensor_not_found at max_seek_travel; a limit switch
+// within the latch or pull-off: limit_in_homing.
+void home_cam_causes(Causes& c, rig::Rig& r, const AxisSettings& e, std::size_t a, sim::Fault f) {
+  const auto& cfg = r.sim().axis_config(a);
+  const AxisMask bit = axis_bit(a);
+  const auto add = [&](std::string what, std::initializer_list<AlarmCode> codes, AxisMask axes, bool must) {
+    c.add(std::move(what), codes, axes, must).needs_true_sensor = true;
+  };
+  const bool dead = f == sim::Fault::sensor_stuck_inactive || (f == sim::Fault::wire_break && !e.sensor_nc);
+  const bool stuck_on = f == sim::Fault::sensor_stuck_active || (f == sim::Fault::wire_break && e.sensor_nc);
+  if (dead) add(letter(a) + "'s dead cam sensor", {AlarmCode::cam_not_found}, bit, true);
+  if (stuck_on) add(letter(a) + "'s cam sensor stuck active", {AlarmCode::not_released, AlarmCode::limit_in_homing}, bit, true);
+  if (f == sim::Fault::limits_dead && cam_lies_behind(r, e, a))
+    add(letter(a) + "'s dead limit switches with its cam behind", {AlarmCode::sensor_not_found}, bit, true);
+  if (f != sim::Fault::none) return;
+  const bool between = cfg.sensor_max_mm >= cfg.sensor_min_mm && cfg.sensor_max_mm > cfg.limit_min_mm &&
+                       cfg.sensor_min_mm < cfg.limit_max_mm;
+  if (!between) {
+    add(letter(a) + "'s cam beyond its limit switches", {AlarmCode::cam_not_found}, bit, true);
+    return;
+  }
+  // Where the latch releases and the pull-off ends, against the switch on that side.
+  const double side = e.cam_edge == CamEdge::ahead ? dir_of(e) : -dir_of(e);
+  const double edge = side > 0 ? cfg.sensor_max_mm : cfg.sensor_min_mm;
+  const double rest = edge + side * (cfg.hysteresis_mm + e.pull_off_mm);
+  const double past = (rest - (side > 0 ? cfg.limit_max_mm : cfg.limit_min_mm)) * side;
+  const double noise = 4 * cfg.noise_mm + 1e-3;
+  if (past > -noise)
+    add(letter(a) + "'s limit switch within its latch or pull-off", {AlarmCode::limit_in_homing}, bit, past > noise);
+}
+
 Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, bool refused, AxisMask encoder_invalid) {
   Causes c;
   if (refused) {
@@ -216,6 +253,7 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
     if (f == sim::Fault::indexer_never_locks)
       c.add(letter(a) + "'s indexer that never locks", {AlarmCode::lock_not_confirmed}, bit,
             mover && mode_uses_switch(e.mode));
+    if (mover && e.mode == HomingMode::home_cam) home_cam_causes(c, r, e, a, f);
     // Both limit switches stuck active: the axis may not move at all.
     if (f == sim::Fault::limits_stuck)
       c.add(letter(a) + "'s limit switches stuck active", {AlarmCode::both_limits_active}, bit,

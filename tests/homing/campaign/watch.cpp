@@ -81,18 +81,15 @@ void Watch::begin_window(const CyclePlan& p, bool is_refused) {
         r_.sim().axis_config(a).fault != sim::Fault::none)
       continue;
     reversal_known |= axis_bit(a);
-    if (reversal_ahead(a)) reversal_expected |= axis_bit(a);
+    if (cam_lies_behind(r_, effective(r_.settings, a), a)) reversal_expected |= axis_bit(a);
   }
 }
 
-// Off the cam, with the cam not between the carriage and the limit switch
-// ahead (behind it, or beyond that switch): the search meets the switch first.
-bool Watch::reversal_ahead(std::size_t a) const {
-  const AxisSettings e = effective(r_.settings, a);
-  const auto& c = r_.sim().axis_config(a);
-  if (r_.sim().sensor_active(a)) return false;
+bool cam_lies_behind(rig::Rig& r, const AxisSettings& e, std::size_t a) {
+  const auto& c = r.sim().axis_config(a);
+  if (r.sim().sensor_active(a)) return false;
   const double dir = dir_of(e);
-  const double x = r_.sim().actual_position_mm(a);
+  const double x = r.sim().actual_position_mm(a);
   const double near = dir > 0 ? c.sensor_min_mm : c.sensor_max_mm;
   const double limit = dir > 0 ? c.limit_max_mm : c.limit_min_mm;
   const bool cam = c.sensor_max_mm >= c.sensor_min_mm;
@@ -211,7 +208,13 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
   // let the seek run into the stop just behind it. A commutator slave rides
   // along with its master's output, into its stop too. Once at the stop it
   // may rest there, but never drives on into it at full current.
-  if (r_.sim().at_hard_stop(a)) {
+  // Limit switches that never trip cannot keep a carriage off its stop: a
+  // home cam's search behind which the cam lies runs into it, losing steps
+  // until max_seek_travel (docs/limit-switches.md, fault limits_dead).
+  const bool limits_dead = m_.plan[a].limits && r_.sim().axis_config(a).fault == sim::Fault::limits_dead;
+  if (r_.sim().at_hard_stop(a) && limits_dead) {
+    pushed_to_stop_[a] = false;
+  } else if (r_.sim().at_hard_stop(a)) {
     const bool pushing = pushes_into_stop(e.mode);
     const bool reduced = r_.engine.outputs().axes[a].push_output ||
                          (master >= 0 && r_.engine.outputs().axes[static_cast<std::size_t>(master)].push_output);
@@ -360,8 +363,10 @@ void Watch::limit_overrun(std::size_t a, double x, double speed) {
 // (docs/limit-switches.md): it enters limit_reversal only in a period whose
 // inputs show that switch active, and never seeks on in cam_seek past a
 // period that showed it (a cam trigger in the same period takes precedence;
-// both switches at once are both_limits_active). The engine runs a phase it
-// enters in the same period, so the period's status shows what it decided.
+// both switches at once are both_limits_active). A phase entered during a
+// period runs in it (the first phase of a sequence step runs from the next
+// period: campaign seed 604), so a period that began and ended in cam_seek
+// shows what the search decided on the inputs it read.
 void Watch::cam_reversal(std::size_t a) {
   const AxisSettings& e = eff_[a];
   const bool read_min = limit_min_read_[a], read_max = limit_max_read_[a];
@@ -375,7 +380,7 @@ void Watch::cam_reversal(std::size_t a) {
     reversed |= axis_bit(a);
     if (!ahead) fail("the home cam search reversed without meeting the limit switch ahead", fmt_axis(a, r_, r_.actual(a)));
   }
-  if (as.phase == Phase::cam_seek && ahead && !both && !r_.status().alarm)
+  if (as.phase == Phase::cam_seek && phase_prev_[a] == Phase::cam_seek && ahead && !both && !r_.status().alarm)
     fail("the home cam search met the limit switch ahead and sought on", fmt_axis(a, r_, r_.actual(a)));
 }
 

@@ -95,7 +95,6 @@ class Watch {
   void track_edges(std::size_t a);
   void limit_overrun(std::size_t a, double x, double speed);
   void cam_reversal(std::size_t a);
-  bool reversal_ahead(std::size_t a) const;  // the cam lies behind: the search must reverse
 
   rig::Rig& r_;
   const Machine& m_;
@@ -134,5 +133,9 @@ class Watch {
 // pull-off away from it (a slave's compensation too), for a home cam off the
 // cam on its cam_edge side (docs/limit-switches.md).
 double rest_from_edge(const AxisSettings& e, double ref, double compensation_mm);
+
+// A home cam axis off its cam, the cam not between the carriage and the limit
+// switch ahead (behind it, or beyond that switch): its search must reverse.
+bool cam_lies_behind(rig::Rig& r, const AxisSettings& e, std::size_t a);
 
 }  // namespace campaign
