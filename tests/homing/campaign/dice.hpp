@@ -5,7 +5,8 @@
 //   1 the machine (machine_gen.cpp, causes_gen.cpp)    2, 3 the run's acts, its periods
 //   7 locking indexers                                  8 the run's indexer faults
 //   11 limit switches on plain switch axes              12 home_cam axes (home_cam_gen.cpp)
-//   13 what goes wrong with home_cam axes
+//   13 what goes wrong with home_cam axes               14 limit switches within reach
+//   15 the run's acts at limit switches
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>

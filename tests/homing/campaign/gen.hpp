@@ -96,6 +96,9 @@ struct Gen {
   CamFrame home_cam_axis(std::size_t a, Dice& hc);
   void place_home_cam(std::size_t a, const CamFrame& f);  // the simulated machine and max_seek_travel
   void home_cam_cause(std::size_t a, CamFrame f, Dice& hk);
+  // Limit switches within reach (limits_reach_gen.cpp), from their own dice.
+  void limits_in_reach();
+  void limit_in_reach(std::size_t a, Dice& lr);
   Machine build();
 };
 

@@ -476,6 +476,7 @@ Machine Gen::build() {
   indexers();
   limit_switches();
   home_cams();
+  limits_in_reach();
   m.start_held_at_powerup = d.chance(0.15);
   m.powerup_periods = d.integer(1, 50);
   m.start_by_button = d.chance(0.25);

@@ -5,7 +5,8 @@
 
 namespace campaign {
 
-Run::Run(std::uint64_t seed) : m_(generate(seed)), d_(seed, 2), periods_(seed, 3), indexer_events_(seed, 8) {
+Run::Run(std::uint64_t seed)
+    : m_(generate(seed)), d_(seed, 2), periods_(seed, 3), indexer_events_(seed, 8), limit_acts_(seed, 15) {
   r_.settings = m_.settings;
   r_.machine = m_.sim;
   const double max_dt = m_.max_dt_s;
@@ -287,6 +288,7 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
       w_->fail("a home command was not accepted", std::string(command_result_name(res)));
   }
   const double limit = time_bound(r_, m_, plan);
+  AxisMask final_seen = 0;
   std::vector<bool> done(events.size(), false);
   std::vector<int> in_phase(events.size(), 0);
   while (r_.status().homing && r_.sim().time_s() - t0 < limit && ok()) {
@@ -312,6 +314,7 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
     if (button_periods > 0 && --button_periods == 0) r_.sim().set_start_button(false);
     const bool home_again = r_.pending.home_all;
     step();
+    final_move_into_limit(causes, final_seen);
     // An input the simulator changed is read by the engine in the next
     // period: the phase it then runs is the one its alarm may carry too.
     for (std::size_t i = applied_from; i < causes.list.size(); ++i)
@@ -362,6 +365,24 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
   return ok() && !r_.status().alarm && w_->alarms_seen == 0;
 }
 
+// A final move whose target lies past a limit switch must stop there with
+// limit_in_homing (the target as the truth places it, once the axis is homed).
+void Run::final_move_into_limit(Causes& causes, AxisMask& seen_final) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const AxisMask bit = axis_bit(a);
+    if ((seen_final & bit) || r_.axis(a).phase != Phase::final_move) continue;
+    seen_final |= bit;
+    const AxisSettings e = effective(r_.settings, a);
+    const sim::Fault f = r_.sim().axis_config(a).fault;
+    if (!e.limits_fitted || !w_->truth[a].valid || f == sim::Fault::limits_dead || f == sim::Fault::limits_stuck) continue;
+    const auto& c = r_.sim().axis_config(a);
+    const double target = e.final_position_mm - w_->truth[a].offset;
+    if (target > c.limit_max_mm + 0.01 || target < c.limit_min_mm - 0.01)
+      causes.add(std::string(1, kAxisUpper[a]) + "'s final position beyond its limit switch", {AlarmCode::limit_in_homing},
+                 bit, true);
+  }
+}
+
 namespace {
 
 std::string gantry_key(const Settings& s, std::size_t slave) {
@@ -382,6 +403,7 @@ void Run::mark_machine() {
       mark("mode " + std::string(mode_name(m_.settings.axes[a].mode)), seen::present);
     }
     if (m_.plan[a].limits) mark("limit switches fitted", seen::present);
+    if (m_.plan[a].reach_side) mark("a limit switch within jogs, moves or the final move", seen::present);
     if (m_.settings.axes[a].mode == HomingMode::home_cam) {
       for (const std::string& k : home_cam_keys(a)) mark(k, seen::present);
       mark(std::string("home_cam starting ") + start_key(m_.plan[a].cam_start), seen::present);
@@ -524,6 +546,13 @@ void Run::recover() {
                   : "an alarm latched again right after a reset with no cause left",
              codes);
   }
+  // Now and then the technician jogs an axis off the limit switch it tripped
+  // (only away is allowed, homed or not); else the next cycle starts on it.
+  const AlarmBits limit_codes = code_bits({AlarmCode::limit_switch, AlarmCode::limit_in_homing});
+  for (std::size_t a = 0; a < kAxisCount && ok() && !r_.status().alarm; ++a) {
+    if (!(w_->axis_alarms[a] & limit_codes) || !on_limit_switch(a) || !limit_acts_.chance(0.5)) continue;
+    jog_off_limit_switch(a, r_.sim().limit_active(a, true) ? -1 : 1);
+  }
 }
 
 void Run::follow_ups() {
@@ -539,6 +568,8 @@ void Run::follow_ups() {
       }
       continue;
     }
+    limit_switch_trip();
+    if (!ok()) break;
     switch (d_.integer(0, 5)) {
       case 5: change_settings(); break;
       case 0: exercise_motion(); break;

@@ -111,6 +111,7 @@ std::string story(const Machine& m) {
     if (s.mode == HomingMode::home_cam)
       o << "; home cam edge " << (s.cam_edge == CamEdge::ahead ? "ahead" : "behind") << ", starts with "
         << cam_start_name(p.cam_start);
+    if (p.reach_side) o << "; the " << (p.reach_side > 0 ? "positive" : "negative") << " limit switch within jogs and moves";
     if (p.cam_missing) o << "; CAM BEYOND THE LIMIT SWITCHES";
     if (p.cam_at_limit) o << "; LIMIT SWITCH WITHIN THE LATCH OR PULL-OFF";
     if (p.short_cam) o << "; CAM SHORTER THAN THE STOP";

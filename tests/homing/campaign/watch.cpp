@@ -331,8 +331,9 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
 }
 
 // No carriage passes a limit switch by more than its stopping distance: the
-// stop at the axis's acceleration from the speed it had when the switch
-// tripped, one late control period of travel and the simulator's tolerance.
+// stop at the axis's acceleration from the speed it had at the end of the
+// period the switch tripped in, one late control period of travel and the
+// simulator's tolerance.
 // The switches are where the simulated machine has them (not what the engine
 // believes); a switch a fault keeps from ever tripping is not held to it.
 void Watch::limit_overrun(std::size_t a, double x, double speed) {
@@ -346,7 +347,16 @@ void Watch::limit_overrun(std::size_t a, double x, double speed) {
     past_limit_[a] = false;
     return;
   }
-  if (!past_limit_[a]) trip_speed_[a] = speed;
+  // The speed at the end of the period it tripped in is what the engine
+  // brakes from: the status of the next period reports it (a carriage still
+  // accelerating ends that period faster than it crossed: seed 2719).
+  if (!past_limit_[a]) {
+    trip_speed_[a] = speed;
+    trip_fresh_[a] = true;
+  } else if (trip_fresh_[a]) {
+    trip_speed_[a] = std::max(trip_speed_[a], std::abs(r_.status().axes[a].velocity_mm_per_s));
+    trip_fresh_[a] = false;
+  }
   past_limit_[a] = true;
   const double v0 = trip_speed_[a];
   const double allowed = stop_distance_mm(v0, accel_limit(a)) + v0 * m_.max_dt_s + kLimitTolerance_mm;

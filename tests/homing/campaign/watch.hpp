@@ -124,6 +124,7 @@ class Watch {
   // Limit switches: past one since the period it tripped, at that speed.
   std::array<bool, kAxisCount> past_limit_{};
   std::array<double, kAxisCount> trip_speed_{};
+  std::array<bool, kAxisCount> trip_fresh_{};  // tripped in the last period: its end speed comes now
   // The limit switches as the engine reads them in the next period (the
   // simulator's levels at the end of this one).
   std::array<bool, kAxisCount> limit_min_read_{}, limit_max_read_{};
