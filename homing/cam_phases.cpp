@@ -6,6 +6,7 @@
 // reference, crossed the same way whichever side the cam was found from.
 #include <cmath>
 
+#include "mutation.hpp"
 #include "phase_runner.hpp"
 
 namespace homing {
@@ -51,11 +52,13 @@ void PhaseRunner::cam_seek() {
       run.reach(Reached::stopped_on_sensor);
       return enter(Phase::cam_latch);
     }
-    if (in.limit_toward(dir)) return enter(Phase::limit_reversal);
+    if (in.limit_toward(dir) && !planted(Mutant::home_cam_search_ignores_limit_switch))
+      return enter(Phase::limit_reversal);
     run.target_mm = run.phase_start_mm + dir * s.max_seek_travel_mm;
   }
   if (edge_to(true)) return cam_triggered();
-  if (in.limit_toward(dir)) return enter(Phase::limit_reversal);
+  if (in.limit_toward(dir) && !planted(Mutant::home_cam_search_ignores_limit_switch))
+    return enter(Phase::limit_reversal);
   move_to(run.target_mm, seek_v);
   if (arrived()) fail(AlarmCode::sensor_not_found, travelled());
 }

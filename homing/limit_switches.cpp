@@ -6,6 +6,7 @@
 // stands on the switch, and a jog away from it (only away) is allowed until
 // it releases (limit_tripped, limit_side; jog_move.cpp).
 #include "engine.hpp"
+#include "mutation.hpp"
 
 namespace homing {
 
@@ -29,6 +30,7 @@ void Engine::check_limit_switches(const Settings& settings) {
       continue;
     }
     if (run.in_cycle && reverses_at_limits(run.phase)) continue;
+    if (!run.in_cycle && planted(Mutant::limit_switch_ignored_outside_homing)) continue;
     const double v = run.motor.velocity_mm_per_s;
     if (v == 0) continue;
     const std::int8_t toward = v < 0 ? -1 : 1;
