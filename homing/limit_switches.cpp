@@ -31,9 +31,12 @@ void Engine::check_limit_switches(const Settings& settings) {
     }
     if (run.in_cycle && reverses_at_limits(run.phase)) continue;
     if (!run.in_cycle && planted(Mutant::limit_switch_ignored_outside_homing)) continue;
+    // Moving toward it, or come to rest on it within the period that just
+    // ended (a target a hair past the switch, a late period): a trip all the same.
     const double v = run.motor.velocity_mm_per_s;
-    if (v == 0) continue;
-    const std::int8_t toward = v < 0 ? -1 : 1;
+    const double heading = v != 0 ? v : run.motor.position_mm - run.period_start.position_mm;
+    if (heading == 0) continue;
+    const std::int8_t toward = heading < 0 ? -1 : 1;
     if (!in.limit_toward(toward)) continue;
     // Reset while still braking onto it: the trip is known, no second alarm.
     // Only that braking: a motion started since (a homing phase; jogs and

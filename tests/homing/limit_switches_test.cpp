@@ -195,3 +195,34 @@ SCENARIO("a homing phase never starts toward an active limit switch: limit_in_ho
     CHECK(std::abs(r.actual(0) - x0) <= 1e-9);
   }
 }
+
+SCENARIO("a move that comes to rest on a limit switch in the period it reaches it still raises limit_switch",
+         "[limits][hard_limit][alarms]") {
+  // The target 0.01 mm past the switch and a control period 10 ms late as the
+  // carriage gets there: the move arrives within the period in which it
+  // reaches the switch, so the next period reads the switch active with the
+  // axis already at rest (campaign seed 13003772: 0.6 mm past the switch at
+  // 900 mm/s). The trip must show all the same.
+  Rig r = cam_rig(95, 10, 20);
+  r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+  r.next_dt = [&] { return r.sim().actual_position_mm(0) > 99 ? 0.01 : 0.001; };
+  r.step();
+  const double target = r.axis(0).position_mm + (100 - r.actual(0)) + 0.01;
+  r.move(0, target);
+  REQUIRE(r.status().last_command_result == CommandResult::accepted);
+  r.run_until([&] { return !r.any_moving() && r.axis(0).phase != Phase::move; }, 10);
+  r.run_for(0.01);
+  REQUIRE(r.actual(0) >= 100);  // on the switch
+  CHECK(r.axis(0).alarm.code == AlarmCode::limit_switch);
+  // Tripped: further onto it is refused, away is allowed.
+  r.reset_alarm();
+  r.jog(0, +1);
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::refused_hard_limit);
+  r.release_jogs();
+  r.step();
+  r.jog(0, -1);
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  r.release_jogs();
+}
