@@ -73,7 +73,10 @@ void Run::exercise_motion() {
         acts_ |= act::event_in_jog_or_move;
         stopped_short = stopped_short_any = true;
       }
-    r_.run_until([&] { return (!r_.any_moving() && r_.axis(a).phase != Phase::move) || !ok(); }, 120);
+    // (A locking indexer unlocks first: the move waits in phase unlock, seed 12018743.)
+    r_.run_until([&] {
+      return (!r_.any_moving() && r_.axis(a).phase != Phase::move && r_.axis(a).phase != Phase::unlock) || !ok();
+    }, 120);
     settle(10);
     if (!outside && !stopped_short && !r_.status().alarm && ok() && std::abs(r_.axis(a).position_mm - target) > 1e-9)
       w_->fail("a move did not arrive", std::to_string(r_.axis(a).position_mm) + " for " + std::to_string(target));
@@ -358,6 +361,12 @@ void Run::lost_steps() {
   const auto& c = r_.sim().axis_config(a);
   const double to_cam = away < 0 ? c.sensor_min_mm - r_.actual(a) : r_.actual(a) - c.sensor_max_mm;
   const double lost = d_.chance(0.5) ? away * d_.u(0, 3) : -away * d_.u(0, std::min(s.pull_off_mm, 0.8 * to_cam));
+  // Nor onto it from the other side: a home cam's jogs may leave it beyond
+  // its cam (seed 13004140).
+  const double x1 = r_.actual(a) + lost, margin = c.hysteresis_mm + 0.1;
+  if (s.mode == HomingMode::home_cam && std::min(r_.actual(a), x1) < c.sensor_max_mm + margin &&
+      std::max(r_.actual(a), x1) > c.sensor_min_mm - margin)
+    return;
   // Nor onto a limit switch: a carriage that jumps past one is no overrun of the engine's.
   if (s.limits_fitted && (r_.actual(a) + lost > c.limit_max_mm - 0.5 || r_.actual(a) + lost < c.limit_min_mm + 0.5)) return;
   say(std::string("lose ") + std::to_string(lost) + " on " + kAxisUpper[a]);

@@ -94,10 +94,19 @@ CamFrame Gen::home_cam_axis(std::size_t a, Dice& hc) {
     lo = std::min(lo, x);
     hi = std::max(hi, x);
   };
-  if (s.final_move_enable) reach(frame_of(s.final_position_mm));
+  // An axis in no sequence step is given its home position where it stands:
+  // then they lie around its start (seed 12004845: a jog ran on past dead
+  // limit switches into the stop).
+  const auto from_start = [&](double machine_mm) { return f.start - dir * (machine_mm - s.home_position_mm); };
+  if (s.final_move_enable) {
+    reach(frame_of(s.final_position_mm));
+    reach(from_start(s.final_position_mm));
+  }
   if (s.soft_limits_enable) {
-    reach(frame_of(s.soft_limit_min_mm));
-    reach(frame_of(s.soft_limit_max_mm));
+    for (const double limit : {s.soft_limit_min_mm, s.soft_limit_max_mm}) {
+      reach(frame_of(limit));
+      reach(from_start(limit));
+    }
   }
   f.seek_side = lo - 3 - hc.u(0.5, 30);
   f.far_side = hi + 3 + hc.u(0.5, 30);

@@ -342,10 +342,11 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
   }
   // A carriage braking after the cycle stopped (another axis's alarm, an
   // abort, an e-stop) may run onto the limit switch its search was heading
-  // for: a trip outside homing, of that axis alone (campaign seed 571).
+  // for: a trip outside homing, of that axis alone (campaign seed 571), in
+  // phase idle when it came to rest on the switch (seed 119).
   for (std::size_t a = 0; a < kAxisCount; ++a)
     if (r_.settings.axes[a].limits_fitted && w_->first_alarm[a].code == AlarmCode::limit_switch &&
-        w_->first_alarm[a].phase == Phase::stopping)
+        (w_->first_alarm[a].phase == Phase::stopping || w_->first_alarm[a].phase == Phase::idle))
       causes.add(std::string(1, kAxisUpper[a]) + "'s limit switch met braking after the cycle stopped",
                  {AlarmCode::limit_switch}, axis_bit(a));
   if (ok()) verdict(*w_, r_, m_, causes, cycles_before);
