@@ -140,6 +140,21 @@ void home_cam_causes(Causes& c, rig::Rig& r, const AxisSettings& e, std::size_t 
     add(letter(a) + "'s limit switch within its latch or pull-off", {AlarmCode::limit_in_homing}, bit, past > noise);
 }
 
+// A pre-move away from the sensor heading past the limit switch on that side
+// (a jog left the carriage next to it) must stop there with limit_in_homing;
+// within a hair of the switch, or where the sensor decides whether it runs,
+// it may. (A final move past a switch: Run::final_move_into_limit.)
+void pre_move_cause(Causes& c, rig::Rig& r, const AxisSettings& e, std::size_t a) {
+  const auto& cfg = r.sim().axis_config(a);
+  const bool always = e.pre_move_mode == PreMove::always;
+  if (!always && !(e.pre_move_mode == PreMove::if_sensor_active && r.sim().sensor_active(a))) return;
+  const double away = -dir_of(e);
+  const double target = r.actual(a) + away * e.pre_move_distance_mm;
+  const double past = (target - (away > 0 ? cfg.limit_max_mm : cfg.limit_min_mm)) * away;
+  if (past > -0.01)
+    c.add(letter(a) + "'s pre-move past its limit switch", {AlarmCode::limit_in_homing}, axis_bit(a), past > 0.01 && always);
+}
+
 Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, bool refused, AxisMask encoder_invalid) {
   Causes c;
   if (refused) {
@@ -254,20 +269,9 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
       c.add(letter(a) + "'s indexer that never locks", {AlarmCode::lock_not_confirmed}, bit,
             mover && mode_uses_switch(e.mode));
     if (mover && e.mode == HomingMode::home_cam) home_cam_causes(c, r, e, a, f);
-    // A pre-move away from the sensor heading past the limit switch on that
-    // side (a jog left the carriage next to it) must stop there; within a
-    // hair of the switch either may happen. (A final move: Run::final_move_into_limit.)
-    if (mover && e.limits_fitted && f == sim::Fault::none && mode_uses_switch(e.mode) && p.role == Role::plain) {
-      const auto& cfg = r.sim().axis_config(a);
-      const bool on_sensor = r.sim().sensor_active(a);
-      const bool pre = e.pre_move_mode == PreMove::always || (e.pre_move_mode == PreMove::if_sensor_active && on_sensor);
-      const double away = -dir_of(e);
-      const double target = r.actual(a) + away * e.pre_move_distance_mm;
-      const double past = (target - (away > 0 ? cfg.limit_max_mm : cfg.limit_min_mm)) * away;
-      if (pre && e.mode != HomingMode::home_cam && past > -0.01)
-        c.add(letter(a) + "'s pre-move past its limit switch", {AlarmCode::limit_in_homing}, bit,
-              past > 0.01 && e.pre_move_mode == PreMove::always);
-    }
+    if (mover && e.limits_fitted && f == sim::Fault::none && p.role == Role::plain && mode_uses_switch(e.mode) &&
+        e.mode != HomingMode::home_cam)
+      pre_move_cause(c, r, e, a);
     // Both limit switches stuck active: the axis may not move at all.
     if (f == sim::Fault::limits_stuck)
       c.add(letter(a) + "'s limit switches stuck active", {AlarmCode::both_limits_active}, bit,
