@@ -62,8 +62,14 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // before its fix in limit_switches.cpp / PhaseRunner::move_to (named
   // scenarios in limit_switches_test.cpp); 571, 604, 1710, 161, 1022, 1177,
   // 2719: the campaign's own model of home cams and limit switches.
-  const std::uint64_t seeds[] = {1, 7, 3, 8, 490, 715, 2, 173, 959, 1242, 2054, 84, 4, 103, 1069, 412, 627, 3972, 8001884,
-                                 31342370, 9, 5000422, 5001903, 9001798, 97, 877, 571, 604, 1710, 161, 1022, 1177, 2719};
+  // 13003772: a move came to rest on a limit switch within the period it
+  // reached it, with no alarm (fix in limit_switches.cpp, named scenario);
+  // 12004845, 13004140, 12018743, 119: the campaign's own model again.
+  const std::uint64_t seeds[] = {1,        7,       3,        8,        490,      715,     2,       173,      959,
+                                 1242,     2054,    84,       4,        103,      1069,    412,     627,      3972,
+                                 8001884,  31342370, 9,       5000422,  5001903,  9001798, 97,      877,      571,
+                                 604,      1710,    161,      1022,     1177,     2719,    13003772, 12004845, 13004140,
+                                 12018743, 119};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);
