@@ -476,6 +476,104 @@ def splice_tls_section(out_path, lines):
         f.write("\n".join(old[:start] + lines + old[end:]))
 
 
+def homing_cycles(port):
+    """status.homing_cycles (IR 3-4, u32 high word first) over a raw MBAP read."""
+    s = socket.create_connection(("127.0.0.1", port), timeout=5)
+    s.sendall(bytes([0, 1, 0, 0, 0, 6, 1, 4, 0, 3, 0, 2]))
+    data = b""
+    while len(data) < 13:
+        chunk = s.recv(64)
+        if not chunk:
+            break
+        data += chunk
+    s.close()
+    return (int.from_bytes(data[9:11], "big") << 16) | int.from_bytes(data[11:13], "big")
+
+
+def mqtt(b, results, clients=8):
+    """The Sparkplug B edge node's cost to the control loop: homingd under the
+    same Modbus load with homing cycles, with and without --mqtt to Debian's
+    mosquitto on loopback; a subscriber counts what the broker carries."""
+    import paho.mqtt.client as paho
+    rows = {"without": [], "with": [], "ratio_loop_p99": [], "msgs_per_s": [], "bytes_per_cycle": [], "cycles": []}
+    for r in range(b.rounds):
+        log(f"mqtt: round {r + 1}/{b.rounds}")
+        port = free_port()
+        hd = b.homingd(port)
+        try:
+            b.load(port, clients, "mixed", duration=max(b.duration, 3), extra=["--home"])
+            rows["without"].append(b.read_diag(port))
+        finally:
+            b.stop(hd)
+        broker_port = free_port()
+        conf = os.path.join(b.work, f"mosquitto.{b.seq}.conf")
+        with open(conf, "w") as f:
+            f.write(f"listener {broker_port} 127.0.0.1\nallow_anonymous true\npersistence false\n")
+        broker = subprocess.Popen(["/usr/sbin/mosquitto", "-c", conf], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        counted = {"msgs": 0, "bytes": 0}
+        sub = paho.Client(client_id=f"bench-host-{r}")
+        def on_message(_c, _u, msg, counted=counted):
+            counted["msgs"] += 1
+            counted["bytes"] += len(msg.payload) + len(msg.topic)
+        sub.on_message = on_message
+        try:
+            end = time.monotonic() + 10
+            while True:
+                try:
+                    sub.connect("127.0.0.1", broker_port)
+                    break
+                except OSError:
+                    if time.monotonic() > end:
+                        raise
+                    time.sleep(0.05)
+            sub.subscribe("spBv1.0/#", qos=0)
+            sub.loop_start()
+            port = free_port()
+            hd = b.homingd(port, extra=["--mqtt", f"mqtt://127.0.0.1:{broker_port}", "--mqtt-group", "bench",
+                                        "--mqtt-node", "m1"])
+            try:
+                time.sleep(0.5)  # the birth
+                c0, m0, t0 = homing_cycles(port), dict(counted), time.monotonic()
+                b.load(port, clients, "mixed", duration=max(b.duration, 3), extra=["--home"])
+                c1, m1, t1 = homing_cycles(port), dict(counted), time.monotonic()
+                rows["with"].append(b.read_diag(port))
+            finally:
+                b.stop(hd)
+            rows["cycles"].append(c1 - c0)
+            rows["msgs_per_s"].append((m1["msgs"] - m0["msgs"]) / (t1 - t0))
+            if c1 > c0:
+                rows["bytes_per_cycle"].append((m1["bytes"] - m0["bytes"]) / (c1 - c0))
+            rows["ratio_loop_p99"].append(rows["with"][-1]["p99"] / max(rows["without"][-1]["p99"], 1))
+        finally:
+            sub.loop_stop()
+            b.stop(broker)
+    results["mqtt"] = rows
+
+
+def mqtt_section(m, clients=8):
+    L = []
+    w = L.append
+    w("## MQTT: the Sparkplug B edge node beside none")
+    w("")
+    w(f"homingd under the same load ({clients} Modbus clients, mix `mixed`, homing cycles running), once without and "
+      "once with `--mqtt` to Debian's mosquitto on loopback, a subscriber on `spBv1.0/#` counting what the broker "
+      "carries (births, value changes, events). Lateness is the control loop's own (diag registers).")
+    w("")
+    w("| | loop lateness p50 µs | p99 µs | p99.9 µs | max µs |")
+    w("|---|---|---|---|---|")
+    for k in ("without", "with"):
+        rr = m[k]
+        w(f"| {k} MQTT | {fmt(med([x['p50'] for x in rr]))} | {fmt(med([x['p99'] for x in rr]))} "
+          f"| {fmt(med([x['p999'] for x in rr]))} | {fmt(med([x['max'] for x in rr]))} |")
+    w("")
+    w(f"Loop lateness p99 with MQTT / without: **{med(m['ratio_loop_p99']):.2f}×** (median of the rounds). "
+      f"Published: {med(m['msgs_per_s']):.1f} messages/s; **"
+      + (f"{med(m['bytes_per_cycle']):.0f} bytes per homing cycle" if m["bytes_per_cycle"] else "no cycle ended in a round")
+      + f"** (payload and topic, births and value changes included; {med(m['cycles']):.0f} cycles per round).")
+    w("")
+    return L
+
+
 def engine(b, results):
     log("engine: Google Benchmark and homing repeatability")
     out = b.run("engine_step_bench", [b.path("engine_step_bench"), "--benchmark_min_time=0.5",
@@ -831,6 +929,9 @@ def report(b, results, info, args, started, out_path, causes):
     if results.get("tls"):
         L.extend(tls_section(b, results["tls"]))
 
+    if results.get("mqtt"):
+        L.extend(mqtt_section(results["mqtt"]))
+
     w("## Commands")
     w("")
     w("Run from the repository root by `bench/run_benchmarks.sh`; `$WORK` is a scratch directory it creates "
@@ -909,6 +1010,7 @@ def main():
         mixes(b, args.mix_clients, results)
         rtu(b, results)
         tls(b, results)
+        mqtt(b, results)
         report(b, results, info, args, started, args.out, load_causes())
     finally:
         shutil.rmtree(work, ignore_errors=True)

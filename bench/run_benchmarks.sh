@@ -6,7 +6,8 @@
 # lateness beside a bare clock_nanosleep loop; the engine's step cost; idle CPU
 # and memory; homing repeatability and cycle time; durable settings writes
 # beside a bare SQLite commit; RTU turnaround over a socat pty pair; Modbus/TCP
-# Security (TLS) beside plain TCP on one homingd, and the cost of a handshake.
+# Security (TLS) beside plain TCP on one homingd, and the cost of a handshake;
+# the control loop with and without the MQTT edge node, and its bytes per cycle.
 #
 #   bash bench/run_benchmarks.sh [BUILD_DIR] [options]
 #

@@ -10,6 +10,13 @@
 namespace homing {
 namespace {
 
+// Hard-stop homing by the encoder: the stall is its following error.
+std::string following_error_note(const AxisSettings& s, std::string_view unit) {
+  if (!detects_stop_by_following_error(s)) return "";
+  return fmt::format(": the carriage never fell behind its steps by more than max_following_error {:g} {}",
+                     s.max_following_error_mm, unit);
+}
+
 // What happened, with the axis letter and the figures.
 std::string what_happened(std::size_t axis, const Alarm& a, const Settings& settings) {
   // Figures from the settings the axis moves with (a slave its master's).
@@ -72,10 +79,11 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
       return fmt::format("{}: absolute encoder gives no valid position", X);
     case AlarmCode::stop_not_found:
       return fmt::format("{}: no stall reported within {:.3f} {} of travel toward the mechanical stop "
-                         "(max_seek_travel {:g} {})", X, a.value, u, s.max_seek_travel_mm, u);
+                         "(max_seek_travel {:g} {}){}", X, a.value, u, s.max_seek_travel_mm, u,
+                         following_error_note(s, u));
     case AlarmCode::stall_timeout:
       return fmt::format("{}: no stall reported after pushing toward the mechanical stop for {:.1f} s "
-                         "(stall_timeout_ms {:g})", X, a.value, s.stall_timeout_ms);
+                         "(stall_timeout_ms {:g}){}", X, a.value, s.stall_timeout_ms, following_error_note(s, u));
     case AlarmCode::stall_at_start:
       return fmt::format("{}: the drive's stall input was active before the push toward the stop began", X);
     case AlarmCode::drive_no_answer:
@@ -105,6 +113,9 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
     case AlarmCode::limit_switch:
       return fmt::format("{}: {} limit switch tripped during {} at {:.3f} {}", X,
                          a.rule == 1 ? "negative" : "positive", ph, a.value, u);
+    case AlarmCode::encoder_reversed:
+      return fmt::format("{}: the encoder counted {:.3f} {} away from the mechanical stop while the motor pushed "
+                         "toward it (stall_detect following_error)", X, a.value, u);
     case AlarmCode::switch_not_repeatable:
       return fmt::format("{}: switch not repeatable: spread {:.3f} {} over {} passes, limit {:.3f} {}", X, a.value,
                          u, latch_passes_of(s.latch_passes), s.max_latch_spread_mm, u);

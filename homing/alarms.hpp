@@ -46,8 +46,9 @@ enum class AlarmCode : std::uint8_t {
   both_limits_active = 30,     // both limit switches active at once (wiring, polarity)
   limit_switch = 31,           // an end-of-travel limit switch tripped outside homing (hard limit)
   switch_not_repeatable = 32,  // the latch passes' spread exceeded max_latch_spread
+  encoder_reversed = 33,       // hard-stop homing by following error: the encoder counted away from the stop
 };
-inline constexpr std::uint8_t kAlarmCodeCount = 33;
+inline constexpr std::uint8_t kAlarmCodeCount = 34;
 
 // The alarm table: per code its name, what happened (text) and what a
 // maintenance technician checks (what_to_check). describe_alarm() says what
@@ -99,10 +100,11 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
      "check the encoder cable, its power and the drive's encoder alarm, then reset and home again"},
     {AlarmCode::stop_not_found, "stop_not_found", "hard-stop homing travelled max_seek_travel without a stall",
      "check that the drive's stall output is wired and enabled (its torque limit and detection time), the "
-     "homing direction, and that the mechanical stop lies within max_seek_travel"},
+     "homing direction, and that the mechanical stop lies within max_seek_travel; with stall_detect "
+     "following_error, that max_following_error fits in the travel left beyond the stop"},
     {AlarmCode::stall_timeout, "stall_timeout", "hard-stop homing pushed for stall_timeout_ms without a stall",
      "check the drive's stall output and its detection time; raise stall_timeout_ms if the stop lies further "
-     "than latch_feedrate covers in that time"},
+     "than latch_feedrate covers in that time (with stall_detect following_error: plus max_following_error)"},
     {AlarmCode::stall_at_start, "stall_at_start", "the stall input was active before the axis moved",
      "check the stall input's wiring and the drive (a stall output stuck on, or the drive still in torque "
      "limit); reset the drive, then home again"},
@@ -140,8 +142,12 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
     {AlarmCode::switch_not_repeatable, "switch_not_repeatable",
      "the latch passes found the reference edge further apart than max_latch_spread",
      "check the switch's mounting, the cam, and the latch feedrate"},
+    {AlarmCode::encoder_reversed, "encoder_reversed",
+     "hard-stop homing by following error: the encoder counted away from the stop while the motor pushed toward it",
+     "check the encoder's counting direction (its A and B channels, the drive's encoder direction setting) and that "
+     "it is this axis's encoder; nothing was homed"},
 };
-static_assert(lists_every_value(kAlarmInfo, AlarmCode::switch_not_repeatable));
+static_assert(lists_every_value(kAlarmInfo, AlarmCode::encoder_reversed));
 static_assert(std::size(kAlarmInfo) == kAlarmCodeCount);
 constexpr std::span<const AlarmInfo> enum_table(AlarmCode) { return kAlarmInfo; }
 

@@ -51,7 +51,10 @@ struct Jog {
 };
 struct PushToStop {
   double start_s = 0;           // engine time the push began
-  bool stalled = false;         // the drive reported the stall: braking at the stop
+  bool stalled = false;         // the stop was told (stall input or following error): braking at the stop
+  // Following-error detection: motor position and encoder reading as the push began.
+  double motor_start_mm = 0;
+  double encoder_start_mm = 0;
 };
 struct LimitReversal {
   bool braked = false;        // at rest after meeting the limit switch: the search runs back

@@ -86,12 +86,24 @@ void PhaseRunner::note_index(double release_mm, double index_mm) {
   run.health.index_near_edge = index_near_edge(run.health.index_distance_mm, s.index_pitch_mm);
 }
 
+// Both sides of a gantry found their edges: how far apart they lie, each
+// from where its side stood when the cycle started, is how far out of square
+// with its sensors the pair stood (docs/health.md "Gantry skew"). The
+// compensation comes later, in the pull-off; published on the slave.
+void PhaseRunner::note_gantry_skew() {
+  Run& slave = is_slave ? run : partner_run();
+  const Run& master = is_slave ? partner_run() : run;
+  slave.health.gantry_skew_mm = (slave.reference_mm - master.reference_mm) - slave.pair_rel0_mm;
+  slave.health.gantry_skew_measured = true;
+}
+
 // The reference edge is located. A commutator master holds there (its
 // slave aligns on its own edge from this point); everyone else pulls off.
 void PhaseRunner::reference_found(double reference_mm) {
   run.reference_mm = reference_mm;
   measure_switch(run.health, run.edges, run.latch, dir, ctx.input.filter.transitions(), ctx.input.filter.accepted());
   run.reach(Reached::reference);
+  if (partner >= 0 && partner_run().has_reached(Reached::reference)) note_gantry_skew();
   if (commutator_master()) {
     run.command = stop_command(accel);
     return wait_for(Wait::slave_aligned, Phase::pull_off);

@@ -4,7 +4,10 @@
 // Pure arithmetic; the phases feed it, publish() reports it.
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <span>
+
+#include "enum_info.hpp"
 
 namespace homing {
 
@@ -44,6 +47,12 @@ struct SwitchHealth {
   int chatter_edges = 0;        // raw transitions the debounce time swallowed this cycle
   double index_distance_mm = 0; // switch + index: release edge to the index pulse taken
   bool index_near_edge = false; // that distance is within kIndexMarginOfPitch of 0 or one pitch
+  // Gantry slave (software-slaved or commutator): its reference edge minus
+  // its master's, each taken from where its side stood when the cycle
+  // started: the pair's squaring before the switch compensation. Set once
+  // both edges are found (gantry_skew_measured).
+  bool gantry_skew_measured = false;
+  double gantry_skew_mm = 0;
 };
 
 // Switch + index: an index pulse this close (as a fraction of the pitch) to
@@ -54,6 +63,38 @@ constexpr bool index_near_edge(double distance_mm, double pitch_mm) {
   return pitch_mm > 0 &&
          (distance_mm < kIndexMarginOfPitch * pitch_mm || distance_mm > (1 - kIndexMarginOfPitch) * pitch_mm);
 }
+
+// What the homing history says of an axis's health: the runtime's trend check
+// (server/health_trend.hpp) compares the last cycles' figures and publishes
+// one of these per axis (axis.<a>.health_warning). Not an alarm: the axis
+// stays homed. Values are register values: append, never renumber.
+enum class HealthWarning : std::uint8_t {
+  none = 0,
+  hysteresis_growing = 1,
+  latch_spread_growing = 2,
+  seek_latch_growing = 3,
+  chatter = 4,
+  index_near_edge = 5,
+  gantry_skew_changed = 6,
+};
+inline constexpr EnumInfo<HealthWarning> kHealthWarningInfo[] = {
+    {HealthWarning::none, "none", "no health warning"},
+    {HealthWarning::hysteresis_growing, "hysteresis_growing",
+     "the switch's hysteresis grew over the last cycles: the switch is wearing; check its mounting and plunger"},
+    {HealthWarning::latch_spread_growing, "latch_spread_growing",
+     "the latch passes' spread grew over the last cycles: check the switch's mounting, the cam and the latch feedrate"},
+    {HealthWarning::seek_latch_growing, "seek_latch_growing",
+     "the seek-latch difference grew over the last cycles: the input is slowing; check the input filter, the wiring "
+     "and the switch's response"},
+    {HealthWarning::chatter, "chatter",
+     "the contact chatters more than it did: check the contact, its connector and noise on the line"},
+    {HealthWarning::index_near_edge, "index_near_edge",
+     "the index pulse lies near the switch edge: move the cam or the encoder's index by about half a pitch"},
+    {HealthWarning::gantry_skew_changed, "gantry_skew_changed",
+     "the gantry's squaring changed beyond max_skew_change: check the slave's coupling and sensor"},
+};
+static_assert(lists_every_value(kHealthWarningInfo, HealthWarning::gantry_skew_changed));
+constexpr std::span<const EnumInfo<HealthWarning>> enum_table(HealthWarning) { return kHealthWarningInfo; }
 
 // The edges one cycle crossed, as the phases find them.
 struct CycleEdges {

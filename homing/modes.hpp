@@ -75,6 +75,18 @@ inline constexpr SignalInfo kSignalInfo[] = {
      "reverses its search at the limit switches", true},
 };
 
+// How a method that pushes into a mechanical stop tells that the carriage has
+// stopped (axis.<a>.stall_detect). Values are register values: never renumber.
+enum class StallDetect : std::uint8_t { stall_input = 0, following_error = 1 };
+inline constexpr EnumInfo<StallDetect> kStallDetectInfo[] = {
+    {StallDetect::stall_input, "stall_input", "the drive's stall or torque-limit input turns on"},
+    {StallDetect::following_error, "following_error",
+     "the encoder: the carriage falls behind its steps by more than max_following_error"},
+};
+static_assert(lists_every_value(kStallDetectInfo, StallDetect::following_error));
+constexpr std::span<const EnumInfo<StallDetect>> enum_table(StallDetect) { return kStallDetectInfo; }
+inline constexpr std::size_t kStallDetectCount = std::size(kStallDetectInfo);
+
 // The coordinate a method gives the axis once homed.
 enum class Coordinate : std::uint8_t {
   none,              // does not home: counts as homed where it stands, keeps its coordinate
@@ -113,6 +125,10 @@ struct ModeRow {
   bool gantry_master;  // may be the master of a gantry pair
   bool gantry_slave;   // may be a gantry slave (it squares on its own sensor)
   bool shares_limit;   // its home sensor may double as a hard limit (axis.<a>.shared_limit)
+  // A method that pushes into a mechanical stop finds it by one signal of
+  // these, chosen per axis by axis.<a>.stall_detect (indexed by StallDetect),
+  // on top of `needs`; none for the other methods.
+  std::array<Signals, kStallDetectCount> stop_signals{};
 
   constexpr std::span<const Phase> phase_list() const { return {phases.data(), phase_count}; }
   constexpr bool runs(Phase p) const {
@@ -127,7 +143,18 @@ struct ModeRow {
     return Phase::done;
   }
   constexpr Phase first() const { return phase_count > 0 ? phases[0] : Phase::done; }
+  // Needed whatever the axis's settings say.
   constexpr bool needs_signal(Signal s) const { return (needs & static_cast<Signals>(s)) != 0; }
+  // The method finds a mechanical stop by a signal axis.<a>.stall_detect chooses.
+  constexpr bool detects_stop() const { return stop_signals[0] != 0; }
+  // Everything it needs wired with this stop detection.
+  constexpr Signals needs_with(StallDetect d) const {
+    const auto i = static_cast<std::size_t>(d);
+    return static_cast<Signals>(needs | (i < kStallDetectCount ? stop_signals[i] : stop_signals[0]));
+  }
+  constexpr bool needs_signal(Signal s, StallDetect d) const {
+    return (needs_with(d) & static_cast<Signals>(s)) != 0;
+  }
 };
 
 namespace mode_phases {
@@ -187,8 +214,10 @@ inline constexpr ModeRow kModeTable[] = {
     {HomingMode::hard_stop, "hard_stop",
      "no switch: push into the mechanical stop at latch feedrate and reduced current until the drive reports a "
      "stall; the stop is the reference",
-     Signal::step_output | Signal::push_output | Signal::stall, mode_phases::hard_stop, 5,
-     Coordinate::mechanical_stop, FinalMove::if_enabled, false, false, false},
+     Signal::step_output | Signal::push_output, mode_phases::hard_stop, 5,
+     Coordinate::mechanical_stop, FinalMove::if_enabled, false, false, false,
+     // The stop: the drive's stall input, or the encoder falling behind the steps.
+     {static_cast<Signals>(Signal::stall), static_cast<Signals>(Signal::absolute_encoder)}},
     // The drive homes itself on its own sensor at its own speeds (CiA 402
     // homing mode, HOME/HOME-END of Oriental AZ and IAI drives): the module
     // sends no steps meanwhile, so it can square no gantry. Its home input is
@@ -227,7 +256,14 @@ constexpr bool rows_are_consistent() {
       return false;
     if (r.runs(Phase::index) != r.needs_signal(Signal::index)) return false;
     if (r.runs(Phase::push) && !r.needs_signal(Signal::push_output)) return false;
-    if (r.runs(Phase::push_to_stop) != r.needs_signal(Signal::stall)) return false;
+    // A method that pushes to a stop finds it by one signal per choice, the
+    // stall input by default; no other method has the choice.
+    if (r.runs(Phase::push_to_stop) != r.detects_stop()) return false;
+    for (const Signals s : r.stop_signals)
+      if ((s == 0) == r.detects_stop()) return false;
+    if (r.detects_stop() && r.stop_signals[static_cast<std::size_t>(StallDetect::stall_input)] !=
+                                static_cast<Signals>(Signal::stall))
+      return false;
     if ((r.coordinate == Coordinate::mechanical_stop) != r.runs(Phase::push_to_stop)) return false;
     if ((r.gantry_master || r.gantry_slave) && !r.needs_signal(Signal::home_sensor)) return false;
     if (r.runs(Phase::drive_homing) != r.needs_signal(Signal::drive_request)) return false;

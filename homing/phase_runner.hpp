@@ -5,6 +5,7 @@
 // see only their context (this axis, its gantry partner, the input carrying
 // its sensor, the time, the alarm path), never the engine itself.
 #include <cmath>
+#include <optional>
 
 #include "alarm_sink.hpp"
 #include "axis_run.hpp"
@@ -99,6 +100,12 @@ struct PhaseRunner {
   void after_stop();
   void push();
   void push_to_stop();  // hard-stop homing (stop_phases.cpp)
+  std::optional<AlarmCode> push_cannot_start() const;
+  struct Following {
+    double error_mm;     // the steps' lead over the encoder, toward the stop
+    double followed_mm;  // the encoder's travel toward the stop
+  };
+  Following following(const phase_data::PushToStop& push) const;
   void back_off();
   void reapproach();
   void latch_edge_found(double edge_mm);
@@ -107,6 +114,7 @@ struct PhaseRunner {
   void index();
   void note_index(double release_mm, double index_mm);
   void reference_found(double reference_mm);
+  void note_gantry_skew();
   double rest_offset_mm() const;
   void pull_off();
   void aligned();

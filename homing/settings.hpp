@@ -143,6 +143,14 @@ struct AxisSettings {
   // is one approach, as before.
   std::uint8_t latch_passes = 1;
   double max_latch_spread_mm = 0;  // their spread above this: switch_not_repeatable
+  // Not used by the engine: a gantry slave's skew that differs from the
+  // trend cycles' by more than this raises the runtime's health warning
+  // gantry_skew_changed (docs/health.md); 0 = not checked.
+  double max_skew_change_mm = 0;
+  // Hard-stop homing: how the stop is told (the stall input, or the encoder
+  // falling behind the steps by more than max_following_error_mm).
+  StallDetect stall_detect = StallDetect::stall_input;
+  double max_following_error_mm = 0;
   friend bool operator==(const AxisSettings&, const AxisSettings&) = default;
 };
 
@@ -159,6 +167,13 @@ struct GlobalSettings {
   // Not used by the engine: the runtime bounds the audit log and the homing
   // history with it (oldest rows pruned).
   std::uint32_t history_max_rows = 10000;
+  // Not used by the engine: the runtime's trend check of the health figures
+  // kept in the homing history (docs/health.md). Over an axis's last
+  // trend_cycles cycles (0 = off), a figure that grew by more than
+  // trend_growth_pct percent, and by at least trend_min_change_mm, warns.
+  std::uint16_t trend_cycles = 0;
+  std::uint16_t trend_growth_pct = 0;
+  double trend_min_change_mm = 0;
   friend bool operator==(const GlobalSettings&, const GlobalSettings&) = default;
 };
 
@@ -219,6 +234,9 @@ enum class AxisField : std::uint8_t {
   limit_overtravel,
   latch_passes,
   max_latch_spread,
+  max_skew_change,
+  stall_detect,
+  max_following_error,
 };
 // The name of each: the suffix of its register name (axis.<a>.<name>).
 struct AxisFieldInfo {
@@ -266,11 +284,25 @@ inline constexpr AxisFieldInfo kAxisFieldInfo[] = {
     {AxisField::limit_overtravel, "limit_overtravel"},
     {AxisField::latch_passes, "latch_passes"},
     {AxisField::max_latch_spread, "max_latch_spread"},
+    {AxisField::max_skew_change, "max_skew_change"},
+    {AxisField::stall_detect, "stall_detect"},
+    {AxisField::max_following_error, "max_following_error"},
 };
-static_assert(lists_every_value(kAxisFieldInfo, AxisField::max_latch_spread));
+static_assert(lists_every_value(kAxisFieldInfo, AxisField::max_following_error));
 constexpr std::span<const AxisFieldInfo> enum_table(AxisField) { return kAxisFieldInfo; }
 
 std::string_view field_name(AxisField field);
+
+// What axis s's method needs wired: its row's signals, with the stop
+// detection its stall_detect chooses (modes.hpp).
+constexpr Signals signals_needed(const AxisSettings& s) { return mode_row(s.mode).needs_with(s.stall_detect); }
+constexpr bool needs_signal(const AxisSettings& s, Signal signal) {
+  return (signals_needed(s) & static_cast<Signals>(signal)) != 0;
+}
+// The axis finds its mechanical stop by the encoder's following error.
+constexpr bool detects_stop_by_following_error(const AxisSettings& s) {
+  return mode_row(s.mode).detects_stop() && s.stall_detect == StallDetect::following_error;
+}
 
 // -1 when the axis is not a slave, else the master's index.
 constexpr int master_of(const AxisSettings& s) {

@@ -62,6 +62,19 @@ std::optional<SettingsFault> check_motion(const AxisSettings& s, std::size_t axi
   return std::nullopt;
 }
 
+// Hard-stop homing by the encoder: a limit the carriage's lag can pass only
+// against the stop, and within the push's travel.
+std::optional<SettingsFault> check_following_error(const AxisSettings& s, std::size_t axis) {
+  if (!detects_stop_by_following_error(s)) return std::nullopt;
+  const double limit = s.max_following_error_mm;
+  if (limit <= 0) return fault(axis, AxisField::max_following_error, CheckRule::not_positive, limit);
+  if (const double floor = following_error_floor_mm(s); limit <= floor)
+    return fault(axis, AxisField::max_following_error, CheckRule::following_error_in_noise, floor);
+  if (limit >= s.max_seek_travel_mm)
+    return fault(axis, AxisField::max_following_error, CheckRule::following_error_beyond_travel, limit);
+  return std::nullopt;
+}
+
 // Hard-stop homing: the push toward the stop at latch feedrate, bounded in
 // travel and time, and the pull-off and pre-move at seek feedrate.
 std::optional<SettingsFault> check_stop_search(const AxisSettings& s, std::size_t axis) {
@@ -70,6 +83,7 @@ std::optional<SettingsFault> check_stop_search(const AxisSettings& s, std::size_
     return fault(axis, AxisField::max_seek_travel, CheckRule::not_positive, s.max_seek_travel_mm);
   if (s.stall_timeout_ms <= 0)
     return fault(axis, AxisField::stall_timeout_ms, CheckRule::not_positive, s.stall_timeout_ms);
+  if (auto f = check_following_error(s, axis)) return f;
   return check_pull_off_and_pre_move(s, axis);
 }
 
@@ -204,6 +218,10 @@ double limit_stop_distance_mm(const AxisSettings& s) {
   return stop_distance_mm(v, s.acceleration_mm_per_s2) + v * kBrakingHorizon_s;
 }
 
+double following_error_floor_mm(const AxisSettings& s) {
+  return 10 * kEncoderReadingError_mm + mm_per_min_to_mm_per_s(s.latch_feedrate_mm_per_min) * kBrakingHorizon_s;
+}
+
 bool final_move_wanted(const AxisSettings& s) {
   switch (mode_row(s.mode).final_move) {
     case FinalMove::never: return false;
@@ -319,6 +337,18 @@ std::string describe_fault(const SettingsFault& f, const Settings& settings) {
                          "raise acceleration or measure the overtravel again",
                          std::max(s.seek_feedrate_mm_per_min, s.jog_feedrate_mm_per_min), unit,
                          s.acceleration_mm_per_s2, unit, f.value, unit, name, s.limit_overtravel_mm, unit);
+    case CheckRule::following_error_in_noise:
+      return fmt::format("{} = {:g} {} does not exceed {:.3f} {}: the encoder's resolution and noise ({:g} {} a "
+                         "reading, ten readings' worth) plus the travel at latch_feedrate {:g} {}/min in one 20 ms "
+                         "control period, which a moving axis lags anyway; the stop would be found in free air. "
+                         "Raise {} or lower latch_feedrate",
+                         name, s.max_following_error_mm, unit, f.value, unit, kEncoderReadingError_mm, unit,
+                         s.latch_feedrate_mm_per_min, unit, name);
+    case CheckRule::following_error_beyond_travel:
+      return fmt::format("{} = {:g} {} is not shorter than axis.{}.max_seek_travel = {:g} {}: the push ends before "
+                         "the carriage could fall that far behind its steps, so the stop is never told; lower {} "
+                         "(a stalled carriage is told at once) or raise max_seek_travel",
+                         name, f.value, unit, letter, s.max_seek_travel_mm, unit, name);
     case CheckRule::shared_limit_rests_on_sensor:
       return fmt::format("{}: the axis would rest {:g} {} from its edge (pull-off, plus a slave's "
                          "switch_compensation); a shared home/limit sensor needs more than 0 so the axis "

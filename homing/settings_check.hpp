@@ -36,6 +36,8 @@ enum class CheckRule : std::uint8_t {
   indexer_in_gantry,        // a locking indexer on a gantry master or slave
   cam_needs_limits,         // home_cam reverses at limit switches: limits_fitted must be on
   limit_overtravel_too_short,  // the axis cannot stop within limit_overtravel past a limit switch
+  following_error_in_noise,    // max_following_error within what the encoder and a moving axis show anyway
+  following_error_beyond_travel,  // max_following_error can never be reached within max_seek_travel
 };
 
 // Each rule in words, for the refusal codes a PLC reads
@@ -79,8 +81,12 @@ inline constexpr EnumInfo<CheckRule> kCheckRuleInfo[] = {
      "home_cam reverses its search at the limit switches: it needs limits_fitted"},
     {CheckRule::limit_overtravel_too_short, "limit_overtravel_too_short",
      "the axis cannot stop within limit_overtravel past a limit switch from its seek or jog feedrate"},
+    {CheckRule::following_error_in_noise, "following_error_in_noise",
+     "max_following_error must exceed the encoder's resolution and noise and what a moving axis lags anyway"},
+    {CheckRule::following_error_beyond_travel, "following_error_beyond_travel",
+     "max_following_error must be shorter than max_seek_travel, or the stop can never be told"},
 };
-static_assert(lists_every_value(kCheckRuleInfo, CheckRule::limit_overtravel_too_short));
+static_assert(lists_every_value(kCheckRuleInfo, CheckRule::following_error_beyond_travel));
 constexpr std::span<const EnumInfo<CheckRule>> enum_table(CheckRule) { return kCheckRuleInfo; }
 
 struct SettingsFault {
@@ -123,6 +129,15 @@ double gantry_stop_distance_mm(const AxisSettings& pair_motion);
 // fastest speed (seek or jog feedrate) plus a 20 ms control period of travel
 // before the switch is seen.
 double limit_stop_distance_mm(const AxisSettings& s);
+// Hard-stop homing by following error: what one reading of the encoders this
+// module is made for may be off by (their resolution and noise together).
+inline constexpr double kEncoderReadingError_mm = 0.002;
+// The least max_following_error that tells a stop: ten readings' error (the
+// following error is the difference of two readings, and encoder_reversed
+// looks for a quarter of the limit) plus the latch feedrate's travel in the
+// longest control period (kBrakingHorizon_s: the steps and the encoder may be
+// read that far apart, so a moving axis shows that much anyway).
+double following_error_floor_mm(const AxisSettings& s);
 // The final move of a cycle is made for this axis.
 bool final_move_wanted(const AxisSettings& s);
 // How far the index phase searches from the release edge before

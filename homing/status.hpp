@@ -60,7 +60,7 @@ inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
     {CommandResult::refused_soft_limit, "refused_soft_limit", "target outside the soft limits"},
     {CommandResult::refused_slave_axis, "refused_slave_axis", "this axis is a gantry slave: command its master"},
     {CommandResult::refused_cause_present, "refused_cause_present",
-     "reset refused: the cause (e-stop, drive fault or watchdog) is still present; remove it first"},
+     "the cause (e-stop, drive fault or watchdog) is still present: remove it, then reset"},
     {CommandResult::refused_invalid, "refused_invalid", "the command makes no sense here (axis disabled or bad target)"},
     {CommandResult::refused_communication_lost, "refused_communication_lost", "the watchdog expired: host.heartbeat stopped changing; reset first"},
     {CommandResult::refused_settings_fault, "refused_settings_fault",

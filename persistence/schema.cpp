@@ -83,6 +83,21 @@ UPDATE homing_axes SET excluded = 2
   WHERE correction_mm IS NULL AND run_id IN (SELECT id FROM homing_runs WHERE result != 0);
 )sql";
 
+// v5: the switch health figures of each axis's cycle (docs/health.md) and a
+// gantry slave's skew, kept with its history row for the trend check. NULL in
+// rows of older databases and of axes whose cycle found no reference.
+constexpr std::string_view kV5 = R"sql(
+ALTER TABLE homing_axes ADD COLUMN latch_passes INTEGER;
+ALTER TABLE homing_axes ADD COLUMN latch_spread_mm REAL;
+ALTER TABLE homing_axes ADD COLUMN latch_sigma_mm REAL;
+ALTER TABLE homing_axes ADD COLUMN hysteresis_mm REAL;
+ALTER TABLE homing_axes ADD COLUMN seek_latch_mm REAL;
+ALTER TABLE homing_axes ADD COLUMN chatter_edges INTEGER;
+ALTER TABLE homing_axes ADD COLUMN index_distance_mm REAL;
+ALTER TABLE homing_axes ADD COLUMN index_near_edge INTEGER;
+ALTER TABLE homing_axes ADD COLUMN gantry_skew_mm REAL;
+)sql";
+
 }  // namespace
 
 const std::vector<Step>& steps() {
@@ -91,8 +106,9 @@ const std::vector<Step>& steps() {
       {2, "audit log", kV2},
       {3, "audit transport/client, homing history, meta", kV3},
       {4, "why a home correction is excluded from the statistics", kV4},
+      {5, "switch health figures and gantry skew per axis and run", kV5},
   };
-  static_assert(kSchemaVersion == 4, "append a migration step when raising kSchemaVersion");
+  static_assert(kSchemaVersion == 5, "append a migration step when raising kSchemaVersion");
   return all;
 }
 

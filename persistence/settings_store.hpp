@@ -27,7 +27,7 @@ namespace persistence {
 
 struct SettingsFileCodec;  // settings_file.hpp
 
-inline constexpr int kSchemaVersion = 4;       // see schema.cpp for the history
+inline constexpr int kSchemaVersion = 5;       // see schema.cpp for the history
 inline constexpr std::size_t kHistoryAxes = 6;  // X Y Z A B C
 
 struct SettingDefault {
@@ -108,11 +108,35 @@ enum class Excluded : std::uint8_t {
 };
 std::string_view excluded_text(Excluded e);  // "not homed before the cycle"
 
+// What one cycle measured of an axis's switch, and of its gantry (the
+// engine's homing::SwitchHealth as the history keeps it; docs/health.md).
+// Lengths in the axis's unit.
+struct AxisHealth {
+  int latch_passes = 0;
+  double latch_spread_mm = 0;
+  double latch_sigma_mm = 0;
+  double hysteresis_mm = 0;
+  double seek_latch_mm = 0;
+  int chatter_edges = 0;
+  double index_distance_mm = 0;
+  bool index_near_edge = false;
+  std::optional<double> gantry_skew_mm;  // a gantry slave's skew, when measured
+  friend bool operator==(const AxisHealth&, const AxisHealth&) = default;
+};
+
 struct AxisRun {
   bool present = false;                 // axis took part and reported
   std::optional<double> correction_mm;  // assigned - believed at the reference edge; only when counted
   std::int64_t duration_ms = 0;
   Excluded excluded = Excluded::no;     // why there is no counted correction
+  std::optional<AxisHealth> health;     // when the cycle homed the axis
+};
+
+// One cycle's health figures of an axis with its run (health_history).
+struct HealthRecord {
+  std::int64_t run_id = 0;
+  std::int64_t start_ms = 0;
+  AxisHealth health;
 };
 
 struct HomingRun {
@@ -190,7 +214,13 @@ class SettingsStore {
   Result<std::int64_t> record_homing_run(const HomingRun& run);
   Result<std::vector<HomingRun>> recent_runs(std::size_t n) const;
   Result<std::vector<AuditEntry>> recent_changes(std::size_t n) const;
+  // The audit rows after this id, oldest first, at most n; and the newest id (0: none).
+  Result<std::vector<AuditEntry>> changes_after(std::int64_t id, std::size_t n) const;
+  Result<std::int64_t> last_change_id() const;
   Result<CorrectionSummary> correction_summary(std::size_t axis, std::size_t last_n) const;
+  // The health figures of the axis's last `last_n` runs that recorded them,
+  // oldest first (what the trend check and the trend plot read).
+  Result<std::vector<HealthRecord>> health_history(std::size_t axis, std::size_t last_n) const;
 
   // Backups: `<db>.bak` (newest) and `<db>.bak.1`.
   Status backup_if_due();  // writes a pending backup if the interval passed

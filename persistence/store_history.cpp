@@ -4,10 +4,63 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "persistence/store_impl.hpp"
 
 namespace persistence {
+
+namespace {
+
+// The health columns of homing_axes (schema v5), in the order bind_health
+// binds and health_at reads them.
+constexpr std::string_view kHealthColumns =
+    "latch_passes, latch_spread_mm, latch_sigma_mm, hysteresis_mm, seek_latch_mm, chatter_edges, "
+    "index_distance_mm, index_near_edge, gantry_skew_mm";
+constexpr int kHealthColumnCount = 9;
+
+void bind_real(sql::Stmt& st, int at, std::optional<double> v) {
+  if (v && std::isfinite(*v)) st.bind(at, *v);
+  else st.bind_null(at);
+}
+
+// A finite figure, else 0 (a length the engine could not measure is no
+// reason to lose the row).
+double finite(double v) { return std::isfinite(v) ? v : 0.0; }
+
+void bind_health(sql::Stmt& st, int first, const std::optional<AxisHealth>& h) {
+  if (!h) {
+    for (int k = 0; k < kHealthColumnCount; ++k) st.bind_null(first + k);
+    return;
+  }
+  st.bind(first, static_cast<std::int64_t>(h->latch_passes))
+      .bind(first + 1, finite(h->latch_spread_mm))
+      .bind(first + 2, finite(h->latch_sigma_mm))
+      .bind(first + 3, finite(h->hysteresis_mm))
+      .bind(first + 4, finite(h->seek_latch_mm))
+      .bind(first + 5, static_cast<std::int64_t>(h->chatter_edges))
+      .bind(first + 6, finite(h->index_distance_mm))
+      .bind(first + 7, static_cast<std::int64_t>(h->index_near_edge ? 1 : 0));
+  bind_real(st, first + 8, h->gantry_skew_mm);
+}
+
+// The figures read from the columns starting at `first`; none when the row has none.
+std::optional<AxisHealth> health_at(const sql::Stmt& st, int first) {
+  if (st.null_at(first)) return std::nullopt;
+  AxisHealth h;
+  h.latch_passes = static_cast<int>(st.int_at(first));
+  h.latch_spread_mm = st.real_at(first + 1);
+  h.latch_sigma_mm = st.real_at(first + 2);
+  h.hysteresis_mm = st.real_at(first + 3);
+  h.seek_latch_mm = st.real_at(first + 4);
+  h.chatter_edges = static_cast<int>(st.int_at(first + 5));
+  h.index_distance_mm = st.real_at(first + 6);
+  h.index_near_edge = st.int_at(first + 7) != 0;
+  if (!st.null_at(first + 8)) h.gantry_skew_mm = st.real_at(first + 8);
+  return h;
+}
+
+}  // namespace
 
 std::string_view excluded_text(Excluded e) {
   switch (e) {
@@ -35,17 +88,18 @@ Result<std::int64_t> SettingsStore::record_homing_run(const HomingRun& run) {
         .bind(5, static_cast<std::int64_t>(run.alarm_axis));
     if (auto s = ins->run("recording a homing run"); !s) return std::unexpected(s.error());
     id = sqlite3_last_insert_rowid(m.db.get());
-    auto ax = m.db.prepare("INSERT INTO homing_axes(run_id, axis, correction_mm, duration_ms, excluded) VALUES(?, ?, ?, ?, ?)");
+    auto ax = m.db.prepare(fmt::format(
+        "INSERT INTO homing_axes(run_id, axis, correction_mm, duration_ms, excluded, {}) "
+        "VALUES(?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+        kHealthColumns));
     if (!ax) return std::unexpected(ax.error());
     for (std::size_t a = 0; a < kHistoryAxes; ++a) {
       const auto& r = run.axis[a];
       if (!r.present) continue;
       ax->bind(1, id).bind(2, static_cast<std::int64_t>(a));
-      if (r.correction_mm && std::isfinite(*r.correction_mm))
-        ax->bind(3, *r.correction_mm);
-      else
-        ax->bind_null(3);
+      bind_real(*ax, 3, r.correction_mm);
       ax->bind(4, r.duration_ms).bind(5, static_cast<std::int64_t>(r.excluded));
+      bind_health(*ax, 6, r.health);
       if (auto s = ax->run("recording a homing run axis"); !s) return std::unexpected(s.error());
     }
     std::int64_t cut = id - static_cast<std::int64_t>(std::max<std::size_t>(m.opt.history_max_rows, 1));
@@ -85,7 +139,9 @@ Result<std::vector<HomingRun>> SettingsStore::recent_runs(std::size_t n) const {
     r.alarm_axis = static_cast<std::int32_t>(st->int_at(5));
     runs.push_back(r);
   }
-  auto ax = m.db.prepare("SELECT axis, correction_mm, duration_ms, excluded FROM homing_axes WHERE run_id = ?");
+  auto ax = m.db.prepare(
+      fmt::format("SELECT axis, correction_mm, duration_ms, excluded, {} FROM homing_axes WHERE run_id = ?",
+                  kHealthColumns));
   if (!ax) return std::unexpected(ax.error());
   for (auto& r : runs) {
     ax->bind(1, r.id);
@@ -99,6 +155,7 @@ Result<std::vector<HomingRun>> SettingsStore::recent_runs(std::size_t n) const {
       if (!ax->null_at(1)) r.axis[a].correction_mm = ax->real_at(1);
       r.axis[a].duration_ms = ax->int_at(2);
       r.axis[a].excluded = static_cast<Excluded>(ax->int_at(3));
+      r.axis[a].health = health_at(*ax, 4);
     }
     ax->reset();
   }
@@ -120,6 +177,28 @@ Result<std::vector<AuditEntry>> SettingsStore::recent_changes(std::size_t n) con
                    st->int_at(6)});
   }
   return out;
+}
+
+Result<std::vector<AuditEntry>> SettingsStore::changes_after(std::int64_t id, std::size_t n) const {
+  std::lock_guard lock(impl_->mu);
+  auto st = impl_->db.prepare(
+      "SELECT id, time_ms, transport, client, name, old_value, new_value FROM audit WHERE id > ? ORDER BY id LIMIT ?");
+  if (!st) return std::unexpected(st.error());
+  st->bind(1, id).bind(2, static_cast<std::int64_t>(n));
+  std::vector<AuditEntry> out;
+  for (;;) {
+    auto row = st->step("reading the audit log");
+    if (!row) return std::unexpected(row.error());
+    if (!*row) break;
+    out.push_back({st->int_at(0), st->int_at(1), st->text_at(2), st->text_at(3), st->text_at(4), st->int_at(5),
+                   st->int_at(6)});
+  }
+  return out;
+}
+
+Result<std::int64_t> SettingsStore::last_change_id() const {
+  std::lock_guard lock(impl_->mu);
+  return impl_->db.query_int("SELECT coalesce(max(id), 0) FROM audit", "reading the audit log");
 }
 
 Result<CorrectionSummary> SettingsStore::correction_summary(std::size_t axis, std::size_t last_n) const {
@@ -154,6 +233,27 @@ Result<CorrectionSummary> SettingsStore::correction_summary(std::size_t axis, st
     s.stddev = std::sqrt(sq / static_cast<double>(xs.size() - 1));
   }
   return s;
+}
+
+Result<std::vector<HealthRecord>> SettingsStore::health_history(std::size_t axis, std::size_t last_n) const {
+  if (axis >= kHistoryAxes)
+    return fail(ErrorKind::invalid, fmt::format("axis index {} out of range (0..{})", axis, kHistoryAxes - 1));
+  std::lock_guard lock(impl_->mu);
+  auto st = impl_->db.prepare(fmt::format(
+      "SELECT r.id, r.start_ms, {} FROM homing_axes AS a JOIN homing_runs AS r ON r.id = a.run_id "
+      "WHERE a.axis = ? AND a.latch_passes IS NOT NULL ORDER BY a.run_id DESC LIMIT ?",
+      kHealthColumns));
+  if (!st) return std::unexpected(st.error());
+  st->bind(1, static_cast<std::int64_t>(axis)).bind(2, static_cast<std::int64_t>(last_n));
+  std::vector<HealthRecord> out;
+  for (;;) {
+    auto row = st->step("reading the health figures");
+    if (!row) return std::unexpected(row.error());
+    if (!*row) break;
+    out.push_back({st->int_at(0), st->int_at(1), *health_at(*st, 2)});
+  }
+  std::reverse(out.begin(), out.end());  // oldest first
+  return out;
 }
 
 }  // namespace persistence

@@ -170,6 +170,8 @@ std::int64_t read_raw(const Register& reg, const ModuleView& view) {
       case Key::axis_chatter_edges: return std::min(a.health.chatter_edges, 65535);
       case Key::axis_index_distance: return to_raw(reg, a.health.index_distance_mm);
       case Key::axis_index_near_edge: return a.health.index_near_edge ? 1 : 0;
+      case Key::axis_gantry_skew: return a.health.gantry_skew_measured ? to_raw(reg, a.health.gantry_skew_mm) : 0;
+      case Key::axis_health_warning: return raw_of(view.extras.health_warning[i]);
       case Key::axis_homed: return a.homed ? 1 : 0;
       case Key::axis_sensor: return a.sensor ? 1 : 0;
       case Key::axis_busy: return a.busy ? 1 : 0;

@@ -44,6 +44,8 @@ struct StatusExtras {
   std::uint16_t map_version = kMapVersion;
   std::array<double, homing::kAxisCount> correction_mean_mm{};
   std::array<double, homing::kAxisCount> correction_spread_mm{};
+  // The health trend of the homing history (server/health_trend.hpp).
+  std::array<homing::HealthWarning, homing::kAxisCount> health_warning{};
   bool settings_locked = false;
   // Diagnostics of the running daemon (diag.*).
   std::uint64_t loop_periods = 0;

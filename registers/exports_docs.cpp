@@ -93,6 +93,9 @@ constexpr AlarmConfirm kAlarmConfirm[] = {
     {homing::AlarmCode::switch_not_repeatable,
      "`axis.<a>.latch_spread` (the figure in `axis.<a>.alarm_value`) is above `axis.<a>.max_latch_spread` over "
      "`axis.<a>.latch_passes_done` passes; home again and watch the spread and `axis.<a>.latch_sigma`"},
+    {homing::AlarmCode::encoder_reversed,
+     "`axis.<a>.alarm_phase` is `push_to_stop` and `axis.<a>.alarm_value` how far the encoder counted back; jog the "
+     "axis and watch the encoder's (or the drive's) position display: it counts opposite to `axis.<a>.position`"},
 };
 
 std::string registers_reference() {

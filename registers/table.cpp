@@ -97,12 +97,14 @@ constexpr auto kAllowed = values_of(homing::kAllowedWithoutHomingInfo);
 constexpr auto kAxisAllowed = values_of(homing::kAxisAllowedWithoutHomingInfo);
 constexpr auto kKinds = values_of(homing::kAxisKindInfo);
 constexpr auto kCamEdges = values_of(homing::kCamEdgeInfo);
+constexpr auto kStallDetects = values_of(homing::kStallDetectInfo);
 constexpr auto kStates = values_of(homing::kMachineStateInfo);
 constexpr auto kCommandResults = values_of(homing::kCommandResultInfo);
 constexpr auto kInterlocks = bits_of(homing::interlock::kInfo);
 constexpr auto kAlarms = values_of(homing::kAlarmInfo);
 constexpr auto kPhases = values_of(homing::kPhaseInfo);
 constexpr auto kSimFaults = values_of(homing::sim::kFaultInfo);
+constexpr auto kHealthWarnings = values_of(homing::kHealthWarningInfo);
 // Why a write was refused: the reasons (registers/errors.hpp), then one code
 // per configuration rule at kRuleReasonBase + the rule (homing::CheckRule).
 constexpr auto kRefusalReasons = [] {
@@ -138,6 +140,7 @@ constexpr ValueList kValueLists[] = {
     {"axis_allowed_without_homing", kAxisAllowed},
     {"kind", kKinds},
     {"cam_edge", kCamEdges},
+    {"stall_detect", kStallDetects},
     {"axis_mask", kAxisBits},
     {"state", kStates},
     {"command_result", kCommandResults},
@@ -146,6 +149,7 @@ constexpr ValueList kValueLists[] = {
     {"alarm_axis", kAlarmAxis},
     {"phase", kPhases},
     {"sim_fault", kSimFaults},
+    {"health_warning", kHealthWarnings},
     {"refusal_reason", kRefusalReasons},
 };
 
@@ -162,6 +166,10 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "global.alarm_clears_homed", .offset = 11, .max = 1, .def = 1, .fills = fills<&G::alarm_clears_homed>, .description = "flag (0/1): an alarm clears the homed state of every axis"},
     {.pattern = "global.watchdog_ms", .offset = 12, .quantity = Quantity::time_ms, .max = 60'000, .fills = fills<&G::watchdog_ms>, .description = "host watchdog: stop motion started over Modbus when host.heartbeat does not change for this long; 0 = off"},
     {.pattern = "global.history_max_rows", .offset = 14, .type = Type::u32, .min = 100, .max = 1'000'000, .def = 10'000, .fills = fills<&G::history_max_rows>, .description = "rows kept in the audit log and in the homing history each (oldest pruned)"},
+    // The health trend (docs/health.md): at most 100 cycles, the fewest runs global.history_max_rows keeps.
+    {.pattern = "global.trend_cycles", .offset = 41, .max = 100, .def = 20, .fills = fills<&G::trend_cycles>, .description = "health trend: after each cycle an axis's last this many cycles in the homing history are compared (docs/health.md); 0 = off"},
+    {.pattern = "global.trend_growth_pct", .offset = 42, .min = 1, .max = 1000, .def = 50, .fills = fills<&G::trend_growth_pct>, .description = "health trend: hysteresis, latch spread, seek-latch difference or chatter grown by more than this percentage over the trend cycles raises axis.<a>.health_warning"},
+    {.pattern = "global.trend_min_change", .offset = 43, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 10, .fills = fills<&G::trend_min_change_mm>, .description = "health trend: a length figure must also have grown by at least this much, in the axis's unit (switch noise does not warn)"},
     {.pattern = "global.single_axis_homing", .offset = 60, .max = 1, .def = 1, .fills = fills<&G::single_axis_homing>, .description = "flag (0/1): axes may be homed alone (cmd.home.<a>, cmd.home_axes); 0 = only cmd.home_all homes, so axes that must home in order are never homed piecemeal"},
     {.pattern = "global.permit_required", .offset = 13, .max = 1, .fills = fills<&G::permit_required>, .description = "flag (0/1): homing needs host.homing_permit (or the permit input) on"},
     {.pattern = "security.unlock", .offset = 30, .max = 65535, .key = Key::security_unlock, .description = "write the unlock code (homingd --unlock-code) to allow settings writes; reads 0"},
@@ -249,6 +257,10 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     {.pattern = "axis.<a>.stall_timeout_ms", .offset = 52, .type = Type::u32, .quantity = Quantity::time_ms, .max = 3'600'000, .def = 30'000, .fills = fills<&A::stall_timeout_ms>, .description = "hard-stop homing: the drive must report a stall within this time of pushing toward the stop (stall_timeout alarm)"},
     {.pattern = "axis.<a>.latch_passes", .offset = 54, .min = 1, .max = homing::kMaxLatchPasses, .def = 1, .fills = fills<&A::latch_passes>, .description = "re-approach methods: slow approaches to the reference edge in one cycle; the reference is their median, their spread and sigma are published (1 = one approach; docs/health.md)"},
     {.pattern = "axis.<a>.max_latch_spread", .offset = 56, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 50, .fills = fills<&A::max_latch_spread_mm>, .description = "with several latch passes: their spread (max - min) above this raises switch_not_repeatable"},
+    {.pattern = "axis.<a>.max_skew_change", .offset = 58, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 100, .fills = fills<&A::max_skew_change_mm>, .description = "gantry slave: the last cycle's skew (axis.<a>.gantry_skew) this much away from what it was over the trend cycles raises the health warning gantry_skew_changed; 0 = not checked (docs/health.md)"},
+    // Hard-stop homing by the encoder (docs/homing-methods.md "Hard-stop homing by following error").
+    {.pattern = "axis.<a>.stall_detect", .offset = 64, .type = Type::enumeration, .max = last_value(kStallDetects), .fills = fills<&A::stall_detect>, .values = kStallDetects, .description = "hard-stop homing: how the stop is told, the drive's stall input (0) or the encoder's following error (1: the carriage falls behind its steps by more than max_following_error)"},
+    {.pattern = "axis.<a>.max_following_error", .offset = 62, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 200, .fills = fills<&A::max_following_error_mm>, .description = "hard-stop homing by following error: the commanded position may lead the encoder by this much before the carriage counts as stopped against the stop"},
     {.pattern = "axis.<a>.target", .offset = 60, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::host_target, .description = "target of cmd.move.<a> (not persisted)"},
     // input registers: per-axis status
     {.pattern = "axis.<a>.phase", .table = IR, .type = Type::enumeration, .access = Access::r, .max = last_value(kPhases), .key = Key::axis_phase, .values = kPhases, .description = "what the axis is doing"},
@@ -271,6 +283,8 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     {.pattern = "axis.<a>.chatter_edges", .table = IR, .offset = 32, .access = Access::r, .max = 65535, .key = Key::axis_chatter_edges, .description = "last homing: switch transitions swallowed by the debounce time (contact chatter)"},
     {.pattern = "axis.<a>.index_distance", .table = IR, .offset = 34, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_index_distance, .description = "last homing, switch + index: distance from the switch's release edge to the index pulse taken (docs/health.md)"},
     {.pattern = "axis.<a>.index_near_edge", .table = IR, .offset = 36, .access = Access::r, .max = 1, .key = Key::axis_index_near_edge, .description = "warning (0/1): the index pulse lies within 10 % of a pitch of the switch edge or of one pitch from it, so switch noise can home one revolution off; move the cam or the encoder's index by about half a pitch"},
+    {.pattern = "axis.<a>.gantry_skew", .table = IR, .offset = 37, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_gantry_skew, .description = "last homing, gantry slave: its reference edge minus its master's, each from where its side stood at the start (the squaring before switch_compensation; docs/health.md); 0 on other axes"},
+    {.pattern = "axis.<a>.health_warning", .table = IR, .offset = 40, .type = Type::enumeration, .access = Access::r, .max = last_value(kHealthWarnings), .key = Key::axis_health_warning, .values = kHealthWarnings, .description = "what the trend of the homing history says of this axis's switch or gantry (a warning, not an alarm: the axis stays homed; docs/health.md)"},
     // discrete inputs
     {.pattern = "axis.<a>.homed", .table = DI, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::axis_homed, .description = "the axis is homed (cleared by an alarm per global.alarm_clears_homed, and when a setting of its home frame changes: home_position, pull_off, switch_compensation, mode, direction, sensor_nc, slave_of, slave_mode)"},
     {.pattern = "axis.<a>.sensor", .table = DI, .offset = 1, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::axis_sensor, .description = "home sensor active (debounced, polarity applied)"},

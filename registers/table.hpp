@@ -61,6 +61,7 @@ enum class Key : std::uint8_t {
   axis_stop_distance, axis_trigger_position, axis_phase_distance, axis_correction_mean,
   axis_correction_spread, axis_latch_spread, axis_latch_sigma, axis_latch_passes_done,
   axis_hysteresis, axis_seek_latch_difference, axis_chatter_edges, axis_index_distance, axis_index_near_edge,
+  axis_gantry_skew, axis_health_warning,
   // discrete inputs, module
   status_alarm, status_homing, status_estop, axis_homed, axis_sensor, axis_busy,
   // coils, module

@@ -14,6 +14,12 @@
 
 namespace server {
 
+std::int64_t unix_now_ms() {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return std::int64_t{ts.tv_sec} * 1000 + ts.tv_nsec / 1'000'000;
+}
+
 std::int64_t monotonic_ns() {
   timespec ts{};
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -235,6 +241,7 @@ void ControlLoop::run_period(double wall_dt_s) {
     io_->apply(outputs_);  // real hardware plays them from the instant the period began
     machine_time_s_ += dt;
     record_trace(r.status);
+    status_events_.observe(r.status, unix_now_ms());
     const bool motion = r.status.homing || r.status.state == homing::MachineState::moving;
     if (!motion && !inputs.commands.home_all && !inputs.commands.home_axes && !inputs.commands.move_axes &&
         std::none_of(loop_jog_.begin(), loop_jog_.end(), [](std::int8_t j) { return j != 0; }))
@@ -258,6 +265,7 @@ void ControlLoop::run_period(double wall_dt_s) {
   s.status = engine_.status();
   s.outputs = outputs_;
   s.periods = loop_stats_.periods;
+  if (s.events.written() != status_events_.written()) s.events = status_events_;  // rare: no copy per period
   if (++stats_publish_tick_ % 64 == 0) stats_ = loop_stats_;  // the histogram is 32 KiB: copy it now and then
   publish_sim(s);
   const bool edits_shown = s.sim_edits_applied != edits_applied_;

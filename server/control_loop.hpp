@@ -11,6 +11,8 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+
+#include "status_events.hpp"
 #include <string_view>
 #include <thread>
 #include <vector>
@@ -32,6 +34,7 @@ struct Snapshot {
   std::uint64_t sim_edits_applied = 0;  // sequence number of the last simulator edit shown here
   double machine_time_s = 0;
   std::uint64_t periods = 0;
+  StatusEvents events;  // what changed period by period, for readers that sample
 };
 
 // Loop timing figures (benchmarks read them).
@@ -180,6 +183,7 @@ class ControlLoop {
   mutable std::mutex snapshot_mutex_;
   std::condition_variable published_;  // with snapshot_mutex_: snapshot_.sim_edits_applied grew
   Snapshot snapshot_{};
+  StatusEvents status_events_;  // the loop's own, copied into each snapshot
   LoopStats stats_{};       // published copy (under snapshot_mutex_)
   LoopStats loop_stats_{};  // the loop's own
   std::uint64_t stats_publish_tick_ = 0;

@@ -18,6 +18,7 @@
 #include "modbus_service.hpp"
 #include "monitor.hpp"
 #include "mqtt_node.hpp"
+#include "plant_events.hpp"
 #include "registers/defaults.hpp"
 #include "registers/sim_bindings.hpp"
 #include "rtu_server.hpp"
@@ -194,17 +195,14 @@ void log_stop(const StopReport& r) {
 // served while the transports close cannot start one), the transports close,
 // and the loop ends once every axis is at rest.
 void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, ModbusService& service,
-           persistence::SettingsStore& store, Transports& t) {
+           persistence::SettingsStore& store, Transports& t, std::unique_ptr<MqttNode> mqtt, PlantEvents* events) {
   loop.start(opt.rt_priority);
   Monitor monitor(loop, service, &store, [&t]() -> std::uint32_t {
     return static_cast<std::uint32_t>((t.tcp ? t.tcp->active_clients() : 0) + (t.tls ? t.tls->active_clients() : 0));
   });
+  monitor.set_plant_events(events);
   monitor.start();
-  std::unique_ptr<MqttNode> mqtt;  // Sparkplug B edge node: its own threads, never in the loop's way
-  if (opt.mqtt_enabled) {
-    mqtt = std::make_unique<MqttNode>(mqtt_config(opt), service);
-    mqtt->start();
-  }
+  if (mqtt) mqtt->start();  // Sparkplug B edge node: its own threads, never in the loop's way
   std::thread tcp_thread, tls_thread, rtu_thread;
   if (t.tcp) tcp_thread = std::thread([&] { t.tcp->run(); });
   if (t.tls) tls_thread = std::thread([&] { t.tls->run(); });
@@ -250,8 +248,26 @@ int run_daemon(const Options& opt, const Wiring& wiring) {
   ModbusService service(service_config(opt, loop, wiring), loop, &*store, *settings);
   auto transports = open_transports(opt, service);
   if (!transports) return fail_start(transports.error());
+  std::optional<persistence::EventOutbox> outbox;
+  std::optional<PlantEvents> events;
+  std::unique_ptr<MqttNode> mqtt;
+  if (opt.mqtt_enabled) {
+    auto config = mqtt_config(opt);
+    if (!config) return fail_start(config.error());
+    auto opened = persistence::EventOutbox::open(config->outbox, config->outbox_max);
+    if (!opened) return fail_start("--mqtt-outbox " + config->outbox + ": " + opened.error().message);
+    outbox.emplace(std::move(*opened));
+    if (const auto owed = outbox->size(); owed > 0)
+      spdlog::info("mqtt: {} events from before this start are owed to the broker ({})", owed, outbox->path());
+    events.emplace(*outbox, &*store);
+    try {
+      mqtt = std::make_unique<MqttNode>(std::move(*config), service, &*outbox);
+    } catch (const std::runtime_error& e) {
+      return fail_start(e.what());
+    }
+  }
 
-  serve(opt, signals, loop, service, *store, *transports);
+  serve(opt, signals, loop, service, *store, *transports, std::move(mqtt), events ? &*events : nullptr);
   store->close();
   spdlog::info("stopped cleanly");
   return 0;

@@ -27,7 +27,10 @@ std::uint16_t first_address(const std::vector<registers::Change>& changes, std::
 
 }  // namespace
 
+thread_local std::optional<registers::Refusal> ModbusService::refused_here_;
+
 Reply ModbusService::refuse(std::uint8_t fc, const registers::Refusal& r, const ClientInfo& client) {
+  refused_here_ = r;
   const auto level = r.reason == registers::RefusalReason::storage_failed ? spdlog::level::err : spdlog::level::warn;
   const std::string reason =
       fmt::format("reason {} ({})", r.reason_code(),

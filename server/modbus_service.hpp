@@ -63,6 +63,11 @@ class ModbusService final : public RequestHandler {
   // calls it now and then, so a flood's last counts are not kept back).
   void flush_refusal_log();
 
+  // A command coil written from outside Modbus (the MQTT edge node's NCMD):
+  // the very path of an FC 05 write by this client to the module unit, so the
+  // same interlocks, roles and refusals. nullopt: accepted; else the refusal.
+  std::optional<registers::Refusal> command(const registers::Register& coil, bool on, const ClientInfo& client);
+
   // Called by the monitor with the history summary.
   void set_extras(const registers::StatusExtras& extras);
   homing::Settings settings() const;
@@ -93,6 +98,7 @@ class ModbusService final : public RequestHandler {
   std::optional<Reply> try_unlock(std::uint8_t fc, std::uint32_t code, std::uint16_t address, const ClientInfo& client);
   std::chrono::steady_clock::time_point now() const;
 
+  static thread_local std::optional<registers::Refusal> refused_here_;  // refuse()'s last, for command()
   ServiceConfig config_;
   ControlLoop& loop_;
   persistence::SettingsStore* store_;

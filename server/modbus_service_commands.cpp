@@ -76,4 +76,20 @@ void ModbusService::run_commands(const std::vector<registers::CommandRequest>& c
   if (any) loop_.submit(c, true);
 }
 
+std::optional<registers::Refusal> ModbusService::command(const registers::Register& coil, bool on,
+                                                         const ClientInfo& client) {
+  const std::uint16_t address = coil.address;
+  const std::uint8_t pdu[] = {0x05, static_cast<std::uint8_t>(address >> 8), static_cast<std::uint8_t>(address & 0xFF),
+                              static_cast<std::uint8_t>(on ? 0xFF : 0x00), 0x00};
+  refused_here_.reset();
+  const Reply reply = handle(config_.unit_id, pdu, client);
+  if (!reply.pdu.empty() && (reply.pdu[0] & 0x80) == 0) return std::nullopt;
+  if (refused_here_) return refused_here_;
+  registers::Refusal r;  // answered without a refusal record: say what the answer was
+  r.code = reply.pdu.size() >= 2 ? static_cast<registers::ExceptionCode>(reply.pdu[1]) : registers::ExceptionCode::server_device_failure;
+  r.message = "the module answered with exception " + std::string(registers::exception_name(r.code));
+  r.address = address;
+  return r;
+}
+
 }  // namespace server

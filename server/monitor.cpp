@@ -2,11 +2,14 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
 #include <string>
+#include <vector>
 
+#include "health_trend.hpp"
 #include "homing/gantry.hpp"
 
 namespace server {
@@ -30,6 +33,20 @@ std::uint64_t resident_kb() {
   return 0;
 }
 
+persistence::AxisHealth history_figures(const homing::SwitchHealth& h) {
+  persistence::AxisHealth f;
+  f.latch_passes = h.latch_passes;
+  f.latch_spread_mm = h.latch_spread_mm;
+  f.latch_sigma_mm = h.latch_sigma_mm;
+  f.hysteresis_mm = h.hysteresis_mm;
+  f.seek_latch_mm = h.seek_latch_mm;
+  f.chatter_edges = h.chatter_edges;
+  f.index_distance_mm = h.index_distance_mm;
+  f.index_near_edge = h.index_near_edge;
+  if (h.gantry_skew_measured) f.gantry_skew_mm = h.gantry_skew_mm;
+  return f;
+}
+
 }  // namespace
 
 // Only a cycle that starts from a position the module trusts measures
@@ -42,6 +59,15 @@ persistence::AxisRun axis_record(bool cycle_ok, const homing::AxisStatus& axis, 
   if (!cycle_ok) r.excluded = persistence::Excluded::cycle_failed;
   else if (!axis.homed_at_cycle_start) r.excluded = persistence::Excluded::not_homed_before;
   else r.correction_mm = axis.home_correction_mm;
+  // Its figures describe the reference it found; a cycle that ended before
+  // (or with an alarm on it) measured nothing to trend.
+  if (axis.homed && !axis.alarm) {
+    r.health = history_figures(axis.health);
+    // A gantry's skew measures how far the pair racked since it was last
+    // squared only when it was homed then: the first cycle after a start-up
+    // finds the carriages wherever they were left (it is published, not kept).
+    if (!axis.homed_at_cycle_start) r.health->gantry_skew_mm.reset();
+  }
   return r;
 }
 
@@ -68,11 +94,15 @@ void Monitor::housekeeping(std::int64_t now_ms) {
   service_.flush_refusal_log();
   if (store_)
     if (auto r = store_->backup_if_due(); !r) spdlog::warn("settings backup not written: {}", r.error().message);
+  if (events_) events_->settings_changes();
 }
 
 Monitor::~Monitor() { stop(); }
 
 void Monitor::start() {
+  // The warnings the stored history gives already: a restart does not hide them.
+  const homing::Settings settings = service_.settings();
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) judge_health(a, settings);
   refresh_summary();
   thread_ = std::thread([this] {
     while (!stop_) {
@@ -99,6 +129,30 @@ void Monitor::refresh_summary() {
   service_.set_extras(extras_);
 }
 
+// The trend of the axis's last cycles in the history: its warning is
+// published, and logged once each time it changes.
+void Monitor::judge_health(std::size_t axis, const homing::Settings& settings) {
+  if (!store_) return;
+  const TrendSettings t = trend_settings(settings, axis);
+  auto records = store_->health_history(axis, std::max<std::size_t>(t.cycles, 1));
+  if (!records) {
+    spdlog::error("health trend of {} not judged: {}", homing::kAxisUpper[axis], records.error().message);
+    return;
+  }
+  std::vector<persistence::AxisHealth> figures;
+  for (const auto& r : *records) figures.push_back(r.health);
+  const auto verdicts = judge_trend(figures, t);
+  const homing::HealthWarning now = verdicts.empty() ? homing::HealthWarning::none : verdicts.front().warning;
+  homing::HealthWarning& shown = extras_.health_warning[axis];
+  if (now == shown) return;
+  if (now == homing::HealthWarning::none)
+    spdlog::info("health warning {} on {} cleared", homing::name_of(shown), homing::kAxisUpper[axis]);
+  else
+    spdlog::warn("health warning {} on {} (not an alarm: the axis stays homed): {}", homing::name_of(now),
+                 homing::kAxisUpper[axis], verdict_text(verdicts.front(), settings, axis));
+  shown = now;
+}
+
 void Monitor::poll(std::int64_t now_ms) {
   housekeeping(now_ms);
   const Snapshot snap = loop_.snapshot();
@@ -112,6 +166,7 @@ void Monitor::poll(std::int64_t now_ms) {
     first_ = false;
   }
   const homing::Settings settings = service_.settings();
+  if (events_) events_->take(snap.events, settings);
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     const auto& now = st.axes[a].alarm;
     if (now.code != last_.axes[a].alarm.code && now) {
@@ -160,6 +215,8 @@ void Monitor::poll(std::int64_t now_ms) {
     else spdlog::warn("homing ended with alarm {}", homing::alarm_name(static_cast<homing::AlarmCode>(run.result)));
     if (store_)
       if (auto r = store_->record_homing_run(run); !r) spdlog::error("history not recorded: {}", r.error().message);
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+      if (run.axis[a].health) judge_health(a, settings);
     refresh_summary();
   }
   last_ = st;

@@ -1,7 +1,8 @@
 #pragma once
 // Watches the published status from outside the control loop: logs alarms
-// and command results, records each homing run in the history and refreshes
-// the home-correction summary that the input registers show.
+// and command results, records each homing run in the history, refreshes
+// the home-correction summary that the input registers show, and after each
+// run judges the health trend of its axes (health_trend.hpp).
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -10,6 +11,7 @@
 #include "control_loop.hpp"
 #include "modbus_service.hpp"
 #include "persistence/settings_store.hpp"
+#include "plant_events.hpp"
 
 namespace server {
 
@@ -20,6 +22,8 @@ class Monitor {
   Monitor(ControlLoop& loop, ModbusService& service, persistence::SettingsStore* store,
           std::function<std::uint32_t()> tcp_clients = {});
   ~Monitor();
+  // Homing cycles, alarms and settings changes for the plant (MQTT); before start().
+  void set_plant_events(PlantEvents* events) { events_ = events; }
   void start();
   void stop();
   // One look at the status (tests call it directly).
@@ -27,6 +31,7 @@ class Monitor {
 
  private:
   void refresh_summary();
+  void judge_health(std::size_t axis, const homing::Settings& settings);
   void refresh_diagnostics();
   void housekeeping(std::int64_t now_ms);
 
@@ -40,6 +45,7 @@ class Monitor {
   bool first_ = true;
   std::int64_t run_start_ms_ = 0;
   homing::AxisMask run_axes_ = 0;
+  PlantEvents* events_ = nullptr;
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };
@@ -48,7 +54,7 @@ std::int64_t unix_ms();
 
 // What the history records of one axis of a finished run: its correction
 // only when the cycle succeeded and the axis was homed when it started,
-// otherwise why not.
+// otherwise why not; its health figures whenever it ended homed.
 persistence::AxisRun axis_record(bool cycle_ok, const homing::AxisStatus& axis, std::int64_t duration_ms);
 
 }  // namespace server

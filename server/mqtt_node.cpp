@@ -1,11 +1,20 @@
 #include "mqtt_node.hpp"
 
 #include <mosquitto.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
+#include <fstream>
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+
+#include "registers/errors.hpp"
+#include "registers/lookup.hpp"
 #include "sparkplug/payload.hpp"
 
 namespace server {
@@ -31,8 +40,36 @@ struct LibInit {
 
 }  // namespace
 
-MqttConfig mqtt_config(const Options& o) {
+// The first line of the file, without its line end: what `echo secret > file` writes.
+std::expected<std::string, std::string> read_password(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return std::unexpected("--mqtt-password-file " + path + ": cannot be read (" + std::strerror(errno) + ")");
+  std::string line;
+  std::getline(in, line);
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  if (line.empty()) return std::unexpected("--mqtt-password-file " + path + ": the first line is empty; write the password there");
+  struct stat st{};
+  if (stat(path.c_str(), &st) == 0 && (st.st_mode & (S_IRWXG | S_IRWXO)))
+    spdlog::warn("mqtt: {} can be read by others (mode {:o}); chmod 600 it", path, st.st_mode & 0777);
+  return line;
+}
+
+std::expected<MqttConfig, std::string> mqtt_config(const Options& o) {
   MqttConfig c;
+  c.tls = o.mqtt_tls;
+  c.ca = o.mqtt_ca;
+  c.cert = o.mqtt_cert;
+  c.key = o.mqtt_key;
+  c.user = o.mqtt_user;
+  c.primary_host = o.mqtt_primary_host;
+  c.commands = o.mqtt_commands;
+  c.outbox = o.mqtt_outbox.empty() ? o.db_path + ".mqtt-events" : o.mqtt_outbox;
+  c.outbox_max = static_cast<std::size_t>(o.mqtt_outbox_max);
+  if (!o.mqtt_password_file.empty()) {
+    auto pw = read_password(o.mqtt_password_file);
+    if (!pw) return std::unexpected(pw.error());
+    c.password = *pw;
+  }
   c.host = o.mqtt_host;
   c.port = o.mqtt_port;
   c.group = o.mqtt_group;
@@ -49,7 +86,8 @@ MqttConfig mqtt_config(const Options& o) {
   return c;
 }
 
-MqttNode::MqttNode(MqttConfig config, ModbusService& service) : config_(std::move(config)), service_(service) {
+MqttNode::MqttNode(MqttConfig config, ModbusService& service, persistence::EventOutbox* outbox)
+    : config_(std::move(config)), service_(service), outbox_(outbox) {
   static LibInit lib;
   const std::string client_id = "homingd-" + config_.group + "-" + config_.node;
   mosq_ = mosquitto_new(client_id.c_str(), true, this);
@@ -57,7 +95,24 @@ MqttNode::MqttNode(MqttConfig config, ModbusService& service) : config_(std::mov
   mosquitto_connect_callback_set(mosq_, &MqttNode::on_connect);
   mosquitto_disconnect_callback_set(mosq_, &MqttNode::on_disconnect);
   mosquitto_message_callback_set(mosq_, &MqttNode::on_message);
-  mosquitto_reconnect_delay_set(mosq_, 1, 30, true);
+  mosquitto_log_callback_set(mosq_, &MqttNode::on_log);
+  mosquitto_publish_callback_set(mosq_, &MqttNode::on_publish);
+  mosquitto_threaded_set(mosq_, true);  // publishes come from the publisher thread
+  if (!config_.user.empty()) {
+    const int rc = mosquitto_username_pw_set(mosq_, config_.user.c_str(),
+                                             config_.password.empty() ? nullptr : config_.password.c_str());
+    if (rc != MOSQ_ERR_SUCCESS) throw std::runtime_error(std::string("mqtt: user name: ") + mosquitto_strerror(rc));
+  }
+  if (config_.tls) {
+    // The broker's certificate is checked against the CA and its name or IP
+    // against the host of --mqtt (libmosquitto's default; never turned off).
+    const int rc = mosquitto_tls_set(mosq_, config_.ca.c_str(), nullptr, config_.cert.empty() ? nullptr : config_.cert.c_str(),
+                                     config_.key.empty() ? nullptr : config_.key.c_str(), nullptr);
+    if (rc != MOSQ_ERR_SUCCESS)
+      throw std::runtime_error("mqtt: TLS files (--mqtt-ca " + config_.ca + (config_.cert.empty() ? "" : ", --mqtt-cert " + config_.cert) +
+                               (config_.key.empty() ? "" : ", --mqtt-key " + config_.key) + "): " + mosquitto_strerror(rc) +
+                               " (are they PEM, and the key unencrypted?)");
+  }
 }
 
 MqttNode::~MqttNode() {
@@ -78,15 +133,51 @@ void MqttNode::set_will() {
 
 void MqttNode::start() {
   set_will();
-  const int rc = mosquitto_connect_async(mosq_, config_.host.c_str(), config_.port, config_.keepalive_s);
-  if (rc != MOSQ_ERR_SUCCESS)
-    spdlog::warn("mqtt: connecting to {}:{}: {}; retrying in the background", config_.host, config_.port,
-                 mosquitto_strerror(rc));
-  if (mosquitto_loop_start(mosq_) != MOSQ_ERR_SUCCESS)
-    throw std::runtime_error("mqtt: cannot start the MQTT network thread");
   started_ = true;
+  network_ = std::thread([this] { network_loop(); });
   publisher_ = std::thread([this] { publish_loop(); });
-  spdlog::info("mqtt: Sparkplug B edge node {} on {}:{}", topic("NBIRTH"), config_.host, config_.port);
+  spdlog::info("mqtt: Sparkplug B edge node {} on {}://{}:{}{}", topic("NBIRTH"), config_.tls ? "mqtts" : "mqtt",
+               config_.host, config_.port, config_.user.empty() ? "" : " as user " + config_.user);
+}
+
+// Our own network thread rather than libmosquitto's loop_start: that one
+// never retries once its first connection fails, nor after a TLS error, and a
+// module must reach a broker that comes back whatever went wrong before.
+// Retries back off from 1 s to 30 s.
+void MqttNode::network_loop() {
+  int delay_s = 1;
+  bool have_socket = false;
+  const auto wait = [&] {
+    for (int i = 0; i < delay_s * 10 && !stop_network_; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    delay_s = std::min(delay_s * 2, 30);
+  };
+  while (!stop_network_) {
+    if (!have_socket) {
+      const int rc = mosquitto_connect(mosq_, config_.host.c_str(), config_.port, config_.keepalive_s);
+      if (rc != MOSQ_ERR_SUCCESS) {
+        log_once(fmt::format("cannot connect: {}; retrying",
+                             rc == MOSQ_ERR_ERRNO ? std::string(std::strerror(errno)) : mosquitto_strerror(rc)));
+        wait();
+        continue;
+      }
+      have_socket = true;
+    }
+    const int rc = mosquitto_loop(mosq_, 100, 1);
+    if (rc != MOSQ_ERR_SUCCESS) {
+      have_socket = false;
+      if (connected_.exchange(false)) on_session_lost(rc);
+      wait();
+    } else if (connected_) {
+      delay_s = 1;
+    }
+  }
+}
+
+void MqttNode::log_once(const std::string& text) {
+  std::lock_guard lock(log_mutex_);
+  if (last_lib_error_ == text) return;
+  last_lib_error_ = text;
+  spdlog::warn("mqtt: {}:{}: {}", config_.host, config_.port, text);
 }
 
 void MqttNode::stop() {
@@ -94,39 +185,167 @@ void MqttNode::stop() {
   started_ = false;
   stop_ = true;
   if (publisher_.joinable()) publisher_.join();
+  stop_network_ = true;
+  if (network_.joinable()) network_.join();
+  // Alone on the client now: the death certificate, written out, then goodbye.
   if (connected_) {
     const std::string bytes = sparkplug::EdgeNode::death(bd_seq_.load()).SerializeAsString();
     int mid = 0;
     mosquitto_publish(mosq_, &mid, topic("NDEATH").c_str(), static_cast<int>(bytes.size()), bytes.data(), 1, false);
+    for (int i = 0; i < 20 && mosquitto_want_write(mosq_); ++i) mosquitto_loop(mosq_, 50, 1);
   }
   mosquitto_disconnect(mosq_);
-  mosquitto_loop_stop(mosq_, false);
+  mosquitto_loop(mosq_, 50, 1);
 }
 
 void MqttNode::on_connect(mosquitto* m, void* self_ptr, int rc) {
   auto* self = static_cast<MqttNode*>(self_ptr);
   if (rc != 0) {
-    spdlog::warn("mqtt: broker refused the connection: {}", mosquitto_connack_string(rc));
+    self->log_once(std::string("broker refused the connection: ") + mosquitto_connack_string(rc));
     return;
   }
   mosquitto_subscribe(m, nullptr, self->topic("NCMD").c_str(), 1);
+  if (!self->config_.primary_host.empty()) {
+    {
+      std::lock_guard lock(self->host_mutex_);
+      self->host_.forget();
+    }
+    mosquitto_subscribe(m, nullptr, sparkplug::state_topic(self->config_.primary_host).c_str(), 1);
+  }
   self->connected_ = true;
   self->need_birth_ = true;
+  {
+    std::lock_guard lock(self->log_mutex_);
+    self->last_lib_error_.clear();
+  }
   spdlog::info("mqtt: connected to {}:{} (bdSeq {})", self->config_.host, self->config_.port, self->bd_seq_.load());
 }
 
 // The next session gets the next bdSeq, and its Will says so before the
-// reconnect registers it.
+// reconnect registers it. What was in flight may not have arrived: sent again
+// after the next birth.
+void MqttNode::on_session_lost(int rc) {
+  {
+    std::lock_guard lock(flight_mutex_);
+    in_flight_.clear();
+    resend_all_ = true;
+  }
+  bd_seq_ = (bd_seq_.load() + 1) % 256;
+  set_will();
+  if (rc != MOSQ_ERR_SUCCESS) spdlog::warn("mqtt: lost the broker ({}); reconnecting", mosquitto_strerror(rc));
+}
+
 void MqttNode::on_disconnect(mosquitto*, void* self_ptr, int rc) {
   auto* self = static_cast<MqttNode*>(self_ptr);
-  const bool was = self->connected_.exchange(false);
-  self->bd_seq_ = (self->bd_seq_.load() + 1) % 256;
-  self->set_will();
-  if (was && rc != 0) spdlog::warn("mqtt: lost the broker ({}); reconnecting", mosquitto_strerror(rc));
+  if (self->connected_.exchange(false)) self->on_session_lost(rc);
+}
+
+// libmosquitto's own errors (a TLS handshake the broker refused, a
+// certificate that does not verify): the why of a connection that fails. A
+// line repeated on each reconnect attempt is logged once until another one.
+void MqttNode::on_log(mosquitto*, void* self_ptr, int level, const char* text) {
+  if (!(level & (MOSQ_LOG_ERR | MOSQ_LOG_WARNING)) || !text) return;
+  static_cast<MqttNode*>(self_ptr)->log_once(text);
+}
+
+// The primary host's STATE: online lets the node be born; offline after the
+// birth ends the session (NDEATH, disconnect), and the node waits in a new
+// one, as Sparkplug 3.0 asks of an edge node with a primary host.
+void MqttNode::take_host_state(const mosquitto_message* msg) {
+  const auto state = sparkplug::parse_host_state(
+      std::string_view(static_cast<const char*>(msg->payload), static_cast<std::size_t>(msg->payloadlen)));
+  if (!state) {
+    spdlog::warn("mqtt: {} is not a STATE message ({{\"online\": bool, \"timestamp\": ms}}); ignored", msg->topic);
+    return;
+  }
+  std::lock_guard lock(host_mutex_);
+  if (!host_.take(*state)) return;
+  spdlog::info("mqtt: primary host {} is {}", config_.primary_host, state->online ? "online" : "offline");
+  if (state->online) need_birth_ = true;
+  else host_gone_ = true;
+}
+
+// An NCMD command: a momentary command coil of the module (cmd/home_all,
+// cmd/home/x, cmd/abort, cmd/reset_alarm, ...) written through the same path
+// as a Modbus write, so the same interlocks and refusals. Held commands (jog,
+// the homing permit) are not taken: a broker's latency must not keep an axis
+// moving. Every command is answered as an event (kind command): accepted, or
+// the refusal with its reason.
+// How the control loop judged the commands so far: status.command_count and
+// status.last_command_result, read as a Modbus client reads them.
+std::pair<std::int64_t, std::int64_t> MqttNode::judged() {
+  static const registers::Register* count = registers::find_register("status.command_count");
+  static const registers::Register* result = registers::find_register("status.last_command_result");
+  std::pair<std::int64_t, std::int64_t> out{0, 0};
+  service_.with_module_view([&](const registers::ModuleView& v) {
+    out = {registers::read_raw(*count, v), registers::read_raw(*result, v)};
+  });
+  return out;
+}
+
+void MqttNode::take_command(const std::string& metric, bool on) {
+  std::string name = metric;
+  std::ranges::replace(name, '/', '.');
+  // event/code: the command result (status.last_command_result, 0 = never
+  // judged); event/new_value: the refusal reason of the write (status.last_refusal_reason, 0 = none).
+  persistence::Event answer{.time_ms = now_ms(), .kind = persistence::EventKind::command, .name = name};
+  const registers::Register* reg = registers::find_register(name);
+  const bool momentary = reg && reg->unit == registers::Unit::module && reg->table == registers::Table::coil &&
+                         reg->access == registers::Access::w;
+  if (!config_.commands) {
+    answer.new_value = static_cast<std::int64_t>(registers::RefusalReason::client_read_only);
+    answer.text = fmt::format("NCMD {} refused: commands over MQTT are off (homingd --mqtt-commands turns them on)", metric);
+  } else if (!momentary) {
+    answer.new_value = static_cast<std::int64_t>(registers::RefusalReason::not_mapped);
+    answer.text = fmt::format("NCMD {} refused: not a command of this module over MQTT (the momentary cmd.* coils only: "
+                              "home, abort, reset, unhome, move, lock settings; no jog, no settings)", metric);
+  } else if (!on) {
+    answer.new_value = static_cast<std::int64_t>(registers::RefusalReason::out_of_range);
+    answer.text = fmt::format("NCMD {} refused: a command is carried out by writing true", metric);
+  } else {
+    const ClientInfo client(0, Transport::mqtt, config_.host + ":" + std::to_string(config_.port));
+    const auto before = judged();
+    if (const auto refusal = service_.command(*reg, true, client)) {
+      answer.new_value = refusal->reason_code();
+      answer.text = fmt::format("NCMD {} refused: {} ({}): {}", metric, homing::name_of(refusal->reason),
+                                registers::exception_name(refusal->code), refusal->message);
+    } else {
+      // The loop judges a command within a period or two; the network thread
+      // may wait that long (the control loop never waits for it).
+      auto now = before;
+      for (int i = 0; i < 2000 && now.first == before.first; ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        now = judged();
+      }
+      if (now.first != before.first) {
+        const auto result = static_cast<homing::CommandResult>(now.second);
+        answer.code = static_cast<std::int32_t>(now.second);
+        answer.text = fmt::format("NCMD {}: {}: {}", metric, homing::command_result_name(result),
+                                  homing::text_of(result));
+      } else {
+        answer.text = fmt::format("NCMD {} taken; the control loop did not judge it within 2 s: see status/last_command_result", metric);
+      }
+    }
+  }
+  if (answer.new_value != 0 || (answer.code > 1)) spdlog::warn("mqtt: {}", answer.text);
+  if (!outbox_) return;
+  if (auto r = outbox_->push(std::move(answer)); !r)
+    spdlog::error("mqtt: the answer to an NCMD could not be kept ({}): {}", outbox_->path(), r.error().message);
+}
+
+bool MqttNode::may_publish() {
+  if (!connected_) return false;
+  if (config_.primary_host.empty()) return true;
+  std::lock_guard lock(host_mutex_);
+  return host_.online();
 }
 
 void MqttNode::on_message(mosquitto*, void* self_ptr, const mosquitto_message* msg) {
   auto* self = static_cast<MqttNode*>(self_ptr);
+  if (!self->config_.primary_host.empty() && sparkplug::state_topic(self->config_.primary_host) == msg->topic) {
+    self->take_host_state(msg);
+    return;
+  }
   sparkplug::Payload cmd;
   if (!cmd.ParseFromArray(msg->payload, msg->payloadlen)) {
     spdlog::warn("mqtt: NCMD on {} is not a Sparkplug B payload; ignored", msg->topic);
@@ -136,8 +355,11 @@ void MqttNode::on_message(mosquitto*, void* self_ptr, const mosquitto_message* m
     if (metric.name() == sparkplug::kRebirthName && metric.boolean_value()) {
       spdlog::info("mqtt: rebirth requested");
       self->need_birth_ = true;
+    } else if (metric.name().starts_with("cmd/") && metric.datatype() == static_cast<std::uint32_t>(sparkplug::DataType::boolean)) {
+      self->take_command(metric.name(), metric.boolean_value());
     } else {
-      spdlog::warn("mqtt: NCMD metric '{}' ignored: MQTT commands are not supported", metric.name());
+      spdlog::warn("mqtt: NCMD metric '{}' ignored: only Node Control/Rebirth and Boolean cmd/... metrics are taken",
+                   metric.name());
     }
   }
 }
@@ -148,19 +370,76 @@ bool MqttNode::publish(std::string_view type, const std::string& bytes) {
   return rc == MOSQ_ERR_SUCCESS;
 }
 
+// An event leaves the outbox once libmosquitto has written it to the broker's
+// connection (NDATA is QoS 0 by the specification: that is the last word the
+// node gets); until then a lost connection sends it again after the next birth.
+void MqttNode::on_publish(mosquitto*, void* self_ptr, int mid) {
+  auto* self = static_cast<MqttNode*>(self_ptr);
+  std::int64_t id = 0;
+  {
+    std::lock_guard lock(self->flight_mutex_);
+    auto it = self->in_flight_.find(mid);
+    if (it == self->in_flight_.end()) return;
+    id = it->second;
+    self->in_flight_.erase(self->in_flight_.begin(), std::next(it));
+  }
+  if (auto r = self->outbox_->remove_through(id); !r)
+    spdlog::error("mqtt: delivered events not removed from {}: {}", self->outbox_->path(), r.error().message);
+}
+
+// The outbox's events after those already handed over in this session, oldest
+// first, each as its own NDATA.
+void MqttNode::send_events(sparkplug::EdgeNode& node) {
+  if (!outbox_) return;
+  auto events = outbox_->oldest(64, sent_through_);
+  if (!events) {
+    spdlog::error("mqtt: events not read from {}: {}", outbox_->path(), events.error().message);
+    return;
+  }
+  if (events->empty()) return;
+  const std::int64_t dropped = outbox_->dropped();
+  for (const auto& e : *events) {
+    auto payload = node.event(e, static_cast<std::uint64_t>(e.time_ms) < birth_ms_, dropped,
+                              static_cast<std::uint64_t>(now_ms()));
+    if (!payload) return;
+    const std::string bytes = payload->SerializeAsString();
+    int mid = 0;
+    std::lock_guard lock(flight_mutex_);  // on_publish may come before mosquitto_publish returns
+    if (mosquitto_publish(mosq_, &mid, topic("NDATA").c_str(), static_cast<int>(bytes.size()), bytes.data(), 0,
+                          false) != MOSQ_ERR_SUCCESS) {
+      need_birth_ = true;
+      return;
+    }
+    in_flight_[mid] = e.id;
+    sent_through_ = e.id;
+  }
+}
+
 void MqttNode::publish_loop() {
   sparkplug::EdgeNode node;
   while (!stop_) {
-    if (connected_) {
+    if (host_gone_.exchange(false) && connected_) {
+      const std::string bytes = sparkplug::EdgeNode::death(bd_seq_.load()).SerializeAsString();
+      mosquitto_publish(mosq_, nullptr, topic("NDEATH").c_str(), static_cast<int>(bytes.size()), bytes.data(), 1, false);
+      mosquitto_disconnect(mosq_);  // the network thread connects again, with the next bdSeq
+    }
+    if (may_publish()) {
       service_.with_module_view([&](const registers::ModuleView& view) {
         const sparkplug::RawReader read = [&](const registers::Register& reg) { return registers::read_raw(reg, view); };
         if (need_birth_.exchange(false)) {
-          if (!publish("NBIRTH", node.birth(bd_seq_.load(), read, static_cast<std::uint64_t>(now_ms())).SerializeAsString()))
+          const auto now = static_cast<std::uint64_t>(now_ms());
+          const std::int64_t dropped = outbox_ ? outbox_->dropped() : 0;
+          if (!publish("NBIRTH", node.birth(bd_seq_.load(), read, now, dropped).SerializeAsString())) {
             need_birth_ = true;  // not connected after all: born again on the next connection
+          } else {
+            birth_ms_ = now;
+            if (resend_all_.exchange(false)) sent_through_ = 0;  // a new session: all the outbox holds is owed
+          }
         } else if (auto data = node.data(read, static_cast<std::uint64_t>(now_ms()))) {
           if (!publish("NDATA", data->SerializeAsString())) need_birth_ = true;
         }
       });
+      if (!need_birth_) send_events(node);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(config_.sample_ms));
   }

@@ -52,6 +52,43 @@ std::expected<void, std::string> check_tls(const Options& o, const CLI::App& app
   return {};
 }
 
+// --mqtt and what goes with it: the scheme decides TLS and the default port;
+// the TLS files only with mqtts://, a client certificate only with its key,
+// a password file only with a user name.
+std::expected<void, std::string> check_mqtt(const std::string& url, Options& o, const CLI::App& app) {
+  const auto given = [&](const char* name) { return app.get_option(name)->count() > 0; };
+  if (url.empty()) {
+    for (const char* name : {"--mqtt-node", "--mqtt-group", "--mqtt-keepalive-s", "--mqtt-ca", "--mqtt-cert",
+                             "--mqtt-key", "--mqtt-user", "--mqtt-password-file", "--mqtt-outbox", "--mqtt-outbox-max",
+                             "--mqtt-primary-host", "--mqtt-commands"})
+      if (given(name))
+        return std::unexpected(std::string(name) + " is set but --mqtt is not: add --mqtt mqtt://HOST:PORT to publish");
+    return {};
+  }
+  const bool tls = url.starts_with("mqtts://");
+  if (!tls && !url.starts_with("mqtt://"))
+    return std::unexpected("--mqtt " + url + ": expected mqtt://HOST[:PORT] or mqtts://HOST[:PORT], e.g. mqtt://broker.plant:1883");
+  auto where = split_host_port("--mqtt", url.substr(tls ? 8 : 7), tls ? 8883 : 1883);
+  if (!where) return std::unexpected(where.error());
+  o.mqtt_enabled = true;
+  o.mqtt_tls = tls;
+  o.mqtt_host = where->host;
+  o.mqtt_port = where->port;
+  if (tls && o.mqtt_ca.empty())
+    return std::unexpected("--mqtt " + url + " needs --mqtt-ca: the CA certificate that signs the broker's certificate "
+                           "(without it the broker could not be checked)");
+  if (!tls)
+    for (const char* name : {"--mqtt-ca", "--mqtt-cert", "--mqtt-key"})
+      if (given(name))
+        return std::unexpected(std::string(name) + " is set but --mqtt " + url +
+                               " is plain MQTT: use mqtts://HOST:PORT for TLS to the broker");
+  if (o.mqtt_cert.empty() != o.mqtt_key.empty())
+    return std::unexpected("--mqtt-cert and --mqtt-key go together: the client certificate and its private key");
+  if (!o.mqtt_password_file.empty() && o.mqtt_user.empty())
+    return std::unexpected("--mqtt-password-file needs --mqtt-user: the user name the password belongs to");
+  return {};
+}
+
 }  // namespace
 
 std::optional<Cidr> parse_cidr(const std::string& text) {
@@ -225,7 +262,8 @@ OptionParser::Table::Table() {
                  "The machine's name, reported as the user application name (FC 43 object 6, FC 17)")
       ->check(identity_text);
   app.add_option("--mqtt", mqtt,
-                 "Publish to this MQTT broker as a Sparkplug B edge node: mqtt://HOST[:PORT] (default port 1883)");
+                 "Publish to this MQTT broker as a Sparkplug B edge node: mqtt://HOST[:PORT] (default port 1883) or, over "
+                 "TLS, mqtts://HOST[:PORT] (default port 8883, needs --mqtt-ca)");
   app.add_option("--mqtt-group,--mqtt_group", o.mqtt_group, "Sparkplug group id")->check(sparkplug_id)->capture_default_str();
   app.add_option("--mqtt-node,--mqtt_node", o.mqtt_node,
                  "Sparkplug edge node id (default: --machine-name, else the host name)")
@@ -233,6 +271,33 @@ OptionParser::Table::Table() {
   app.add_option("--mqtt-keepalive-s,--mqtt_keepalive_s", o.mqtt_keepalive_s,
                  "MQTT keep-alive: the broker publishes the death certificate this long (x1.5) after the module falls silent")
       ->check(CLI::Range(5, 3600))
+      ->capture_default_str();
+  app.add_option("--mqtt-ca,--mqtt_ca", o.mqtt_ca,
+                 "mqtts://: the CA certificate (PEM) that signs the broker's certificate; the broker's name or "
+                 "IP must match it")
+      ->check(CLI::ExistingFile);
+  app.add_option("--mqtt-cert,--mqtt_cert", o.mqtt_cert,
+                 "mqtts://: the module's client certificate (PEM), for brokers that require one (with --mqtt-key)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--mqtt-key,--mqtt_key", o.mqtt_key, "mqtts://: the private key of --mqtt-cert (PEM, no pass phrase)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--mqtt-user,--mqtt_user", o.mqtt_user, "MQTT user name (its password in --mqtt-password-file)");
+  app.add_option("--mqtt-password-file,--mqtt_password_file", o.mqtt_password_file,
+                 "File whose first line is the MQTT password of --mqtt-user (keep it readable by the service only)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--mqtt-primary-host,--mqtt_primary_host", o.mqtt_primary_host,
+                 "Sparkplug primary host id: be born and publish only while spBv1.0/STATE/<id> says online "
+                 "(events wait in the outbox meanwhile)")
+      ->check(sparkplug_id);
+  app.add_flag("--mqtt-commands,--mqtt_commands", o.mqtt_commands,
+               "Carry out commands sent as NCMD (cmd/home_all, cmd/abort, cmd/reset_alarm, ...) through the same "
+               "interlocks as Modbus; off: refused and answered as an event");
+  app.add_option("--mqtt-outbox,--mqtt_outbox", o.mqtt_outbox,
+                 "SQLite file keeping homing cycles, alarms and settings changes until the broker has them "
+                 "(default: the --db path + .mqtt-events)");
+  app.add_option("--mqtt-outbox-max,--mqtt_outbox_max", o.mqtt_outbox_max,
+                 "Events kept at most while the broker is away; past it the oldest are dropped and counted")
+      ->check(CLI::Range(100, 10000000))
       ->capture_default_str();
   app.add_option("--export-settings,--export_settings", o.export_settings,
                  "Write every setting of --db to this TOML file and exit (no server)");
@@ -287,21 +352,7 @@ std::expected<ParseOutcome, std::string> OptionParser::parse(int argc, char** ar
     o.tls_port = where->port;
   }
   if (auto r = check_tls(o, app); !r) return std::unexpected(r.error());
-  if (!t.mqtt.empty()) {
-    if (t.mqtt.starts_with("mqtts://"))
-      return std::unexpected("--mqtt " + t.mqtt + ": mqtts:// (TLS to the broker) is not supported yet; use mqtt://HOST:PORT");
-    if (!t.mqtt.starts_with("mqtt://"))
-      return std::unexpected("--mqtt " + t.mqtt + ": expected mqtt://HOST[:PORT], e.g. mqtt://broker.plant:1883");
-    auto where = split_host_port("--mqtt", t.mqtt.substr(7), 1883);
-    if (!where) return std::unexpected(where.error());
-    o.mqtt_enabled = true;
-    o.mqtt_host = where->host;
-    o.mqtt_port = where->port;
-  } else {
-    for (const char* name : {"--mqtt-node", "--mqtt-group", "--mqtt-keepalive-s"})
-      if (app.get_option(name)->count() > 0)
-        return std::unexpected(std::string(name) + " is set but --mqtt is not: add --mqtt mqtt://HOST:PORT to publish");
-  }
+  if (auto r = check_mqtt(t.mqtt, o, app); !r) return std::unexpected(r.error());
   o.parity = t.parity.empty() ? 'E' : t.parity[0];
   o.word_order = t.word_order == "low-first" ? registers::WordOrder::low_first : registers::WordOrder::high_first;
   for (const auto& entry : o.write_allow)

@@ -61,6 +61,16 @@ struct Options {
   std::string mqtt_group = "homing";  // Sparkplug group id
   std::string mqtt_node;              // edge node id; empty: --machine-name, else the host name
   int mqtt_keepalive_s = 30;
+  bool mqtt_tls = false;              // mqtts://: TLS to the broker, its certificate checked against mqtt_ca
+  std::string mqtt_ca;                // CA that signs the broker's certificate (PEM)
+  std::string mqtt_cert;              // the module's client certificate (PEM), with mqtt_key
+  std::string mqtt_key;
+  std::string mqtt_user;              // MQTT user name; its password comes from mqtt_password_file
+  std::string mqtt_password_file;
+  std::string mqtt_outbox;            // events owed to the broker; empty: <db>.mqtt-events
+  int mqtt_outbox_max = 10000;        // events kept at most while the broker is away (oldest dropped)
+  std::string mqtt_primary_host;      // Sparkplug primary host id: publish only while its STATE says online
+  bool mqtt_commands = false;         // NCMD cmd.* accepted (off: refused and reported)
   // Offline settings transfer: act on --db and exit without serving.
   std::string export_settings;
   std::string import_settings;

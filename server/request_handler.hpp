@@ -16,8 +16,9 @@ namespace server {
 // Where a request came from: the rules differ (unit ids 0 and 0xFF, the
 // --write-allow list, broadcasts, silence for unknown units). tls is
 // Modbus/TCP Security: Modbus TCP inside TLS, the client known by its certificate.
-enum class Transport : std::uint8_t { tcp, rtu, tls };
-inline constexpr std::size_t kTransportCount = 3;  // arrays indexed by Transport
+// mqtt: commands of the Sparkplug B edge node (NCMD), with --mqtt-commands.
+enum class Transport : std::uint8_t { tcp, rtu, tls, mqtt };
+inline constexpr std::size_t kTransportCount = 4;  // arrays indexed by Transport
 
 // "tcp", "rtu", "tls": for the log and the audit log's transport column.
 constexpr std::string_view transport_name(Transport t) {
@@ -25,12 +26,15 @@ constexpr std::string_view transport_name(Transport t) {
     case Transport::tcp: return "tcp";
     case Transport::rtu: return "rtu";
     case Transport::tls: return "tls";
+    case Transport::mqtt: return "mqtt";
   }
   return "?";
 }
 
 // Modbus TCP framing and a network address: plain or inside TLS.
-constexpr bool over_network(Transport t) { return t != Transport::rtu; }
+// Clients with an IP address of their own (--write-allow applies to them);
+// an MQTT command comes through the broker, enabled by --mqtt-commands.
+constexpr bool over_network(Transport t) { return t == Transport::tcp || t == Transport::tls; }
 
 // What a client may change, each level including the ones before it. Plain
 // TCP and RTU clients have `settings` (--write-allow and the unlock code still

@@ -15,7 +15,7 @@ namespace sparkplug {
 // Values of the specification's DataType enum that the module uses
 // (sparkplug_b.proto holds the whole enum).
 enum class DataType : std::uint32_t {
-  int16 = 2, int32 = 3, int64 = 4, uint16 = 6, uint32 = 7, dbl = 10, boolean = 11,
+  int16 = 2, int32 = 3, int64 = 4, uint16 = 6, uint32 = 7, dbl = 10, boolean = 11, string = 12,
 };
 
 struct MetricDef {

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "registers/codec.hpp"
+#include "sparkplug/events.hpp"
 
 namespace sparkplug {
 
@@ -33,7 +34,7 @@ std::uint64_t EdgeNode::next_seq() {
   return seq_;
 }
 
-Payload EdgeNode::birth(std::uint64_t bd_seq, const RawReader& read, std::uint64_t now_ms) {
+Payload EdgeNode::birth(std::uint64_t bd_seq, const RawReader& read, std::uint64_t now_ms, std::int64_t events_dropped) {
   Payload p;
   p.set_timestamp(now_ms);
   seq_ = 0;
@@ -58,7 +59,18 @@ Payload EdgeNode::birth(std::uint64_t bd_seq, const RawReader& read, std::uint64
     set_value(*m, def, raw);
     remember(i, raw, now_ms);
   }
+  add_event_metrics(p, first_event_alias(), now_ms, events_dropped);
   born_ = true;
+  return p;
+}
+
+std::optional<Payload> EdgeNode::event(const persistence::Event& e, bool historical, std::int64_t events_dropped,
+                                       std::uint64_t now_ms) {
+  if (!born_) return std::nullopt;
+  Payload p;
+  add_event(p, e, historical, first_event_alias(), events_dropped);
+  p.set_timestamp(now_ms);
+  p.set_seq(next_seq());
   return p;
 }
 

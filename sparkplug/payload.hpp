@@ -9,6 +9,7 @@
 #include <optional>
 #include <vector>
 
+#include "persistence/event_outbox.hpp"
 #include "sparkplug/node_metrics.hpp"
 #include "sparkplug_b.pb.h"
 
@@ -37,10 +38,18 @@ class EdgeNode {
 
   // NBIRTH: seq restarts at 0; bdSeq first, then every metric with name,
   // alias, datatype and current value. Also the answer to a rebirth request.
-  Payload birth(std::uint64_t bd_seq, const RawReader& read, std::uint64_t now_ms);
+  // The event metrics (events.hpp) follow the register metrics, with the
+  // outbox's count of dropped events.
+  Payload birth(std::uint64_t bd_seq, const RawReader& read, std::uint64_t now_ms, std::int64_t events_dropped = 0);
   // NDATA with the metrics that changed since they were last published
   // (aliases only, no names); nothing before a birth or when nothing changed.
   std::optional<Payload> data(const RawReader& read, std::uint64_t now_ms);
+  // NDATA of one plant event, at the time it happened; historical when it is
+  // sent late (it happened before this session's birth); the payload's own
+  // timestamp is when it is sent. Only after a birth.
+  std::optional<Payload> event(const persistence::Event& event, bool historical, std::int64_t events_dropped,
+                               std::uint64_t now_ms);
+  std::uint64_t first_event_alias() const { return metrics_.size() + 1; }
   // NDEATH (the MQTT Will): bdSeq only, no seq, as the specification says.
   static Payload death(std::uint64_t bd_seq);
 

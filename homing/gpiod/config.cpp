@@ -289,10 +289,10 @@ std::optional<std::string> check_wiring(const BackendConfig& config, const homin
                            letter(a), letter(mi), lower(a));
       continue;  // moved by the master's output; its switch is read on the master's home line
     }
-    // Every line the axis's method needs (modes.hpp), in the table's order.
-    const homing::ModeRow& row = homing::mode_row(s.mode);
+    // Every line the axis's method needs (modes.hpp, with the stop detection
+    // its stall_detect chooses), in the table's order.
     for (const homing::SignalInfo& sig : homing::kSignalInfo) {
-      if (!sig.gpio_line_required || !row.needs_signal(sig.signal) || has_line(lines, sig.signal)) continue;
+      if (!sig.gpio_line_required || !homing::needs_signal(s, sig.signal) || has_line(lines, sig.signal)) continue;
       if (sig.signal == homing::Signal::step_output)
         return fmt::format("axis.{0}.mode is {1} (the axis can move) but [gpiod.axes.{2}] has no step/dir output; "
                            "wire {2} or set axis.{0}.mode = 0 (disabled)",

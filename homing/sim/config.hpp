@@ -26,6 +26,7 @@ enum class Fault : std::uint8_t {
   indexer_never_locks = 11,  // the pin stays out once out: the indexer never reports locked again
   limits_dead = 12,          // neither limit switch ever reports (NO wiring cut, switches jammed open)
   limits_stuck = 13,         // both limit switches report active everywhere
+  encoder_reversed = 14,     // the encoder counts the wrong way: it reads absolute_offset - actual position
 };
 inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::none, "none", "no fault"},
@@ -45,8 +46,10 @@ inline constexpr EnumInfo<Fault> kFaultInfo[] = {
     {Fault::indexer_never_locks, "indexer_never_locks", "the locking indexer's pin, once out, never goes in again"},
     {Fault::limits_dead, "limits_dead", "neither end-of-travel limit switch ever turns active"},
     {Fault::limits_stuck, "limits_stuck", "both end-of-travel limit switches read active everywhere"},
+    {Fault::encoder_reversed, "encoder_reversed",
+     "the encoder counts the wrong way (its channels swapped): it reads the offset less the carriage's position"},
 };
-static_assert(lists_every_value(kFaultInfo, Fault::limits_stuck));
+static_assert(lists_every_value(kFaultInfo, Fault::encoder_reversed));
 constexpr std::span<const EnumInfo<Fault>> enum_table(Fault) { return kFaultInfo; }
 
 struct AxisConfig {
@@ -60,6 +63,12 @@ struct AxisConfig {
   double index_pitch_mm = 0;      // 0 = no index
   double index_offset_mm = 0;
   double absolute_offset_mm = 0;  // absolute encoder reads actual + offset
+  // The encoder's counts: it reads in steps of its resolution, each reading
+  // off by normal noise of this standard deviation (drawn from the seed).
+  // 0 and 0, the default, read exactly. Against a mechanical stop it reads
+  // where the carriage is held while the steps go on.
+  double encoder_resolution_mm = 0;
+  double encoder_noise_mm = 0;
   // The drive's stall output: on once the carriage has been held by a
   // mechanical stop, with the motor driving into it, for the detection time
   // plus a random share of the spread (drawn per contact); off when the

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "carriage.hpp"
 #include "index_pulses.hpp"
@@ -14,6 +15,16 @@ constexpr double kTouch_mm = 1e-9;
 // Crossed stops (a half-written pair of registers) act as one wall at the minimum.
 Stops stops_of(const AxisConfig& c) {
   return Stops{c.hard_stop_min_mm, std::max(c.hard_stop_min_mm, c.hard_stop_max_mm)};
+}
+
+// A fraction in [0, 1) from a seed and two counters (splitmix64): the same
+// contact draws the same detection time in every run with this seed.
+double fraction(std::uint64_t seed, std::uint64_t a, std::uint64_t b) {
+  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * (a * 1000003ull + b + 1);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * 0x1.0p-53;
 }
 
 double clamp_to_stops(double x_mm, const AxisConfig& c) {
@@ -34,7 +45,7 @@ Simulator::Simulator(const MachineConfig& config) : config_(config) {
     ax.reported_level = electrical_level(i);
     own_[i].sensor_level = ax.reported_level;
     own_[i].absolute_valid = true;
-    own_[i].absolute_position_mm = ax.actual_mm + c.absolute_offset_mm;
+    own_[i].absolute_position_mm = encoder_reading(i);
     own_[i].drive_fault = c.fault == Fault::drive_fault;
     own_[i].stall = c.fault == Fault::stall_stuck;
     own_[i].drive_done = ax.drive.done(c);
@@ -47,6 +58,7 @@ Simulator::Simulator(const MachineConfig& config) : config_(config) {
 
 void Simulator::reseed() {
   for (std::size_t i = 0; i < kAxisCount; ++i) {
+    axes_[i].encoder_reads = 0;
     axes_[i].sensor.reseed(config_.seed, i);
     axes_[i].bounce.reseed(config_.seed, i);
   }
@@ -127,7 +139,8 @@ bool Simulator::electrical_level(std::size_t axis) const {
     case Fault::indexer_stuck_locked:
     case Fault::indexer_never_locks:
     case Fault::limits_dead:
-    case Fault::limits_stuck: break;
+    case Fault::limits_stuck:
+    case Fault::encoder_reversed: break;
   }
   return c.sensor_nc ? !contact : contact;
 }
@@ -149,7 +162,8 @@ bool Simulator::reports_edges(std::size_t axis) const {
     case Fault::indexer_stuck_locked:
     case Fault::indexer_never_locks:
     case Fault::limits_dead:
-    case Fault::limits_stuck: break;
+    case Fault::limits_stuck:
+    case Fault::encoder_reversed: break;
   }
   return true;
 }
@@ -258,11 +272,29 @@ void Simulator::advance_axis(std::size_t i, std::size_t output, const AxisOutput
   ax.reported_level = electrical_level(i);
   in.sensor_level = ax.reported_level;
   in.absolute_valid = true;
-  in.absolute_position_mm = ax.actual_mm + c.absolute_offset_mm;
+  in.absolute_position_mm = encoder_reading(i);
   in.drive_fault = c.fault == Fault::drive_fault;
   in.stall = stall_output(i, carriage, out.motor.position_mm, motor.end.position_mm);
   in.drive_done = ax.drive.done(c);
   set_limit_levels(i);
+}
+
+// Its own draws (stream 1000 + axis, apart from the stall's), and only with
+// noise: an exact encoder leaves every other draw as it was.
+double Simulator::encoder_reading(std::size_t i) {
+  Axis& ax = axes_[i];
+  const AxisConfig& c = config_.axes[i];
+  const double carriage = c.fault == Fault::encoder_reversed ? -ax.actual_mm : ax.actual_mm;
+  double reading = carriage + c.absolute_offset_mm;
+  if (c.encoder_noise_mm > 0) {
+    // Box-Muller from two draws of this reading.
+    const double u1 = 1.0 - fraction(config_.seed, 1000 + i, 2 * ax.encoder_reads);
+    const double u2 = fraction(config_.seed, 1000 + i, 2 * ax.encoder_reads + 1);
+    ++ax.encoder_reads;
+    reading += c.encoder_noise_mm * std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
+  }
+  if (c.encoder_resolution_mm > 0) reading = std::round(reading / c.encoder_resolution_mm) * c.encoder_resolution_mm;
+  return reading;
 }
 
 bool Simulator::limit_active(std::size_t axis, bool max_end) const {
@@ -280,17 +312,6 @@ void Simulator::set_limit_levels(std::size_t axis) {
   own_[axis].limit_max_level = limit_active(axis, true) != nc;
 }
 
-namespace {
-// A fraction in [0, 1) from a seed and two counters (splitmix64): the same
-// contact draws the same detection time in every run with this seed.
-double fraction(std::uint64_t seed, std::uint64_t a, std::uint64_t b) {
-  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * (a * 1000003ull + b + 1);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  z ^= z >> 31;
-  return static_cast<double>(z >> 11) * 0x1.0p-53;
-}
-}  // namespace
 
 bool Simulator::stall_output(std::size_t i, const CarriagePath& path, double motor_start_mm, double motor_end_mm) {
   Axis& ax = axes_[i];

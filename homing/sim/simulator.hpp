@@ -111,6 +111,7 @@ class Simulator {
     double held_since_s = -1;      // the motor has driven into a stop since then (-1: not)
     double stall_after_s = 0;      // this contact's detection time
     std::uint64_t contacts = 0;    // contacts with a stop so far (draws the detection time)
+    std::uint64_t encoder_reads = 0;  // noisy encoder readings so far (draws their noise)
     HomingDrive drive{};           // drive mode: the drive's own homing
     bool pin_in = false;           // locking indexer: the pin holds the carriage
     double pin_timer_s = 0;        // how long the unlock output has wanted the pin to move
@@ -130,6 +131,8 @@ class Simulator {
   // at end_mm, the motor moving from motor_start_mm to motor_end_mm.
   bool stall_output(std::size_t axis, const CarriagePath& path, double motor_start_mm, double motor_end_mm);
   bool reports_edges(std::size_t axis) const;
+  // What the encoder reads now (absolute_position_mm).
+  double encoder_reading(std::size_t axis);
   void route_sensors(const Outputs& outputs);
   void set_limit_levels(std::size_t axis);
   void advance_indexer(std::size_t axis, bool unlock_output, double dt_s);

@@ -39,6 +39,17 @@ TEST_CASE("hard-stop homing without a stall line is refused by the wiring check,
   CHECK_FALSE(homing::gpiod::check_wiring(fixture::config(kWithStall.c_str()), hard_stop_on_x()));
 }
 
+TEST_CASE("hard-stop homing by following error needs no stall line: the wiring check asks for what stall_detect "
+          "chooses") {
+  homing::Settings s = hard_stop_on_x();
+  s.axes[0].stall_detect = homing::StallDetect::following_error;
+  CHECK_FALSE(homing::gpiod::check_wiring(fixture::config(), s));
+  // The encoder is no GPIO line: this backend reports no position, so such an
+  // axis ends its push at encoder_fault before it moves (docs/homing-methods.md).
+  fixture::Backend b(fixture::config());
+  CHECK_FALSE(b.period(Outputs{}, kMs).axes[0].absolute_valid);
+}
+
 TEST_CASE("a stall line on a line another signal uses is refused before the hardware is touched") {
   const std::string clash = std::string(fixture::kConfig) + "stall = 12\n";  // the index's line
   const auto c = homing::gpiod::parse_config(toml::parse(clash), "test.toml");

@@ -675,3 +675,28 @@ SCENARIO("switch_not_repeatable: the latch passes of a noisy switch disagree bey
                   "feedrate") != std::string::npos);
   check_latched_until_reset(r, 0, AlarmCode::switch_not_repeatable);
 }
+
+SCENARIO("encoder_reversed: hard-stop homing by following error with an encoder that counts the wrong way",
+         "[alarms]") {
+  Rig r;
+  AxisSettings& s = r.settings.axes[0];
+  s.mode = HomingMode::hard_stop;
+  s.stall_detect = StallDetect::following_error;
+  s.max_following_error_mm = 0.4;
+  r.machine.axes[0].actual_position_mm = 3;  // its stop at -5 mm
+  r.machine.axes[0].sensor_min_mm = 1;
+  r.machine.axes[0].sensor_max_mm = 0;
+  r.machine.axes[0].fault = sim::Fault::encoder_reversed;
+  r.clear_trace();
+  home_into_alarm(r);
+  CHECK(r.axis(0).alarm.code == AlarmCode::encoder_reversed);
+  CHECK(r.axis(0).alarm.phase == Phase::push_to_stop);
+  // It counted back a quarter of the limit: the carriage went as far the other way.
+  CHECK(r.axis(0).alarm.value == Approx(0.1).margin(0.002));
+  CHECK_FALSE(r.axis(0).homed);
+  CHECK(r.trace[0].min_actual > 3 - 0.2);  // stopped long before the stop, nothing homed in free air
+  CHECK(text_of(r, 0).find("X: the encoder counted 0.10") == 0);
+  CHECK_THAT(text_of(r, 0), Catch::Contains("check the encoder's counting direction"));
+  r.set_fault(0, sim::Fault::none);
+  check_latched_until_reset(r, 0, AlarmCode::encoder_reversed);
+}

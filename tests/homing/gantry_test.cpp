@@ -338,3 +338,43 @@ SCENARIO("external commutator: the slave's sensor is read with its own polarity"
     }
   }
 }
+
+SCENARIO("a gantry publishes its skew on the slave: the slave's edge minus the master's, from where each stood",
+         "[gantry][health]") {
+  struct Case {
+    const char* topology;
+    bool commutator;
+    double slave_start_mm;
+    double slave_sensor_max_mm;
+    double skew_mm;
+  };
+  // The master's edge lies at 0.05 (cam end plus hysteresis); both carriages start at 100.
+  for (const Case k : {Case{"software", false, 100, 0.4, 0.4}, Case{"software", false, 101.5, 0, -1.5},
+                       Case{"commutator", true, 100, 0.4, 0.4}, Case{"commutator", true, 100.8, 0, -0.8}}) {
+    DYNAMIC_SECTION(k.topology << " slave at " << k.slave_start_mm << ", its sensor " << k.slave_sensor_max_mm) {
+      Rig r = k.commutator ? commutator_gantry(k.slave_start_mm, 0.3) : software_gantry(k.slave_start_mm, 0.3);
+      r.machine.axes[1].sensor_max_mm = k.slave_sensor_max_mm;
+      REQUIRE(r.home_all());
+      const double tol = 2 * edge_tolerance_mm(r.settings.axes[0], r.dt_s) + 1e-6;
+      THEN("the slave holds the skew before its switch compensation (0.3 mm) is applied, the master none") {
+        CHECK(r.axis(1).health.gantry_skew_measured);
+        CHECK(r.axis(1).health.gantry_skew_mm == Approx(k.skew_mm).margin(tol));
+        CHECK_FALSE(r.axis(0).health.gantry_skew_measured);
+        CHECK(r.axis(0).health.gantry_skew_mm == 0);
+      }
+      WHEN("the pair homes again from where it was squared") {
+        REQUIRE(r.home_all());
+        THEN("it stood square with its sensors but for the compensation: the slave rests 0.3 mm further off") {
+          CHECK(r.axis(1).health.gantry_skew_measured);
+          CHECK(r.axis(1).health.gantry_skew_mm == Approx(-0.3).margin(tol));
+        }
+      }
+    }
+  }
+}
+
+SCENARIO("an axis that is no gantry slave measures no skew", "[gantry][health]") {
+  Rig r;
+  REQUIRE(r.home_all());
+  for (std::size_t a = 0; a < kAxisCount; ++a) CHECK_FALSE(r.axis(a).health.gantry_skew_measured);
+}

@@ -4,6 +4,7 @@
 // the coordinate it gives the axis.
 #include <catch2/catch.hpp>
 
+#include <string>
 #include <vector>
 
 #include "rig.hpp"
@@ -13,14 +14,35 @@ using namespace rig;
 
 namespace {
 
+// A method as one axis has it: its row, and for a method that finds a
+// mechanical stop each way of telling the stop (axis.<a>.stall_detect).
+struct Variant {
+  const ModeRow* row;
+  StallDetect detect;
+};
+std::vector<Variant> variants() {
+  std::vector<Variant> out;
+  for (const ModeRow& row : kModeTable) {
+    out.push_back({&row, StallDetect::stall_input});
+    if (row.detects_stop()) out.push_back({&row, StallDetect::following_error});
+  }
+  return out;
+}
+std::string variant_name(const Variant& v) {
+  std::string name = "mode " + std::string(v.row->name);
+  if (v.row->detects_stop()) name += " by " + std::string(name_of(v.detect));
+  return name;
+}
+
 // X on the typical switch (release edge at 0.05 mm, trigger edge at 0), its
 // mechanical stop at -5 mm, an index pulse every 5 mm at 0.3 mm, an absolute
 // encoder reading carriage + 7,
 // a pre-move and a final move wherever the method allows them.
-Rig rig_for(const ModeRow& row) {
+Rig rig_for(const ModeRow& row, StallDetect detect = StallDetect::stall_input) {
   Rig r;
   AxisSettings& s = r.settings.axes[0];
   s.mode = row.value;
+  s.stall_detect = detect;
   s.pre_move_mode = PreMove::always;
   s.final_move_enable = true;
   s.final_position_mm = 5;
@@ -84,9 +106,10 @@ double reference_edge_mm(const ModeRow& row) {
 }  // namespace
 
 TEST_CASE("every mode shows the phases of its row in order and drives the outputs its row names", "[modes][table]") {
-  for (const ModeRow& row : kModeTable) {
-    DYNAMIC_SECTION("mode " << row.name) {
-      Rig r = rig_for(row);
+  for (const Variant& v : variants()) {
+    const ModeRow& row = *v.row;
+    DYNAMIC_SECTION(variant_name(v)) {
+      Rig r = rig_for(row, v.detect);
       r.step();
       const Watched w = home_and_watch(r);
       CHECK(r.axis(0).homed);
@@ -114,14 +137,15 @@ TEST_CASE("a mode cannot home without an input its row names, and homes without 
       {Signal::drive_done, "drive's home done",
        [](Rig& r) { r.tweak_inputs = [](Inputs& in) { in.axes[0].drive_done = false; }; }},
   };
-  for (const ModeRow& row : kModeTable) {
+  for (const Variant& v : variants()) {
     for (const Missing& m : inputs) {
-      DYNAMIC_SECTION("mode " << row.name << " without its " << m.what) {
-        Rig r = rig_for(row);
+      DYNAMIC_SECTION(variant_name(v) << " without its " << m.what) {
+        Rig r = rig_for(*v.row, v.detect);
         m.take_away(r);
         r.step();
         r.home_all();
-        if (row.needs_signal(m.signal)) {
+        // The row's signals, with the stop detection the axis chose.
+        if (needs_signal(r.settings.axes[0], m.signal)) {
           CHECK(r.status().alarm);
           CHECK_FALSE(r.axis(0).homed);
         } else {
@@ -134,9 +158,10 @@ TEST_CASE("a mode cannot home without an input its row names, and homes without 
 }
 
 TEST_CASE("every mode gives the axis the coordinate its row defines", "[modes][table]") {
-  for (const ModeRow& row : kModeTable) {
-    DYNAMIC_SECTION("mode " << row.name) {
-      Rig r = rig_for(row);
+  for (const Variant& v : variants()) {
+    const ModeRow& row = *v.row;
+    DYNAMIC_SECTION(variant_name(v)) {
+      Rig r = rig_for(row, v.detect);
       r.step();
       const double start = r.actual(0);
       const double believed_before = r.axis(0).position_mm;

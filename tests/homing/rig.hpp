@@ -37,6 +37,7 @@ inline AxisSettings typical_axis() {
   s.soft_limit_max_mm = 500;
   s.jog_feedrate_mm_per_min = 600;
   s.stall_timeout_ms = 120'000;  // hard-stop homing: 2 min of pushing at latch feedrate
+  s.max_following_error_mm = 0.2;  // hard-stop homing by following error (stall_detect following_error)
   s.drive_home_timeout_s = 30;  // drive mode: the drive's own homing (see typical_sim_axis) takes ~10 s
   return s;
 }

@@ -2,6 +2,7 @@
 // the engine-side motor state by integrating the same commands.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -404,6 +405,68 @@ TEST_CASE("absolute encoder reads actual plus offset") {
   rig.sim.lose_steps(0, -1);
   rig.step(0, stop_command(500));
   CHECK(rig.sim.inputs().axes[0].absolute_position_mm == Approx(111));
+}
+
+TEST_CASE("against a mechanical stop the encoder reads where the carriage is held while the steps go on") {
+  AxisConfig a = cam(100, 200);
+  a.actual_position_mm = 10;
+  a.hard_stop_max_mm = 20;
+  a.absolute_offset_mm = 5;
+  Rig rig(one_axis(a));
+  rig.run(0, velocity_command(100, 0), 300);  // motor 30 mm on, carriage held after 10
+  CHECK(rig.motor(0) == Approx(30));
+  CHECK(rig.sim.inputs().axes[0].absolute_position_mm == Approx(25));  // the stop, plus the offset
+  rig.run(0, velocity_command(100, 0), 100);
+  CHECK(rig.sim.inputs().axes[0].absolute_position_mm == Approx(25));
+}
+
+TEST_CASE("the encoder counts in steps of its resolution, with seeded noise on each reading") {
+  AxisConfig a = cam(100, 200);
+  a.actual_position_mm = 7.0004;
+  a.encoder_resolution_mm = 0.001;
+  Rig exact(one_axis(a));
+  CHECK(exact.sim.inputs().axes[0].absolute_position_mm == Approx(7.000).margin(1e-12));
+  a.encoder_resolution_mm = 0;
+  a.encoder_noise_mm = 0.002;
+  auto readings = [&](std::uint64_t seed) {
+    MachineConfig c = one_axis(a);
+    c.seed = seed;
+    Rig rig(c);
+    std::vector<double> xs;
+    for (int k = 0; k < 2000; ++k) {
+      rig.step(0, stop_command(500));
+      xs.push_back(rig.sim.inputs().axes[0].absolute_position_mm - 7.0004);
+    }
+    return xs;
+  };
+  const auto first = readings(11);
+  CHECK(first == readings(11));  // the seed repeats it exactly
+  CHECK(first != readings(12));
+  CHECK(stddev(first) == Approx(0.002).epsilon(0.1));
+  SECTION("an exact encoder draws nothing: the switch's noise stays as it was") {
+    a.encoder_noise_mm = 0;
+    a.noise_mm = 0.01;
+    MachineConfig c = one_axis(a);
+    a.encoder_noise_mm = 0.002;
+    MachineConfig noisy = one_axis(a);
+    Rig quiet(c), loud(noisy);
+    quiet.move_to(0, 150, 50, 500);
+    loud.move_to(0, 150, 50, 500);
+    CHECK(quiet.sensor[0].size() == loud.sensor[0].size());
+    for (std::size_t e = 0; e < std::min(quiet.sensor[0].size(), loud.sensor[0].size()); ++e)
+      CHECK(quiet.sensor[0][e].time_s == loud.sensor[0][e].time_s);
+  }
+}
+
+TEST_CASE("a reversed encoder (sim fault encoder_reversed) counts against the carriage") {
+  AxisConfig a = cam(100, 200);
+  a.actual_position_mm = 7;
+  a.absolute_offset_mm = 100;
+  a.fault = Fault::encoder_reversed;
+  Rig rig(one_axis(a));
+  CHECK(rig.sim.inputs().axes[0].absolute_position_mm == Approx(93));
+  rig.move_to(0, 5, 50, 500);  // the carriage 5 mm up
+  CHECK(rig.sim.inputs().axes[0].absolute_position_mm == Approx(88));
 }
 
 TEST_CASE("lose_steps shifts the carriage without the motor knowing") {

@@ -72,6 +72,18 @@ TEST_CASE("mutation check: the campaign fails a product that lets a gantry rack 
   CHECK(o.failure.what.rfind("a gantry racked beyond its max misalignment", 0) == 0);
 }
 
+TEST_CASE("mutation check: the campaign fails a product that trusts an encoder counting the wrong way",
+          "[mutant]") {
+  Planted p(homing::Mutant::reversed_encoder_unchecked);
+  const campaign::Outcome o = first_failure(1000);
+  REQUIRE(o.failed);
+  INFO(o.failure.what << ": " << o.failure.detail);
+  // The lag doubles in free air: a hard-stop axis reading its encoder homes
+  // short of its stop, or the reversed encoder's own alarm never comes.
+  const std::string& w = o.failure.what;
+  CHECK((w.find("coordinate") != std::string::npos || w.find("reversed encoder") != std::string::npos));
+}
+
 TEST_CASE("mutation check: the campaign fails a product that ignores a limit switch outside homing", "[mutant]") {
   Planted p(homing::Mutant::limit_switch_ignored_outside_homing);
   const campaign::Outcome o = first_failure(500);

@@ -144,11 +144,12 @@ TEST_CASE("the .deb puts the programs, unit, config, maps and documents where a 
     }
   }
   CHECK(map_files >= 5);
-  // The guides README.md links to (docs/), beside it.
+  // The guides README.md links to (docs/, with what they link to in its folders), beside it.
   std::size_t doc_files = 0;
-  for (const auto& e : std::filesystem::directory_iterator(std::filesystem::path(HOMING_SOURCE_DIR) / "docs")) {
-    if (e.path().extension() != ".md") continue;
-    const std::string installed = "/usr/share/doc/homingd/docs/" + e.path().filename().string();
+  const std::filesystem::path docs = std::filesystem::path(HOMING_SOURCE_DIR) / "docs";
+  for (const auto& e : std::filesystem::recursive_directory_iterator(docs)) {
+    if (!e.is_regular_file() || e.path().extension() != ".md") continue;
+    const std::string installed = "/usr/share/doc/homingd/docs/" + e.path().lexically_relative(docs).string();
     expected.insert(installed);
     ++doc_files;
     if (std::filesystem::exists(pkg.in_root(installed))) {

@@ -127,3 +127,62 @@ TEST_CASE("an axis recorded as excluded keeps its reason and stays out of the co
   CHECK(s->mean == Approx(0.010));
   CHECK(s->spread == 0);
 }
+
+namespace {
+AxisHealth figures(double hysteresis_mm, std::optional<double> skew_mm = std::nullopt) {
+  AxisHealth h;
+  h.latch_passes = 3;
+  h.latch_spread_mm = 0.004;
+  h.latch_sigma_mm = 0.0015;
+  h.hysteresis_mm = hysteresis_mm;
+  h.seek_latch_mm = -0.002;
+  h.chatter_edges = 2;
+  h.index_distance_mm = 0.3;
+  h.index_near_edge = true;
+  h.gantry_skew_mm = skew_mm;
+  return h;
+}
+}  // namespace
+
+TEST_CASE("the health figures of each homed axis are kept with its run and read back", "[persistence][health]") {
+  test::TempDir dir;
+  OpenReport report;
+  auto store = test::open_ok(dir.file("settings.db"), report);
+  HomingRun run = run_with(1000, 0.01, 0.02);
+  run.axis[0].health = figures(0.05);
+  run.axis[1].health = figures(0.07, 0.42);
+  REQUIRE(store.record_homing_run(run));
+  auto runs = store.recent_runs(1);
+  REQUIRE(runs);
+  REQUIRE(runs->size() == 1);
+  CHECK(runs->front().axis[0].health == figures(0.05));
+  CHECK(runs->front().axis[1].health == figures(0.07, 0.42));
+  CHECK_FALSE(runs->front().axis[2].health);
+}
+
+TEST_CASE("the health history of an axis holds its last N runs with figures, oldest first", "[persistence][health]") {
+  test::TempDir dir;
+  OpenReport report;
+  auto store = test::open_ok(dir.file("settings.db"), report);
+  for (int i = 0; i < 6; ++i) {
+    HomingRun run = run_with(1000 * i, 0.01, 0.02);
+    if (i != 4) run.axis[0].health = figures(0.05 + 0.01 * i);  // run 4 found no reference: no figures
+    run.axis[1].health = figures(0.5, 0.1 * i);
+    REQUIRE(store.record_homing_run(run));
+  }
+  auto x = store.health_history(0, 3);
+  REQUIRE(x);
+  REQUIRE(x->size() == 3);
+  CHECK((*x)[0].health.hysteresis_mm == Approx(0.07));
+  CHECK((*x)[1].health.hysteresis_mm == Approx(0.08));  // run 4 is not among them
+  CHECK((*x)[2].health.hysteresis_mm == Approx(0.10));
+  CHECK((*x)[2].start_ms == 5000);
+  CHECK((*x)[0].run_id < (*x)[1].run_id);
+  CHECK_FALSE((*x)[2].health.gantry_skew_mm);
+  auto y = store.health_history(1, 100);
+  REQUIRE(y);
+  REQUIRE(y->size() == 6);
+  CHECK(y->back().health.gantry_skew_mm == Approx(0.5));
+  CHECK(store.health_history(2, 10)->empty());
+  CHECK_FALSE(store.health_history(6, 10));
+}

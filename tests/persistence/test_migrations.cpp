@@ -34,7 +34,54 @@ CREATE TABLE audit(id INTEGER PRIMARY KEY AUTOINCREMENT, time_ms INTEGER NOT NUL
                    client TEXT NOT NULL, name TEXT NOT NULL, old_value INTEGER NOT NULL, new_value INTEGER NOT NULL);
 )" + kV3HistorySql + "PRAGMA user_version = 3;\n";
 
+// What version 4 shipped: version 3 with the reason a correction is excluded.
+const std::string kV4Sql = kV3Sql + R"(
+ALTER TABLE homing_axes ADD COLUMN excluded INTEGER NOT NULL DEFAULT 0;
+PRAGMA user_version = 4;
+)";
+
 }  // namespace
+
+TEST_CASE("a version 4 database upgrades: its runs stay, without health figures, and new runs keep theirs",
+          "[persistence][migration][health]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  test::sql_exec(db, kV4Sql + R"(
+    INSERT INTO settings VALUES('axis.x.mode', 3);
+    INSERT INTO homing_runs(id, start_ms, end_ms, axes, result, alarm_axis) VALUES(1, 100, 200, 1, 0, -1),
+                                                                                (2, 300, 400, 1, 0, -1);
+    INSERT INTO homing_axes(run_id, axis, correction_mm, duration_ms, excluded) VALUES(1, 0, NULL, 100, 1),
+                                                                                      (2, 0, 0.012, 100, 0);
+  )");
+  OpenReport report;
+  auto store = test::open_ok(db, report);
+  CHECK(report.schema_version_found == 4);
+  CHECK(test::sql_int(db, "PRAGMA user_version") == kSchemaVersion);
+  CHECK(store.value("axis.x.mode") == 3);
+  auto runs = store.recent_runs(10);
+  REQUIRE(runs);
+  REQUIRE(runs->size() == 2);
+  CHECK((*runs)[0].axis[0].correction_mm == Approx(0.012));
+  CHECK((*runs)[1].axis[0].excluded == Excluded::not_homed_before);
+  CHECK_FALSE((*runs)[0].axis[0].health);
+  CHECK(store.correction_summary(0, 10)->count == 1);
+  CHECK(store.health_history(0, 10)->empty());  // the old runs measured nothing the history kept
+  HomingRun run;
+  AxisHealth h;
+  h.latch_passes = 1;
+  h.hysteresis_mm = 0.05;
+  h.gantry_skew_mm = 0.3;
+  run.axis[0] = {true, 0.011, 50, Excluded::no, h};
+  auto id = store.record_homing_run(run);
+  REQUIRE(id);
+  CHECK(*id == 3);
+  auto health = store.health_history(0, 10);
+  REQUIRE(health);
+  REQUIRE(health->size() == 1);
+  CHECK(health->front().run_id == 3);
+  CHECK(health->front().health == h);
+  CHECK(std::filesystem::exists(db + ".pre-v" + std::to_string(kSchemaVersion)));
+}
 
 TEST_CASE("a version 3 database upgrades: failed runs are marked excluded, earlier corrections stay counted",
           "[persistence][migration]") {

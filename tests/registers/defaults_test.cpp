@@ -41,10 +41,12 @@ TEST_CASE("a new module allows only a reduced-speed jog before homing, in the ta
 
 TEST_CASE("persisted defaults hold every persisted register and no runtime value") {
   const auto rows = persisted_defaults();
-  // 6 sequence steps + 6 global settings (single_axis_homing the sixth), 39 settings per
-  // axis (30, plus indexer_lock and lock_timeout_ms of the locking indexer, allowed_without_homing,
-  // limits_fitted, limits_nc, cam_edge and limit_overtravel, latch_passes and max_latch_spread)
-  CHECK(rows.size() == 6 + 6 + 39 * homing::kAxisCount);
+  // 6 sequence steps + 9 global settings (single_axis_homing the sixth, then trend_cycles,
+  // trend_growth_pct and trend_min_change of the health trend), 42 settings per axis (30, plus
+  // indexer_lock and lock_timeout_ms of the locking indexer, allowed_without_homing, limits_fitted,
+  // limits_nc, cam_edge and limit_overtravel, latch_passes, max_latch_spread, max_skew_change,
+  // stall_detect and max_following_error)
+  CHECK(rows.size() == 6 + 9 + 42 * homing::kAxisCount);
   for (const auto& [name, raw] : rows) {
     const Register* r = find_register(name);
     REQUIRE(r);

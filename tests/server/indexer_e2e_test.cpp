@@ -44,18 +44,24 @@ TEST_CASE("over Modbus a locking indexer unlocks before A homes, holds it still 
   Daemon d;
   Client c = Client::tcp(d.port());
   configure_a(c);
+  // Each way 800 ms here: under the sanitizers on 2 shared cores one poll of
+  // four reads has taken longer than the 200 ms a phase lasts elsewhere.
+  REQUIRE(c.write("axis.a.lock_timeout_ms", 3'000) == 0);
+  REQUIRE(c.write("sim.a.unlock_delay_ms", 800) == 0);
+  REQUIRE(c.write("sim.a.lock_delay_ms", 800) == 0);
   CHECK(c.read("axis.a.phase") == code(Phase::idle));
   REQUIRE(c.write("cmd.home.a", 1) == 0);
-  // The first 200 ms: held in phase unlock, the carriage where it was.
+  // The first 800 ms: held in phase unlock, the carriage where it was.
   REQUIRE(wait_until([&] { return c.read("axis.a.phase") == code(Phase::unlock); }, 2s));
   CHECK(c.read("sim.a.actual_position") == 5'000);
   CHECK(c.read("sim.a.indexer_locked") == 1);
   bool saw_lock = false;
   REQUIRE(wait_until(
       [&] {
-        saw_lock = saw_lock || c.read("axis.a.phase") == code(Phase::lock);
-        return c.read("axis.a.homed") == 1 && c.read("sim.a.indexer_locked") == 1 &&
-               c.read("axis.a.phase") == code(Phase::done);
+        const auto phase = c.read("axis.a.phase");
+        saw_lock = saw_lock || phase == code(Phase::lock);
+        return phase == code(Phase::done) && c.read("axis.a.homed") == 1 &&
+               c.read("sim.a.indexer_locked") == 1;
       },
       20s, 20ms));
   CHECK(saw_lock);

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "registers/lookup.hpp"
+#include "sparkplug/events.hpp"
 #include "sparkplug/payload.hpp"
 
 namespace {
@@ -91,7 +92,8 @@ TEST_CASE("birth carries seq 0, bdSeq, the rebirth control and every metric with
   REQUIRE(rebirth != nullptr);
   CHECK(rebirth->datatype() == static_cast<std::uint32_t>(DataType::boolean));
   CHECK_FALSE(rebirth->boolean_value());
-  CHECK(static_cast<std::size_t>(birth.metrics_size()) == node.metrics().size() + 2);
+  // bdSeq, Rebirth, the register metrics, then the event metrics (events_test.cpp).
+  CHECK(static_cast<std::size_t>(birth.metrics_size()) == node.metrics().size() + 2 + sparkplug::kEventMetrics.size());
   for (const auto& def : node.metrics()) {
     const auto* m = by_name(birth, def.name);
     REQUIRE(m != nullptr);

@@ -154,3 +154,18 @@ TEST_CASE("a linear gantry slave on A set over Modbus reads mm in get, check, ex
   }
   check_kepware_in_mm(read_file(dir.file("from_file/kepware_module.csv")));
 }
+
+// The commissioning guide's gantry: B set linear, then its simulated switch placed.
+TEST_CASE("homingctl set echoes a simulated carriage's value in the unit of its axis kind, as get reads it") {
+  Daemon d;
+  REQUIRE(ctl(d, {"set", "axis.b.kind=linear"}).code() == 0);
+  auto r = ctl(d, {"set", "sim.b.sensor_max=0.3", "sim.c.sensor_max=0.2"});
+  {
+    SHOW(r);
+    REQUIRE(r.code() == 0);
+    CHECK(has_line("\n" + r.out, "sim.b.sensor_max = 0.3 mm"));
+    CHECK(has_line("\n" + r.out, "sim.c.sensor_max = 0.2 deg"));  // C stays rotary
+  }
+  r = ctl(d, {"get", "sim.b.sensor_max"});
+  CHECK(r.out == "sim.b.sensor_max = 0.3 mm\n");
+}

@@ -216,6 +216,7 @@ TEST_CASE("homingctl home waits for the result, a failing homing exits 1 with th
     SHOW(r);
     CHECK(r.code() == 1);
     CHECK(r.err.find("still present") != std::string::npos);
+    CHECK(r.err.find("reset refused: reset refused") == std::string::npos);  // said once
   }
   REQUIRE(ctl(d, {"set", "sim.y.fault=none"}).code() == 0);
   CHECK(ctl(d, {"reset"}).code() == 0);
@@ -328,6 +329,37 @@ TEST_CASE("homingctl check: stop distance against its limit, cycle time, warning
   CHECK(j["axes"][1]["stop_distance"] == Approx(4000.0 * 4000.0 / 3600.0 / 500.0).margin(1e-3));
   CHECK(j["axes"][3]["enabled"] == false);
   CHECK(j["cycle_worst_s"].get<double>() > 30);
+}
+
+TEST_CASE("homingctl check shows what a method needs wired and how a hard-stop axis tells its stop") {
+  Daemon d;
+  REQUIRE(ctl(d, {"set", "axis.x.mode=hard_stop"}).code() == 0);
+  auto r = ctl(d, {"check"});
+  {
+    SHOW(r);
+    REQUIRE(r.code() == 0);
+    CHECK(r.out.find("wiring: step, push, stall\n     stop told by: the drive's stall input") != std::string::npos);
+    CHECK(r.out.find("wiring: step, home\n") != std::string::npos);  // Y: a switch
+  }
+  REQUIRE(ctl(d, {"set", "axis.x.stall_detect=following_error", "axis.x.max_following_error=0.3"}).code() == 0);
+  r = ctl(d, {"check"});
+  {
+    SHOW(r);
+    REQUIRE(r.code() == 0);
+    CHECK(r.out.find("wiring: step, push, absolute\n     stop told by: following error above 0.3 mm (the encoder; "
+                     "the stall input is not read)") != std::string::npos);
+    CHECK(r.out.find("settings: ok") != std::string::npos);
+  }
+  auto j = json_of(ctl(d, {"check", "--json"}));
+  CHECK(j["axes"][0]["stop_detection"] == "following_error");
+  CHECK(j["axes"][0]["max_following_error"] == Approx(0.3));
+  CHECK(j["axes"][0]["signals"] == nlohmann::json::array({"step", "push", "absolute"}));
+  CHECK(j["axes"][1]["stop_detection"].is_null());
+  // A limit within the encoder's noise: the engine's rule, in words.
+  r = ctl(d, {"set", "axis.x.max_following_error=0.01"});
+  SHOW(r);
+  CHECK(r.code() != 0);
+  CHECK(r.err.find("following_error") != std::string::npos);
 }
 
 TEST_CASE("homingctl history reads the daemon's database read-only while it runs") {

@@ -123,6 +123,13 @@ CheckReport check_settings(const homing::Settings& settings,
       c.limit_stop_distance_mm = homing::limit_stop_distance_mm(s);
       c.limit_overtravel_mm = s.limit_overtravel_mm;
     }
+    // What the row needs wired, with the stop detection the axis chose.
+    for (const homing::SignalInfo& sig : homing::kSignalInfo)
+      if (homing::needs_signal(s, sig.signal)) c.signals.emplace_back(sig.name);
+    if (homing::mode_row(s.mode).detects_stop()) {
+      c.stop_detection = homing::name_of(s.stall_detect);
+      if (homing::detects_stop_by_following_error(s)) c.max_following_error_mm = s.max_following_error_mm;
+    }
 
     // Warnings the engine's check does not refuse.
     if (homing::mode_uses_switch(s.mode)) {
@@ -233,6 +240,16 @@ std::string render_check(const CheckReport& r) {
       for (const auto& [name, t] : c.phases) p += fmt::format("{}{} {:.2f} s", p.empty() ? "" : ", ", name, t);
       out += fmt::format("     phases (estimate): {}\n", p);
     }
+    if (!c.signals.empty()) {
+      std::string wiring;
+      for (const auto& name : c.signals) wiring += (wiring.empty() ? "" : ", ") + name;
+      out += fmt::format("     wiring: {}\n", wiring);
+    }
+    if (c.stop_detection == homing::name_of(homing::StallDetect::following_error))
+      out += fmt::format("     stop told by: following error above {:g} {} (the encoder; the stall input is not "
+                         "read)\n", c.max_following_error_mm, u);
+    else if (!c.stop_detection.empty())
+      out += "     stop told by: the drive's stall input\n";
     for (const auto& w : c.warnings) out += fmt::format("     warning: {}\n", w);
   }
   out += fmt::format("expected home-all cycle: at most {:.1f} s (seeks over their whole max_seek_travel, a home "
@@ -263,6 +280,9 @@ nlohmann::json check_json(const CheckReport& r) {
       a["phases"] = nlohmann::json::object();
       for (const auto& [name, t] : c.phases) a["phases"][name] = t;
       a["warnings"] = c.warnings;
+      a["signals"] = c.signals;
+      a["stop_detection"] = c.stop_detection.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.stop_detection);
+      if (c.max_following_error_mm > 0) a["max_following_error"] = c.max_following_error_mm;
     }
     j["axes"].push_back(a);
   }

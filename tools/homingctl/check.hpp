@@ -32,6 +32,9 @@ struct AxisCheck {
   bool limits = false;
   double limit_stop_distance_mm = 0, limit_overtravel_mm = 0;
   std::vector<std::pair<std::string, double>> phases;  // phase name, seconds (estimate)
+  std::vector<std::string> signals;  // what its method needs wired (kSignalInfo names), its stop detection included
+  std::string stop_detection;        // how a method that pushes to a stop tells it (stall_detect); "" otherwise
+  double max_following_error_mm = 0;  // with stop_detection following_error
   std::vector<std::string> warnings;
 };
 

@@ -82,6 +82,7 @@ struct SetOptions {
 struct Assignments {
   RawMap module;
   std::vector<std::pair<const Register*, std::int64_t>> simulator;
+  registers::AxisKinds kinds = registers::default_kinds();  // the units the values were read in
 };
 
 // The assignments, or the exit code of a refusal already printed.
@@ -112,6 +113,7 @@ std::variant<Assignments, int> parse_assignments(Context& ctx, const std::vector
       if (auto raw = parse_value(*r, text)) changing[r->name()] = *raw;
   }
   const registers::AxisKinds kinds = kinds_for(ctx.connection(), regs, changing);
+  out.kinds = kinds;
   for (const auto& [r, text] : named) {
     auto raw = parse_value(*r, text, kinds);
     if (!raw) {
@@ -146,18 +148,19 @@ int set_module_settings(Context& ctx, const RawMap& wanted, const SetOptions& o)
   return kOk;
 }
 
+// Echoed in the unit they were read in: a simulated carriage has its axis's kind.
 int set_simulator_values(Context& ctx, const std::vector<std::pair<const Register*, std::int64_t>>& writes,
-                         const SetOptions& o) {
+                         const registers::AxisKinds& kinds, const SetOptions& o) {
   Connection& c = ctx.connection();
   for (const auto& [r, raw] : writes) {
     if (o.dry_run) continue;
     if (const int ex = c.write(*r, raw)) {
-      fmt::print(stderr, "refused: {} = {}: {}\n", r->name(), value_text(*r, raw),
+      fmt::print(stderr, "refused: {} = {}: {}\n", r->name(), value_text(*r, raw, kinds),
                  ex == 6 ? "exception 06: the simulated carriage cannot be placed while it moves"
                          : exception_sentence(ex));
       return kFailed;
     }
-    if (!ctx.json) fmt::print("{} = {}\n", r->name(), value_text(*r, raw));
+    if (!ctx.json) fmt::print("{} = {}\n", r->name(), value_text(*r, raw, kinds));
   }
   return kOk;
 }
@@ -168,7 +171,7 @@ int set(Context& ctx, const SetOptions& o) {
   const Assignments& a = std::get<Assignments>(parsed);
   if (!a.module.empty())
     if (const int rc = set_module_settings(ctx, a.module, o); rc != kOk) return rc;
-  if (const int rc = set_simulator_values(ctx, a.simulator, o); rc != kOk) return rc;
+  if (const int rc = set_simulator_values(ctx, a.simulator, a.kinds, o); rc != kOk) return rc;
   if (ctx.json) print_json({{"ok", true}, {"dry_run", o.dry_run}});
   return kOk;
 }

@@ -91,8 +91,8 @@ int health(Context& ctx) {
   const auto settings = read_settings(c);
   nlohmann::json j = nlohmann::json::object();
   if (!ctx.json)
-    fmt::print("{:<4} {:>6} {:>10} {:>10} {:>10} {:>7} {:>10} {:>10}  {}\n", "axis", "passes", "spread", "sigma",
-               "hysteresis", "chatter", "seek-latch", "index", "warnings");
+    fmt::print("{:<4} {:>6} {:>10} {:>10} {:>10} {:>7} {:>10} {:>10} {:>10}  {}\n", "axis", "passes", "spread", "sigma",
+               "hysteresis", "chatter", "seek-latch", "index", "skew", "warnings");
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     const homing::AxisSettings& s = settings.axes[a];
     if (!homing::mode_homes(s.mode)) continue;
@@ -106,20 +106,31 @@ int health(Context& ctx) {
     const double hysteresis = value("hysteresis"), seek_latch = value("seek_latch_difference");
     const double chatter = value("chatter_edges"), index = value("index_distance");
     const bool near = value("index_near_edge") != 0;
+    const bool slave = homing::gantry_master(settings, a) >= 0;
+    const double skew = value("gantry_skew");
+    const auto trend = static_cast<homing::HealthWarning>(value("health_warning"));
     std::vector<std::string> warnings;
     if (near)
       warnings.push_back(fmt::format("index pulse {:.3f} {} from the switch edge (index_pitch {:g} {}): switch noise can "
                                      "home one pitch off; move the cam or the encoder's index by about half a pitch",
                                      index, u, s.index_pitch_mm, u));
+    // The history's trend (the index warning is said above already); its
+    // figures are in the daemon's log and in homingctl history --trend.
+    if (trend != homing::HealthWarning::none && trend != homing::HealthWarning::index_near_edge)
+      warnings.push_back(fmt::format("{}: {} (homingctl history --trend {})", homing::name_of(trend),
+                                     homing::text_of(trend), letter));
     if (ctx.json) {
       j[std::string(letter)] = {{"latch_passes", passes}, {"latch_spread", spread}, {"latch_sigma", sigma},
                                 {"hysteresis", hysteresis}, {"chatter_edges", chatter},
                                 {"seek_latch_difference", seek_latch}, {"index_distance", index},
+                                {"gantry_skew", slave ? nlohmann::json(skew) : nlohmann::json(nullptr)},
+                                {"health_warning", std::string(homing::name_of(trend))},
                                 {"unit", std::string(u)}, {"warnings", warnings}};
       continue;
     }
-    fmt::print("{:<4} {:>6g} {:>10.4f} {:>10.4f} {:>10.4f} {:>7g} {:>10.4f} {:>10.4f}  {}\n", homing::kAxisUpper[a],
+    fmt::print("{:<4} {:>6g} {:>10.4f} {:>10.4f} {:>10.4f} {:>7g} {:>10.4f} {:>10.4f} {:>10}  {}\n", homing::kAxisUpper[a],
                passes, spread, sigma, hysteresis, chatter, seek_latch, index,
+               slave ? fmt::format("{:.4f}", skew) : "-",
                warnings.empty() ? "-" : fmt::format("{}", fmt::join(warnings, "; ")));
   }
   if (ctx.json) print_json(j);
@@ -133,7 +144,8 @@ void add_view_commands(Commands& commands, Context&) {
   commands.add("status", "one table: every axis (mode, phase, position, homed, sensor, alarm), "
                          "the machine state and what blocks motion", status);
   commands.add("health", "switch health per axis from the last homing cycle: latch passes, spread, sigma, "
-                         "hysteresis, chatter, seek-latch difference, index distance, with their warnings", health);
+                         "hysteresis, chatter, seek-latch difference, index distance, a gantry slave's skew, with "
+                         "their warnings and the history's trend warning", health);
   auto o = std::make_shared<WatchOptions>();
   auto* sub = commands.add("watch", "status refreshed live with progress bars during homing; exits when a "
                                     "homing cycle ends (0 homed, 1 alarm)",

@@ -6,6 +6,7 @@
 
 #include "homing/alarms.hpp"
 #include "homing/axes.hpp"
+#include "homing/gantry.hpp"
 #include "persistence/settings_store.hpp"
 #include "persistence/time_text.hpp"
 #include "registers/defaults.hpp"
@@ -115,9 +116,8 @@ std::expected<void, std::string> add_corrections(HistoryReport& out, const persi
   return {};
 }
 
-}  // namespace
-
-std::expected<HistoryReport, std::string> read_history(const std::string& db, const HistoryRequest& request) {
+// The daemon's database, read-only.
+std::expected<persistence::SettingsStore, std::string> open_history(const std::string& db) {
   struct stat st{};
   if (::stat(db.c_str(), &st) != 0)
     return std::unexpected(fmt::format("{}: no such database (give the daemon's --db file with --db)", db));
@@ -128,6 +128,14 @@ std::expected<HistoryReport, std::string> read_history(const std::string& db, co
   options.read_only = true;
   auto store = persistence::SettingsStore::open(db, {}, report, options);
   if (!store) return std::unexpected(fmt::format("{}: {}", db, store.error().message));
+  return std::move(*store);
+}
+
+}  // namespace
+
+std::expected<HistoryReport, std::string> read_history(const std::string& db, const HistoryRequest& request) {
+  auto store = open_history(db);
+  if (!store) return std::unexpected(store.error());
   auto runs = store->recent_runs(request.runs);
   if (!runs) return std::unexpected(runs.error().message);
   auto changes = store->recent_changes(request.changes);
@@ -139,6 +147,54 @@ std::expected<HistoryReport, std::string> read_history(const std::string& db, co
   if (request.corrections > 0)
     if (auto c = add_corrections(out, *store, request.corrections); !c) return std::unexpected(c.error());
   return out;
+}
+
+std::expected<HealthTrend, std::string> read_health_trend(const std::string& db, std::size_t axis,
+                                                          std::size_t cycles) {
+  auto store = open_history(db);
+  if (!store) return std::unexpected(store.error());
+  auto records = store->health_history(axis, cycles);
+  if (!records) return std::unexpected(records.error().message);
+  HealthTrend t;
+  t.axis = axis;
+  t.unit = std::string(homing::axis_unit(registers::settings_from_raw(store->load()).settings, axis));
+  t.cycles = std::move(*records);
+  return t;
+}
+
+std::string trend_table(const HealthTrend& t) {
+  std::string out = fmt::format("health figures of {} (oldest first, {} cycles, lengths in {}):\n",
+                                homing::kAxisUpper[t.axis], t.cycles.size(), t.unit);
+  out += fmt::format("  {:<6} {:<19} {:>6} {:>9} {:>9} {:>10} {:>10} {:>7} {:>9} {:>9}\n", "run", "time", "passes",
+                     "spread", "sigma", "hysteresis", "seek-latch", "chatter", "index", "skew");
+  for (const auto& r : t.cycles) {
+    const auto& h = r.health;
+    out += fmt::format("  #{:<5} {:<19} {:>6} {:>9.4f} {:>9.4f} {:>10.4f} {:>10.4f} {:>7} {:>9.4f} {:>9}{}\n", r.run_id,
+                       local_time(r.start_ms), h.latch_passes, h.latch_spread_mm, h.latch_sigma_mm, h.hysteresis_mm,
+                       h.seek_latch_mm, h.chatter_edges, h.index_distance_mm,
+                       h.gantry_skew_mm ? fmt::format("{:.4f}", *h.gantry_skew_mm) : "-",
+                       h.index_near_edge ? "  index near the switch edge" : "");
+  }
+  return out;
+}
+
+nlohmann::json trend_json(const HealthTrend& t) {
+  nlohmann::json j = {{"axis", homing::kAxisLetters[t.axis]}, {"unit", t.unit}, {"cycles", nlohmann::json::array()}};
+  for (const auto& r : t.cycles) {
+    const auto& h = r.health;
+    j["cycles"].push_back({{"run", r.run_id},
+                           {"start_ms", r.start_ms},
+                           {"latch_passes", h.latch_passes},
+                           {"latch_spread", h.latch_spread_mm},
+                           {"latch_sigma", h.latch_sigma_mm},
+                           {"hysteresis", h.hysteresis_mm},
+                           {"seek_latch_difference", h.seek_latch_mm},
+                           {"chatter_edges", h.chatter_edges},
+                           {"index_distance", h.index_distance_mm},
+                           {"index_near_edge", h.index_near_edge},
+                           {"gantry_skew", h.gantry_skew_mm ? nlohmann::json(*h.gantry_skew_mm) : nlohmann::json(nullptr)}});
+  }
+  return j;
 }
 
 }  // namespace homingctl

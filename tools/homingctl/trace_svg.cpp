@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "svg_parts.hpp"
 #include "text_fit.hpp"
 #include "trace.hpp"
 
@@ -21,20 +22,6 @@ constexpr double kLine = 15, kTitleLine = 19, kLegendRow = 20;
 constexpr double kPlotH = 150, kGap = 30, kSensorH = 60;
 constexpr double kAxisLabelX = 12;  // the rotated axis labels' baseline
 
-std::string xml_escape(std::string_view s) {
-  std::string o;
-  for (char c : s) {
-    switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
-    }
-  }
-  return o;
-}
-
 // One colour per phase (value = register value).
 std::string_view phase_colour(homing::Phase p) {
   static constexpr std::string_view k[] = {"#cccccc", "#e0e0e0", "#b3de69", "#80b1d3", "#fb8072", "#bc80bd",
@@ -44,37 +31,7 @@ std::string_view phase_colour(homing::Phase p) {
   return i < std::size(k) ? k[i] : "#999999";
 }
 
-// Round tick step for a span.
-double tick_step(double span, int want) {
-  if (span <= 0) return 1;
-  const double raw = span / want;
-  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (raw <= m * mag) return m * mag;
-  return 10 * mag;
-}
-
-// A tick value with as many decimals as its step needs ("0.05", "1200", never "-0").
-std::string tick_text(double v, double step) {
-  const int decimals = step >= 1 ? 0 : static_cast<int>(std::ceil(-std::log10(step) - 1e-9));
-  if (std::abs(v) < step * 1e-6) v = 0;
-  return fmt::format("{:.{}f}", v, decimals);
-}
-
-struct Tick {
-  double value = 0;
-  std::string text;
-};
-std::vector<Tick> ticks(double lo, double hi, double step) {
-  std::vector<Tick> out;
-  for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + step * 1e-9; v += step) out.push_back({v, tick_text(v, step)});
-  return out;
-}
-double widest(const std::vector<Tick>& ts) {
-  double w = 0;
-  for (const auto& t : ts) w = std::max(w, text_width(t.text, kFont));
-  return w;
-}
+double widest(const std::vector<Tick>& ts) { return homingctl::widest(ts, kFont); }
 
 // The values plotted: a range padded by 5 %, never empty.
 template <class Get>

@@ -6,6 +6,11 @@
 
 namespace campaign {
 
+bool Run::move_pending(std::size_t a) const {
+  const Phase p = r_.axis(a).phase;
+  return p == Phase::move || p == Phase::unlock;
+}
+
 void Run::exercise_motion() {
   std::vector<std::size_t> cand;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
@@ -73,10 +78,8 @@ void Run::exercise_motion() {
         acts_ |= act::event_in_jog_or_move;
         stopped_short = stopped_short_any = true;
       }
-    // (A locking indexer unlocks first: the move waits in phase unlock, seed 12018743.)
-    r_.run_until([&] {
-      return (!r_.any_moving() && r_.axis(a).phase != Phase::move && r_.axis(a).phase != Phase::unlock) || !ok();
-    }, 120);
+    // (A locking indexer unlocks first: the move waits in phase unlock, seeds 5550935, 12018743.)
+    r_.run_until([&] { return (!r_.any_moving() && !move_pending(a)) || !ok(); }, 120);
     settle(10);
     if (!outside && !stopped_short && !r_.status().alarm && ok() && std::abs(r_.axis(a).position_mm - target) > 1e-9)
       w_->fail("a move did not arrive", std::to_string(r_.axis(a).position_mm) + " for " + std::to_string(target));
@@ -191,7 +194,7 @@ void Run::motion_before_homing() {
   say(std::string("move unhomed ") + kAxisUpper[a] + " to " + std::to_string(target));
   r_.move(a, target);
   const CommandResult move_res = r_.status().last_command_result;
-  r_.run_until([&] { return (!r_.any_moving() && r_.axis(a).phase != Phase::move) || !ok(); }, 30);
+  r_.run_until([&] { return (!r_.any_moving() && !move_pending(a)) || !ok(); }, 30);
   settle(10);
   if (move_allowed && move_res != CommandResult::accepted)
     w_->fail("a move before homing with allowed_without_homing all was refused", std::string(command_result_name(move_res)));

@@ -90,6 +90,7 @@ struct Gen {
   void events();
   void indexers();
   void limit_switches();
+  void following_error();
   // home_cam axes (home_cam_gen.cpp), from their own dice after everything else.
   bool may_become_home_cam(std::size_t a) const;
   void home_cams();

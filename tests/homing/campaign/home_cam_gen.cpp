@@ -1,5 +1,5 @@
 // home_cam axes (docs/limit-switches.md): a cam in mid-travel between two
-// limit switches. Drawn from their own dice (stream 12) after everything
+// limit switches. Drawn from their own dice (stream 16) after everything
 // else, on plain axes nothing else is planned for, so every other draw of a
 // seed stays as it was. Positions are drawn in the frame of machine_gen.cpp:
 // the seek runs toward negative, the cam [bottom, top] lies somewhere
@@ -29,7 +29,7 @@ bool Gen::may_become_home_cam(std::size_t a) const {
 }
 
 void Gen::home_cams() {
-  Dice hc(m.seed, 12);
+  Dice hc(m.seed, 16);  // 12: hard-stop axes by following error
   Dice hk(m.seed, 13);  // what goes wrong with them
   std::vector<std::size_t> cand = axes_where([&](std::size_t x) { return may_become_home_cam(x); });
   if (cand.empty() || !hc.chance(0.45)) return;

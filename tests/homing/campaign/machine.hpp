@@ -98,6 +98,7 @@ struct AxisPlan {
   bool late_drive = false;     // drive mode: the drive answers after its time limit
   bool indexer = false;        // a locking indexer (axis.<a>.indexer_lock, fitted on the simulator)
   bool limits = false;         // end-of-travel limit switches fitted (axis.<a>.limits_fitted, on the simulator)
+  bool following_error = false;  // hard-stop axis telling its stop by its encoder (stall_detect following_error)
   CamStart cam_start = CamStart::none;  // home_cam: where its first cycle starts
   bool cam_missing = false;    // home_cam: its cam lies beyond the limit switches
   bool cam_at_limit = false;   // home_cam: the limit switch on its reference side lies within its latch or pull-off

@@ -111,10 +111,14 @@ void Gen::place_switch(std::size_t a, double hyst_pair, double slack, bool share
   const double hyst = std::max(c.hysteresis_mm, hyst_pair);
   s.max_backoff_mm += slack;
   const double edge_f = d.u(-50, 50);
-  const double cam_len = over + hyst + 2 * slack + d.u(0.5, 30);
+  const bool pushing = mode_is_pushing(s.mode);
+  // A pushing axis pushes its sensor's actuator against the mechanical stop
+  // (placed within the push below): the cam reaches past the push, else the
+  // carriage would leave the sensor's far side before it meets the stop.
+  double cam_len = over + hyst + 2 * slack + d.u(0.5, 30);
+  if (pushing) cam_len = std::max(cam_len, over + s.push_distance_mm + hyst + 1);
   // Off the sensor by more than a slave's start may differ from this one's.
   double gap = d.u(0.5, 25) + slack;
-  const bool pushing = mode_is_pushing(s.mode);
   if (!pushing && d.chance(0.15)) {
     const double depth_room = std::min(cam_len, s.max_backoff_mm - hyst - slack - 0.2) * 0.8;
     if (depth_room > 0.05) gap = -d.u(0, depth_room);
@@ -458,6 +462,44 @@ void Gen::limit_switches() {
   }
 }
 
+// Hard-stop axes that read their encoder for the stop (stall_detect
+// following_error), with their own dice so that every other draw stays as it
+// was: a limit the rule following_error_in_noise accepts, mostly within the
+// push's travel beyond the stop, one in ten beyond it (stop_not_found); an
+// encoder counting in steps of up to 1 um with noise within what the rule
+// allows for; now and then an encoder reversed from power-up or reporting no
+// valid position. A stall output made dead or stuck on by causes() stays:
+// the encoder must home the axis all the same.
+void Gen::following_error() {
+  Dice fe(m.seed, 12);  // every stream and what it draws: dice.hpp
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    AxisSettings& s = m.settings.axes[a];
+    AxisPlan& p = m.plan[a];
+    if (s.mode != HomingMode::hard_stop || p.role != Role::plain || p.encoder_invalid) continue;
+    if ((m.invalid != Invalid::none && m.invalid_axis == a) || !fe.chance(0.5)) continue;
+    sim::AxisConfig& c = m.sim.axes[a];
+    s.stall_detect = StallDetect::following_error;
+    const double stop = s.direction == Direction::negative ? c.hard_stop_min_mm : c.hard_stop_max_mm;
+    const double pre = s.pre_move_mode == PreMove::always ? s.pre_move_distance_mm : 0;
+    // The push's travel left beyond the stop from where the first cycle starts (at least 1 mm).
+    const double room = s.max_seek_travel_mm - std::abs(c.actual_position_mm - stop) - pre;
+    const double floor = following_error_floor_mm(s);
+    s.max_following_error_mm = fe.chance(0.1) ? std::min(room * fe.u(1.1, 2.0), s.max_seek_travel_mm * 0.95)
+                                              : floor * fe.u(1.2, 4.0) + (fe.chance(0.5) ? fe.u(0, 0.5 * room) : 0.0);
+    s.max_following_error_mm = std::max(s.max_following_error_mm, floor * 1.05);
+    c.encoder_resolution_mm = fe.chance(0.5) ? fe.u(0, 0.001) : 0;
+    c.encoder_noise_mm = fe.chance(0.5) ? fe.u(0, 0.0003) : 0;
+    p.following_error = true;
+    bool evented = false;
+    for (const Event& e : m.events) evented = evented || e.axis == a;
+    if (p.start_fault == sim::Fault::none && !evented && fe.chance(0.1)) {
+      p.start_fault = c.fault = sim::Fault::encoder_reversed;
+    } else if (fe.chance(0.05)) {
+      p.encoder_invalid = true;
+    }
+  }
+}
+
 Machine Gen::build() {
   // One period in ten comes late, by up to the 20 ms the README promises.
   m.max_dt_s = d.chance(0.3) ? 0.002 : d.u(0.005, 0.020);
@@ -475,6 +517,7 @@ Machine Gen::build() {
   events();
   indexers();
   limit_switches();
+  following_error();
   home_cams();
   limits_in_reach();
   m.start_held_at_powerup = d.chance(0.15);

@@ -404,6 +404,7 @@ void Run::mark_machine() {
       mark("mode " + std::string(mode_name(m_.settings.axes[a].mode)), seen::present);
     }
     if (m_.plan[a].limits) mark("limit switches fitted", seen::present);
+    if (m_.plan[a].following_error) mark("hard_stop by following error", seen::present);
     if (m_.plan[a].reach_side) mark("a limit switch within jogs, moves or the final move", seen::present);
     if (m_.settings.axes[a].mode == HomingMode::home_cam) {
       for (const std::string& k : home_cam_keys(a)) mark(k, seen::present);
@@ -448,6 +449,7 @@ void Run::mark_cycle(const CyclePlan& plan, const Causes& causes, bool clean) {
       mark("mode " + std::string(mode_name(m_.settings.axes[a].mode)), bits);
     }
     if (m_.plan[a].limits) mark("limit switches fitted", bits);
+    if (m_.plan[a].following_error) mark("hard_stop by following error", bits);
     if (r_.settings.axes[a].mode == HomingMode::home_cam) {
       for (const std::string& k : home_cam_keys(a)) mark(k, bits);
       if (w_->reversal_known & axis_bit(a))

@@ -103,6 +103,8 @@ class Run {
   std::vector<Phase> phases_run(std::size_t a) const;
   void follow_ups();
   bool homed_axis(std::size_t a) const;
+  // A move commanded and not yet over: moving, or still unlocking its indexer first.
+  bool move_pending(std::size_t a) const;
   void mark(const std::string& key, std::uint8_t bits) { coverage_[key] |= bits; }
   void mark_machine();
   void mark_cycle(const CyclePlan& plan, const Causes& causes, bool clean);

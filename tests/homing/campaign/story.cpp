@@ -22,6 +22,7 @@ const char* fault_name(sim::Fault f) {
     case sim::Fault::drive_done_lost: return "drive's home done lost";
     case sim::Fault::indexer_stuck_locked: return "indexer stuck locked";
     case sim::Fault::indexer_never_locks: return "indexer never locks";
+    case sim::Fault::encoder_reversed: return "encoder counting the wrong way";
     case sim::Fault::limits_dead: return "limit switches dead";
     case sim::Fault::limits_stuck: return "limit switches stuck active";
   }
@@ -120,6 +121,10 @@ std::string story(const Machine& m) {
       o << "; locking indexer (unlock " << m.sim.axes[a].unlock_delay_ms << " ms, lock " << m.sim.axes[a].lock_delay_ms
         << " ms, timeout " << m.settings.axes[a].lock_timeout_ms << " ms)";
     if (p.start_fault != sim::Fault::none) o << "; FAULT FROM POWER-UP: " << fault_name(p.start_fault);
+    if (p.following_error)
+      o << "; stop told by following error above " << m.settings.axes[a].max_following_error_mm
+        << " (encoder resolution " << m.sim.axes[a].encoder_resolution_mm << ", noise "
+        << m.sim.axes[a].encoder_noise_mm << ")";
     if (p.encoder_invalid) o << "; ENCODER INVALID";
     o << "\n";
   }

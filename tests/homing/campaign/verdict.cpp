@@ -184,17 +184,44 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
             mover && overruns);
     }
     // Hard-stop homing: a stall output that never comes or is on all the
-    // time, or a stop further than the push reaches (README).
+    // time, or a stop further than the push reaches (README). An axis that
+    // tells its stop by its encoder (docs/homing-methods.md) reads no stall
+    // input: it needs the stop within the push's reach less its limit.
     if (mover && e.mode == HomingMode::hard_stop) {
-      if (f == sim::Fault::stall_dead)
+      const bool by_encoder = e.stall_detect == StallDetect::following_error;
+      if (f == sim::Fault::stall_dead && !by_encoder)
         c.add(letter(a) + "'s dead stall output", {AlarmCode::stop_not_found, AlarmCode::stall_timeout}, bit, true);
-      if (f == sim::Fault::stall_stuck) c.add(letter(a) + "'s stall output stuck on", {AlarmCode::stall_at_start}, bit, true);
+      if (f == sim::Fault::stall_stuck && !by_encoder)
+        c.add(letter(a) + "'s stall output stuck on", {AlarmCode::stall_at_start}, bit, true);
       const auto& cfg = r.sim().axis_config(a);
       const double stop = dir_of(e) < 0 ? cfg.hard_stop_min_mm : cfg.hard_stop_max_mm;
       const double reach = e.max_seek_travel_mm - (e.pre_move_mode == PreMove::always ? e.pre_move_distance_mm : 0);
       const double gap = std::abs(r.actual(a) - stop);
-      // Near the end of the reach the stall's detection time decides.
-      if (gap > reach - 1) c.add(letter(a) + "'s stop beyond the push's reach", {AlarmCode::stop_not_found, AlarmCode::stall_timeout}, bit, gap > reach + 1e-3);
+      // Near the end of the reach the stall's detection time decides; the
+      // encoder's resolution and noise decide when the lag passes the limit.
+      const double settled = by_encoder ? 2 * (cfg.encoder_resolution_mm + 5 * cfg.encoder_noise_mm) + 1e-3 : 1e-3;
+      // The steps needed until the stop is told (or the reversal shows):
+      // lo and hi differ only where two outcomes are equally likely.
+      double needed_lo = gap;
+      double needed_hi = gap;
+      const bool reversed = by_encoder && f == sim::Fault::encoder_reversed;
+      if (by_encoder && !reversed) needed_lo = needed_hi = gap + e.max_following_error_mm;
+      if (reversed) {
+        // A reversed encoder counts the travel as lag: a carriage more than a
+        // quarter of the limit from the stop shows the reversal after that
+        // quarter; one closer rests on the stop, and the limit is passed
+        // after the limit less the gap (seed 2258828930).
+        const double quarter = 0.25 * e.max_following_error_mm;
+        const double shows = quarter;
+        const double passes = e.max_following_error_mm - gap;
+        needed_lo = gap > quarter + settled ? shows : gap < quarter - settled ? passes : std::min(shows, passes);
+        needed_hi = gap > quarter + settled ? shows : gap < quarter - settled ? passes : std::max(shows, passes);
+        c.add(letter(a) + "'s reversed encoder", {AlarmCode::encoder_reversed}, bit,
+              gap > quarter + settled && needed_hi < reach - 1);
+      }
+      if (needed_hi > reach - 1)
+        c.add(letter(a) + "'s stop beyond the push's reach", {AlarmCode::stop_not_found, AlarmCode::stall_timeout}, bit,
+              needed_lo > reach + settled);
     }
     if (p.rest_on_sensor) c.add(letter(a) + "'s shared limit resting on its sensor", {AlarmCode::settings_fault, AlarmCode::not_released}, bit);
     // A cycle that starts deeper in the cam than max_backoff can release (a
@@ -251,7 +278,12 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
         c.add(letter(a) + "'s drive never reporting home done", {AlarmCode::drive_no_answer}, bit, true);
       if (f == sim::Fault::drive_answers_at_once)
         c.add(letter(a) + "'s drive answering at once", {AlarmCode::drive_answered_at_once}, bit, true);
-      if (f == sim::Fault::none || f == sim::Fault::drive_fault) {
+      // Any drive that answers at all (whatever else is wrong with the axis,
+      // such as an indexer that never locks once it is done) may answer late;
+      // one that the stuck pin never lets start is the indexer's cause.
+      const bool answers = f != sim::Fault::drive_never_answers && f != sim::Fault::drive_done_lost &&
+                           f != sim::Fault::drive_answers_at_once && f != sim::Fault::indexer_stuck_locked;
+      if (answers) {
         const double takes = std::abs(cfg.drive_home_position_mm - r.actual(a)) / (cfg.drive_speed_mm_per_min / 60) +
                              cfg.drive_answer_ms / 1000;
         // Within a few late periods of the limit either may happen.
@@ -279,6 +311,9 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
     if ((encoder_invalid & bit) && mode_is_absolute(e.mode))
       c.add(letter(a) + "'s invalid absolute encoder", {AlarmCode::encoder_fault}, bit,
             (plan.covered & bit) || (plan.unsequenced & bit));
+    // Hard-stop homing by the encoder reads it as the push begins.
+    if ((encoder_invalid & bit) && e.mode == HomingMode::hard_stop && e.stall_detect == StallDetect::following_error)
+      c.add(letter(a) + "'s invalid encoder for the stop", {AlarmCode::encoder_fault}, bit, mover);
   }
   return c;
 }

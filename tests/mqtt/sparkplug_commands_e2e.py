@@ -1,0 +1,151 @@
+#!/usr/bin/python3
+"""End-to-end: commands over MQTT (NCMD). Off by default: refused and answered
+as an event. With --mqtt-commands: cmd/home_all homes the machine; refused for
+the same reason as the same command over Modbus when homing is blocked; held
+commands (jog) and settings are never taken. Debian's mosquitto on loopback,
+an independent Sparkplug host (paho-mqtt, python3-protobuf), pymodbus.
+
+usage: sparkplug_commands_e2e.py HOMINGD PYTHON_DIR"""
+import os, signal, socket, subprocess, sys, tempfile, time
+
+homingd, pydir = sys.argv[1], sys.argv[2]
+sys.path.insert(0, pydir)
+import sparkplug_b_pb2 as spb  # noqa: E402
+import paho.mqtt.client as paho  # noqa: E402
+from pymodbus.client import ModbusTcpClient  # noqa: E402
+
+failures = []
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what)
+    if not cond:
+        failures.append(what)
+
+def free_port():
+    s = socket.socket(); s.bind(("127.0.0.1", 0)); p = s.getsockname()[1]; s.close(); return p
+
+def wait_until(pred, timeout=10.0):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if pred(): return True
+        time.sleep(0.05)
+    return pred()
+
+work = tempfile.mkdtemp(prefix="mqtt-cmd-e2e-")
+broker_port = free_port()
+conf = os.path.join(work, "mosquitto.conf")
+with open(conf, "w") as f:
+    f.write(f"listener {broker_port} 127.0.0.1\nallow_anonymous true\npersistence false\n")
+broker = subprocess.Popen(["/usr/sbin/mosquitto", "-c", conf], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+messages = []
+sub = paho.Client(client_id="cmd-e2e-host")
+def on_message(_c, _u, msg):
+    p = spb.Payload(); p.ParseFromString(msg.payload)
+    parts = msg.topic.split("/")
+    messages.append((parts[2], parts[3], p))
+sub.on_message = on_message
+def try_connect():
+    try:
+        return sub.connect("127.0.0.1", broker_port) == 0
+    except OSError:
+        return False
+assert wait_until(try_connect, 10), "mosquitto did not start"
+sub.subscribe("spBv1.0/plant/#", qos=1)
+sub.loop_start()
+
+def start(node, *extra):
+    port = free_port()
+    p = subprocess.Popen([homingd, "--tcp", f"127.0.0.1:{port}", "--db", os.path.join(work, node + ".db"),
+                          "--rt-priority", "0", "--time-scale", "20", "--mqtt", f"mqtt://127.0.0.1:{broker_port}",
+                          "--mqtt-group", "plant", "--mqtt-node", node, *extra],
+                         stdout=open(os.path.join(work, node + ".log"), "w"), stderr=subprocess.STDOUT)
+    return p, port
+
+def births(node): return [p for t, n, p in messages if t == "NBIRTH" and n == node]
+def aliases(node): return {m.alias: m.name for m in births(node)[0].metrics if m.HasField("alias")}
+def answers(node):
+    """The command events of a node: (setting, command result, refusal reason, text)."""
+    names = aliases(node)
+    out = []
+    for t, n, p in messages:
+        if t != "NDATA" or n != node: continue
+        ev = {names.get(m.alias): m for m in p.metrics}
+        if "event/kind" in ev and ev["event/kind"].string_value == "command":
+            out.append((ev["event/setting"].string_value, ev["event/code"].int_value,
+                        ev["event/new_value"].long_value if "event/new_value" in ev else 0, ev["event/text"].string_value))
+    return out
+
+def ncmd(node, name, value=True):
+    cmd = spb.Payload()
+    m = cmd.metrics.add(); m.name = name; m.datatype = spb.Boolean; m.boolean_value = value
+    sub.publish(f"spBv1.0/plant/NCMD/{node}", cmd.SerializeToString(), qos=1)
+
+def ir(mb, address):
+    r = mb.read_input_registers(address, 1, slave=1)
+    return None if r.isError() else r.registers[0]
+
+daemons = []
+try:
+    off, off_port = start("off"); daemons.append(off)
+    on, on_port = start("on", "--mqtt-commands"); daemons.append(on)
+    check(wait_until(lambda: births("off") and births("on"), 15), "both modules are born")
+
+    # Off by default: refused, answered, nothing moves.
+    ncmd("off", "cmd/home_all")
+    check(wait_until(lambda: len(answers("off")) >= 1, 10), "a command to a module without --mqtt-commands is answered")
+    if answers("off"):
+        name, _, reason, text = answers("off")[0]
+        check(name == "cmd.home_all" and reason != 0 and "--mqtt-commands" in text, f"as refused, naming the option: {text}")
+    mb_off = ModbusTcpClient("127.0.0.1", port=off_port, timeout=2, retries=0); mb_off.connect()
+    time.sleep(0.5)
+    check(ir(mb_off, 1) == 0, "and nothing homes (state not_homed)")
+
+    # On: home_all homes.
+    ncmd("on", "cmd/home_all")
+    mb = ModbusTcpClient("127.0.0.1", port=on_port, timeout=2, retries=0)
+    check(wait_until(lambda: mb.connect(), 5), "Modbus connects")
+    check(wait_until(lambda: ir(mb, 1) == 2, 30), "cmd/home_all over MQTT homes the machine (state homed)")
+    check(wait_until(lambda: any(a[0] == "cmd.home_all" and a[1] == 1 and a[2] == 0 for a in answers("on")), 5),
+          "and is answered as accepted (command result 1)")
+
+    # Homing blocked by a latched alarm: the same refusal as over Modbus.
+    # The simulator's e-stop pressed and released: the alarm stays latched.
+    mb.write_coil(0, True, slave=247)  # sim.estop
+    wait_until(lambda: ir(mb, 1) == 3, 10)
+    mb.write_coil(0, False, slave=247)
+    check(wait_until(lambda: ir(mb, 1) == 3, 10), "an alarm is latched")
+    n = len(answers("on"))
+    ncmd("on", "cmd/home_all")
+    check(wait_until(lambda: len(answers("on")) > n, 10), "cmd/home_all during the alarm is answered")
+    answer = answers("on")[-1] if len(answers("on")) > n else None
+    r = mb.write_coil(0, True, slave=1)
+    time.sleep(0.1)
+    modbus_result = ir(mb, 6)  # status.last_command_result
+    check(not r.isError() and modbus_result == 3, f"over Modbus the same command is refused_alarm (3): {modbus_result}")
+    check(answer is not None and answer[1] == modbus_result and "refused_alarm" in answer[3],
+          f"and over MQTT for the same reason: {answer}")
+
+    # Never over MQTT: held commands and settings.
+    n = len(answers("on"))
+    ncmd("on", "cmd/jog_plus/x")
+    ncmd("on", "axis/x/seek_feedrate")
+    check(wait_until(lambda: len(answers("on")) >= n + 1, 10), "a jog over MQTT is answered")
+    check(all(reason != 0 for _, _, reason, _ in answers("on")[n:]), "and refused")
+    time.sleep(0.3)
+    feed = mb.read_holding_registers(102, 1, slave=1).registers[0]
+    check(feed == 1000, "no setting was written over MQTT")
+    mb.close(); mb_off.close()
+finally:
+    for d in daemons:
+        if d.poll() is None:
+            d.send_signal(signal.SIGTERM)
+            try:
+                d.wait(10)
+            except subprocess.TimeoutExpired:
+                d.kill(); d.wait()
+    sub.loop_stop()
+    broker.send_signal(signal.SIGTERM); broker.wait()
+if failures:
+    for node in ("off", "on"):
+        print(f"--- {node} ---\n" + open(os.path.join(work, node + ".log")).read()[-2500:])
+sys.exit(1 if failures else 0)
