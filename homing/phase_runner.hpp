@@ -81,8 +81,11 @@ struct PhaseRunner {
   }
   void move_to(double target_mm, double v) {
     run.target_mm = target_mm;
+    if (starts_into_limit(target_mm)) return;
     run.command = move_to_command(run.motor, target_mm, v, accel, dt());
   }
+  // A motion from rest toward an active limit switch: raised instead (cam_phases.cpp).
+  bool starts_into_limit(double target_mm);
   void wait_for(Wait w, Phase next) {
     enter(Phase::waiting);
     run.phase_data<phase_data::Waiting>() = {w, next};

@@ -75,4 +75,8 @@ constexpr std::span<const EnumInfo<Phase>> enum_table(Phase) { return kPhaseInfo
 
 std::string_view phase_name(Phase phase);
 
+// The phases that meet an end-of-travel limit switch on purpose (home_cam's
+// search reverses there); in every other phase an active one is a hard limit.
+constexpr bool reverses_at_limits(Phase p) { return p == Phase::cam_seek || p == Phase::limit_reversal; }
+
 }  // namespace homing
