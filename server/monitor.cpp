@@ -79,6 +79,13 @@ void Monitor::refresh_diagnostics() {
   extras_.late_p999_us = s.lateness_percentile_us(0.999);
   extras_.late_max_us = s.max_lateness_us;
   extras_.engine_step_ns = s.engine_steps ? s.engine_us_total * 1000.0 / static_cast<double>(s.engine_steps) : 0;
+  if (s.sim_held_back_periods > 0 && !sim_behind_logged_) {
+    sim_behind_logged_ = true;
+    spdlog::warn("the simulated machine fell behind the wall clock: a control period came more than {:.0f} ms after "
+                 "the last (the computer too busy for --time-scale, engine step {:.0f} us, or the process stopped); "
+                 "the simulation catches up no more than that in one period, so it ran slower than asked",
+                 ControlLoop::kSimCatchUpMaxS * 1000, extras_.engine_step_ns / 1000.0);
+  }
   extras_.rss_kb = resident_kb();
   extras_.tcp_clients = tcp_clients_ ? tcp_clients_() : 0;
 }
