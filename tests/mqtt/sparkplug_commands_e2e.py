@@ -97,8 +97,14 @@ try:
         name, _, reason, text = answers("off")[0]
         check(name == "cmd.home_all" and reason != 0 and "--mqtt-commands" in text, f"as refused, naming the option: {text}")
     mb_off = ModbusTcpClient("127.0.0.1", port=off_port, timeout=2, retries=0); mb_off.connect()
-    time.sleep(0.5)
-    check(ir(mb_off, 1) == 0, "and nothing homes (state not_homed)")
+    # The answer came after the NCMD was handled; a cmd.reset_alarm over Modbus
+    # behind it is judged no earlier than anything the NCMD handed the loop, so
+    # once it is judged a home_all carried out would show (state, one more count).
+    count = ir(mb_off, 11)  # status.command_count
+    mb_off.write_coil(2, True, slave=1)  # cmd.reset_alarm
+    check(wait_until(lambda: ir(mb_off, 11) != count, 10), "a reset over Modbus behind it is judged")
+    check(ir(mb_off, 1) == 0 and ir(mb_off, 11) == (count + 1) % 65536,
+          "and nothing homes (state not_homed, only the reset judged)")
 
     # On: home_all homes.
     ncmd("on", "cmd/home_all")
@@ -109,29 +115,33 @@ try:
           "and is answered as accepted (command result 1)")
 
     # Homing blocked by a latched alarm: the same refusal as over Modbus.
-    # The simulator's e-stop pressed and released: the alarm stays latched.
-    mb.write_coil(0, True, slave=247)  # sim.estop
+    # The simulator's e-stop pressed and released: the alarm stays latched. A
+    # simulator write is answered once the loop shows it.
+    r = mb.write_coil(0, True, slave=247)  # sim.estop
     wait_until(lambda: ir(mb, 1) == 3, 10)
-    mb.write_coil(0, False, slave=247)
+    r2 = mb.write_coil(0, False, slave=247)
+    check(not r.isError() and not r2.isError(), f"the simulator's e-stop is pressed and released: {r}, {r2}")
     check(wait_until(lambda: ir(mb, 1) == 3, 10), "an alarm is latched")
     n = len(answers("on"))
     ncmd("on", "cmd/home_all")
     check(wait_until(lambda: len(answers("on")) > n, 10), "cmd/home_all during the alarm is answered")
     answer = answers("on")[-1] if len(answers("on")) > n else None
+    count = ir(mb, 11)  # status.command_count: the result below is this command's once it moved
     r = mb.write_coil(0, True, slave=1)
-    time.sleep(0.1)
+    check(wait_until(lambda: ir(mb, 11) != count, 10), "the same command over Modbus is judged")
     modbus_result = ir(mb, 6)  # status.last_command_result
     check(not r.isError() and modbus_result == 3, f"over Modbus the same command is refused_alarm (3): {modbus_result}")
     check(answer is not None and answer[1] == modbus_result and "refused_alarm" in answer[3],
           f"and over MQTT for the same reason: {answer}")
 
-    # Never over MQTT: held commands and settings.
+    # Never over MQTT: held commands and settings. The setting goes first: the
+    # broker delivers one topic's messages in order, so once the jog is
+    # answered the setting has been handled.
     n = len(answers("on"))
-    ncmd("on", "cmd/jog_plus/x")
     ncmd("on", "axis/x/seek_feedrate")
+    ncmd("on", "cmd/jog_plus/x")
     check(wait_until(lambda: len(answers("on")) >= n + 1, 10), "a jog over MQTT is answered")
     check(all(reason != 0 for _, _, reason, _ in answers("on")[n:]), "and refused")
-    time.sleep(0.3)
     feed = mb.read_holding_registers(102, 1, slave=1).registers[0]
     check(feed == 1000, "no setting was written over MQTT")
     mb.close(); mb_off.close()
