@@ -161,7 +161,6 @@ void Monitor::judge_health(std::size_t axis, const homing::Settings& settings) {
 }
 
 void Monitor::poll(std::int64_t now_ms) {
-  housekeeping(now_ms);
   const Snapshot snap = loop_.snapshot();
   const homing::Status& st = snap.status;
   if (first_) {
@@ -174,6 +173,10 @@ void Monitor::poll(std::int64_t now_ms) {
   }
   const homing::Settings settings = service_.settings();
   if (events_) events_->take(snap.events, settings);
+  // After the loop's events: a settings change read now comes after every
+  // cycle and alarm this snapshot holds, which may be older than it (this
+  // thread late on a busy machine); the plant gets them in the order they happened.
+  housekeeping(now_ms);
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     const auto& now = st.axes[a].alarm;
     if (now.code != last_.axes[a].alarm.code && now) {
