@@ -211,7 +211,9 @@ bool ControlLoop::watchdog_expired() const {
 void ControlLoop::run_period(double wall_dt_s) {
   // --time-scale: several engine periods of the nominal length per wall
   // period, so precision does not change with the speed-up.
-  const double sim_dt = wall_dt_s * time_scale_;
+  const bool held_back = wall_dt_s > kSimCatchUpMaxS && has_sim();
+  if (held_back) ++loop_stats_.sim_held_back_periods;
+  const double sim_dt = (held_back ? kSimCatchUpMaxS : wall_dt_s) * time_scale_;
   const double nominal = period_us_ * 1e-6;
   const int steps = sim_dt <= 0 ? 1 : std::max(1, static_cast<int>(std::ceil(sim_dt / nominal - 1e-9)));
   const double dt = sim_dt / steps;

@@ -43,6 +43,9 @@ struct LoopStats {
   std::array<std::uint64_t, kBuckets> lateness_us_histogram{};
   std::uint64_t periods = 0;
   std::uint64_t late_periods = 0;  // started more than one period after their deadline
+  // Periods in which the simulated machine was held back (ControlLoop::kSimCatchUpMaxS):
+  // the computer could not keep up with --time-scale, so the simulation ran slower.
+  std::uint64_t sim_held_back_periods = 0;
   double max_lateness_us = 0;
   double engine_us_total = 0;
   std::uint64_t engine_steps = 0;
@@ -124,6 +127,16 @@ class ControlLoop {
 
   // Runs one period by hand (tests step the loop without a thread).
   void run_period(double wall_dt_s);
+
+  // The most wall-clock time one period advances a simulated machine. A
+  // period simulates the wall time since the last one times --time-scale,
+  // in steps of the nominal period; when the computer cannot compute that
+  // as fast as it passes (a sanitized build, several time-scaled daemons on
+  // a shared machine), catching it all up would make each period longer than
+  // the one before, without bound, and commands wait for the next period.
+  // Beyond this the simulation falls behind the wall clock instead. Real
+  // hardware is never held back: its time is the wall clock.
+  static constexpr double kSimCatchUpMaxS = 0.05;
 
  private:
   void thread_main();

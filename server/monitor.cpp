@@ -79,6 +79,13 @@ void Monitor::refresh_diagnostics() {
   extras_.late_p999_us = s.lateness_percentile_us(0.999);
   extras_.late_max_us = s.max_lateness_us;
   extras_.engine_step_ns = s.engine_steps ? s.engine_us_total * 1000.0 / static_cast<double>(s.engine_steps) : 0;
+  if (s.sim_held_back_periods > 0 && !sim_behind_logged_) {
+    sim_behind_logged_ = true;
+    spdlog::warn("the simulated machine fell behind the wall clock: a control period came more than {:.0f} ms after "
+                 "the last (the computer too busy for --time-scale, engine step {:.0f} us, or the process stopped); "
+                 "the simulation catches up no more than that in one period, so it ran slower than asked",
+                 ControlLoop::kSimCatchUpMaxS * 1000, extras_.engine_step_ns / 1000.0);
+  }
   extras_.rss_kb = resident_kb();
   extras_.tcp_clients = tcp_clients_ ? tcp_clients_() : 0;
 }
@@ -154,7 +161,6 @@ void Monitor::judge_health(std::size_t axis, const homing::Settings& settings) {
 }
 
 void Monitor::poll(std::int64_t now_ms) {
-  housekeeping(now_ms);
   const Snapshot snap = loop_.snapshot();
   const homing::Status& st = snap.status;
   if (first_) {
@@ -167,6 +173,10 @@ void Monitor::poll(std::int64_t now_ms) {
   }
   const homing::Settings settings = service_.settings();
   if (events_) events_->take(snap.events, settings);
+  // After the loop's events: a settings change read now comes after every
+  // cycle and alarm this snapshot holds, which may be older than it (this
+  // thread late on a busy machine); the plant gets them in the order they happened.
+  housekeeping(now_ms);
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     const auto& now = st.axes[a].alarm;
     if (now.code != last_.axes[a].alarm.code && now) {

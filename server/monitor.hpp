@@ -46,6 +46,7 @@ class Monitor {
   std::int64_t run_start_ms_ = 0;
   homing::AxisMask run_axes_ = 0;
   PlantEvents* events_ = nullptr;
+  bool sim_behind_logged_ = false;  // LoopStats::sim_held_back_periods: said once
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };
