@@ -63,6 +63,21 @@ try:
     seqs = [p.seq for t, p in messages if t in ("NBIRTH", "NDATA")]
     check(all((b - a) % 256 == 1 for a, b in zip(seqs, seqs[1:])), f"seq continuous from the birth: {seqs[:10]}...")
 
+    # An alarm's text beside its code: the simulator's e-stop pressed at rest
+    # latches the machine's alarm; its text arrives as a String, and is
+    # cleared once the e-stop is released and the alarm reset.
+    check(names.get("status/global_alarm_text") is not None and names["status/global_alarm_text"].datatype == spb.String,
+          "birth carries status/global_alarm_text as String")
+    check(all(names.get(f"axis/{a}/alarm_text") is not None for a in "xyzabc"), "birth carries axis/<a>/alarm_text")
+    text_alias = names["status/global_alarm_text"].alias
+    def texts(): return [m.string_value for p in of("NDATA") for m in p.metrics if m.alias == text_alias]
+    check(not mb.write_coil(0, True, slave=247).isError(), "sim.estop pressed")  # sim.estop
+    check(wait_until(lambda: any(t.startswith("emergency stop pressed; ") for t in texts()), 10),
+          f"the e-stop's text arrives in status/global_alarm_text: {texts()[-1:]}")
+    check(not mb.write_coil(0, False, slave=247).isError(), "sim.estop released")
+    mb.write_coil(2, True, slave=1)  # cmd.reset_alarm
+    check(wait_until(lambda: texts() and texts()[-1] == "", 10), "the text is cleared after the reset")
+
     # Rebirth on command.
     ncmd(sub, "m1", "Node Control/Rebirth")
     check(wait_until(lambda: len(of("NBIRTH")) == 2), "rebirth answered with a new NBIRTH")
