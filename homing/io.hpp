@@ -2,9 +2,11 @@
 // What the engine reads each control period and what it emits.
 #include <array>
 #include <cstdint>
+#include <optional>
 
 #include "axes.hpp"
 #include "motion.hpp"
+#include "trust.hpp"
 
 namespace homing {
 
@@ -52,6 +54,7 @@ struct Commands {
   std::array<std::int8_t, kAxisCount> jog{};  // -1, 0, +1 while held
   AxisMask move_axes = 0;
   std::array<double, kAxisCount> move_target_mm{};
+  AxisMask refcheck_axes = 0;  // reference check of these axes (trust.hpp), one cycle
 };
 
 struct Inputs {
@@ -62,6 +65,11 @@ struct Inputs {
   bool communication_lost = false;  // set by the runtime when the watchdog expires
   bool settings_lost = false;       // set by the runtime when settings had to be reset
   Commands commands{};
+  // Where each axis came to rest before this start, as the runtime kept it
+  // (trust.hpp): given once, before anything moves. An axis whose last stop
+  // was clean, in the frame its settings give it now, takes its stored
+  // position as its coordinate and is offered a reference check.
+  std::optional<LastStops> restore{};
 };
 
 struct AxisOutputs {
