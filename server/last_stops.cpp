@@ -88,8 +88,9 @@ std::optional<homing::LastStops> take_last_stops(persistence::SettingsStore& sto
                   wiped.error().message);
     return std::nullopt;
   }
+  // Axes that do not home (disabled) have nothing to trust: not logged.
   for (std::size_t a = 0; a < homing::kAxisCount; ++a)
-    if ((*stored)[a]) log_last_stop(a, *(*stored)[a], settings);
+    if ((*stored)[a] && homing::mode_homes(settings.axes[a].mode)) log_last_stop(a, *(*stored)[a], settings);
   return to_engine(*stored);
 }
 
