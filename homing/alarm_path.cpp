@@ -33,7 +33,7 @@ void Engine::raise_global(const Settings& settings, AlarmCode code) {
 
 void Engine::halt(const Settings& settings) {
   if (settings.global.alarm_clears_homed) {
-    for (AxisRun& run : axes_) run.home.reset();
+    for (AxisRun& run : axes_) run.lose_reference();
   }
   stop_all(settings);
 }
@@ -50,11 +50,13 @@ void Engine::stop_all(const Settings& settings) {
     // motor is at rest: switching it under a moving motor would hand the
     // pulses to the other motor.
     run.in_cycle = false;
+    run.checking = false;
     run.aligning = false;
     if (moving) run.set_phase(Phase::stopping);
     else if (run.phase != Phase::done) run.set_phase(Phase::idle);
   }
   cycle_active_ = false;
+  cycle_is_check_ = false;
   step_index_ = -1;
 }
 

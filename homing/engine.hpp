@@ -40,6 +40,7 @@ class Engine {
   void check_drive_references(const Settings& settings);
   void check_limit_switches(const Settings& settings);                             // limit_switches.cpp
   void handle_commands(const Settings& settings, const Inputs& inputs);
+  void restore_last_stops(const Settings& settings, const LastStops& stops);          // refcheck.cpp
   void run_cycle(const Settings& settings);                                       // cycle.cpp
   void run_motion(const Settings& settings);                                      // jog_move.cpp
   void follow_masters(const Settings& settings);                                  // gantry_guard.cpp
@@ -72,6 +73,11 @@ class Engine {
   void begin_axis(const Settings& settings, std::size_t axis);
   void run_axis(const Settings& settings, std::size_t axis);
   bool cycle_runs(std::size_t axis) const { return cycle_active_ && axes_[axis].in_cycle; }
+
+  // The reference check (refcheck.cpp; its phase in refcheck_phases.cpp).
+  CommandResult refcheck_refusal(const Settings& settings, std::size_t axis) const;
+  void refcheck_command(const Settings& settings, AxisMask axes);
+  void start_refcheck(AxisMask axes);
 
   // Jog and move (jog_move.cpp).
   CommandResult motion_refusal(const Settings& settings, std::size_t axis) const;
@@ -118,6 +124,7 @@ class Engine {
   bool first_step_ = true;
   bool cycle_active_ = false;
   bool cycle_all_ = false;
+  bool cycle_is_check_ = false;  // the running cycle is a reference check
   AxisMask cycle_requested_ = 0;
   CyclePlan plan_{};
   int step_index_ = -1;          // index into plan_.steps of the running step

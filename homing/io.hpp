@@ -2,9 +2,11 @@
 // What the engine reads each control period and what it emits.
 #include <array>
 #include <cstdint>
+#include <optional>
 
 #include "axes.hpp"
 #include "motion.hpp"
+#include "trust.hpp"
 
 namespace homing {
 
@@ -55,6 +57,7 @@ struct Commands {
   // Service: give these unhomed axes a coordinate where they stand, without moving.
   AxisMask set_position_axes = 0;
   std::array<double, kAxisCount> set_position_mm{};
+  AxisMask refcheck_axes = 0;  // reference check of these axes (trust.hpp), one cycle
 };
 
 // Two requests that arrive within one period, as one: flags and masks join,
@@ -64,6 +67,7 @@ inline void merge(Commands& into, const Commands& c) {
   into.home_all = into.home_all || c.home_all;
   into.home_axes |= c.home_axes;
   into.unhome_axes |= c.unhome_axes;
+  into.refcheck_axes |= c.refcheck_axes;
   into.abort = into.abort || c.abort;
   into.reset_alarm = into.reset_alarm || c.reset_alarm;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
@@ -83,6 +87,11 @@ struct Inputs {
   bool communication_lost = false;  // set by the runtime when the watchdog expires
   bool settings_lost = false;       // set by the runtime when settings had to be reset
   Commands commands{};
+  // Where each axis came to rest before this start, as the runtime kept it
+  // (trust.hpp): given once, before anything moves. An axis whose last stop
+  // was clean, in the frame its settings give it now, takes its stored
+  // position as its coordinate and is offered a reference check.
+  std::optional<LastStops> restore{};
 };
 
 struct AxisOutputs {

@@ -35,6 +35,7 @@ enum class Phase : std::uint8_t {
   limit_reversal = 23,  // home cam: braking at the limit switch, then seeking the cam the other way
   cam_stop = 24,      // home cam: decelerating after the cam's trigger; the cam must stay active
   cam_latch = 25,     // home cam: leaving the cam at latch_feedrate toward its reference edge
+  reference_check = 26,  // after a restart: finding the switch edge near where the stored position puts it
 };
 
 inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
@@ -69,8 +70,11 @@ inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
      "home cam: met the limit switch first; braking, then seeking the cam the other way"},
     {Phase::cam_stop, "cam_stop", "home cam: decelerating on the cam after its trigger"},
     {Phase::cam_latch, "cam_latch", "home cam: leaving the cam at latch_feedrate across its reference edge"},
+    {Phase::reference_check, "reference_check",
+     "reference check: finding the switch edge at latch_feedrate near where the stored position puts it, then "
+     "back to where the check started"},
 };
-static_assert(lists_every_value(kPhaseInfo, Phase::cam_latch));
+static_assert(lists_every_value(kPhaseInfo, Phase::reference_check));
 constexpr std::span<const EnumInfo<Phase>> enum_table(Phase) { return kPhaseInfo; }
 
 std::string_view phase_name(Phase phase);
