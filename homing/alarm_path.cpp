@@ -19,6 +19,7 @@ void Engine::raise(const Settings& settings, AxisMask axes, Alarm alarm) {
     if (!(axes & axis_bit(a)) || run.alarm) continue;
     run.alarm = alarm;
     run.alarm.phase = run.shown_phase();
+    raised_now_ |= axis_bit(a);
     latched = true;
   }
   if (latched) halt(settings);
@@ -27,7 +28,10 @@ void Engine::raise(const Settings& settings, AxisMask axes, Alarm alarm) {
 // An alarm not tied to one axis (e-stop, settings lost): latched once, and
 // every period it is raised motion stops as for an axis alarm.
 void Engine::raise_global(const Settings& settings, AlarmCode code) {
-  if (global_alarm_ == AlarmCode::none) global_alarm_ = code;
+  if (global_alarm_ == AlarmCode::none) {
+    global_alarm_ = code;
+    global_raised_now_ = true;
+  }
   halt(settings);
 }
 
@@ -60,9 +64,14 @@ void Engine::stop_all(const Settings& settings) {
   step_index_ = -1;
 }
 
+// Only alarms latched before this period: one raised in the period the
+// reset arrives (a limit tripped as the operator pressed reset for something
+// else) has not been published yet and stays, or the cycle would end with
+// no reason given.
 void Engine::clear_alarms() {
-  global_alarm_ = AlarmCode::none;
-  for (AxisRun& run : axes_) run.alarm = Alarm{};
+  if (!global_raised_now_) global_alarm_ = AlarmCode::none;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (!(raised_now_ & axis_bit(a))) axes_[a].alarm = Alarm{};
 }
 
 // Abort during homing is an alarm on every axis still homing; abort of a

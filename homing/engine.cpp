@@ -23,6 +23,8 @@ StepResult Engine::step(const Settings& configured, const Inputs& inputs, double
   if (dt_s > 0) last_dt_s_ = dt_s;
   ++heartbeat_;
   time_s_ += dt_s;
+  raised_now_ = 0;
+  global_raised_now_ = false;
   advance_motion(dt_s);
   keep_home_frames(settings);
   read_inputs(settings, inputs, dt_s);

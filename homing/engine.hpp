@@ -129,6 +129,10 @@ class Engine {
   CyclePlan plan_{};
   int step_index_ = -1;          // index into plan_.steps of the running step
   AlarmCode global_alarm_ = AlarmCode::none;
+  // Alarms latched in this period: nobody has seen them yet, so a reset in
+  // the same period must not clear them (seed 2818140234).
+  AxisMask raised_now_ = 0;
+  bool global_raised_now_ = false;
   bool estop_ = false;
   bool prev_start_button_ = false;
   bool comm_lost_ = false;

@@ -114,12 +114,14 @@ void ModbusService::audit_position_set(std::size_t axis, double old_mm, double n
     std::lock_guard lock(mutex_);
     source = position_set_by_[axis];
   }
+  // The audit row first: once the log says it, the row is there.
+  if (store_ && reg) {
+    const persistence::Change change{name(axis), registers::to_raw(*reg, old_mm), registers::to_raw(*reg, new_mm)};
+    if (auto r = store_->audit(change, source); !r)
+      spdlog::error("the coordinate of {} set by hand was not audited: {}", homing::kAxisUpper[axis], r.error().message);
+  }
   spdlog::warn("{} set by hand from {:.3f} to {:.3f} by {} {} (the axis stays unhomed)", homing::kAxisUpper[axis], old_mm,
                new_mm, source.transport, source.client);
-  if (!store_ || !reg) return;
-  const persistence::Change change{name(axis), registers::to_raw(*reg, old_mm), registers::to_raw(*reg, new_mm)};
-  if (auto r = store_->audit(change, source); !r)
-    spdlog::error("the coordinate of {} set by hand was not audited: {}", homing::kAxisUpper[axis], r.error().message);
 }
 
 }  // namespace server

@@ -123,6 +123,35 @@ SCENARIO("home_cam without limit switches is refused before anything moves", "[l
   CHECK(g->rule == CheckRule::limit_overtravel_too_short);
 }
 
+SCENARIO("a reset in the very period a limit switch trips does not clear that alarm", "[limits][hard_limit][alarms]") {
+  // The operator presses reset (for an older alarm) as the carriage meets
+  // the switch: the new alarm was never shown, so it stays (seed 2818140234:
+  // the cycle ended stopped with no alarm at all).
+  auto jog_rig = [] {
+    Rig r = cam_rig(99, 10, 20);
+    r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+    r.step();
+    r.jog(0, +1);
+    return r;
+  };
+  Rig probe = jog_rig();
+  REQUIRE(probe.run_until([&] { return probe.status().alarm; }, 10));
+  const std::uint64_t trip_period = probe.periods;
+
+  Rig r = jog_rig();
+  while (r.periods + 1 < trip_period) r.step();
+  r.pending.reset_alarm = true;
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  CHECK(r.axis(0).alarm.code == AlarmCode::limit_switch);
+  CHECK(r.status().alarm);
+  r.release_jogs();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(r.actual(0) < 110);  // it stopped for the alarm the reset did not clear
+  r.reset_alarm();  // once seen, a reset clears it
+  CHECK_FALSE(r.status().alarm);
+}
+
 SCENARIO("a jog onto a limit switch stops with limit_switch, within its acceleration, and jogs away only",
          "[limits][hard_limit][alarms]") {
   Rig r = cam_rig(95, 10, 20);
