@@ -32,6 +32,7 @@ void Engine::raise(const Settings& settings, AxisMask axes, Alarm alarm) {
     run.alarm = alarm;
     run.alarm.phase = run.shown_phase();
     if (first_alarm_axis_ < 0) first_alarm_axis_ = static_cast<int>(a);
+    raised_now_ |= axis_bit(a);
     latched = true;
   }
   if (latched || (new_cause && wind_down_ != WindDown::none)) after_alarm(settings, alarm.code);
@@ -40,7 +41,10 @@ void Engine::raise(const Settings& settings, AxisMask axes, Alarm alarm) {
 // An alarm not tied to one axis (e-stop, settings lost): latched once, and
 // every period it is raised motion stops as for an axis alarm.
 void Engine::raise_global(const Settings& settings, AlarmCode code) {
-  if (global_alarm_ == AlarmCode::none) global_alarm_ = code;
+  if (global_alarm_ == AlarmCode::none) {
+    global_alarm_ = code;
+    global_raised_now_ = true;
+  }
   halt(settings);
 }
 
@@ -54,12 +58,13 @@ void Engine::halt(const Settings& settings) {
 void Engine::unhome_on_alarm(const Settings& settings, AxisMask spared) {
   if (!settings.global.alarm_clears_homed) return;
   for (std::size_t a = 0; a < kAxisCount; ++a)
-    if (!(spared & axis_bit(a))) axes_[a].home.reset();
+    if (!(spared & axis_bit(a))) axes_[a].lose_reference();
 }
 
 void Engine::stop_all(const Settings& settings) {
   for (std::size_t a = 0; a < kAxisCount; ++a) stop_axis(settings, a);
   cycle_active_ = false;
+  cycle_is_check_ = false;
   step_index_ = -1;
   wind_down_ = WindDown::none;
 }
@@ -75,15 +80,26 @@ void Engine::stop_axis(const Settings& settings, std::size_t a) {
   // motor is at rest: switching it under a moving motor would hand the
   // pulses to the other motor.
   run.in_cycle = false;
+  run.checking = false;
   run.aligning = false;
   if (moving) run.set_phase(Phase::stopping);
   else if (run.phase != Phase::done) run.set_phase(Phase::idle);
 }
 
+// Only alarms latched before this period: one raised in the period the
+// reset arrives (a limit tripped as the operator pressed reset for something
+// else) has not been published yet and stays, or the cycle would end with
+// no reason given.
 void Engine::clear_alarms() {
-  global_alarm_ = AlarmCode::none;
-  first_alarm_axis_ = -1;
-  for (AxisRun& run : axes_) run.alarm = Alarm{};
+  if (!global_raised_now_) global_alarm_ = AlarmCode::none;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (!(raised_now_ & axis_bit(a))) axes_[a].alarm = Alarm{};
+  // The first alarm stays the first if it is one of those kept.
+  if (first_alarm_axis_ >= 0 && !axes_[static_cast<std::size_t>(first_alarm_axis_)].alarm) {
+    first_alarm_axis_ = -1;
+    for (std::size_t a = 0; a < kAxisCount && first_alarm_axis_ < 0; ++a)
+      if (axes_[a].alarm) first_alarm_axis_ = static_cast<int>(a);
+  }
 }
 
 // Abort during homing is an alarm on every axis still homing, and the

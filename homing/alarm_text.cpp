@@ -30,8 +30,8 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
     case AlarmCode::sensor_not_found:
       return fmt::format("{}: home sensor not found within {:g} {} of travel", X, s.max_seek_travel_mm, u);
     case AlarmCode::overrun_during_stop:
-      return fmt::format("{}: home sensor released while stopping after the trigger; the trigger is "
-                         "shorter than the stop distance ({:.3f} {})", X, seek_stop_distance_mm(s), u);
+      return fmt::format("{}: home sensor released {:.3f} {} after the trigger, while stopping; the trigger is "
+                         "shorter than the stop distance ({:.3f} {})", X, a.value, u, seek_stop_distance_mm(s), u);
     case AlarmCode::stop_distance_exceeded:
       return fmt::format("{}: came to rest {:.3f} {} past the trigger, more than max_stop_distance "
                          "{:g} {}", X, a.value, u, s.max_stop_distance_mm, u);

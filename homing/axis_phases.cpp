@@ -19,6 +19,9 @@ PhaseRunner::PhaseRunner(const PhaseContext& context, const Settings& st, std::s
 }
 
 void PhaseRunner::begin() {
+  // A reference check measures nothing of the switch's health: the last
+  // cycle's figures stay.
+  if (run.checking) return enter(Phase::reference_check);
   run.latch = {};
   run.health = {};
   run.edges = {};
@@ -62,6 +65,7 @@ void PhaseRunner::dispatch() {
     case Phase::limit_reversal: return limit_reversal();
     case Phase::cam_stop: return cam_stop();
     case Phase::cam_latch: return cam_latch();
+    case Phase::reference_check: return reference_check();
     case Phase::done:
       run.entered = true;
       return;

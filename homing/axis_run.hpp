@@ -11,6 +11,7 @@
 #include "home_frame.hpp"
 #include "motion.hpp"
 #include "phases.hpp"
+#include "trust.hpp"
 
 namespace homing {
 
@@ -66,12 +67,28 @@ struct DriveHoming {
   double request_s = 0;       // engine time the home request was raised
   bool done_seen_off = false; // home done was seen off since the request: the drive began homing
 };
+// The reference check (refcheck_phases.cpp), one phase in steps.
+struct RefCheck {
+  enum class Step : std::uint8_t {
+    leave_sensor,  // started on the switch: off it at latch feedrate to its release edge
+    approach,      // toward the switch at latch feedrate to its trigger edge
+    back_off,      // release methods: off the switch again, to the release edge
+    go_back,       // judged: back to where the check started (or off the switch)
+  };
+  Step step = Step::approach;
+  double start_mm = 0;     // motor position where the check started
+  double expected_mm = 0;  // motor position where the stored position puts the reference edge
+  double trigger_mm = 0;   // motor position of the trigger edge found, in back_off
+  bool started_on_sensor = false;
+  bool accepted = false;   // in go_back: the edge lay within refcheck_tolerance
+  double offset_mm = 0;    // in go_back, accepted: the axis's offset that puts the edge found where expected
+};
 }  // namespace phase_data
 
 using PhaseData = std::variant<std::monostate, phase_data::Seek, phase_data::Stop,
                                phase_data::BackOff, phase_data::Index, phase_data::Waiting, phase_data::Jog,
                                phase_data::PushToStop, phase_data::DriveHoming,
-                               phase_data::LimitReversal, phase_data::Return>;
+                               phase_data::LimitReversal, phase_data::Return, phase_data::RefCheck>;
 
 // How far this axis has come in the running homing cycle, in order. The
 // gantry partner waits on it.
@@ -156,14 +173,32 @@ struct AxisRun {
   bool homed_at_cycle_start = false;  // reported: homed when its last cycle started
   double cycle_start_mm = 0;    // motor position as its cycle started (failure policy return_to_start)
   bool moved_in_cycle = false;  // its motor ran in this cycle
+  bool started_on_limit = false;  // a limit switch was active as its cycle started
   // In this cycle it pushed into its mechanical stop or its drive homed it:
   // its counted steps no longer say how far its carriage went.
   bool steps_off_carriage = false;
   CycleEdges edges{};           // this cycle's seek trigger and first release
   LatchEdges latch{};           // this cycle's slow approaches to the reference edge
   SwitchHealth health{};        // reported: what the last cycle measured of the switch
+  std::uint32_t positions_set = 0;  // reported: set-position commands carried out
+
+  // Position trust (trust.hpp).
+  std::optional<HomeFrame> restored;  // its stored last stop was clean in this frame: a reference check is offered
+  bool checking = false;              // the running cycle is this axis's reference check
+  bool homed_by_check = false;        // its reference came from a reference check
+  double refcheck_error_mm = 0;       // reported: the last check's edge found less where it was expected
 
   bool homed() const { return home.has_value(); }
+  // Where the axis is is no longer known: not homed, and its stored
+  // position no longer offered for a reference check.
+  void lose_reference() {
+    home.reset();
+    restored.reset();
+  }
+  Trust trust() const {
+    if (homed()) return homed_by_check ? Trust::reference_checked : Trust::homed_this_power_on;
+    return restored ? Trust::last_stop_clean : Trust::unknown;
+  }
   // Homed, or its method does not home (disabled): what jogs, moves and the
   // homed status go by.
   bool counts_as_homed(HomingMode mode) const { return homed() || !mode_homes(mode); }

@@ -6,6 +6,7 @@
 // reference, crossed the same way whichever side the cam was found from.
 #include <cmath>
 
+#include "mutation.hpp"
 #include "phase_runner.hpp"
 
 namespace homing {
@@ -13,6 +14,27 @@ namespace homing {
 void PhaseRunner::fail_limit(AlarmCode code, double toward) {
   ctx.alarms.raise(axis_bit(axis), Alarm{code, run.phase, AxisField::none, run.machine_position_mm(),
                                          static_cast<std::uint8_t>(toward < 0 ? 1 : 2)});
+}
+
+// A homing motion never starts toward an active limit switch, as a jog or a
+// move toward one is refused: the alarm comes before a period of motion
+// (else each cycle started on a tripped switch would creep deeper past it).
+// Only the search that reverses at the switches may head for one.
+bool PhaseRunner::starts_into_limit(double target_mm) {
+  const AxisReadings& in = run.readings;
+  const double toward = target_mm - run.motor.position_mm;
+  if (!settings.axes[axis].limits_fitted || !at_rest() || toward == 0 || reverses_at_limits(run.phase) ||
+      !in.limit_toward(toward))
+    return false;
+  run.command = stop_command(accel);
+  if (in.limit_min && in.limit_max) {
+    fail_limit(AlarmCode::both_limits_active, toward);
+    return true;
+  }
+  fail_limit(AlarmCode::limit_in_homing, toward);
+  run.limit_tripped = true;
+  run.limit_side = toward < 0 ? -1 : 1;
+  return true;
 }
 
 void PhaseRunner::cam_triggered() {
@@ -30,11 +52,13 @@ void PhaseRunner::cam_seek() {
       run.reach(Reached::stopped_on_sensor);
       return enter(Phase::cam_latch);
     }
-    if (in.limit_toward(dir)) return enter(Phase::limit_reversal);
+    if (in.limit_toward(dir) && !planted(Mutant::home_cam_search_ignores_limit_switch))
+      return enter(Phase::limit_reversal);
     run.target_mm = run.phase_start_mm + dir * s.max_seek_travel_mm;
   }
   if (edge_to(true)) return cam_triggered();
-  if (in.limit_toward(dir)) return enter(Phase::limit_reversal);
+  if (in.limit_toward(dir) && !planted(Mutant::home_cam_search_ignores_limit_switch))
+    return enter(Phase::limit_reversal);
   move_to(run.target_mm, seek_v);
   if (arrived()) fail(AlarmCode::sensor_not_found, travelled());
 }

@@ -41,7 +41,8 @@ void Engine::home_command(const Settings& settings, const Inputs& inputs) {
   if (home_all || home_axes) {
     ++command_count_;
     if (cycle_active_) {
-      const bool same = home_all ? cycle_all_ : (!cycle_all_ && home_axes == cycle_requested_);
+      const bool same =
+          !cycle_is_check_ && (home_all ? cycle_all_ : (!cycle_all_ && home_axes == cycle_requested_));
       last_result_ = same ? CommandResult::already_running : CommandResult::refused_busy;
     } else if (const CommandResult r = homing_refusal(settings); r != CommandResult::accepted) {
       last_result_ = r;
@@ -77,6 +78,7 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
   }
 
   cycle_active_ = true;
+  cycle_is_check_ = false;
   cycle_all_ = all;
   cycle_requested_ = requested;
   step_index_ = -1;
@@ -91,7 +93,11 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
     run.cycle_start_mm = run.motor.position_mm;
     run.steps_off_carriage = false;
     run.moved_in_cycle = false;
-    run.home.reset();
+    run.started_on_limit = run.readings.limit_min || run.readings.limit_max;
+    // A full cycle replaces any reference check the axis was offered.
+    run.lose_reference();
+    run.homed_by_check = false;
+    run.checking = false;
     run.drive_referenced = false;
     run.set_phase(Phase::waiting);  // for its step
     run.entered = false;
@@ -170,6 +176,8 @@ void Engine::assign_unsequenced(const Settings& settings, std::size_t a) {
   run.trigger_position_mm = run.motor.position_mm + run.offset_mm;
   run.offset_mm = new_offset;
   run.home = home_frame(settings.axes[a]);
+  run.homed_by_check = false;
+  run.restored.reset();
   run.set_phase(Phase::done);
 }
 
@@ -181,9 +189,18 @@ void Engine::finish_cycle(const Settings& settings) {
   for (std::size_t a = 0; a < kAxisCount && cycle_active_ && wind_down_ == WindDown::none; ++a)
     if (plan_.unsequenced & axis_bit(a)) assign_unsequenced(settings, a);
   if (!cycle_active_ || wind_down_ != WindDown::none) return;  // an encoder fault failed the cycle
-  for (AxisRun& run : axes_) run.in_cycle = false;
+  for (AxisRun& run : axes_) {
+    // A refused reference check leaves its axis at rest, not homed: idle, not done.
+    if (run.checking && !run.homed()) run.set_phase(Phase::idle);
+    run.checking = false;
+    run.in_cycle = false;
+  }
   cycle_active_ = false;
   step_index_ = -1;
+  if (cycle_is_check_) {
+    cycle_is_check_ = false;
+    return;  // a reference check is not a homing cycle (status.homing_cycles)
+  }
   ++homing_cycles_;
 }
 

@@ -23,10 +23,13 @@ StepResult Engine::step(const Settings& configured, const Inputs& inputs, double
   if (dt_s > 0) last_dt_s_ = dt_s;
   ++heartbeat_;
   time_s_ += dt_s;
+  raised_now_ = 0;
+  global_raised_now_ = false;
   advance_motion(dt_s);
   keep_home_frames(settings);
   read_inputs(settings, inputs, dt_s);
   check_safety(settings, inputs);
+  if (inputs.restore) restore_last_stops(settings, *inputs.restore);
   handle_commands(settings, inputs);
   run_cycle(settings);
   run_motion(settings);
@@ -79,13 +82,15 @@ bool Engine::any_motion() const {
   });
 }
 
-// Commands in a fixed order: reset, abort, unhome, home, jog, move.
+// Commands in a fixed order: reset, abort, unhome, set position, home, reference check, jog, move.
 void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
   const Commands& c = inputs.commands;
   if (c.reset_alarm) reset_command();
   if (c.abort) abort_command(settings);
   if (c.unhome_axes) unhome_command(settings, c.unhome_axes);
+  if (c.set_position_axes) set_position_commands(settings, c);
   home_command(settings, inputs);
+  if (c.refcheck_axes) refcheck_command(settings, c.refcheck_axes);
   jog_commands(settings, c);
   move_commands(settings, c);
 }

@@ -40,6 +40,7 @@ class Engine {
   void check_drive_references(const Settings& settings);
   void check_limit_switches(const Settings& settings);                             // limit_switches.cpp
   void handle_commands(const Settings& settings, const Inputs& inputs);
+  void restore_last_stops(const Settings& settings, const LastStops& stops);          // refcheck.cpp
   void run_cycle(const Settings& settings);                                       // cycle.cpp
   void run_motion(const Settings& settings);                                      // jog_move.cpp
   void follow_masters(const Settings& settings);                                  // gantry_guard.cpp
@@ -82,6 +83,7 @@ class Engine {
   CommandResult homing_refusal(const Settings& settings) const;
   void home_command(const Settings& settings, const Inputs& inputs);
   void unhome_command(const Settings& settings, AxisMask axes);
+  void set_position_commands(const Settings& settings, const Commands& c);
   void start_cycle(const Settings& settings, AxisMask requested, bool all);
   bool start_step(const Settings& settings);
   void assign_unsequenced(const Settings& settings, std::size_t axis);
@@ -91,6 +93,11 @@ class Engine {
   void run_axis(const Settings& settings, std::size_t axis);
   bool steps_run() const { return cycle_active_ && wind_down_ != WindDown::returning; }
   bool cycle_runs(std::size_t axis) const { return steps_run() && axes_[axis].in_cycle; }
+
+  // The reference check (refcheck.cpp; its phase in refcheck_phases.cpp).
+  CommandResult refcheck_refusal(const Settings& settings, std::size_t axis) const;
+  void refcheck_command(const Settings& settings, AxisMask axes);
+  void start_refcheck(AxisMask axes);
 
   // Jog and move (jog_move.cpp).
   CommandResult motion_refusal(const Settings& settings, std::size_t axis) const;
@@ -137,6 +144,7 @@ class Engine {
   bool first_step_ = true;
   bool cycle_active_ = false;
   bool cycle_all_ = false;
+  bool cycle_is_check_ = false;  // the running cycle is a reference check
   AxisMask cycle_requested_ = 0;
   CyclePlan plan_{};
   int step_index_ = -1;          // index into plan_.steps of the running (or returning) step
@@ -144,6 +152,10 @@ class Engine {
   std::uint32_t wind_down_period_ = 0;  // the period (heartbeat_) the failed cycle began to wind down
   int first_alarm_axis_ = -1;    // the axis that latched the first alarm since the last reset
   AlarmCode global_alarm_ = AlarmCode::none;
+  // Alarms latched in this period: nobody has seen them yet, so a reset in
+  // the same period must not clear them (seed 2818140234).
+  AxisMask raised_now_ = 0;
+  bool global_raised_now_ = false;
   bool estop_ = false;
   bool prev_start_button_ = false;
   bool comm_lost_ = false;

@@ -67,13 +67,15 @@ double return_speed_mm_per_s(const AxisSettings& s) {
 }  // namespace
 
 // The policy for an alarm just latched, as the cycle stands: none (every
-// axis stops) when no step runs, the cause concerns the whole machine, the
+// axis stops) when no step runs, in a reference check, the cause concerns the whole machine, the
 // axes are already going back, or the policy is stop_all. Alarms latched in
 // the period the failure came are one failure: the way back is planned
 // again with them all.
 Engine::WindDown Engine::wind_down_for(const Settings& settings, AlarmCode code) const {
   const bool step_runs = cycle_active_ && step_index_ >= 0 && step_index_ < static_cast<int>(plan_.steps.size());
-  if (!step_runs || stops_everything(code)) return WindDown::none;
+  // A reference check is no homing cycle: one short move at latch speed,
+  // stopped where it is whatever the policy.
+  if (!step_runs || cycle_is_check_ || stops_everything(code)) return WindDown::none;
   if (wind_down_ == WindDown::returning)
     return heartbeat_ == wind_down_period_ ? WindDown::returning : WindDown::none;
   if (wind_down_ == WindDown::finishing) return WindDown::finishing;
@@ -171,7 +173,9 @@ AxisMask Engine::returning_axes(const Settings& settings) const {
 
 bool Engine::may_return(const Settings& settings, std::size_t a) const {
   const AxisRun& run = axes_[a];
-  return run.in_cycle && !run.steps_off_carriage && alarm_lets_return(run.alarm.code) &&
+  // One that started on a limit switch stands at the end of its travel: its
+  // way back would end on the switch (campaign seed 162).
+  return run.in_cycle && !run.steps_off_carriage && !run.started_on_limit && alarm_lets_return(run.alarm.code) &&
          return_speed_mm_per_s(settings.axes[a]) > 0 && settings.axes[a].acceleration_mm_per_s2 > 0;
 }
 

@@ -9,6 +9,8 @@ void Engine::keep_home_frames(const Settings& settings) {
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     AxisRun& run = axes_[a];
     if (run.home && *run.home != home_frame(settings.axes[a])) run.home.reset();
+    // A stored position is where the axis rested in its frame then.
+    if (run.restored && *run.restored != home_frame(settings.axes[a])) run.restored.reset();
   }
 }
 

@@ -110,7 +110,7 @@ void Engine::run_indexers(const Settings& settings, const Inputs& inputs) {
     }
     // The motor ran on against the pin: the axis is no longer where its
     // coordinate says, whatever alarm_clears_homed says.
-    if (p.steps_lost) run.home.reset();
+    if (p.steps_lost) run.lose_reference();
     if (p.alarm != AlarmCode::none) {
       raise(settings, axis_bit(a), Alarm{p.alarm, Phase::idle, AxisField::lock_timeout_ms, s.lock_timeout_ms, 0});
       if (run.indexer.state != p.after_alarm) p.enter(p.after_alarm);

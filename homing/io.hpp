@@ -2,9 +2,11 @@
 // What the engine reads each control period and what it emits.
 #include <array>
 #include <cstdint>
+#include <optional>
 
 #include "axes.hpp"
 #include "motion.hpp"
+#include "trust.hpp"
 
 namespace homing {
 
@@ -52,7 +54,30 @@ struct Commands {
   std::array<std::int8_t, kAxisCount> jog{};  // -1, 0, +1 while held
   AxisMask move_axes = 0;
   std::array<double, kAxisCount> move_target_mm{};
+  // Service: give these unhomed axes a coordinate where they stand, without moving.
+  AxisMask set_position_axes = 0;
+  std::array<double, kAxisCount> set_position_mm{};
+  AxisMask refcheck_axes = 0;  // reference check of these axes (trust.hpp), one cycle
 };
+
+// Two requests that arrive within one period, as one: flags and masks join,
+// a later target or jog wins. Every field is here, so a new command cannot be
+// dropped by a runtime that queues requests between periods.
+inline void merge(Commands& into, const Commands& c) {
+  into.home_all = into.home_all || c.home_all;
+  into.home_axes |= c.home_axes;
+  into.unhome_axes |= c.unhome_axes;
+  into.refcheck_axes |= c.refcheck_axes;
+  into.abort = into.abort || c.abort;
+  into.reset_alarm = into.reset_alarm || c.reset_alarm;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (c.jog[a] != 0) into.jog[a] = c.jog[a];
+    if (c.move_axes & axis_bit(a)) into.move_target_mm[a] = c.move_target_mm[a];
+    if (c.set_position_axes & axis_bit(a)) into.set_position_mm[a] = c.set_position_mm[a];
+  }
+  into.move_axes |= c.move_axes;
+  into.set_position_axes |= c.set_position_axes;
+}
 
 struct Inputs {
   std::array<AxisInputs, kAxisCount> axes{};
@@ -62,6 +87,11 @@ struct Inputs {
   bool communication_lost = false;  // set by the runtime when the watchdog expires
   bool settings_lost = false;       // set by the runtime when settings had to be reset
   Commands commands{};
+  // Where each axis came to rest before this start, as the runtime kept it
+  // (trust.hpp): given once, before anything moves. An axis whose last stop
+  // was clean, in the frame its settings give it now, takes its stored
+  // position as its coordinate and is offered a reference check.
+  std::optional<LastStops> restore{};
 };
 
 struct AxisOutputs {

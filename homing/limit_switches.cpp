@@ -6,14 +6,9 @@
 // stands on the switch, and a jog away from it (only away) is allowed until
 // it releases (limit_tripped, limit_side; jog_move.cpp).
 #include "engine.hpp"
+#include "mutation.hpp"
 
 namespace homing {
-namespace {
-
-// The phases that meet a limit switch on purpose.
-bool reverses_at_limits(Phase p) { return p == Phase::cam_seek || p == Phase::limit_reversal; }
-
-}  // namespace
 
 void Engine::check_limit_switches(const Settings& settings) {
   for (std::size_t a = 0; a < kAxisCount; ++a) {
@@ -36,12 +31,19 @@ void Engine::check_limit_switches(const Settings& settings) {
       continue;
     }
     if (run.in_cycle && reverses_at_limits(run.phase)) continue;
+    if (!run.in_cycle && planted(Mutant::limit_switch_ignored_outside_homing)) continue;
+    // Moving toward it, or come to rest on it within the period that just
+    // ended (a target a hair past the switch, a late period): a trip all the same.
     const double v = run.motor.velocity_mm_per_s;
-    if (v == 0) continue;
-    const std::int8_t toward = v < 0 ? -1 : 1;
+    const double heading = v != 0 ? v : run.motor.position_mm - run.period_start.position_mm;
+    if (heading == 0) continue;
+    const std::int8_t toward = heading < 0 ? -1 : 1;
     if (!in.limit_toward(toward)) continue;
     // Reset while still braking onto it: the trip is known, no second alarm.
-    if (run.limit_tripped && run.limit_side == toward) continue;
+    // Only that braking: a motion started since (a homing phase; jogs and
+    // moves toward it are refused) trips the switch again at once.
+    const bool braking = !run.in_cycle && (run.phase == Phase::stopping || run.phase == Phase::idle);
+    if (run.limit_tripped && run.limit_side == toward && braking) continue;
     const AlarmCode code = run.in_cycle ? AlarmCode::limit_in_homing : AlarmCode::limit_switch;
     raise(settings, axis_bit(a),
           Alarm{code, Phase::idle, AxisField::none, pos, static_cast<std::uint8_t>(toward < 0 ? 1 : 2)});

@@ -12,6 +12,8 @@ enum class Mutant {
   slave_keeps_own_direction,              // a slave homes in its own direction, not its master's
   racking_allowed_0_2_mm_past_limit,      // the gantry guard lets a pair rack 0.2 mm past max_misalignment
   reversed_encoder_unchecked,             // hard-stop homing by following error trusts an encoder counting backwards
+  limit_switch_ignored_outside_homing,    // jogs, moves and braking run on past an active limit switch
+  home_cam_search_ignores_limit_switch,   // cam_seek seeks on past the limit switch ahead instead of reversing
 };
 
 #ifdef HOMING_MUTATION_TESTING

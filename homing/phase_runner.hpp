@@ -81,8 +81,11 @@ struct PhaseRunner {
   }
   void move_to(double target_mm, double v) {
     run.target_mm = target_mm;
+    if (starts_into_limit(target_mm)) return;
     run.command = move_to_command(run.motor, target_mm, v, accel, dt());
   }
+  // A motion from rest toward an active limit switch: raised instead (cam_phases.cpp).
+  bool starts_into_limit(double target_mm);
   void wait_for(Wait w, Phase next) {
     enter(Phase::waiting);
     run.phase_data<phase_data::Waiting>() = {w, next};
@@ -134,6 +137,15 @@ struct PhaseRunner {
   double cam_side() const { return s.cam_edge == CamEdge::ahead ? dir : -dir; }
   // Pull-off: away from the reference edge (from the sensor; a home cam's off the cam on its reference side).
   double away_from_reference() const { return row().runs(Phase::cam_latch) ? cam_side() : -dir; }
+  // The reference check (refcheck_phases.cpp): one phase in steps.
+  void reference_check();
+  void refcheck_begin(phase_data::RefCheck& c);
+  void refcheck_step(phase_data::RefCheck& c, phase_data::RefCheck::Step step, double target_mm);
+  void refcheck_leave_sensor(phase_data::RefCheck& c);
+  void refcheck_approach(phase_data::RefCheck& c);
+  void refcheck_back_off(phase_data::RefCheck& c);
+  void refcheck_judge(phase_data::RefCheck& c, double edge_mm, bool found);
+  void refcheck_go_back(phase_data::RefCheck& c);
   void begin();
   void dispatch();
 };

@@ -35,7 +35,8 @@ enum class Phase : std::uint8_t {
   limit_reversal = 23,  // home cam: braking at the limit switch, then seeking the cam the other way
   cam_stop = 24,      // home cam: decelerating after the cam's trigger; the cam must stay active
   cam_latch = 25,     // home cam: leaving the cam at latch_feedrate toward its reference edge
-  return_to_start = 26,  // failure policy return_to_start: braking, then back to where the cycle found it
+  reference_check = 26,  // after a restart: finding the switch edge near where the stored position puts it
+  return_to_start = 27,  // failure policy return_to_start: braking, then back to where the cycle found it
 };
 
 inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
@@ -71,6 +72,9 @@ inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
      "home cam: met the limit switch first; braking, then seeking the cam the other way"},
     {Phase::cam_stop, "cam_stop", "home cam: decelerating on the cam after its trigger"},
     {Phase::cam_latch, "cam_latch", "home cam: leaving the cam at latch_feedrate across its reference edge"},
+    {Phase::reference_check, "reference_check",
+     "reference check: finding the switch edge at latch_feedrate near where the stored position puts it, then "
+     "back to where the check started"},
     {Phase::return_to_start, "return_to_start",
      "the cycle failed (global.failure_policy return_to_start): braking, then moving back to where the cycle found "
      "the axis, at the lower of jog_feedrate and seek_feedrate"},
@@ -79,5 +83,9 @@ static_assert(lists_every_value(kPhaseInfo, Phase::return_to_start));
 constexpr std::span<const EnumInfo<Phase>> enum_table(Phase) { return kPhaseInfo; }
 
 std::string_view phase_name(Phase phase);
+
+// The phases that meet an end-of-travel limit switch on purpose (home_cam's
+// search reverses there); in every other phase an active one is a hard limit.
+constexpr bool reverses_at_limits(Phase p) { return p == Phase::cam_seek || p == Phase::limit_reversal; }
 
 }  // namespace homing

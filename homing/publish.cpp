@@ -27,7 +27,10 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
     as.trigger_position_mm = run.trigger_position_mm;
     as.home_correction_mm = run.home_correction_mm;
     as.homed_at_cycle_start = run.homed_at_cycle_start;
+    as.positions_set = run.positions_set;
     as.health = run.health;
+    as.trust = run.trust();
+    as.refcheck_error_mm = run.refcheck_error_mm;
     as.stop_distance_mm = seek_stop_distance_mm(s);  // the figure the configuration check holds to
     if (!std::isfinite(as.stop_distance_mm)) as.stop_distance_mm = 0;
     as.phase_distance_mm = std::abs(run.motor.position_mm - run.phase_start_mm);
@@ -38,6 +41,7 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
   const bool alarm = any_alarm();
   st.alarm = alarm;
   st.homing = cycle_active_;
+  st.reference_check = cycle_active_ && cycle_is_check_;
   st.estop = inputs.estop;
   st.global_alarm = global_alarm_;
   st.first_alarm_axis = static_cast<std::int8_t>(first_alarm_axis_);

@@ -25,7 +25,7 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
     // A drive in fault does not follow its steps: an axis commanded to move
     // meanwhile is no longer where its coordinate says, whatever
     // global.alarm_clears_homed says (at rest it has lost nothing).
-    if (axes_[a].moving() || axes_[a].period_start.velocity_mm_per_s != 0) axes_[a].home.reset();
+    if (axes_[a].moving() || axes_[a].period_start.velocity_mm_per_s != 0) axes_[a].lose_reference();
     if (planted(Mutant::drive_fault_as_sensor_alarm_elsewhere)) {
       raise(settings, axis_bit((a + 1) % kAxisCount), Alarm{AlarmCode::sensor_not_found});
       continue;

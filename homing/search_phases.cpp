@@ -73,7 +73,10 @@ void PhaseRunner::stop() {
 bool PhaseRunner::stopped_on_sensor() {
   if (entry()) run.command = stop_command(accel);
   if (edge_to(false)) {
-    fail(AlarmCode::overrun_during_stop);
+    // The figure: how far past the trigger the sensor was seen released,
+    // to hold against the stop distance the text names.
+    fail(AlarmCode::overrun_during_stop,
+         std::abs(run.motor.position_mm - run.phase_data<phase_data::Stop>().trigger_mm));
     return false;
   }
   if (!at_rest()) return false;

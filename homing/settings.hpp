@@ -167,6 +167,9 @@ struct AxisSettings {
   // falling behind the steps by more than max_following_error_mm).
   StallDetect stall_detect = StallDetect::stall_input;
   double max_following_error_mm = 0;
+  // Reference check (homing/trust.hpp): the switch edge must be found within
+  // this of where the axis's stored position puts it.
+  double refcheck_tolerance_mm = 0;
   friend bool operator==(const AxisSettings&, const AxisSettings&) = default;
 };
 
@@ -255,6 +258,7 @@ enum class AxisField : std::uint8_t {
   max_skew_change,
   stall_detect,
   max_following_error,
+  refcheck_tolerance,
 };
 // The name of each: the suffix of its register name (axis.<a>.<name>).
 struct AxisFieldInfo {
@@ -305,8 +309,9 @@ inline constexpr AxisFieldInfo kAxisFieldInfo[] = {
     {AxisField::max_skew_change, "max_skew_change"},
     {AxisField::stall_detect, "stall_detect"},
     {AxisField::max_following_error, "max_following_error"},
+    {AxisField::refcheck_tolerance, "refcheck_tolerance"},
 };
-static_assert(lists_every_value(kAxisFieldInfo, AxisField::max_following_error));
+static_assert(lists_every_value(kAxisFieldInfo, AxisField::refcheck_tolerance));
 constexpr std::span<const AxisFieldInfo> enum_table(AxisField) { return kAxisFieldInfo; }
 
 std::string_view field_name(AxisField field);

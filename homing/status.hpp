@@ -11,6 +11,7 @@
 #include "enum_info.hpp"
 #include "health.hpp"
 #include "phases.hpp"
+#include "trust.hpp"
 
 namespace homing {
 
@@ -43,8 +44,12 @@ enum class CommandResult : std::uint8_t {
   refused_settings_fault = 14,  // the configuration check refused the cycle: see the axis alarm
   refused_hard_limit = 15,   // on a tripped shared limit: only a jog away from the sensor is allowed
   refused_home_all_only = 16,  // global.single_axis_homing is off: the machine homes all axes or none
+  refused_homed = 17,        // set position: the axis is homed; its coordinate comes from its reference
+  refused_no_switch_edge = 18,  // reference check: the axis's method has no switch edge to check
+  refused_no_clean_stop = 19,   // reference check: axis.<a>.trust is not last_stop_clean
+  refused_gantry_pair = 20,     // reference check: a gantry pair is squared by a full cycle only
 };
-inline constexpr std::uint8_t kCommandResultCount = 17;
+inline constexpr std::uint8_t kCommandResultCount = 21;
 inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
     {CommandResult::none, "none", "no command yet"},
     {CommandResult::accepted, "accepted", "the last command started"},
@@ -69,8 +74,18 @@ inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
      "on a tripped shared limit: only a jog away from the sensor is allowed until it releases"},
     {CommandResult::refused_home_all_only, "refused_home_all_only",
      "global.single_axis_homing is off: this machine homes all axes together (cmd.home_all), never one alone"},
+    {CommandResult::refused_homed, "refused_homed",
+     "the axis is homed: its coordinate comes from its reference; unhome it first (cmd.unhome.<a>) to set it by hand"},
+    {CommandResult::refused_no_switch_edge, "refused_no_switch_edge",
+     "reference check refused: the axis's homing method has no switch edge to check (manual, absolute, hard stop, "
+     "drive, switch + index, pushing): home it with a full cycle"},
+    {CommandResult::refused_no_clean_stop, "refused_no_clean_stop",
+     "reference check refused: axis.<a>.trust is not last_stop_clean (its last stop was not clean, its home "
+     "settings changed, a check already failed, or it is homed): home it with a full cycle"},
+    {CommandResult::refused_gantry_pair, "refused_gantry_pair",
+     "reference check refused: the axis is one side of a gantry pair, which only a full cycle squares"},
 };
-static_assert(lists_every_value(kCommandResultInfo, CommandResult::refused_home_all_only));
+static_assert(lists_every_value(kCommandResultInfo, CommandResult::refused_gantry_pair));
 static_assert(std::size(kCommandResultInfo) == kCommandResultCount);
 constexpr std::span<const EnumInfo<CommandResult>> enum_table(CommandResult) { return kCommandResultInfo; }
 
@@ -141,6 +156,13 @@ struct AxisStatus {
   double stop_distance_mm = 0;      // v²/2a of the seek
   double phase_distance_mm = 0;     // travelled in the current phase
   SwitchHealth health{};            // what the last homing cycle measured of the switch (health.hpp)
+  // Set-position commands carried out on this axis since start: the runtime
+  // audits each one (who set which coordinate).
+  std::uint32_t positions_set = 0;
+  Trust trust = Trust::unknown;     // how far position_mm can be believed (trust.hpp)
+  // The last reference check: where it found the switch edge less where the
+  // stored position put it (the figure it was accepted or refused on).
+  double refcheck_error_mm = 0;
 };
 
 struct Status {
@@ -159,6 +181,7 @@ struct Status {
   bool alarm = false;
   bool homing = false;
   bool estop = false;
+  bool reference_check = false;     // the running cycle (homing) is a reference check, not a homing cycle
   std::array<AxisStatus, kAxisCount> axes{};
 };
 

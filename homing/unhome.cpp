@@ -24,7 +24,7 @@ void Engine::unhome_command(const Settings& settings, AxisMask axes) {
     return;
   }
   for (std::size_t a = 0; a < kAxisCount; ++a)
-    if (with_partners & axis_bit(a)) axes_[a].home.reset();
+    if (with_partners & axis_bit(a)) axes_[a].lose_reference();
   last_result_ = CommandResult::accepted;
 }
 

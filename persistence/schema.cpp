@@ -98,6 +98,30 @@ ALTER TABLE homing_axes ADD COLUMN index_near_edge INTEGER;
 ALTER TABLE homing_axes ADD COLUMN gantry_skew_mm REAL;
 )sql";
 
+// v6: where each axis came to rest when the module last stopped, whether it
+// stopped cleanly and the home frame it was homed in (position trust across
+// restarts), and where the simulator's carriages are.
+constexpr std::string_view kV6 = R"sql(
+CREATE TABLE last_stop(
+  axis                   INTEGER PRIMARY KEY NOT NULL,
+  clean                  INTEGER NOT NULL,
+  position_mm            REAL NOT NULL,
+  mode                   INTEGER NOT NULL,
+  direction              INTEGER NOT NULL,
+  sensor_nc              INTEGER NOT NULL,
+  slave_of               INTEGER NOT NULL,
+  slave_mode             INTEGER NOT NULL,
+  pull_off_mm            REAL NOT NULL,
+  switch_compensation_mm REAL NOT NULL,
+  home_position_mm       REAL NOT NULL,
+  time_ms                INTEGER NOT NULL
+) WITHOUT ROWID;
+CREATE TABLE sim_carriages(
+  axis      INTEGER PRIMARY KEY NOT NULL,
+  actual_mm REAL NOT NULL
+) WITHOUT ROWID;
+)sql";
+
 }  // namespace
 
 const std::vector<Step>& steps() {
@@ -107,8 +131,9 @@ const std::vector<Step>& steps() {
       {3, "audit transport/client, homing history, meta", kV3},
       {4, "why a home correction is excluded from the statistics", kV4},
       {5, "switch health figures and gantry skew per axis and run", kV5},
+      {6, "last stop of each axis (position trust) and the simulator's carriages", kV6},
   };
-  static_assert(kSchemaVersion == 5, "append a migration step when raising kSchemaVersion");
+  static_assert(kSchemaVersion == 6, "append a migration step when raising kSchemaVersion");
   return all;
 }
 

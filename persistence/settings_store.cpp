@@ -155,6 +155,30 @@ Status SettingsStore::acknowledge_settings_lost(const ChangeSource& source) {
   return {};
 }
 
+Status SettingsStore::audit(const Change& change, const ChangeSource& source) {
+  std::lock_guard lock(impl_->mu);
+  auto& m = *impl_;
+  auto txn = sql::Transaction::begin(m.db, "starting an audit row");
+  if (!txn) return std::unexpected(txn.error());
+  {
+    auto aud = m.db.prepare(
+        "INSERT INTO audit(time_ms, transport, client, name, old_value, new_value) VALUES(?, ?, ?, ?, ?, ?)");
+    if (!aud) return std::unexpected(aud.error());
+    aud->bind(1, m.now_ms())
+        .bind(2, std::string_view(source.transport))
+        .bind(3, std::string_view(source.client))
+        .bind(4, std::string_view(change.name))
+        .bind(5, change.old_value)
+        .bind(6, change.new_value);
+    if (auto s = aud->run(fmt::format("writing the audit row of '{}'", change.name)); !s) return s;
+    auto prune = m.db.prepare("DELETE FROM audit WHERE id <= (SELECT max(id) FROM audit) - ?");
+    if (!prune) return std::unexpected(prune.error());
+    prune->bind(1, static_cast<std::int64_t>(std::max<std::size_t>(m.opt.audit_max_rows, 1)));
+    if (auto s = prune->run("pruning the audit log"); !s) return s;
+  }
+  return txn->commit("committing an audit row");
+}
+
 Status SettingsStore::set_limits(std::size_t audit_max_rows, std::size_t history_max_rows) {
   std::lock_guard lock(impl_->mu);
   impl_->opt.audit_max_rows = std::max<std::size_t>(audit_max_rows, 1);

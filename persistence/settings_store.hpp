@@ -27,7 +27,7 @@ namespace persistence {
 
 struct SettingsFileCodec;  // settings_file.hpp
 
-inline constexpr int kSchemaVersion = 5;       // see schema.cpp for the history
+inline constexpr int kSchemaVersion = 6;       // see schema.cpp for the history
 inline constexpr std::size_t kHistoryAxes = 6;  // X Y Z A B C
 
 struct SettingDefault {
@@ -158,6 +158,36 @@ struct CorrectionSummary {
   double max = 0;
 };
 
+// Where an axis came to rest when the module last stopped (docs/operating.md
+// "Position trust across restarts"): clean only when written by a clean
+// shutdown; start-up wipes the mark (clear_clean_stops) before anything can
+// move, so a run that ends any other way (kill, power cut) leaves it wiped.
+// The home frame it was homed in is kept as the register values of its
+// settings (mode, direction, ...): the runtime compares it with the settings
+// it starts with.
+struct StoredFrame {
+  std::int64_t mode = 0;
+  std::int64_t direction = 0;
+  bool sensor_nc = false;
+  std::int64_t slave_of = 0;
+  std::int64_t slave_mode = 0;
+  double pull_off_mm = 0;
+  double switch_compensation_mm = 0;
+  double home_position_mm = 0;
+  friend bool operator==(const StoredFrame&, const StoredFrame&) = default;
+};
+struct AxisLastStop {
+  bool clean = false;
+  double position_mm = 0;  // machine coordinate, in the axis's unit
+  StoredFrame frame;
+  std::int64_t time_ms = 0;  // when it was recorded
+  friend bool operator==(const AxisLastStop&, const AxisLastStop&) = default;
+};
+using LastStops = std::array<std::optional<AxisLastStop>, kHistoryAxes>;  // nullopt: never recorded
+// Where each simulated carriage is (homingd's simulator backend keeps them as
+// a real machine keeps its carriages across a restart).
+using SimCarriages = std::array<std::optional<double>, kHistoryAxes>;
+
 // Validation of a whole proposed settings set, supplied by the register layer
 // so an import follows exactly the Modbus rules. nullopt = accepted.
 struct Rejection {
@@ -206,6 +236,9 @@ class SettingsStore {
 
   bool settings_lost() const;
   Status acknowledge_settings_lost(const ChangeSource& source);
+  // A change made by a service command rather than a settings write (an
+  // axis's coordinate set by hand): one audit row, pruned like the others.
+  Status audit(const Change& change, const ChangeSource& source);
 
   Status set_limits(std::size_t audit_max_rows, std::size_t history_max_rows);
 
@@ -221,6 +254,16 @@ class SettingsStore {
   // The health figures of the axis's last `last_n` runs that recorded them,
   // oldest first (what the trend check and the trend plot read).
   Result<std::vector<HealthRecord>> health_history(std::size_t axis, std::size_t last_n) const;
+
+  // The last stops (schema v6, store_last_stop.cpp). record_last_stops
+  // replaces the axes given (nullopt: left as they are) in one transaction,
+  // durable when it returns; clear_clean_stops keeps the positions and
+  // marks every axis not clean.
+  Result<LastStops> last_stops() const;
+  Status record_last_stops(const LastStops& stops);
+  Status clear_clean_stops();
+  Result<SimCarriages> sim_carriages() const;
+  Status record_sim_carriages(const std::array<double, kHistoryAxes>& actual_mm);
 
   // Backups: `<db>.bak` (newest) and `<db>.bak.1`.
   Status backup_if_due();  // writes a pending backup if the interval passed

@@ -88,6 +88,11 @@ Status open_writable(SettingsStore::Impl& m, const std::vector<SettingDefault>& 
   report.schema_version_found = found->version;
   if (found->version == 0 && report.outcome == OpenOutcome::opened) report.outcome = OpenOutcome::created;
   if (auto s = upgrade_schema(m, found->version, note); !s) return s;
+  // A backup's last stops are older than the run that just ended: none of
+  // them is known to be where the axis stopped last (position trust).
+  if (report.outcome == OpenOutcome::restored_from_backup)
+    if (auto s = m.db.exec("UPDATE last_stop SET clean = 0", "wiping the clean-stop marks of a restored backup"); !s)
+      return s;
   if (auto s = insert_defaults(m, defaults, report); !s) return s;
   if (found->fresh) (void)fsync_path(dir_of(m.path), true);
   if (!report.added_defaults.empty() && report.outcome != OpenOutcome::created)

@@ -87,7 +87,9 @@ std::optional<CommandRequest> command_of(const Register& reg, std::int64_t raw) 
     case Key::cmd_reset_alarm: return CommandRequest{Command::reset_alarm, -1, true};
     case Key::cmd_home: return CommandRequest{Command::home_axis, axis, true};
     case Key::cmd_unhome: return CommandRequest{Command::unhome_axis, axis, true};
+    case Key::cmd_refcheck: return CommandRequest{Command::refcheck_axis, axis, true};
     case Key::cmd_move: return CommandRequest{Command::move, axis, true};
+    case Key::cmd_set_position: return CommandRequest{Command::set_position, axis, true};
     case Key::cmd_jog_plus: return CommandRequest{Command::jog_plus, axis, value};
     case Key::cmd_jog_minus: return CommandRequest{Command::jog_minus, axis, value};
     case Key::host_homing_permit: return CommandRequest{Command::homing_permit, -1, value};
@@ -172,6 +174,8 @@ std::int64_t read_raw(const Register& reg, const ModuleView& view) {
       case Key::axis_index_near_edge: return a.health.index_near_edge ? 1 : 0;
       case Key::axis_gantry_skew: return a.health.gantry_skew_measured ? to_raw(reg, a.health.gantry_skew_mm) : 0;
       case Key::axis_health_warning: return raw_of(view.extras.health_warning[i]);
+      case Key::axis_trust: return raw_of(a.trust);
+      case Key::axis_refcheck_error: return to_raw(reg, a.refcheck_error_mm);
       case Key::axis_homed: return a.homed ? 1 : 0;
       case Key::axis_sensor: return a.sensor ? 1 : 0;
       case Key::axis_busy: return a.busy ? 1 : 0;

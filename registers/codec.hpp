@@ -67,6 +67,8 @@ enum class Command : std::uint8_t {
   home_all, home_axis, abort, reset_alarm, jog_plus, jog_minus, move, homing_permit, lock_settings,
   home_axes,  // cmd.home_axes: one cycle of the named axes
   unhome_axis,  // cmd.unhome.<a>: forget the axis's reference
+  set_position,  // cmd.set_position.<a>: the unhomed axis's coordinate is axis.<a>.target where it stands
+  refcheck_axis,  // cmd.refcheck.<a>: reference check after a restart
 };
 struct CommandRequest {
   Command command = Command::home_all;

@@ -19,6 +19,7 @@ constexpr AlarmConfirm kAlarmConfirm[] = {
      "`axis.<a>.alarm_value` is the travel searched; `homingctl get axis.<a>.sensor` reads 1 while you press the "
      "switch by hand (else wiring or `sensor_nc`); `homingctl trace <a>` shows the sensor never turning on"},
     {homing::AlarmCode::overrun_during_stop,
+     "`axis.<a>.alarm_value` is how far past the trigger the sensor was seen released (about the cam's length); "
      "`homingctl trace <a>`: the sensor turns off again while the axis is still braking; `homingctl check` shows the "
      "stop distance against the cam's length"},
     {homing::AlarmCode::stop_distance_exceeded,

@@ -13,6 +13,7 @@
 #include "homing/settings.hpp"
 #include "homing/sim/config.hpp"
 #include "homing/status.hpp"
+#include "homing/trust.hpp"
 #include "registers/errors.hpp"
 #include "registers/fills.hpp"
 
@@ -106,6 +107,7 @@ constexpr auto kAlarms = values_of(homing::kAlarmInfo);
 constexpr auto kPhases = values_of(homing::kPhaseInfo);
 constexpr auto kSimFaults = values_of(homing::sim::kFaultInfo);
 constexpr auto kHealthWarnings = values_of(homing::kHealthWarningInfo);
+constexpr auto kTrusts = values_of(homing::kTrustInfo);
 // Why a write was refused: the reasons (registers/errors.hpp), then one code
 // per configuration rule at kRuleReasonBase + the rule (homing::CheckRule).
 constexpr auto kRefusalReasons = [] {
@@ -152,6 +154,7 @@ constexpr ValueList kValueLists[] = {
     {"phase", kPhases},
     {"sim_fault", kSimFaults},
     {"health_warning", kHealthWarnings},
+    {"trust", kTrusts},
     {"refusal_reason", kRefusalReasons},
 };
 
@@ -264,6 +267,8 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     // Hard-stop homing by the encoder (docs/homing-methods.md "Hard-stop homing by following error").
     {.pattern = "axis.<a>.stall_detect", .offset = 64, .type = Type::enumeration, .max = last_value(kStallDetects), .fills = fills<&A::stall_detect>, .values = kStallDetects, .description = "hard-stop homing: how the stop is told, the drive's stall input (0) or the encoder's following error (1: the carriage falls behind its steps by more than max_following_error)"},
     {.pattern = "axis.<a>.max_following_error", .offset = 62, .type = Type::i32, .quantity = LEN, .max = kLengthMax, .def = 200, .fills = fills<&A::max_following_error_mm>, .description = "hard-stop homing by following error: the commanded position may lead the encoder by this much before the carriage counts as stopped against the stop"},
+    // Position trust across restarts (docs/homing-methods.md "Position trust and the reference check").
+    {.pattern = "axis.<a>.refcheck_tolerance", .offset = 67, .type = Type::u32, .quantity = LEN, .min = 1, .max = 10'000, .def = 100, .fills = fills<&A::refcheck_tolerance_mm>, .description = "reference check after a restart: the switch edge must be found within this of where the stored position puts it, or the check is refused and a full cycle is needed"},
     {.pattern = "axis.<a>.target", .offset = 60, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .key = Key::host_target, .description = "target of cmd.move.<a> (not persisted)"},
     // input registers: per-axis status
     {.pattern = "axis.<a>.phase", .table = IR, .type = Type::enumeration, .access = Access::r, .max = last_value(kPhases), .key = Key::axis_phase, .values = kPhases, .description = "what the axis is doing"},
@@ -288,6 +293,8 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     {.pattern = "axis.<a>.index_near_edge", .table = IR, .offset = 36, .access = Access::r, .max = 1, .key = Key::axis_index_near_edge, .description = "warning (0/1): the index pulse lies within 10 % of a pitch of the switch edge or of one pitch from it, so switch noise can home one revolution off; move the cam or the encoder's index by about half a pitch"},
     {.pattern = "axis.<a>.gantry_skew", .table = IR, .offset = 37, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_gantry_skew, .description = "last homing, gantry slave: its reference edge minus its master's, each from where its side stood at the start (the squaring before switch_compensation; docs/health.md); 0 on other axes"},
     {.pattern = "axis.<a>.health_warning", .table = IR, .offset = 40, .type = Type::enumeration, .access = Access::r, .max = last_value(kHealthWarnings), .key = Key::axis_health_warning, .values = kHealthWarnings, .description = "what the trend of the homing history says of this axis's switch or gantry (a warning, not an alarm: the axis stays homed; docs/health.md)"},
+    {.pattern = "axis.<a>.trust", .table = IR, .offset = 41, .type = Type::enumeration, .access = Access::r, .max = last_value(kTrusts), .key = Key::axis_trust, .values = kTrusts, .description = "how far the axis's position can be believed: unknown, last_stop_clean (a reference check is offered: cmd.refcheck.<a>), reference_checked, homed_this_power_on"},
+    {.pattern = "axis.<a>.refcheck_error", .table = IR, .offset = 42, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_refcheck_error, .description = "last reference check: where the switch edge was found less where the stored position put it (refused beyond refcheck_tolerance; when the edge was not found at all, as far as the search went)"},
     // discrete inputs
     {.pattern = "axis.<a>.homed", .table = DI, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::axis_homed, .description = "the axis is homed (cleared by an alarm per global.alarm_clears_homed, and when a setting of its home frame changes: home_position, pull_off, switch_compensation, mode, direction, sensor_nc, slave_of, slave_mode)"},
     {.pattern = "axis.<a>.sensor", .table = DI, .offset = 1, .type = Type::boolean, .access = Access::r, .max = 1, .key = Key::axis_sensor, .description = "home sensor active (debounced, polarity applied)"},
@@ -297,6 +304,8 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     {.pattern = "cmd.jog_plus.<a>", .table = CO, .offset = 1, .type = Type::boolean, .access = Access::rw, .max = 1, .key = Key::cmd_jog_plus, .description = "jog positive while 1; 0 stops (reads back the held state)"},
     {.pattern = "cmd.jog_minus.<a>", .table = CO, .offset = 2, .type = Type::boolean, .access = Access::rw, .max = 1, .key = Key::cmd_jog_minus, .description = "jog negative while 1; 0 stops (reads back the held state)"},
     {.pattern = "cmd.unhome.<a>", .table = CO, .offset = 4, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_unhome, .description = "write 1: forget this axis's reference (and its gantry partner's) without moving; refused while it moves or a cycle runs (reads back 0)"},
+    {.pattern = "cmd.set_position.<a>", .table = CO, .offset = 6, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_set_position, .description = "write 1: this unhomed axis's coordinate becomes axis.<a>.target where it stands, without moving (it stays unhomed); refused while homed, moving or a gantry slave; audited with the client (reads back 0)"},
+    {.pattern = "cmd.refcheck.<a>", .table = CO, .offset = 5, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_refcheck, .description = "write 1: reference check of this axis after a restart (axis.<a>.trust last_stop_clean): find its switch edge at latch feedrate near where its stored position puts it; homed when within refcheck_tolerance (reads back 0)"},
     {.pattern = "cmd.move.<a>", .table = CO, .offset = 3, .type = Type::boolean, .access = Access::w, .max = 1, .key = Key::cmd_move, .description = "write 1: move to axis.<a>.target at jog_feedrate (reads back 0)"},
 });
 

@@ -17,6 +17,7 @@ bool is_operating_row(const registers::Register& reg) {
     case Key::cmd_home_all:
     case Key::cmd_home:
     case Key::cmd_unhome:
+    case Key::cmd_refcheck:
     case Key::cmd_abort:
     case Key::cmd_reset_alarm:
     case Key::cmd_jog_plus:

@@ -63,15 +63,7 @@ void ControlLoop::stop() {
 
 void ControlLoop::submit(const homing::Commands& c, bool from_modbus) {
   std::lock_guard lock(mailbox_mutex_);
-  pending_.home_all |= c.home_all;
-  pending_.home_axes |= c.home_axes;
-  pending_.unhome_axes |= c.unhome_axes;
-  pending_.abort |= c.abort;
-  pending_.reset_alarm |= c.reset_alarm;
-  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-    if (c.move_axes & homing::axis_bit(a)) pending_.move_target_mm[a] = c.move_target_mm[a];
-  }
-  pending_.move_axes |= c.move_axes;
+  homing::merge(pending_, c);
   pending_from_modbus_ = pending_from_modbus_ || from_modbus;
 }
 
@@ -97,6 +89,11 @@ void ControlLoop::set_settings(const homing::Settings& settings) {
   std::lock_guard lock(mailbox_mutex_);
   new_settings_ = settings;
   settings_pending_ = true;
+}
+
+void ControlLoop::restore_last_stops(const homing::LastStops& stops) {
+  std::lock_guard lock(mailbox_mutex_);
+  restore_pending_ = stops;
 }
 
 void ControlLoop::set_permit_coil(bool on) {
@@ -179,14 +176,13 @@ LoopStats ControlLoop::stats() const {
 }
 
 // Never blocks: when the server holds the mailbox, its news waits one period.
-// Never blocks: when the server holds the mailbox, its news waits one period.
 // Taken before the machine advances, so that a simulator edit (a carriage
 // placed, a fault) is already in the inputs the commands are judged on.
 void ControlLoop::take_mailbox(Mailbox& out) {
   std::unique_lock lock(mailbox_mutex_, std::try_to_lock);
   if (!lock.owns_lock()) return;
   out.commands = pending_;
-  if (pending_from_modbus_ && (pending_.home_all || pending_.home_axes || pending_.move_axes))
+  if (pending_from_modbus_ && (pending_.home_all || pending_.home_axes || pending_.move_axes || pending_.refcheck_axes))
     modbus_motion_ = true;
   pending_ = homing::Commands{};
   pending_from_modbus_ = false;
@@ -209,6 +205,8 @@ void ControlLoop::take_mailbox(Mailbox& out) {
   loop_permit_ = permit_coil_;
   out.settings_lost = settings_lost_pending_;
   settings_lost_pending_ = false;
+  out.restore = restore_pending_;
+  restore_pending_.reset();
 }
 
 bool ControlLoop::watchdog_expired() const {
@@ -220,7 +218,9 @@ bool ControlLoop::watchdog_expired() const {
 void ControlLoop::run_period(double wall_dt_s) {
   // --time-scale: several engine periods of the nominal length per wall
   // period, so precision does not change with the speed-up.
-  const double sim_dt = wall_dt_s * time_scale_;
+  const bool held_back = wall_dt_s > kSimCatchUpMaxS && has_sim();
+  if (held_back) ++loop_stats_.sim_held_back_periods;
+  const double sim_dt = (held_back ? kSimCatchUpMaxS : wall_dt_s) * time_scale_;
   const double nominal = period_us_ * 1e-6;
   const int steps = sim_dt <= 0 ? 1 : std::max(1, static_cast<int>(std::ceil(sim_dt / nominal - 1e-9)));
   const double dt = sim_dt / steps;
@@ -233,6 +233,7 @@ void ControlLoop::run_period(double wall_dt_s) {
     inputs.commands.jog = loop_jog_;
     inputs.homing_permit = inputs.homing_permit || loop_permit_;
     inputs.settings_lost = mail.settings_lost;
+    inputs.restore = mail.restore;
     inputs.communication_lost = watchdog_expired();
     const std::int64_t t0 = monotonic_ns();
     const homing::StepResult r = engine_.step(settings_, inputs, dt);
@@ -244,6 +245,7 @@ void ControlLoop::run_period(double wall_dt_s) {
     status_events_.observe(r.status, unix_now_ms());
     const bool motion = r.status.homing || r.status.state == homing::MachineState::moving;
     if (!motion && !inputs.commands.home_all && !inputs.commands.home_axes && !inputs.commands.move_axes &&
+        !inputs.commands.refcheck_axes &&
         std::none_of(loop_jog_.begin(), loop_jog_.end(), [](std::int8_t j) { return j != 0; }))
       modbus_motion_ = false;
     engine_us_ += (t1 - t0) / 1000.0;
@@ -319,6 +321,15 @@ void ControlLoop::end_stop_report(bool still_moving) {
   stop_report_.at_rest = !still_moving;
   const homing::Status& st = engine_.status();
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) stop_report_.axes[a].rest_mm = st.axes[a].position_mm;
+  stop_report_.last_stops = homing::last_stops_at_shutdown(settings_, st, outputs_);
+  if (still_moving)
+    for (homing::LastStop& s : stop_report_.last_stops) s.clean = false;
+  if (const homing::sim::SimulatorControls* sim = io_->simulator_controls()) {
+    const homing::sim::SimulatorView view = sim->view();
+    std::array<double, homing::kAxisCount> at{};
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) at[a] = view.axes[a].actual_position_mm;
+    stop_report_.sim_carriages_mm = at;
+  }
 }
 
 void ControlLoop::thread_main() {
@@ -351,6 +362,7 @@ void ControlLoop::thread_main() {
       pending_.home_all = false;
       pending_.home_axes = 0;
       pending_.move_axes = 0;
+      pending_.refcheck_axes = 0;
     }
     run_period((now - last) * 1e-9);
     last = now;

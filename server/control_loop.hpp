@@ -11,6 +11,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 
 #include "status_events.hpp"
 #include <string_view>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "homing/engine.hpp"
+#include "homing/last_stop.hpp"
 #include "homing/machine_io.hpp"
 #include "homing/sim/simulator_controls.hpp"
 #include "trace.hpp"
@@ -43,6 +45,9 @@ struct LoopStats {
   std::array<std::uint64_t, kBuckets> lateness_us_histogram{};
   std::uint64_t periods = 0;
   std::uint64_t late_periods = 0;  // started more than one period after their deadline
+  // Periods in which the simulated machine was held back (ControlLoop::kSimCatchUpMaxS):
+  // the computer could not keep up with --time-scale, so the simulation ran slower.
+  std::uint64_t sim_held_back_periods = 0;
   double max_lateness_us = 0;
   double engine_us_total = 0;
   std::uint64_t engine_steps = 0;
@@ -63,6 +68,12 @@ struct StopReport {
   std::array<Axis, homing::kAxisCount> axes{};
   double machine_s = 0;  // machine time the stop took
   bool at_rest = true;   // false: still moving when the 10 s bound ended the wait
+  // What homingd keeps of each axis for the next start (homing/trust.hpp):
+  // clean only for an axis homed, at rest, with no alarm latched, once the
+  // whole stop came to rest.
+  homing::LastStops last_stops{};
+  // The simulator's carriages where they came to rest (simulator backend only).
+  std::optional<std::array<double, homing::kAxisCount>> sim_carriages_mm;
 };
 
 // Nanoseconds since an arbitrary point (CLOCK_MONOTONIC).
@@ -105,6 +116,10 @@ class ControlLoop {
   // Releases every jog held by an owner (its client disconnected).
   void release_jogs(std::uint64_t owner);
   void set_settings(const homing::Settings& settings);
+  // The last stops kept before this start (homing/trust.hpp), given to the
+  // engine in the next period: an axis whose last stop was clean takes its
+  // stored position and is offered a reference check.
+  void restore_last_stops(const homing::LastStops& stops);
   void set_permit_coil(bool on);
   void raise_settings_lost();
   // The host wrote host.heartbeat (the watchdog only cares that it changes).
@@ -125,6 +140,16 @@ class ControlLoop {
   // Runs one period by hand (tests step the loop without a thread).
   void run_period(double wall_dt_s);
 
+  // The most wall-clock time one period advances a simulated machine. A
+  // period simulates the wall time since the last one times --time-scale,
+  // in steps of the nominal period; when the computer cannot compute that
+  // as fast as it passes (a sanitized build, several time-scaled daemons on
+  // a shared machine), catching it all up would make each period longer than
+  // the one before, without bound, and commands wait for the next period.
+  // Beyond this the simulation falls behind the wall clock instead. Real
+  // hardware is never held back: its time is the wall clock.
+  static constexpr double kSimCatchUpMaxS = 0.05;
+
  private:
   void thread_main();
   void begin_stop_report();
@@ -132,6 +157,7 @@ class ControlLoop {
   struct Mailbox {
     homing::Commands commands{};
     bool settings_lost = false;
+    std::optional<homing::LastStops> restore;
   };
   void take_mailbox(Mailbox& out);
   bool watchdog_expired() const;
@@ -162,6 +188,7 @@ class ControlLoop {
   std::uint64_t next_edit_seq_ = 0;
   bool permit_coil_ = false;
   bool settings_lost_pending_ = false;
+  std::optional<homing::LastStops> restore_pending_;
 
   // Loop-private copies of the mailbox state.
   std::array<std::int8_t, homing::kAxisCount> loop_jog_{};

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "control_loop.hpp"
+#include "last_stops.hpp"
 #include "homing/gpiod/gpiod_io.hpp"
 #include "homing/gpiod/gpiod_lines.hpp"
 #include "homing/sim/simulator_io.hpp"
@@ -62,9 +63,17 @@ std::expected<homing::Settings, std::string> load_settings(persistence::Settings
   return from_raw.settings;
 }
 
-// The GPIO lines requested, or the simulated machine with the table's defaults.
-std::expected<std::unique_ptr<homing::MachineIo>, std::string> open_machine(const Options& opt, const Wiring& wiring) {
-  if (!wiring) return std::make_unique<homing::sim::SimulatorIo>(registers::default_sim_config());
+// The GPIO lines requested, or the simulated machine with the table's
+// defaults, its carriages where they were kept (as a real machine's stay).
+std::expected<std::unique_ptr<homing::MachineIo>, std::string> open_machine(const Options& opt, const Wiring& wiring,
+                                                                           persistence::SettingsStore& store) {
+  if (!wiring) {
+    homing::sim::MachineConfig config = registers::default_sim_config();
+    const persistence::SimCarriages kept = kept_sim_carriages(store);
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+      if (kept[a]) config.axes[a].actual_position_mm = *kept[a];
+    return std::make_unique<homing::sim::SimulatorIo>(config);
+  }
   homing::gpiod::RunOptions run;
   run.control_period_us = opt.period_us;
   run.warn = [](const std::string& m) { spdlog::warn("{}", m); };
@@ -237,13 +246,18 @@ int run_daemon(const Options& opt, const Wiring& wiring) {
   if (!store) return fail_start(store.error());
   auto settings = load_settings(*store, opt, wiring);
   if (!settings) return fail_start(settings.error());
-  auto machine = open_machine(opt, wiring);
+  auto machine = open_machine(opt, wiring, *store);
   if (!machine) return fail_start(machine.error());
 
   ControlLoop loop(*settings, std::move(*machine), opt.period_us, opt.time_scale);
   if (store->settings_lost()) {
     loop.raise_settings_lost();
     loop.run_period(0);  // latched in the snapshot before the first client can read it
+  }
+  // Before anything can move: the clean marks are wiped as they are taken.
+  if (const auto stops = take_last_stops(*store, *settings)) {
+    loop.restore_last_stops(*stops);
+    loop.run_period(0);  // trust shown before the first client can read it
   }
   ModbusService service(service_config(opt, loop, wiring), loop, &*store, *settings);
   auto transports = open_transports(opt, service);
@@ -268,6 +282,7 @@ int run_daemon(const Options& opt, const Wiring& wiring) {
   }
 
   serve(opt, signals, loop, service, *store, *transports, std::move(mqtt), events ? &*events : nullptr);
+  keep_last_stops(*store, loop.stop_report());  // the only place a clean stop is written
   store->close();
   spdlog::info("stopped cleanly");
   return 0;

@@ -68,6 +68,11 @@ class ModbusService final : public RequestHandler {
   // same interlocks, roles and refusals. nullopt: accepted; else the refusal.
   std::optional<registers::Refusal> command(const registers::Register& coil, bool on, const ClientInfo& client);
 
+  // Called by the monitor when an axis's positions_set count moved on: the
+  // coordinate set by hand goes into the audit log (axis.<a>.position, old ->
+  // new) with the client that asked for it last.
+  void audit_position_set(std::size_t axis, double old_mm, double new_mm);
+
   // Called by the monitor with the history summary.
   void set_extras(const registers::StatusExtras& extras);
   homing::Settings settings() const;
@@ -107,6 +112,7 @@ class ModbusService final : public RequestHandler {
   homing::Settings settings_;
   bool locked_ = false;
   registers::HostRegisters host_{};
+  std::array<persistence::ChangeSource, homing::kAxisCount> position_set_by_{};  // under mutex_
   registers::StatusExtras extras_{};
   LineDiagnostics diagnostics_;
   // The last refused write: count (bits 0-15), register (16-31), reason (32-47).

@@ -1,8 +1,11 @@
 // ModbusService: the commands an accepted write carries (coils, cmd.home_axes)
 // handed to the control loop, each logged with the client that sent it.
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "modbus_service.hpp"
+#include "registers/codec.hpp"
+#include "registers/lookup.hpp"
 #include "write_log.hpp"
 
 namespace server {
@@ -22,6 +25,8 @@ std::string_view command_name(registers::Command c) {
     case Command::lock_settings: return "lock_settings";
     case Command::home_axes: return "home_axes";
     case Command::unhome_axis: return "unhome";
+    case Command::set_position: return "set_position";
+    case Command::refcheck_axis: return "refcheck";
   }
   return "?";
 }
@@ -39,6 +44,7 @@ void ModbusService::run_commands(const std::vector<registers::CommandRequest>& c
       case Command::home_axis: c.home_axes |= homing::axis_bit(a); any = true; break;
       case Command::home_axes: c.home_axes |= r.axes; any = true; break;
       case Command::unhome_axis: c.unhome_axes |= homing::axis_bit(a); any = true; break;
+      case Command::refcheck_axis: c.refcheck_axes |= homing::axis_bit(a); any = true; break;
       case Command::abort: c.abort = true; any = true; break;
       case Command::reset_alarm:
         c.reset_alarm = true;
@@ -54,6 +60,14 @@ void ModbusService::run_commands(const std::vector<registers::CommandRequest>& c
         std::lock_guard lock(mutex_);
         c.move_axes |= homing::axis_bit(a);
         c.move_target_mm[a] = host_.target_mm[a];
+        any = true;
+        break;
+      }
+      case Command::set_position: {
+        std::lock_guard lock(mutex_);
+        c.set_position_axes |= homing::axis_bit(a);
+        c.set_position_mm[a] = host_.target_mm[a];
+        position_set_by_[a] = source_of(client);
         any = true;
         break;
       }
@@ -90,6 +104,24 @@ std::optional<registers::Refusal> ModbusService::command(const registers::Regist
   r.message = "the module answered with exception " + std::string(registers::exception_name(r.code));
   r.address = address;
   return r;
+}
+
+void ModbusService::audit_position_set(std::size_t axis, double old_mm, double new_mm) {
+  static const auto name = [](std::size_t a) { return fmt::format("axis.{}.position", homing::kAxisLetters[a]); };
+  const registers::Register* reg = registers::find_register(name(axis));
+  persistence::ChangeSource source;
+  {
+    std::lock_guard lock(mutex_);
+    source = position_set_by_[axis];
+  }
+  // The audit row first: once the log says it, the row is there.
+  if (store_ && reg) {
+    const persistence::Change change{name(axis), registers::to_raw(*reg, old_mm), registers::to_raw(*reg, new_mm)};
+    if (auto r = store_->audit(change, source); !r)
+      spdlog::error("the coordinate of {} set by hand was not audited: {}", homing::kAxisUpper[axis], r.error().message);
+  }
+  spdlog::warn("{} set by hand from {:.3f} to {:.3f} by {} {} (the axis stays unhomed)", homing::kAxisUpper[axis], old_mm,
+               new_mm, source.transport, source.client);
 }
 
 }  // namespace server

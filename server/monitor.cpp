@@ -79,6 +79,13 @@ void Monitor::refresh_diagnostics() {
   extras_.late_p999_us = s.lateness_percentile_us(0.999);
   extras_.late_max_us = s.max_lateness_us;
   extras_.engine_step_ns = s.engine_steps ? s.engine_us_total * 1000.0 / static_cast<double>(s.engine_steps) : 0;
+  if (s.sim_held_back_periods > 0 && !sim_behind_logged_) {
+    sim_behind_logged_ = true;
+    spdlog::warn("the simulated machine fell behind the wall clock: a control period came more than {:.0f} ms after "
+                 "the last (the computer too busy for --time-scale, engine step {:.0f} us, or the process stopped); "
+                 "the simulation catches up no more than that in one period, so it ran slower than asked",
+                 ControlLoop::kSimCatchUpMaxS * 1000, extras_.engine_step_ns / 1000.0);
+  }
   extras_.rss_kb = resident_kb();
   extras_.tcp_clients = tcp_clients_ ? tcp_clients_() : 0;
 }
@@ -154,7 +161,6 @@ void Monitor::judge_health(std::size_t axis, const homing::Settings& settings) {
 }
 
 void Monitor::poll(std::int64_t now_ms) {
-  housekeeping(now_ms);
   const Snapshot snap = loop_.snapshot();
   const homing::Status& st = snap.status;
   if (first_) {
@@ -167,6 +173,10 @@ void Monitor::poll(std::int64_t now_ms) {
   }
   const homing::Settings settings = service_.settings();
   if (events_) events_->take(snap.events, settings);
+  // After the loop's events: a settings change read now comes after every
+  // cycle and alarm this snapshot holds, which may be older than it (this
+  // thread late on a busy machine); the plant gets them in the order they happened.
+  housekeeping(now_ms);
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     const auto& now = st.axes[a].alarm;
     if (now.code != last_.axes[a].alarm.code && now) {
@@ -183,40 +193,93 @@ void Monitor::poll(std::int64_t now_ms) {
   if (st.homing && !last_.homing) {
     run_start_ms_ = now_ms;
     run_axes_ = 0;
-    spdlog::info("homing started");
+    spdlog::info(st.reference_check ? "reference check started" : "homing started");
   }
   if (st.homing) {
     for (std::size_t a = 0; a < homing::kAxisCount; ++a)
       if (st.axes[a].busy) run_axes_ |= homing::axis_bit(a);
   }
   if (!st.homing && last_.homing) {
-    persistence::HomingRun run;
-    run.start_ms = run_start_ms_;
-    run.end_ms = now_ms;
-    run.axes = run_axes_;
-    run.result = 0;
-    if (const int a = homing::reported_alarm_axis(st); a >= 0) {
-      run.result = static_cast<int>(st.axes[static_cast<std::size_t>(a)].alarm.code);
-      run.alarm_axis = a;
-    }
-    if (run.result == 0 && st.global_alarm != homing::AlarmCode::none) run.result = static_cast<int>(st.global_alarm);
-    for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-      if (!(run_axes_ & homing::axis_bit(a))) continue;
-      run.axis[a] = axis_record(run.result == 0, st.axes[a], now_ms - run_start_ms_);
-      if (run.axis[a].excluded == persistence::Excluded::not_homed_before)
-        spdlog::info("home correction of {} not counted in its statistics: {} ({:+.3f} {} is where it stood)",
-                     homing::kAxisUpper[a], persistence::excluded_text(run.axis[a].excluded),
-                     st.axes[a].home_correction_mm, homing::axis_unit(settings, a));
-    }
-    if (run.result == 0) spdlog::info("homing done in {} ms", now_ms - run_start_ms_);
-    else spdlog::warn("homing ended with alarm {}", homing::alarm_name(static_cast<homing::AlarmCode>(run.result)));
-    if (store_)
-      if (auto r = store_->record_homing_run(run); !r) spdlog::error("history not recorded: {}", r.error().message);
-    for (std::size_t a = 0; a < homing::kAxisCount; ++a)
-      if (run.axis[a].health) judge_health(a, settings);
-    refresh_summary();
+    // A reference check is no homing cycle: it measured nothing of the switch
+    // to keep in the history, only whether the axis is where it was kept.
+    if (last_.reference_check) report_refcheck(st, settings);
+    else record_run(st, settings, now_ms);
   }
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+    if (st.axes[a].positions_set != last_.axes[a].positions_set)
+      service_.audit_position_set(a, last_.axes[a].position_mm, st.axes[a].position_mm);
+  keep_sim_carriages(snap, now_ms);
   last_ = st;
+}
+
+void Monitor::record_run(const homing::Status& st, const homing::Settings& settings, std::int64_t now_ms) {
+  persistence::HomingRun run;
+  run.start_ms = run_start_ms_;
+  run.end_ms = now_ms;
+  run.axes = run_axes_;
+  run.result = 0;
+  if (const int a = homing::reported_alarm_axis(st); a >= 0) {
+    run.result = static_cast<int>(st.axes[static_cast<std::size_t>(a)].alarm.code);
+    run.alarm_axis = a;
+  }
+  if (run.result == 0 && st.global_alarm != homing::AlarmCode::none) run.result = static_cast<int>(st.global_alarm);
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    if (!(run_axes_ & homing::axis_bit(a))) continue;
+    run.axis[a] = axis_record(run.result == 0, st.axes[a], now_ms - run_start_ms_);
+    if (run.axis[a].excluded == persistence::Excluded::not_homed_before)
+      spdlog::info("home correction of {} not counted in its statistics: {} ({:+.3f} {} is where it stood)",
+                   homing::kAxisUpper[a], persistence::excluded_text(run.axis[a].excluded),
+                   st.axes[a].home_correction_mm, homing::axis_unit(settings, a));
+  }
+  if (run.result == 0) spdlog::info("homing done in {} ms", now_ms - run_start_ms_);
+  else spdlog::warn("homing ended with alarm {}", homing::alarm_name(static_cast<homing::AlarmCode>(run.result)));
+  if (store_)
+    if (auto r = store_->record_homing_run(run); !r) spdlog::error("history not recorded: {}", r.error().message);
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+    if (run.axis[a].health) judge_health(a, settings);
+  refresh_summary();
+}
+
+// Each axis checked: accepted and homed, or refused with the figure (an
+// alarm that stopped the check is logged as every alarm is).
+void Monitor::report_refcheck(const homing::Status& st, const homing::Settings& settings) {
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    if (!(run_axes_ & homing::axis_bit(a))) continue;
+    const homing::AxisStatus& x = st.axes[a];
+    const auto unit = homing::axis_unit(settings, a);
+    const double tolerance = settings.axes[a].refcheck_tolerance_mm;
+    if (x.alarm || st.global_alarm != homing::AlarmCode::none)
+      spdlog::warn("reference check of {} stopped by an alarm: {} is not homed", homing::kAxisUpper[a],
+                   homing::kAxisUpper[a]);
+    else if (x.trust == homing::Trust::reference_checked)
+      spdlog::info("reference check of {} accepted: its switch edge lies {:+.3f} {} from where its stored position "
+                   "put it (tolerance {:.3f} {}); {} is homed",
+                   homing::kAxisUpper[a], x.refcheck_error_mm, unit, tolerance, unit, homing::kAxisUpper[a]);
+    else
+      spdlog::warn("reference check of {} refused: its switch edge lies {:+.3f} {} from where its stored position "
+                   "put it (tolerance {:.3f} {}): the carriage moved or lost steps while the module was off, or its "
+                   "switch moved; home {} with a full cycle",
+                   homing::kAxisUpper[a], x.refcheck_error_mm, unit, tolerance, unit, homing::kAxisUpper[a]);
+  }
+}
+
+// The simulator keeps its carriages across a restart, as a real machine
+// does, even one that ends without a clean shutdown: each time they come to
+// rest somewhere new (a cycle, a jog, a carriage placed), at most 5 times a second.
+void Monitor::keep_sim_carriages(const Snapshot& snap, std::int64_t now_ms) {
+  if (!store_ || !snap.has_sim || now_ms - carriages_kept_ms_ < 200) return;
+  std::array<double, homing::kAxisCount> at{};
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    if (snap.sim.axes[a].moving) return;
+    at[a] = snap.sim.axes[a].actual_position_mm;
+  }
+  if (carriages_kept_ == at) return;
+  carriages_kept_ms_ = now_ms;
+  if (auto r = store_->record_sim_carriages(at); !r) {
+    spdlog::warn("simulator carriages not kept: {}", r.error().message);
+    return;
+  }
+  carriages_kept_ = at;
 }
 
 }  // namespace server

@@ -3,9 +3,11 @@
 // and command results, records each homing run in the history, refreshes
 // the home-correction summary that the input registers show, and after each
 // run judges the health trend of its axes (health_trend.hpp).
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <thread>
 
 #include "control_loop.hpp"
@@ -34,6 +36,9 @@ class Monitor {
   void judge_health(std::size_t axis, const homing::Settings& settings);
   void refresh_diagnostics();
   void housekeeping(std::int64_t now_ms);
+  void record_run(const homing::Status& st, const homing::Settings& settings, std::int64_t now_ms);
+  void report_refcheck(const homing::Status& st, const homing::Settings& settings);
+  void keep_sim_carriages(const Snapshot& snap, std::int64_t now_ms);
 
   ControlLoop& loop_;
   ModbusService& service_;
@@ -46,6 +51,10 @@ class Monitor {
   std::int64_t run_start_ms_ = 0;
   homing::AxisMask run_axes_ = 0;
   PlantEvents* events_ = nullptr;
+  bool sim_behind_logged_ = false;  // LoopStats::sim_held_back_periods: said once
+  // The simulator's carriages as last written to the store, and when.
+  std::optional<std::array<double, homing::kAxisCount>> carriages_kept_;
+  std::int64_t carriages_kept_ms_ = 0;
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };

@@ -27,16 +27,20 @@ void StatusEvents::observe(const homing::Status& now, std::int64_t now_ms) {
   if (now.global_alarm != homing::AlarmCode::none && now.global_alarm != last_.global_alarm)
     add({.kind = StatusEventKind::alarm_raised, .code = now.global_alarm, .time_ms = now_ms});
   if (last_.alarm && !now.alarm) add({.kind = StatusEventKind::alarms_reset, .time_ms = now_ms});
-  if (now.homing) {
-    if (!last_.homing) {
+  // A reference check is no homing cycle (docs/homing-methods.md): its
+  // alarms are news, the check itself is not reported as a cycle.
+  const bool cycle_now = now.homing && !now.reference_check;
+  const bool cycle_before = last_.homing && !last_.reference_check;
+  if (cycle_now) {
+    if (!cycle_before) {
       cycle_start_ms_ = now_ms;
       cycle_axes_ = 0;
     }
     for (std::size_t a = 0; a < homing::kAxisCount; ++a)
       if (now.axes[a].busy) cycle_axes_ |= homing::axis_bit(a);
-    if (!last_.homing) add({.kind = StatusEventKind::cycle_started, .axes = cycle_axes_, .time_ms = now_ms});
+    if (!cycle_before) add({.kind = StatusEventKind::cycle_started, .axes = cycle_axes_, .time_ms = now_ms});
   }
-  if (!now.homing && last_.homing) {
+  if (!cycle_now && cycle_before) {
     StatusEvent e{.kind = StatusEventKind::cycle_ended, .axes = cycle_axes_, .time_ms = now_ms,
                   .duration_ms = now_ms - cycle_start_ms_};
     if (const int a = homing::reported_alarm_axis(now); a >= 0) {

@@ -1,7 +1,7 @@
 #pragma once
 // What changed in the engine's status from one control period to the next
 // that the plant must hear of (an alarm raised, alarms reset, a homing cycle
-// started or ended), recorded by the control loop every period into a ring
+// started or ended; a reference check is no homing cycle), recorded by the control loop every period into a ring
 // that the snapshot carries. Readers that sample the snapshot now and then
 // (the monitor every 10 ms) still see an alarm raised and reset between two
 // of their looks.

@@ -289,6 +289,19 @@ std::optional<std::string> check_wiring(const BackendConfig& config, const homin
                            letter(a), letter(mi), lower(a));
       continue;  // moved by the master's output; its switch is read on the master's home line
     }
+    // No line carries an encoder's position: such an axis could only ever end
+    // in encoder_fault, so it is refused here, by name, before anything moves.
+    if (homing::needs_signal(s, homing::Signal::absolute_encoder)) {
+      if (s.mode == HomingMode::hard_stop)
+        return fmt::format("axis.{0}.stall_detect is 1 (following error: the encoder tells the stop) but the GPIO "
+                           "backend reads no encoder; wire the drive's stall output as 'stall' in [gpiod.axes.{1}] "
+                           "and set axis.{0}.stall_detect = 0",
+                           lower(a), letter(a));
+      return fmt::format("axis.{0}.mode {1} reads an absolute encoder but the GPIO backend reads no encoder; give "
+                         "{2} a method without one (manual 1, a switch 2-4, 7, 8, 11, a hard stop 9 on the stall "
+                         "input, its drive 10)",
+                         lower(a), static_cast<int>(s.mode), letter(a));
+    }
     // Every line the axis's method needs (modes.hpp, with the stop detection
     // its stall_detect chooses), in the table's order.
     for (const homing::SignalInfo& sig : homing::kSignalInfo) {

@@ -39,15 +39,32 @@ TEST_CASE("hard-stop homing without a stall line is refused by the wiring check,
   CHECK_FALSE(homing::gpiod::check_wiring(fixture::config(kWithStall.c_str()), hard_stop_on_x()));
 }
 
-TEST_CASE("hard-stop homing by following error needs no stall line: the wiring check asks for what stall_detect "
-          "chooses") {
+TEST_CASE("hard-stop homing by following error is refused by the wiring check: no GPIO line carries an encoder") {
   homing::Settings s = hard_stop_on_x();
   s.axes[0].stall_detect = homing::StallDetect::following_error;
-  CHECK_FALSE(homing::gpiod::check_wiring(fixture::config(), s));
-  // The encoder is no GPIO line: this backend reports no position, so such an
-  // axis ends its push at encoder_fault before it moves (docs/homing-methods.md).
+  // With or without a stall line: what stall_detect chooses is the encoder.
+  for (const auto& config : {fixture::config(), fixture::config(kWithStall.c_str())}) {
+    const auto problem = homing::gpiod::check_wiring(config, s);
+    REQUIRE(problem);
+    CHECK_THAT(*problem, Catch::Contains("axis.x.stall_detect is 1 (following error: the encoder tells the stop) but "
+                                         "the GPIO backend reads no encoder"));
+    CHECK_THAT(*problem, Catch::Contains("set axis.x.stall_detect = 0"));
+  }
+  // The backend reports no position: an axis let through would end in encoder_fault.
   fixture::Backend b(fixture::config());
   CHECK_FALSE(b.period(Outputs{}, kMs).axes[0].absolute_valid);
+}
+
+TEST_CASE("the absolute modes are refused by the wiring check naming the axis and the methods that need no encoder") {
+  for (const homing::HomingMode m : {homing::HomingMode::absolute, homing::HomingMode::absolute_final}) {
+    homing::Settings s;
+    s.axes[1].mode = m;
+    const auto problem = homing::gpiod::check_wiring(fixture::config(), s);
+    REQUIRE(problem);
+    CHECK_THAT(*problem, Catch::Contains("axis.y.mode " + std::to_string(static_cast<int>(m)) +
+                                         " reads an absolute encoder but the GPIO backend reads no encoder"));
+    CHECK_THAT(*problem, Catch::Contains("give Y a method without one"));
+  }
 }
 
 TEST_CASE("a stall line on a line another signal uses is refused before the hardware is touched") {

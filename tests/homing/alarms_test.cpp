@@ -2,6 +2,8 @@
 // reset; all motion stopped while latched.
 #include <catch2/catch.hpp>
 
+#include <fmt/format.h>
+
 #include "rig.hpp"
 #include "truth.hpp"
 
@@ -76,6 +78,11 @@ SCENARIO("overrun_during_stop: a trigger cam shorter than the stop distance", "[
   CHECK(r.axis(0).alarm.code == AlarmCode::overrun_during_stop);
   CHECK(r.axis(0).alarm.phase == Phase::stop);
   CHECK(text_of(r, 0).find("shorter than the stop distance") != std::string::npos);
+  // The value: seen released about the cam and its hysteresis past the trigger.
+  CHECK(r.axis(0).alarm.value > 0.2);
+  CHECK(r.axis(0).alarm.value < 0.4);
+  CHECK(text_of(r, 0).find(fmt::format("released {:.3f} mm after the trigger", r.axis(0).alarm.value)) !=
+        std::string::npos);
   check_latched_until_reset(r, 0, AlarmCode::overrun_during_stop);
 }
 

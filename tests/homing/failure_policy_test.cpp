@@ -240,6 +240,36 @@ SCENARIO("return_to_start: an axis whose seek ran out without its sensor stays, 
   for (std::size_t a : {Y, A, Z}) CHECK(r.actual(a) == Approx(start[a]).margin(1e-6));
 }
 
+SCENARIO("return_to_start: an axis the cycle found on a limit switch stays, the others go back", "[failure_policy][limits]") {
+  // Z rests on its positive limit switch and homes away from it: its way
+  // back would end on the switch it stood on (campaign seed 162: the way
+  // back met the switch and stopped every axis).
+  Rig r = machine(FailurePolicy::return_to_start);
+  r.settings.axes[Z].limits_fitted = true;
+  r.settings.axes[Z].limit_overtravel_mm = 1;
+  r.machine.axes[Z].limit_min_mm = -8;
+  r.machine.axes[Z].hard_stop_min_mm = -10;
+  r.machine.axes[Z].limit_max_mm = 39.5;
+  x_sensor_out_of_reach(r);
+  r.step();
+  REQUIRE(r.sim().limit_active(Z, true));
+  std::array<double, kAxisCount> start{};
+  for (std::size_t a = 0; a < kAxisCount; ++a) start[a] = r.actual(a);
+  r.pending.home_all = true;
+  r.step();
+  REQUIRE(r.status().last_command_result == CommandResult::accepted);
+  REQUIRE(r.run_until([&] { return r.status().sequence_step == 2; }, 60));
+  const double z_homed_at = r.actual(Z);
+  until_alarm_on(r, X);
+  until_cycle_over(r);
+  CHECK(r.axis(X).alarm.code == AlarmCode::sensor_not_found);
+  CHECK(r.status().first_alarm_axis == static_cast<std::int8_t>(X));
+  CHECK(r.actual(Z) == Approx(z_homed_at).margin(1e-9));
+  CHECK_FALSE(r.sim().limit_active(Z, true));
+  for (std::size_t a : {Y, A}) CHECK(r.actual(a) == Approx(start[a]).margin(1e-6));
+  CHECK_FALSE(r.axis(Z).alarm);
+}
+
 SCENARIO("return_to_start with alarm_clears_homed off: Z, homed in step 1, goes back and is no longer homed",
          "[failure_policy]") {
   Rig r = machine(FailurePolicy::return_to_start);

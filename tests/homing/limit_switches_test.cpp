@@ -2,6 +2,8 @@
 // end-of-travel limit switches as hard limits (docs/limit-switches.md).
 #include <catch2/catch.hpp>
 
+#include <cmath>
+
 #include "homing/settings_check.hpp"
 #include "rig.hpp"
 
@@ -121,6 +123,35 @@ SCENARIO("home_cam without limit switches is refused before anything moves", "[l
   CHECK(g->rule == CheckRule::limit_overtravel_too_short);
 }
 
+SCENARIO("a reset in the very period a limit switch trips does not clear that alarm", "[limits][hard_limit][alarms]") {
+  // The operator presses reset (for an older alarm) as the carriage meets
+  // the switch: the new alarm was never shown, so it stays (seed 2818140234:
+  // the cycle ended stopped with no alarm at all).
+  auto jog_rig = [] {
+    Rig r = cam_rig(99, 10, 20);
+    r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+    r.step();
+    r.jog(0, +1);
+    return r;
+  };
+  Rig probe = jog_rig();
+  REQUIRE(probe.run_until([&] { return probe.status().alarm; }, 10));
+  const std::uint64_t trip_period = probe.periods;
+
+  Rig r = jog_rig();
+  while (r.periods + 1 < trip_period) r.step();
+  r.pending.reset_alarm = true;
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  CHECK(r.axis(0).alarm.code == AlarmCode::limit_switch);
+  CHECK(r.status().alarm);
+  r.release_jogs();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(r.actual(0) < 110);  // it stopped for the alarm the reset did not clear
+  r.reset_alarm();  // once seen, a reset clears it
+  CHECK_FALSE(r.status().alarm);
+}
+
 SCENARIO("a jog onto a limit switch stops with limit_switch, within its acceleration, and jogs away only",
          "[limits][hard_limit][alarms]") {
   Rig r = cam_rig(95, 10, 20);
@@ -147,4 +178,80 @@ SCENARIO("a jog onto a limit switch stops with limit_switch, within its accelera
   r.release_jogs();
   r.run_until([&] { return !r.any_moving(); }, 5);
   CHECK_FALSE(r.status().alarm);
+}
+
+SCENARIO("a homing cycle started on a tripped limit switch does not drive further onto it",
+         "[limits][home_cam][alarms]") {
+  // The latch of the first cycle runs into the negative limit switch
+  // (limit_in_homing) and brakes past it, still on the cam. After the reset
+  // the switch is still active and tripped; the next cycle, starting on the
+  // cam, latches toward it again: it must stop there with limit_in_homing at
+  // once, not latch on toward the mechanical stop (campaign seed 97).
+  Rig r = cam_rig(50, -95, -90, CamEdge::ahead);
+  r.machine.axes[0].limit_min_mm = -93;
+  r.step();
+  REQUIRE_FALSE(r.home_all());
+  REQUIRE(r.axis(0).alarm.code == AlarmCode::limit_in_homing);
+  REQUIRE(r.actual(0) < -93);
+  r.reset_alarm();
+  REQUIRE_FALSE(r.status().alarm);
+  const double x0 = r.actual(0);
+  CHECK_FALSE(r.home_all());
+  CHECK(r.axis(0).alarm.code == AlarmCode::limit_in_homing);
+  CHECK(r.axis(0).alarm.phase == Phase::cam_latch);
+  // Within the stop from latch feedrate (1 mm/s at 500 mm/s²) and a period of travel.
+  CHECK(x0 - r.actual(0) < 0.01);
+}
+
+SCENARIO("a homing phase never starts toward an active limit switch: limit_in_homing before it moves",
+         "[limits][home_cam][alarms]") {
+  // As a jog or a move toward an active limit switch is refused, a latch,
+  // pull-off or final move that would start toward one raises limit_in_homing
+  // without a period of motion: cycle after cycle started there, the carriage
+  // would otherwise creep deeper past the switch (campaign seed 1602).
+  Rig r = cam_rig(50, -95, -90, CamEdge::ahead);
+  r.machine.axes[0].limit_min_mm = -93;
+  r.step();
+  REQUIRE_FALSE(r.home_all());
+  REQUIRE(r.axis(0).alarm.code == AlarmCode::limit_in_homing);
+  for (int cycle = 0; cycle < 3; ++cycle) {
+    r.reset_alarm();
+    REQUIRE_FALSE(r.status().alarm);
+    const double x0 = r.actual(0);
+    CHECK_FALSE(r.home_all());
+    CHECK(r.axis(0).alarm.code == AlarmCode::limit_in_homing);
+    CHECK(r.axis(0).alarm.phase == Phase::cam_latch);
+    CHECK(std::abs(r.actual(0) - x0) <= 1e-9);
+  }
+}
+
+SCENARIO("a move that comes to rest on a limit switch in the period it reaches it still raises limit_switch",
+         "[limits][hard_limit][alarms]") {
+  // The target 0.01 mm past the switch and a control period 10 ms late as the
+  // carriage gets there: the move arrives within the period in which it
+  // reaches the switch, so the next period reads the switch active with the
+  // axis already at rest (campaign seed 13003772: 0.6 mm past the switch at
+  // 900 mm/s). The trip must show all the same.
+  Rig r = cam_rig(95, 10, 20);
+  r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+  r.next_dt = [&] { return r.sim().actual_position_mm(0) > 99 ? 0.01 : 0.001; };
+  r.step();
+  const double target = r.axis(0).position_mm + (100 - r.actual(0)) + 0.01;
+  r.move(0, target);
+  REQUIRE(r.status().last_command_result == CommandResult::accepted);
+  r.run_until([&] { return !r.any_moving() && r.axis(0).phase != Phase::move; }, 10);
+  r.run_for(0.01);
+  REQUIRE(r.actual(0) >= 100);  // on the switch
+  CHECK(r.axis(0).alarm.code == AlarmCode::limit_switch);
+  // Tripped: further onto it is refused, away is allowed.
+  r.reset_alarm();
+  r.jog(0, +1);
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::refused_hard_limit);
+  r.release_jogs();
+  r.step();
+  r.jog(0, -1);
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  r.release_jogs();
 }

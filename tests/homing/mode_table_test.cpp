@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "homing/last_stop.hpp"
 #include "rig.hpp"
 #include "truth.hpp"
 
@@ -199,6 +200,43 @@ TEST_CASE("every mode gives the axis the coordinate its row defines", "[modes][t
           CHECK(offset == Approx(s.home_position_mm - rest).margin(1e-9));
           break;
         }
+      }
+    }
+  }
+}
+
+TEST_CASE("after a clean stop and a restart, every mode whose row has a switch edge passes the reference check and every other mode is refused it",
+          "[modes][table][trust]") {
+  for (const Variant& v : variants()) {
+    const ModeRow& row = *v.row;
+    DYNAMIC_SECTION(variant_name(v)) {
+      Rig before = rig_for(row, v.detect);
+      before.step();
+      REQUIRE(before.home_all());
+      const LastStops stops = last_stops_at_shutdown(before.settings, before.status(), before.engine.outputs());
+      const double offset = before.axis(0).position_mm - before.actual(0);
+      // The same machine started again: the carriage where it was, the last stops given.
+      Rig r = rig_for(row, v.detect);
+      r.machine.axes[0].actual_position_mm = before.actual(0);
+      r.restore = stops;
+      r.step();
+      const bool homes = mode_homes(row.value);
+      CHECK(r.axis(0).trust == (homes ? Trust::last_stop_clean : Trust::unknown));
+      r.pending.refcheck_axes = axis_bit(0);
+      r.step();
+      const CommandResult result = r.status().last_command_result;
+      r.run_until([&] { return !r.status().homing && !r.any_moving(); }, 60);
+      if (refcheck_edge(row) != RefcheckEdge::none) {
+        CHECK(result == CommandResult::accepted);
+        CHECK(r.axis(0).trust == Trust::reference_checked);
+        CHECK(r.axis(0).homed);
+        CHECK(std::abs(r.axis(0).refcheck_error_mm) <= r.settings.axes[0].refcheck_tolerance_mm);
+        CHECK(r.actual(0) == Approx(before.actual(0)).margin(1e-9));
+        CHECK(r.axis(0).position_mm - r.actual(0) == Approx(offset).margin(r.settings.axes[0].refcheck_tolerance_mm));
+      } else {
+        CHECK(result == (homes ? CommandResult::refused_no_switch_edge : CommandResult::refused_invalid));
+        CHECK(r.actual(0) == before.actual(0));
+        CHECK_FALSE(r.status().homing);
       }
     }
   }

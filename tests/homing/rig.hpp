@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 
 #include "homing/engine.hpp"
 #include "homing/sim/simulator.hpp"
@@ -39,6 +40,7 @@ inline AxisSettings typical_axis() {
   s.stall_timeout_ms = 120'000;  // hard-stop homing: 2 min of pushing at latch feedrate
   s.max_following_error_mm = 0.2;  // hard-stop homing by following error (stall_detect following_error)
   s.drive_home_timeout_s = 30;  // drive mode: the drive's own homing (see typical_sim_axis) takes ~10 s
+  s.refcheck_tolerance_mm = 0.1;  // reference check after a restart (homing/trust.hpp)
   return s;
 }
 
@@ -67,6 +69,7 @@ struct Rig {
   std::function<double()> next_dt;  // random period lengths, when set
   Commands pending{};  // one-period requests, cleared after each step
   Commands held{};     // levels held every period (jog), merged into each step
+  std::optional<LastStops> restore;  // the runtime's record of the last stops, given in the next step only
   double ran_dt_s = 0.001;  // length of the period the simulator last ran
   Inputs last_inputs{};
   std::uint64_t periods = 0;
@@ -97,6 +100,8 @@ struct Rig {
     in.commands = pending;
     merge_held(in.commands);
     pending = Commands{};
+    in.restore = restore;
+    restore.reset();
     tweak_inputs(in);
     last_inputs = in;
     const StepResult r = engine.step(settings, in, ran_dt_s);

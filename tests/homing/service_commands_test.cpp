@@ -3,6 +3,9 @@
 // may only be homed as a whole (global.single_axis_homing off).
 #include <catch2/catch.hpp>
 
+#include <cmath>
+#include <limits>
+
 #include "rig.hpp"
 
 using namespace rig;
@@ -111,4 +114,88 @@ SCENARIO("an axis's own allowed_without_homing overrides the global one, each wa
   r.settings.axes[Z].allowed_without_homing = AxisAllowedWithoutHoming::all;
   r.step();
   CHECK((r.status().interlocks & interlock::not_homed) == 0);
+}
+
+namespace {
+void set_position(Rig& r, std::size_t axis, double mm) {
+  r.pending.set_position_axes = axis_bit(axis);
+  r.pending.set_position_mm[axis] = mm;
+  r.step();
+}
+}  // namespace
+
+SCENARIO("setting an unhomed axis's position gives it that coordinate where it stands, without moving, still "
+         "unhomed",
+         "[service]") {
+  Rig r;
+  r.step();
+  const double x_at = r.actual(X);
+  const auto sets = r.axis(X).positions_set;
+  const std::uint32_t before = r.status().command_count;
+  set_position(r, X, 42.5);
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  CHECK(r.status().command_count == before + 1);
+  CHECK(r.axis(X).position_mm == Approx(42.5).margin(1e-9));
+  CHECK(r.axis(X).positions_set == sets + 1);
+  CHECK_FALSE(r.axis(X).homed);  // the technician's word, not a reference
+  r.run_for(0.2);
+  CHECK(r.actual(X) == x_at);
+  CHECK_FALSE(r.any_moving());
+  // A jog then counts from the coordinate set (allowed without homing here).
+  r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+  r.jog(X, +1);
+  r.run_for(0.3);
+  r.release_jogs();
+  REQUIRE(r.run_until([&] { return !r.any_moving(); }, 2));
+  CHECK(r.axis(X).position_mm - 42.5 == Approx(r.actual(X) - x_at).margin(1e-6));
+}
+
+SCENARIO("setting the position of a homed axis is refused_homed and changes nothing", "[service]") {
+  Rig r;
+  REQUIRE(r.home_all());
+  const double at = r.axis(X).position_mm;
+  const auto sets = r.axis(X).positions_set;
+  set_position(r, X, 100);
+  CHECK(r.status().last_command_result == CommandResult::refused_homed);
+  CHECK(r.axis(X).position_mm == at);
+  CHECK(r.axis(X).homed);
+  CHECK(r.axis(X).positions_set == sets);
+  // Unhomed first, it is taken.
+  unhome(r, axis_bit(X));
+  set_position(r, X, 100);
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  CHECK(r.axis(X).position_mm == Approx(100).margin(1e-9));
+}
+
+SCENARIO("setting the position is refused busy while the axis jogs, refused for a bad number, and changes nothing",
+         "[service]") {
+  Rig r;
+  r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+  r.step();
+  set_position(r, X, std::numeric_limits<double>::quiet_NaN());
+  CHECK(r.status().last_command_result == CommandResult::refused_invalid);
+  r.jog(X, +1);
+  REQUIRE(r.run_until([&] { return r.any_moving(); }, 1));
+  const double believed = r.axis(X).position_mm;
+  set_position(r, X, 7);
+  CHECK(r.status().last_command_result == CommandResult::refused_busy);
+  CHECK(std::abs(r.axis(X).position_mm - 7) > 0.5);
+  CHECK(std::abs(r.axis(X).position_mm - believed) < 0.1);  // went on counting from where it was
+}
+
+SCENARIO("a gantry's position is set through its master, both sides taking it, and refused on the slave",
+         "[service][gantry]") {
+  Rig r;
+  r.settings.axes[B] = typical_axis();
+  r.settings.axes[B].slave_of = static_cast<std::uint8_t>(Y + 1);
+  r.add_axis(Y, 2);
+  r.step();
+  set_position(r, B, 5);
+  CHECK(r.status().last_command_result == CommandResult::refused_slave_axis);
+  set_position(r, Y, 5);
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  CHECK(r.axis(Y).position_mm == Approx(5).margin(1e-9));
+  CHECK(r.axis(B).position_mm == Approx(5).margin(1e-9));
+  CHECK_FALSE(r.axis(Y).homed);
+  CHECK_FALSE(r.axis(B).homed);
 }

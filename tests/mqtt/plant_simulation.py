@@ -9,7 +9,12 @@ that ran has its start and its end. Prints the figures; exits non-zero on a
 missing event. Bounded: N modules, C cycles each, a time limit for the whole.
 
 usage: plant_simulation.py HOMINGD PYTHON_DIR [--modules N] [--cycles C] [--time-limit-s S]"""
-import argparse, os, signal, socket, subprocess, sys, tempfile, time
+import argparse, os, sys, tempfile, time
+
+from pymodbus.client import ModbusTcpClient
+
+from e2e_support import (Broker, alias_names, free_port, import_sparkplug, ncmd, shut_down, sparkplug_host,
+                         start_homingd, wait_until)
 
 ap = argparse.ArgumentParser()
 ap.add_argument("homingd"); ap.add_argument("pydir")
@@ -17,62 +22,30 @@ ap.add_argument("--modules", type=int, default=6)
 ap.add_argument("--cycles", type=int, default=4)
 ap.add_argument("--time-limit-s", type=float, default=120)
 args = ap.parse_args()
-sys.path.insert(0, args.pydir)
-import sparkplug_b_pb2 as spb  # noqa: E402
-import paho.mqtt.client as paho  # noqa: E402
-from pymodbus.client import ModbusTcpClient  # noqa: E402
-
-def free_port():
-    s = socket.socket(); s.bind(("127.0.0.1", 0)); p = s.getsockname()[1]; s.close(); return p
-
-def wait_until(pred, timeout):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if pred(): return True
-        time.sleep(0.05)
-    return pred()
+import_sparkplug(args.pydir)
 
 started = time.monotonic()
 work = tempfile.mkdtemp(prefix="plant-")
-broker_port = free_port()
-conf = os.path.join(work, "mosquitto.conf")
-with open(conf, "w") as f:
-    f.write(f"listener {broker_port} 127.0.0.1\nallow_anonymous true\npersistence false\nmax_queued_messages 100000\n")
-broker = subprocess.Popen(["/usr/sbin/mosquitto", "-c", conf], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+broker = Broker(work, "allow_anonymous true\npersistence false\nmax_queued_messages 100000\n")
 
 births, events, counts = {}, {}, {"NBIRTH": 0, "NDATA": 0, "bytes": 0}
-sub = paho.Client(client_id="plant-host")
-def on_message(_c, _u, msg):
-    parts = msg.topic.split("/")
-    kind, node = parts[2], parts[3]
+def on_payload(kind, node, p, msg):
     counts[kind] = counts.get(kind, 0) + 1
     counts["bytes"] += len(msg.payload)
-    p = spb.Payload(); p.ParseFromString(msg.payload)
     if kind == "NBIRTH":
-        births[node] = {m.alias: m.name for m in p.metrics if m.HasField("alias")}
+        births[node] = alias_names(p)
     elif kind == "NDATA" and node in births:
         ev = {births[node].get(m.alias): m for m in p.metrics}
         if "event/id" in ev:
             events.setdefault(node, []).append((ev["event/id"].long_value, ev["event/kind"].string_value))
-sub.on_message = on_message
-def try_connect():
-    try:
-        return sub.connect("127.0.0.1", broker_port) == 0
-    except OSError:
-        return False
-assert wait_until(try_connect, 10), "mosquitto did not start"
-sub.subscribe("spBv1.0/plant/#", qos=1)
-sub.loop_start()
+sub = sparkplug_host("plant-host", broker, on_payload)
 
 modules = []
 try:
     for i in range(args.modules):
         port = free_port()
         node = f"cell{i + 1}"
-        p = subprocess.Popen([args.homingd, "--tcp", f"127.0.0.1:{port}", "--db", os.path.join(work, node + ".db"),
-                              "--rt-priority", "0", "--time-scale", "20", "--mqtt", f"mqtt://127.0.0.1:{broker_port}",
-                              "--mqtt-group", "plant", "--mqtt-node", node, "--mqtt-commands"],
-                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        p = start_homingd(args.homingd, port, os.path.join(work, node + ".db"), broker.url(), node, "--mqtt-commands")
         modules.append((node, port, p))
     ok = wait_until(lambda: len(births) == args.modules, 30)
     print(f"[plant] {len(births)} of {args.modules} modules born")
@@ -103,8 +76,7 @@ try:
             before[node] = cycles_done(c)
         for node, c in clients.items():
             if k % 2 == 0:
-                cmd = spb.Payload(); m = cmd.metrics.add(); m.name = "cmd/home_all"; m.datatype = spb.Boolean; m.boolean_value = True
-                sub.publish(f"spBv1.0/plant/NCMD/{node}", cmd.SerializeToString(), qos=1)
+                ncmd(sub, node, "cmd/home_all")
             else:
                 try:
                     c.write_coil(0, True, slave=1)
@@ -136,14 +108,5 @@ try:
         print("[plant] MISSING " + line)
     ok = ok and not missing and total_cycles == args.modules * args.cycles
 finally:
-    for _, _, p in modules:
-        if p.poll() is None:
-            p.send_signal(signal.SIGTERM)
-    for _, _, p in modules:
-        try:
-            p.wait(10)
-        except subprocess.TimeoutExpired:
-            p.kill(); p.wait()
-    sub.loop_stop()
-    broker.send_signal(signal.SIGTERM); broker.wait()
+    shut_down([p for _, _, p in modules], sub, broker)
 sys.exit(0 if ok else 1)

@@ -6,63 +6,32 @@ commands (jog) and settings are never taken. Debian's mosquitto on loopback,
 an independent Sparkplug host (paho-mqtt, python3-protobuf), pymodbus.
 
 usage: sparkplug_commands_e2e.py HOMINGD PYTHON_DIR"""
-import os, signal, socket, subprocess, sys, tempfile, time
+import os, sys, tempfile
+
+from pymodbus.client import ModbusTcpClient
+
+import e2e_support
+from e2e_support import (Broker, alias_names, check, failures, free_port, import_sparkplug, shut_down,
+                         sparkplug_host, start_homingd, wait_until)
+from e2e_support import input_register as ir
 
 homingd, pydir = sys.argv[1], sys.argv[2]
-sys.path.insert(0, pydir)
-import sparkplug_b_pb2 as spb  # noqa: E402
-import paho.mqtt.client as paho  # noqa: E402
-from pymodbus.client import ModbusTcpClient  # noqa: E402
-
-failures = []
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what)
-    if not cond:
-        failures.append(what)
-
-def free_port():
-    s = socket.socket(); s.bind(("127.0.0.1", 0)); p = s.getsockname()[1]; s.close(); return p
-
-def wait_until(pred, timeout=10.0):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if pred(): return True
-        time.sleep(0.05)
-    return pred()
+import_sparkplug(pydir)
 
 work = tempfile.mkdtemp(prefix="mqtt-cmd-e2e-")
-broker_port = free_port()
-conf = os.path.join(work, "mosquitto.conf")
-with open(conf, "w") as f:
-    f.write(f"listener {broker_port} 127.0.0.1\nallow_anonymous true\npersistence false\n")
-broker = subprocess.Popen(["/usr/sbin/mosquitto", "-c", conf], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+broker = Broker(work)
 
 messages = []
-sub = paho.Client(client_id="cmd-e2e-host")
-def on_message(_c, _u, msg):
-    p = spb.Payload(); p.ParseFromString(msg.payload)
-    parts = msg.topic.split("/")
-    messages.append((parts[2], parts[3], p))
-sub.on_message = on_message
-def try_connect():
-    try:
-        return sub.connect("127.0.0.1", broker_port) == 0
-    except OSError:
-        return False
-assert wait_until(try_connect, 10), "mosquitto did not start"
-sub.subscribe("spBv1.0/plant/#", qos=1)
-sub.loop_start()
+sub = sparkplug_host("cmd-e2e-host", broker, lambda kind, node, p, _msg: messages.append((kind, node, p)))
 
 def start(node, *extra):
     port = free_port()
-    p = subprocess.Popen([homingd, "--tcp", f"127.0.0.1:{port}", "--db", os.path.join(work, node + ".db"),
-                          "--rt-priority", "0", "--time-scale", "20", "--mqtt", f"mqtt://127.0.0.1:{broker_port}",
-                          "--mqtt-group", "plant", "--mqtt-node", node, *extra],
-                         stdout=open(os.path.join(work, node + ".log"), "w"), stderr=subprocess.STDOUT)
+    p = start_homingd(homingd, port, os.path.join(work, node + ".db"), broker.url(), node, *extra,
+                      log=open(os.path.join(work, node + ".log"), "w"))
     return p, port
 
 def births(node): return [p for t, n, p in messages if t == "NBIRTH" and n == node]
-def aliases(node): return {m.alias: m.name for m in births(node)[0].metrics if m.HasField("alias")}
+def aliases(node): return alias_names(births(node)[0])
 def answers(node):
     """The command events of a node: (setting, command result, refusal reason, text)."""
     names = aliases(node)
@@ -75,14 +44,7 @@ def answers(node):
                         ev["event/new_value"].long_value if "event/new_value" in ev else 0, ev["event/text"].string_value))
     return out
 
-def ncmd(node, name, value=True):
-    cmd = spb.Payload()
-    m = cmd.metrics.add(); m.name = name; m.datatype = spb.Boolean; m.boolean_value = value
-    sub.publish(f"spBv1.0/plant/NCMD/{node}", cmd.SerializeToString(), qos=1)
-
-def ir(mb, address):
-    r = mb.read_input_registers(address, 1, slave=1)
-    return None if r.isError() else r.registers[0]
+def ncmd(node, name, value=True): e2e_support.ncmd(sub, node, name, value)
 
 daemons = []
 try:
@@ -97,8 +59,14 @@ try:
         name, _, reason, text = answers("off")[0]
         check(name == "cmd.home_all" and reason != 0 and "--mqtt-commands" in text, f"as refused, naming the option: {text}")
     mb_off = ModbusTcpClient("127.0.0.1", port=off_port, timeout=2, retries=0); mb_off.connect()
-    time.sleep(0.5)
-    check(ir(mb_off, 1) == 0, "and nothing homes (state not_homed)")
+    # The answer came after the NCMD was handled; a cmd.reset_alarm over Modbus
+    # behind it is judged no earlier than anything the NCMD handed the loop, so
+    # once it is judged a home_all carried out would show (state, one more count).
+    count = ir(mb_off, 11)  # status.command_count
+    mb_off.write_coil(2, True, slave=1)  # cmd.reset_alarm
+    check(wait_until(lambda: ir(mb_off, 11) != count, 10), "a reset over Modbus behind it is judged")
+    check(ir(mb_off, 1) == 0 and ir(mb_off, 11) == (count + 1) % 65536,
+          "and nothing homes (state not_homed, only the reset judged)")
 
     # On: home_all homes.
     ncmd("on", "cmd/home_all")
@@ -109,42 +77,38 @@ try:
           "and is answered as accepted (command result 1)")
 
     # Homing blocked by a latched alarm: the same refusal as over Modbus.
-    # The simulator's e-stop pressed and released: the alarm stays latched.
-    mb.write_coil(0, True, slave=247)  # sim.estop
+    # The simulator's e-stop pressed and released: the alarm stays latched. A
+    # simulator write is answered once the loop shows it.
+    r = mb.write_coil(0, True, slave=247)  # sim.estop
     wait_until(lambda: ir(mb, 1) == 3, 10)
-    mb.write_coil(0, False, slave=247)
+    r2 = mb.write_coil(0, False, slave=247)
+    check(not r.isError() and not r2.isError(), f"the simulator's e-stop is pressed and released: {r}, {r2}")
     check(wait_until(lambda: ir(mb, 1) == 3, 10), "an alarm is latched")
     n = len(answers("on"))
     ncmd("on", "cmd/home_all")
     check(wait_until(lambda: len(answers("on")) > n, 10), "cmd/home_all during the alarm is answered")
     answer = answers("on")[-1] if len(answers("on")) > n else None
+    count = ir(mb, 11)  # status.command_count: the result below is this command's once it moved
     r = mb.write_coil(0, True, slave=1)
-    time.sleep(0.1)
+    check(wait_until(lambda: ir(mb, 11) != count, 10), "the same command over Modbus is judged")
     modbus_result = ir(mb, 6)  # status.last_command_result
     check(not r.isError() and modbus_result == 3, f"over Modbus the same command is refused_alarm (3): {modbus_result}")
     check(answer is not None and answer[1] == modbus_result and "refused_alarm" in answer[3],
           f"and over MQTT for the same reason: {answer}")
 
-    # Never over MQTT: held commands and settings.
+    # Never over MQTT: held commands and settings. The setting goes first: the
+    # broker delivers one topic's messages in order, so once the jog is
+    # answered the setting has been handled.
     n = len(answers("on"))
-    ncmd("on", "cmd/jog_plus/x")
     ncmd("on", "axis/x/seek_feedrate")
+    ncmd("on", "cmd/jog_plus/x")
     check(wait_until(lambda: len(answers("on")) >= n + 1, 10), "a jog over MQTT is answered")
     check(all(reason != 0 for _, _, reason, _ in answers("on")[n:]), "and refused")
-    time.sleep(0.3)
     feed = mb.read_holding_registers(102, 1, slave=1).registers[0]
     check(feed == 1000, "no setting was written over MQTT")
     mb.close(); mb_off.close()
 finally:
-    for d in daemons:
-        if d.poll() is None:
-            d.send_signal(signal.SIGTERM)
-            try:
-                d.wait(10)
-            except subprocess.TimeoutExpired:
-                d.kill(); d.wait()
-    sub.loop_stop()
-    broker.send_signal(signal.SIGTERM); broker.wait()
+    shut_down(daemons, sub, broker)
 if failures:
     for node in ("off", "on"):
         print(f"--- {node} ---\n" + open(os.path.join(work, node + ".log")).read()[-2500:])

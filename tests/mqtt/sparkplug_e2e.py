@@ -4,58 +4,25 @@ an independent Sparkplug subscriber (paho-mqtt, payloads decoded by
 python3-protobuf from the project's sparkplug_b.proto).
 
 usage: sparkplug_e2e.py HOMINGD PYTHON_DIR"""
-import os, signal, socket, subprocess, sys, tempfile, time
+import os, signal, sys, tempfile
+
+from pymodbus.client import ModbusTcpClient
+
+from e2e_support import (Broker, check, failures, free_port, import_sparkplug, ncmd, sparkplug_host, start_homingd,
+                         wait_until)
 
 homingd, pydir = sys.argv[1], sys.argv[2]
-sys.path.insert(0, pydir)
-import sparkplug_b_pb2 as spb  # noqa: E402
-import paho.mqtt.client as paho  # noqa: E402
-from pymodbus.client import ModbusTcpClient  # noqa: E402
-
-failures = []
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what)
-    if not cond:
-        failures.append(what)
-
-def free_port():
-    s = socket.socket(); s.bind(("127.0.0.1", 0)); p = s.getsockname()[1]; s.close(); return p
-
-def wait_until(pred, timeout=10.0):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if pred(): return True
-        time.sleep(0.05)
-    return pred()
+spb = import_sparkplug(pydir)
 
 work = tempfile.mkdtemp(prefix="mqtt-e2e-")
-broker_port, modbus_port = free_port(), free_port()
-conf = os.path.join(work, "mosquitto.conf")
-with open(conf, "w") as f:
-    f.write(f"listener {broker_port} 127.0.0.1\nallow_anonymous true\npersistence false\n")
-broker = subprocess.Popen(["/usr/sbin/mosquitto", "-c", conf], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+broker = Broker(work)
+modbus_port = free_port()
 
 messages = []  # (type, Payload)
-sub = paho.Client(client_id="e2e-host")
-def on_message(_c, _u, msg):
-    p = spb.Payload(); p.ParseFromString(msg.payload)
-    messages.append((msg.topic.split("/")[2], p))
-sub.on_message = on_message
-def try_connect():
-    try:
-        return sub.connect("127.0.0.1", broker_port) == 0
-    except OSError:
-        return False
-assert wait_until(try_connect, 10), "mosquitto did not start"
-sub.subscribe("spBv1.0/plant/#", qos=1)
-sub.loop_start()
+sub = sparkplug_host("e2e-host", broker, lambda kind, _node, p, _msg: messages.append((kind, p)))
 
 def of(kind): return [p for t, p in messages if t == kind]
-def start_homingd():
-    return subprocess.Popen([homingd, "--tcp", f"127.0.0.1:{modbus_port}", "--db", os.path.join(work, "h.db"),
-                             "--rt-priority", "0", "--time-scale", "20", "--mqtt", f"mqtt://127.0.0.1:{broker_port}",
-                             "--mqtt-group", "plant", "--mqtt-node", "m1"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-daemon = start_homingd()
+daemon = start_homingd(homingd, modbus_port, os.path.join(work, "h.db"), broker.url(), "m1")
 try:
     check(wait_until(lambda: len(of("NBIRTH")) == 1), "NBIRTH arrives")
     birth = of("NBIRTH")[0]
@@ -96,9 +63,23 @@ try:
     seqs = [p.seq for t, p in messages if t in ("NBIRTH", "NDATA")]
     check(all((b - a) % 256 == 1 for a, b in zip(seqs, seqs[1:])), f"seq continuous from the birth: {seqs[:10]}...")
 
+    # An alarm's text beside its code: the simulator's e-stop pressed at rest
+    # latches the machine's alarm; its text arrives as a String, and is
+    # cleared once the e-stop is released and the alarm reset.
+    check(names.get("status/global_alarm_text") is not None and names["status/global_alarm_text"].datatype == spb.String,
+          "birth carries status/global_alarm_text as String")
+    check(all(names.get(f"axis/{a}/alarm_text") is not None for a in "xyzabc"), "birth carries axis/<a>/alarm_text")
+    text_alias = names["status/global_alarm_text"].alias
+    def texts(): return [m.string_value for p in of("NDATA") for m in p.metrics if m.alias == text_alias]
+    check(not mb.write_coil(0, True, slave=247).isError(), "sim.estop pressed")  # sim.estop
+    check(wait_until(lambda: any(t.startswith("emergency stop pressed; ") for t in texts()), 10),
+          f"the e-stop's text arrives in status/global_alarm_text: {texts()[-1:]}")
+    check(not mb.write_coil(0, False, slave=247).isError(), "sim.estop released")
+    mb.write_coil(2, True, slave=1)  # cmd.reset_alarm
+    check(wait_until(lambda: texts() and texts()[-1] == "", 10), "the text is cleared after the reset")
+
     # Rebirth on command.
-    cmd = spb.Payload(); m = cmd.metrics.add(); m.name = "Node Control/Rebirth"; m.datatype = spb.Boolean; m.boolean_value = True
-    sub.publish("spBv1.0/plant/NCMD/m1", cmd.SerializeToString(), qos=1)
+    ncmd(sub, "m1", "Node Control/Rebirth")
     check(wait_until(lambda: len(of("NBIRTH")) == 2), "rebirth answered with a new NBIRTH")
     check(of("NBIRTH")[1].seq == 0, "the new birth restarts seq at 0")
     bd = names["bdSeq"].long_value
@@ -111,5 +92,5 @@ finally:
     if daemon.poll() is None:
         daemon.send_signal(signal.SIGKILL); daemon.wait()
     sub.loop_stop()
-    broker.send_signal(signal.SIGTERM); broker.wait()
+    broker.stop()
 sys.exit(1 if failures else 0)

@@ -8,82 +8,48 @@ must then receive every one of those events, as historical metrics with the
 times they happened, oldest first, with no id missing.
 
 usage: sparkplug_outage_e2e.py HOMINGD PYTHON_DIR"""
-import os, signal, socket, subprocess, sys, tempfile, time
+import json, os, signal, sys, tempfile, time
+
+from pymodbus.client import ModbusTcpClient
+
+import e2e_support
+from e2e_support import (Broker, check, failures, free_port, import_sparkplug, ncmd, shut_down, sparkplug_host,
+                         wait_until)
+from e2e_support import input_register as ir
 
 homingd, pydir = sys.argv[1], sys.argv[2]
-sys.path.insert(0, pydir)
-import sparkplug_b_pb2 as spb  # noqa: E402
-import paho.mqtt.client as paho  # noqa: E402
-from pymodbus.client import ModbusTcpClient  # noqa: E402
-
-failures = []
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what)
-    if not cond:
-        failures.append(what)
-
-def free_port():
-    s = socket.socket(); s.bind(("127.0.0.1", 0)); p = s.getsockname()[1]; s.close(); return p
-
-def wait_until(pred, timeout=10.0):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if pred(): return True
-        time.sleep(0.05)
-    return pred()
+import_sparkplug(pydir)
 
 work = tempfile.mkdtemp(prefix="mqtt-outage-e2e-")
-broker_port, modbus_port = free_port(), free_port()
-conf = os.path.join(work, "mosquitto.conf")
-with open(conf, "w") as f:
-    f.write(f"listener {broker_port} 127.0.0.1\nallow_anonymous true\npersistence false\n")
-def start_broker():
-    return subprocess.Popen(["/usr/sbin/mosquitto", "-c", conf], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-broker = start_broker()
+broker = Broker(work)
+modbus_port = free_port()
 
 messages = []  # (type, Payload, arrival time)
-sub = paho.Client(client_id="outage-e2e-host")
 # The subscriber is the plant's primary host: on every connection it says it
 # is online (retained, as Sparkplug 3.0 asks), and its Will says offline.
-import json  # noqa: E402
 STATE = "spBv1.0/STATE/e2e-host"
 host_online = True
 def on_connect(c, _u, _f, rc):
     if rc == 0:
         c.subscribe("spBv1.0/plant/#", qos=1)
         c.publish(STATE, json.dumps({"online": host_online, "timestamp": int(time.time() * 1000)}), qos=1, retain=True)
-def on_message(_c, _u, msg):
-    p = spb.Payload(); p.ParseFromString(msg.payload)
-    messages.append((msg.topic.split("/")[2], p, time.time()))
-sub.will_set(STATE, json.dumps({"online": False, "timestamp": int(time.time() * 1000)}), qos=1, retain=True)
-sub.on_connect = on_connect
-sub.on_message = on_message
-sub.reconnect_delay_set(min_delay=1, max_delay=1)
-def try_connect():
-    try:
-        return sub.connect("127.0.0.1", broker_port) == 0
-    except OSError:
-        return False
-assert wait_until(try_connect, 10), "mosquitto did not start"
-sub.loop_start()
+def primary_host(client):
+    client.will_set(STATE, json.dumps({"online": False, "timestamp": int(time.time() * 1000)}), qos=1, retain=True)
+    client.on_connect = on_connect
+    client.reconnect_delay_set(min_delay=1, max_delay=1)
+sub = sparkplug_host("outage-e2e-host", broker, lambda kind, _node, p, _msg: messages.append((kind, p, time.time())),
+                     setup=primary_host, subscribe=False)
 
 def of(kind): return [p for t, p, _ in messages if t == kind]
 log = open(os.path.join(work, "homingd.log"), "a")
 def start_homingd():
-    return subprocess.Popen([homingd, "--tcp", f"127.0.0.1:{modbus_port}", "--db", os.path.join(work, "h.db"),
-                             "--rt-priority", "0", "--time-scale", "20", "--mqtt", f"mqtt://127.0.0.1:{broker_port}",
-                             "--mqtt-group", "plant", "--mqtt-node", "m1", "--mqtt-keepalive-s", "5",
-                             "--mqtt-primary-host", "e2e-host"],
-                            stdout=log, stderr=subprocess.STDOUT)
+    return e2e_support.start_homingd(homingd, modbus_port, os.path.join(work, "h.db"), broker.url(), "m1",
+                                     "--mqtt-keepalive-s", "5", "--mqtt-primary-host", "e2e-host", log=log)
 
 def modbus():
     mb = ModbusTcpClient("127.0.0.1", port=modbus_port, timeout=2, retries=0)
     assert wait_until(lambda: mb.connect(), 10), "Modbus does not connect"
     return mb
-
-def ir(mb, address):
-    r = mb.read_input_registers(address, 1, slave=1)
-    return None if r.isError() else r.registers[0]
 
 def cycles_done(mb):  # status.homing_cycles: u32, high word first
     r = mb.read_input_registers(3, 2, slave=1)
@@ -105,7 +71,7 @@ try:
     name_of = {a: n for n, a in alias.items()}
 
     # The broker goes away.
-    broker.send_signal(signal.SIGTERM); broker.wait()
+    broker.stop()
     outage_start = time.time()
     mb = modbus()
     # An alarm: the first cycle (the long one, from power-up) aborted.
@@ -134,7 +100,7 @@ try:
     seen_before = len(messages)
 
     # The broker comes back: every event arrives, historical, oldest first.
-    broker = start_broker()
+    broker.start()
     def events():
         out = []
         for t, p, _ in messages[seen_before:]:
@@ -173,8 +139,7 @@ try:
 
     # Delivered events leave the outbox: a rebirth sends none again.
     n = len(events())
-    cmd = spb.Payload(); m = cmd.metrics.add(); m.name = "Node Control/Rebirth"; m.datatype = spb.Boolean; m.boolean_value = True
-    sub.publish("spBv1.0/plant/NCMD/m1", cmd.SerializeToString(), qos=1)
+    ncmd(sub, "m1", "Node Control/Rebirth")
     births = len(of("NBIRTH"))
     check(wait_until(lambda: len(of("NBIRTH")) > births, 10), "rebirth")
     time.sleep(1.0)
@@ -202,15 +167,7 @@ try:
         check({m.name: m for m in of("NBIRTH")[-1].metrics}["bdSeq"].long_value == (bd + 1) % 256, "with the next bdSeq")
     check(wait_until(lambda: len(ended()) >= 6, 10), "the cycle run while the host was offline arrives after the new birth")
 finally:
-    if daemon.poll() is None:
-        daemon.send_signal(signal.SIGTERM)
-        try:
-            daemon.wait(10)
-        except subprocess.TimeoutExpired:
-            daemon.kill(); daemon.wait()
-    sub.loop_stop()
-    if broker.poll() is None:
-        broker.send_signal(signal.SIGTERM); broker.wait()
+    shut_down([daemon], sub, broker)
 if failures:
     print(open(os.path.join(work, "homingd.log")).read()[-3000:])
 sys.exit(1 if failures else 0)

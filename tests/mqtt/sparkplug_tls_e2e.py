@@ -6,28 +6,13 @@ from mosquitto_passwd. An independent subscriber (paho-mqtt with its own client
 certificate) sees the birth only from a module that is let in.
 
 usage: sparkplug_tls_e2e.py HOMINGD PYTHON_DIR MAKE_CERTS"""
-import os, signal, socket, ssl, subprocess, sys, tempfile, time
+import os, ssl, subprocess, sys, tempfile, time
+
+from e2e_support import (Broker, check, failures, free_port, import_sparkplug, shut_down, sparkplug_host, start_homingd,
+                         wait_until)
 
 homingd, pydir, make_certs = sys.argv[1], sys.argv[2], sys.argv[3]
-sys.path.insert(0, pydir)
-import sparkplug_b_pb2 as spb  # noqa: E402
-import paho.mqtt.client as paho  # noqa: E402
-
-failures = []
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what)
-    if not cond:
-        failures.append(what)
-
-def free_port():
-    s = socket.socket(); s.bind(("127.0.0.1", 0)); p = s.getsockname()[1]; s.close(); return p
-
-def wait_until(pred, timeout=10.0):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if pred(): return True
-        time.sleep(0.05)
-    return pred()
+import_sparkplug(pydir)
 
 work = tempfile.mkdtemp(prefix="mqtt-tls-e2e-")
 pki = os.path.join(work, "pki")
@@ -41,32 +26,18 @@ for path in (work, pki):
 for path in (pwfile, f"{pki}/server.key"):
     os.chmod(path, 0o644)
 
-broker_port = free_port()
-conf = os.path.join(work, "mosquitto.conf")
-with open(conf, "w") as f:
-    f.write(f"listener {broker_port} 127.0.0.1\n"
-            f"cafile {pki}/ca.crt\ncertfile {pki}/server.crt\nkeyfile {pki}/server.key\n"
-            "require_certificate true\n"
-            f"password_file {pwfile}\nallow_anonymous false\npersistence false\n")
-broker = subprocess.Popen(["/usr/sbin/mosquitto", "-c", conf], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+broker = Broker(work, f"cafile {pki}/ca.crt\ncertfile {pki}/server.crt\nkeyfile {pki}/server.key\n"
+                      "require_certificate true\n"
+                      f"password_file {pwfile}\nallow_anonymous false\npersistence false\n")
+broker_port = broker.port
 
 messages = []
-sub = paho.Client(client_id="tls-e2e-host")
-sub.tls_set(ca_certs=f"{pki}/ca.crt", certfile=f"{pki}/operator.crt", keyfile=f"{pki}/operator.key",
-            cert_reqs=ssl.CERT_REQUIRED)
-sub.username_pw_set("module", "s3cret-pw")
-def on_message(_c, _u, msg):
-    p = spb.Payload(); p.ParseFromString(msg.payload)
-    messages.append((msg.topic.split("/")[2], msg.topic.split("/")[3], p))
-sub.on_message = on_message
-def try_connect():
-    try:
-        return sub.connect("127.0.0.1", broker_port) == 0
-    except OSError:
-        return False
-assert wait_until(try_connect, 10), "mosquitto with TLS did not start"
-sub.subscribe("spBv1.0/plant/#", qos=1)
-sub.loop_start()
+def with_certificate(client):
+    client.tls_set(ca_certs=f"{pki}/ca.crt", certfile=f"{pki}/operator.crt", keyfile=f"{pki}/operator.key",
+                   cert_reqs=ssl.CERT_REQUIRED)
+    client.username_pw_set("module", "s3cret-pw")
+sub = sparkplug_host("tls-e2e-host", broker, lambda kind, node, p, _msg: messages.append((kind, node, p)),
+                     setup=with_certificate, started="mosquitto with TLS did not start")
 
 def births(node): return [p for t, n, p in messages if t == "NBIRTH" and n == node]
 pw_ok = os.path.join(work, "module.pw"); open(pw_ok, "w").write("s3cret-pw\n"); os.chmod(pw_ok, 0o600)
@@ -74,11 +45,8 @@ pw_bad = os.path.join(work, "wrong.pw"); open(pw_bad, "w").write("guessed\n"); o
 
 def start(node, *extra):
     log = open(os.path.join(work, node + ".log"), "w")
-    p = subprocess.Popen([homingd, "--tcp", f"127.0.0.1:{free_port()}", "--db", os.path.join(work, node + ".db"),
-                          "--rt-priority", "0", "--mqtt", f"mqtts://127.0.0.1:{broker_port}", "--mqtt-group", "plant",
-                          "--mqtt-node", node, "--mqtt-ca", f"{pki}/ca.crt", *extra],
-                         stdout=log, stderr=subprocess.STDOUT)
-    return p
+    return start_homingd(homingd, free_port(), os.path.join(work, node + ".db"), broker.url("mqtts"), node,
+                         "--mqtt-ca", f"{pki}/ca.crt", *extra, log=log, time_scale=None)
 
 def log_of(node): return open(os.path.join(work, node + ".log")).read()
 
@@ -118,15 +86,7 @@ try:
     rc, err = refused("--mqtt", f"mqtt://127.0.0.1:{broker_port}", "--mqtt-user", "module", "--mqtt-password-file", empty)
     check(rc != 0 and "empty.pw" in err and "empty" in err, f"an empty password file is refused naming it: {err.strip()[:120]}")
 finally:
-    for d in daemons:
-        if d.poll() is None:
-            d.send_signal(signal.SIGTERM)
-            try:
-                d.wait(10)
-            except subprocess.TimeoutExpired:
-                d.kill(); d.wait()
-    sub.loop_stop()
-    broker.send_signal(signal.SIGTERM); broker.wait()
+    shut_down(daemons, sub, broker)
 if failures:
     for node in ("good", "nocert", "badpw"):
         print(f"--- {node} log ---\n" + log_of(node)[-2000:])

@@ -84,6 +84,26 @@ TEST_CASE("mutation check: the campaign fails a product that trusts an encoder c
   CHECK((w.find("coordinate") != std::string::npos || w.find("reversed encoder") != std::string::npos));
 }
 
+TEST_CASE("mutation check: the campaign fails a product that ignores a limit switch outside homing", "[mutant]") {
+  Planted p(homing::Mutant::limit_switch_ignored_outside_homing);
+  const campaign::Outcome o = first_failure(500);
+  REQUIRE(o.failed);
+  INFO(o.failure.what << ": " << o.failure.detail);
+  // A jog or move runs on past the switch: beyond its stopping distance, into
+  // the mechanical stop, or without the limit_switch alarm it must raise.
+  const std::string& w = o.failure.what;
+  CHECK((w == "a carriage passed a limit switch by more than its stopping distance" ||
+         w.rfind("a carriage ran into a mechanical stop", 0) == 0 || w.find("raised no alarm of its own") != std::string::npos));
+}
+
+TEST_CASE("mutation check: the campaign fails a home cam search that seeks on past the limit switch ahead",
+          "[mutant]") {
+  Planted p(homing::Mutant::home_cam_search_ignores_limit_switch);
+  const campaign::Outcome o = first_failure(200);
+  REQUIRE(o.failed);
+  CHECK(o.failure.what == "the home cam search met the limit switch ahead and sought on");
+}
+
 TEST_CASE("mutation check: the same campaign seeds pass on the product as built", "[mutant]") {
   // The mutants above are caught by the campaign, not by a broken harness:
   // without a planted bug the same seeds run clean.

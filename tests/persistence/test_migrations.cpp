@@ -40,7 +40,50 @@ ALTER TABLE homing_axes ADD COLUMN excluded INTEGER NOT NULL DEFAULT 0;
 PRAGMA user_version = 4;
 )";
 
+// What version 5 shipped: version 4 with the switch health figures.
+const std::string kV5Sql = kV4Sql + R"(
+ALTER TABLE homing_axes ADD COLUMN latch_passes INTEGER;
+ALTER TABLE homing_axes ADD COLUMN latch_spread_mm REAL;
+ALTER TABLE homing_axes ADD COLUMN latch_sigma_mm REAL;
+ALTER TABLE homing_axes ADD COLUMN hysteresis_mm REAL;
+ALTER TABLE homing_axes ADD COLUMN seek_latch_mm REAL;
+ALTER TABLE homing_axes ADD COLUMN chatter_edges INTEGER;
+ALTER TABLE homing_axes ADD COLUMN index_distance_mm REAL;
+ALTER TABLE homing_axes ADD COLUMN index_near_edge INTEGER;
+ALTER TABLE homing_axes ADD COLUMN gantry_skew_mm REAL;
+PRAGMA user_version = 5;
+)";
+
 }  // namespace
+
+TEST_CASE("a version 5 database upgrades: its runs stay, no axis has a last stop, and the last stops are kept from then on",
+          "[persistence][migration][trust]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  test::sql_exec(db, kV5Sql + R"(
+    INSERT INTO settings VALUES('axis.x.mode', 3);
+    INSERT INTO homing_runs(id, start_ms, end_ms, axes, result, alarm_axis) VALUES(1, 100, 200, 1, 0, -1);
+    INSERT INTO homing_axes(run_id, axis, correction_mm, duration_ms, excluded, hysteresis_mm)
+      VALUES(1, 0, 0.012, 100, 0, 0.05);
+  )");
+  OpenReport report;
+  auto store = test::open_ok(db, report);
+  CHECK(report.schema_version_found == 5);
+  CHECK(test::sql_int(db, "PRAGMA user_version") == kSchemaVersion);
+  CHECK(store.value("axis.x.mode") == 3);
+  auto runs = store.recent_runs(10);
+  REQUIRE(runs);
+  REQUIRE(runs->size() == 1);
+  auto stops = store.last_stops();
+  REQUIRE(stops);
+  for (const auto& s : *stops) CHECK_FALSE(s.has_value());
+  LastStops one{};
+  one[2] = AxisLastStop{true, 12.5, StoredFrame{2, 1, false, 0, 0, 1.0, 0.0, 0.0}, 77};
+  REQUIRE(store.record_last_stops(one));
+  stops = store.last_stops();
+  REQUIRE(stops);
+  CHECK((*stops)[2] == one[2]);
+}
 
 TEST_CASE("a version 4 database upgrades: its runs stay, without health figures, and new runs keep theirs",
           "[persistence][migration][health]") {

@@ -141,6 +141,28 @@ TEST_CASE("the audit log keeps only the newest rows up to its limit", "[persiste
   CHECK(store.recent_changes(100)->size() == 3);
 }
 
+TEST_CASE("a service change is one audit row with its client, changes no setting and is pruned like the others",
+          "[persistence]") {
+  test::TempDir dir;
+  OpenReport report;
+  auto o = test::options();
+  o.audit_max_rows = 3;
+  auto store = test::open_ok(dir.file("settings.db"), report, o);
+  const auto before = store.load();
+  REQUIRE(store.audit({"axis.x.position", -1500, 12345}, test::kTcp));
+  auto audit = store.recent_changes(10);
+  REQUIRE(audit);
+  REQUIRE(audit->size() == 1);
+  CHECK(audit->front().name == "axis.x.position");
+  CHECK(audit->front().old_value == -1500);
+  CHECK(audit->front().new_value == 12345);
+  CHECK(audit->front().transport == test::kTcp.transport);
+  CHECK(audit->front().client == test::kTcp.client);
+  CHECK(store.load() == before);
+  for (int i = 0; i < 5; ++i) REQUIRE(store.audit({"axis.y.position", i, i + 1}, test::kTcp));
+  CHECK(store.recent_changes(100)->size() == 3);
+}
+
 TEST_CASE("a read-only store answers writes with an error and keeps the value", "[persistence]") {
   test::TempDir dir;
   OpenReport report;

@@ -13,6 +13,7 @@
 #include "fault_vfs.hpp"
 #include "homing/gpiod/config.hpp"
 #include "homing/sim/simulator_io.hpp"
+#include "persistence/event_outbox.hpp"
 #include "persistence/settings_store.hpp"
 #include "registers/defaults.hpp"
 #include "registers/errors.hpp"
@@ -21,6 +22,7 @@
 #include "server/control_loop.hpp"
 #include "server/modbus_service.hpp"
 #include "server/monitor.hpp"
+#include "server/plant_events.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace {
@@ -350,6 +352,34 @@ TEST_CASE("the home-correction statistics count only cycles that started homed: 
   const auto r = m.request({4, static_cast<std::uint8_t>(mean >> 8), static_cast<std::uint8_t>(mean), 0, 2});
   REQUIRE(r.size() == 6);
   CHECK(std::abs(static_cast<std::int32_t>((r[2] << 24) | (r[3] << 16) | (r[4] << 8) | r[5])) < 50);  // µm
+}
+
+TEST_CASE("the plant's events stay in the order they happened when a setting is changed before the monitor saw "
+          "the cycle that ended first") {
+  Module m(false);
+  auto outbox = persistence::EventOutbox::open(m.dir.file("settings.db.mqtt-events"), 100);
+  REQUIRE(outbox);
+  server::PlantEvents events(*outbox, m.store.get());
+  server::Monitor monitor(*m.loop, *m.service, m.store.get());
+  monitor.set_plant_events(&events);
+  std::int64_t now_ms = 0;
+  const auto watch = [&] { monitor.poll(now_ms += 10); };
+  watch();
+  m.coil("cmd.home_all");
+  REQUIRE(m.run_until([&] { return m.status().homing; }, 100, watch));
+  // The cycle ends while the monitor does not look (its thread late on a busy
+  // machine), and a setting is changed before it looks again, with its
+  // half-second housekeeping (which reads settings changes) due.
+  REQUIRE(m.run_until([&] { return !m.status().homing; }, 400'000));
+  REQUIRE(m.write_u16("axis.x.seek_feedrate", 1007).at(0) == 6);
+  monitor.poll(now_ms += 1000);
+  const auto kept = outbox->oldest(100);
+  REQUIRE(kept);
+  std::vector<persistence::EventKind> kinds;
+  for (const auto& e : *kept) kinds.push_back(e.kind);
+  using K = persistence::EventKind;
+  CHECK(kinds == std::vector<K>{K::cycle_started, K::cycle_ended, K::setting_changed});
+  for (std::size_t i = 1; i < kept->size(); ++i) CHECK((*kept)[i - 1].time_ms <= (*kept)[i].time_ms);
 }
 
 TEST_CASE("the history records an axis's correction only when its cycle succeeded and it started homed") {

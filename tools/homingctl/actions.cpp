@@ -318,4 +318,40 @@ ActionResult move(Connection& c, const std::string& axis, const std::string& tar
   return s.finished(what, *st);
 }
 
+ActionResult refcheck(Connection& c, const std::string& axis, const ActionOptions& o) {
+  const int a = axis_index(axis);
+  if (a < 0) throw std::invalid_argument(fmt::format("refcheck: '{}' is not an axis (x, y, z, a, b, c)", axis));
+  const auto i = static_cast<std::size_t>(a);
+  Session s(c, o);
+  const std::string what = fmt::format("refcheck {}", homing::kAxisUpper[i]);
+  auto r = s.pulse(fmt::format("cmd.refcheck.{}", homing::kAxisLetters[i]));
+  if (!r) return failure(r.error());
+  if (!taken(*r)) return s.refused(what, *r);
+  if (!o.wait) return not_waited(what, *r);
+  auto st = s.wait_for(at_rest, true);
+  if (!st) return failure(st.error());
+  ActionResult res = s.finished(what, *st);
+  if (res.exit_code != 0) return res;
+  const AxisView& x = st->axes[i];
+  const auto unit = homing::axis_unit(s.settings, i);
+  const double tolerance = s.settings.axes[i].refcheck_tolerance_mm;
+  const bool accepted = x.trust == homing::Trust::reference_checked;
+  res.json["accepted"] = accepted;
+  res.json["refcheck_error"] = x.refcheck_error;
+  res.json["trust"] = std::string(homing::name_of(x.trust));
+  if (accepted) {
+    res.message = fmt::format("{}: accepted, the switch edge lies {:+.3f} {} from where the stored position put it "
+                              "(tolerance {:.3f} {}); {} is homed at {:.3f} {}",
+                              what, x.refcheck_error, unit, tolerance, unit, homing::kAxisUpper[i], x.position, unit);
+    return res;
+  }
+  res.exit_code = 1;
+  res.json["ok"] = false;
+  res.message = fmt::format("{}: refused, the switch edge lies {:+.3f} {} from where the stored position put it "
+                            "(tolerance {:.3f} {}): the carriage moved or lost steps while the module was off; home "
+                            "it with a full cycle (homingctl home {})",
+                            what, x.refcheck_error, unit, tolerance, unit, homing::kAxisLetters[i]);
+  return res;
+}
+
 }  // namespace homingctl

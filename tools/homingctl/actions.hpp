@@ -39,6 +39,9 @@ ActionResult reset_alarm(Connection& c, const ActionOptions& o);
 // Holds the jog coil for `ms` (refreshing the heartbeat), then releases it.
 ActionResult jog(Connection& c, const std::string& axis, int direction, int ms, const ActionOptions& o);
 ActionResult move(Connection& c, const std::string& axis, const std::string& target, const ActionOptions& o);
+// cmd.refcheck.<a>: the reference check after a restart; ok when the axis
+// ends homed by it (trust reference_checked), else refused with the figure.
+ActionResult refcheck(Connection& c, const std::string& axis, const ActionOptions& o);
 
 // Axis index of "x".."c" (case-insensitive) or -1.
 int axis_index(std::string_view letter);

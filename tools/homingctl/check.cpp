@@ -71,7 +71,30 @@ CheckReport check_settings(const homing::Settings& settings,
           c.seek_worst_s = move_time(s.max_seek_travel_mm, seek_v, a);
           phase(p, c.seek_worst_s);
           break;
-        case Phase::stop: phase(p, a > 0 ? seek_v / a + s.debounce_ms / 1000.0 : 0); break;
+        case Phase::stop:
+        case Phase::cam_stop: phase(p, a > 0 ? seek_v / a + s.debounce_ms / 1000.0 : 0); break;
+        // A home cam: out to the limit switch ahead over max_seek_travel at
+        // worst, braking there, and back over max_seek_travel again.
+        case Phase::cam_seek:
+          c.seek_worst_s = move_time(s.max_seek_travel_mm, seek_v, a);
+          phase(p, c.seek_worst_s);
+          break;
+        case Phase::limit_reversal: {
+          const double t = (a > 0 ? seek_v / a : 0) + move_time(s.max_seek_travel_mm, seek_v, a);
+          c.seek_worst_s += t;
+          phase(p, t);
+          break;
+        }
+        // Off the cam toward cam_edge: from the stop on it, and across the
+        // whole cam when its far edge is the reference (not known without the
+        // simulator unit: max_backoff, the most the latch may run).
+        case Phase::cam_latch: {
+          double d = c.stop_distance_mm + latch_stop;
+          if (s.cam_edge == homing::CamEdge::ahead)
+            d = cams[i] ? d + (cams[i]->max_mm - cams[i]->min_mm) + cams[i]->hysteresis_mm : s.max_backoff_mm;
+          phase(p, move_time(d, latch_v, a) + s.debounce_ms / 1000.0);
+          break;
+        }
         case Phase::push: phase(p, move_time(s.push_distance_mm, latch_v, a)); break;
         case Phase::push_to_stop:
           // Bounded twice: the travel at latch feedrate, and stall_timeout_ms.
@@ -93,7 +116,13 @@ CheckReport check_settings(const homing::Settings& settings,
       }
     }
     for (const auto& [name, t] : c.phases)
-      if (name != "seek" && name != "push_to_stop") c.after_trigger_s += t;
+      if (name != "seek" && name != "push_to_stop" && name != "cam_seek" && name != "limit_reversal")
+        c.after_trigger_s += t;
+    if (s.limits_fitted) {
+      c.limits = true;
+      c.limit_stop_distance_mm = homing::limit_stop_distance_mm(s);
+      c.limit_overtravel_mm = s.limit_overtravel_mm;
+    }
     // What the row needs wired, with the stop detection the axis chose.
     for (const homing::SignalInfo& sig : homing::kSignalInfo)
       if (homing::needs_signal(s, sig.signal)) c.signals.emplace_back(sig.name);
@@ -128,6 +157,30 @@ CheckReport check_settings(const homing::Settings& settings,
                                          s.max_backoff_mm, u, c.stop_distance_mm + latch_stop, u));
       if (s.pull_off_mm == 0)
         c.warnings.push_back("pull_off is 0: the axis rests on the sensor edge and the sensor may flicker");
+    }
+    if (c.limits && !c.fault && c.limit_stop_distance_mm > 0.8 * s.limit_overtravel_mm)
+      c.warnings.push_back(fmt::format("the stop past a limit switch {:.3f} {} uses {:.0f}% of limit_overtravel {:g} {}: "
+                                       "little margin before the mechanical stop",
+                                       c.limit_stop_distance_mm, u, 100 * c.limit_stop_distance_mm / s.limit_overtravel_mm,
+                                       s.limit_overtravel_mm, u));
+    if (homing::mode_row(s.mode).runs(Phase::limit_reversal) && cams[i]) {
+      const TriggerCam& k = *cams[i];
+      const double travel = k.limit_max_mm - k.limit_min_mm;
+      const double len = k.max_mm - k.min_mm;
+      if (k.max_mm <= k.limit_min_mm || k.min_mm >= k.limit_max_mm)
+        c.warnings.push_back(fmt::format("the home cam [{:g}, {:g}] {} lies outside the limit switches at {:g} and {:g} {}: "
+                                         "the search cannot find it (cam_not_found)",
+                                         k.min_mm, k.max_mm, u, k.limit_min_mm, k.limit_max_mm, u));
+      else if (travel < 1e8 && s.max_seek_travel_mm < travel)
+        c.warnings.push_back(fmt::format("max_seek_travel {:g} {} is shorter than the travel between the limit switches "
+                                         "{:.3f} {}: the search back from one switch may end before the cam or the other "
+                                         "switch (sensor_not_found)",
+                                         s.max_seek_travel_mm, u, travel, u));
+      const double latch = c.stop_distance_mm + latch_stop + len + k.hysteresis_mm;
+      if (s.cam_edge == homing::CamEdge::ahead && s.max_backoff_mm < latch)
+        c.warnings.push_back(fmt::format("max_backoff {:g} {} is shorter than the cam's length plus the stop ({:.3f} {}): "
+                                         "the latch toward its far edge may end on the cam (not_released)",
+                                         s.max_backoff_mm, u, latch, u));
     }
     const bool outside_home = s.home_position_mm < s.soft_limit_min_mm || s.home_position_mm > s.soft_limit_max_mm;
     if (outside_home)
@@ -179,6 +232,9 @@ std::string render_check(const CheckReport& r) {
                        fmt::format("{:.3f} / {:g} {}", c.stop_distance_mm, c.max_stop_distance_mm, u), c.seek_worst_s,
                        c.after_trigger_s, c.fault ? "REFUSED" : (c.warnings.empty() ? "ok" : "ok, with warnings"));
     if (c.fault) out += fmt::format("     error: {}\n", *c.fault);
+    if (c.limits)
+      out += fmt::format("     limit switches: stop past one {:.3f} / overtravel {:g} {}\n", c.limit_stop_distance_mm,
+                         c.limit_overtravel_mm, u);
     if (!c.phases.empty()) {
       std::string p;
       for (const auto& [name, t] : c.phases) p += fmt::format("{}{} {:.2f} s", p.empty() ? "" : ", ", name, t);
@@ -196,8 +252,8 @@ std::string render_check(const CheckReport& r) {
       out += "     stop told by: the drive's stall input\n";
     for (const auto& w : c.warnings) out += fmt::format("     warning: {}\n", w);
   }
-  out += fmt::format("expected home-all cycle: at most {:.1f} s (seeks over their whole max_seek_travel; "
-                     "usually much less)\n", r.cycle_worst_s);
+  out += fmt::format("expected home-all cycle: at most {:.1f} s (seeks over their whole max_seek_travel, a home "
+                     "cam's both ways; usually much less)\n", r.cycle_worst_s);
   for (const auto& w : r.warnings) out += fmt::format("warning: {}\n", w);
   out += r.ok() ? "settings: ok\n" : "settings: homing will be REFUSED (see the errors above)\n";
   return out;
@@ -217,6 +273,10 @@ nlohmann::json check_json(const CheckReport& r) {
       a["fault"] = c.fault ? nlohmann::json(*c.fault) : nlohmann::json(nullptr);
       a["seek_worst_s"] = c.seek_worst_s;
       a["after_trigger_s"] = c.after_trigger_s;
+      if (c.limits) {
+        a["limit_stop_distance"] = c.limit_stop_distance_mm;
+        a["limit_overtravel"] = c.limit_overtravel_mm;
+      }
       a["phases"] = nlohmann::json::object();
       for (const auto& [name, t] : c.phases) a["phases"][name] = t;
       a["warnings"] = c.warnings;

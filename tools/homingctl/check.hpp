@@ -14,6 +14,8 @@ namespace homingctl {
 
 struct TriggerCam {
   double min_mm = 0, max_mm = 0, hysteresis_mm = 0;  // from the simulator unit, when there is one
+  // Its end-of-travel limit switches (the defaults lie beyond any stop).
+  double limit_min_mm = -1e9, limit_max_mm = 1e9;
 };
 
 struct AxisCheck {
@@ -23,8 +25,12 @@ struct AxisCheck {
   double stop_distance_mm = 0;     // seek_stop_distance_mm
   double max_stop_distance_mm = 0;
   std::optional<std::string> fault;  // describe_fault: homing will be refused
-  double seek_worst_s = 0;           // over max_seek_travel
-  double after_trigger_s = 0;        // stop, back-off, re-approach, index, pull-off, final move
+  double seek_worst_s = 0;           // over max_seek_travel (a home cam's: out to the limit switch and back)
+  double after_trigger_s = 0;        // stop, back-off, re-approach, index, latch, pull-off, final move
+  // Limit switches fitted: the stop past one from the faster of seek and jog
+  // feedrate (limit_stop_distance_mm) against limit_overtravel.
+  bool limits = false;
+  double limit_stop_distance_mm = 0, limit_overtravel_mm = 0;
   std::vector<std::pair<std::string, double>> phases;  // phase name, seconds (estimate)
   std::vector<std::string> signals;  // what its method needs wired (kSignalInfo names), its stop detection included
   std::string stop_detection;        // how a method that pushes to a stop tells it (stall_detect); "" otherwise

@@ -1,4 +1,4 @@
-// home, abort, reset, jog, move: commands that move (or stop) the machine,
+// home, refcheck, abort, reset, jog, move: commands that move (or stop) the machine,
 // each waiting for its outcome unless --no-wait.
 #include "actions.hpp"
 #include "cli.hpp"
@@ -32,6 +32,15 @@ void add_motion_commands(Commands& commands, Context& ctx) {
                                 });
   home_cmd->add_option("axes", *targets, "all | x y z a b c");
   commands.add_wait_options(home_cmd, ctx);
+
+  auto refcheck_axis = std::make_shared<std::string>();
+  auto* refcheck_cmd = commands.add(
+      "refcheck",
+      "after a restart, check an axis whose last stop was clean (trust last_stop_clean) against its switch edge "
+      "instead of a full cycle: refcheck x",
+      [refcheck_axis](Context& c) { return c.report(refcheck(c.connection(), *refcheck_axis, c.ao)); });
+  refcheck_cmd->add_option("axis", *refcheck_axis, "x y z a b c")->required();
+  commands.add_wait_options(refcheck_cmd, ctx);
 
   auto* abort_cmd = commands.add("abort", "stop every motion (a running homing latches 'aborted')",
                                  [](Context& c) { return c.report(abort_motion(c.connection(), c.ao)); });

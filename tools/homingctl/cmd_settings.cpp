@@ -186,10 +186,14 @@ std::array<std::optional<TriggerCam>, homing::kAxisCount> simulated_cams(Context
       const auto l = homing::kAxisLetters[a];
       auto v = c.read_many({&register_named(fmt::format("sim.{}.sensor_min", l)),
                             &register_named(fmt::format("sim.{}.sensor_max", l)),
-                            &register_named(fmt::format("sim.{}.hysteresis", l))});
+                            &register_named(fmt::format("sim.{}.hysteresis", l)),
+                            &register_named(fmt::format("sim.{}.limit_min", l)),
+                            &register_named(fmt::format("sim.{}.limit_max", l))});
       cams[a] = TriggerCam{v.at(fmt::format("sim.{}.sensor_min", l)) / 1000.0,
                            v.at(fmt::format("sim.{}.sensor_max", l)) / 1000.0,
-                           v.at(fmt::format("sim.{}.hysteresis", l)) / 1000.0};
+                           v.at(fmt::format("sim.{}.hysteresis", l)) / 1000.0,
+                           v.at(fmt::format("sim.{}.limit_min", l)) / 1000.0,
+                           v.at(fmt::format("sim.{}.limit_max", l)) / 1000.0};
     }
   } catch (const ModbusException&) {
     cams.fill(std::nullopt);  // no simulator unit (real machine)

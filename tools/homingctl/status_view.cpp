@@ -26,7 +26,8 @@ StatusView read_status(Connection& c, const homing::Settings& settings) {
     for (const char* f : {"homed", "sensor", "busy"}) regs.push_back(&register_named(ax(a, f)));
     if (settings.axes[a].mode == homing::HomingMode::disabled) continue;
     for (const char* f :
-         {"phase", "alarm", "alarm_phase", "alarm_value", "position", "velocity", "phase_distance", "stop_distance"})
+         {"phase", "alarm", "alarm_phase", "alarm_value", "position", "velocity", "phase_distance", "stop_distance",
+          "trust", "refcheck_error"})
       regs.push_back(&register_named(ax(a, f)));
   }
   const auto v = c.read_many(regs);
@@ -56,6 +57,8 @@ StatusView read_status(Connection& c, const homing::Settings& settings) {
     x.velocity = mm(ax(a, "velocity"));
     x.phase_distance = mm(ax(a, "phase_distance"));
     x.stop_distance = mm(ax(a, "stop_distance"));
+    x.trust = static_cast<homing::Trust>(get(ax(a, "trust")));
+    x.refcheck_error = mm(ax(a, "refcheck_error"));
   }
   return s;
 }
@@ -116,8 +119,8 @@ std::string progress_bar(double done, double bound, int width) {
 
 std::string render_status(const StatusView& s, const homing::Settings& settings, bool progress) {
   std::string out;
-  out += fmt::format("{:<4} {:<18} {:<11} {:>14} {:<5} {:<6} {}\n", "axis", "mode", "phase", "position", "homed",
-                     "sensor", "alarm");
+  out += fmt::format("{:<4} {:<18} {:<11} {:>14} {:<5} {:<19} {:<6} {}\n", "axis", "mode", "phase", "position",
+                     "homed", "trust", "sensor", "alarm");
   const homing::Settings moves = homing::motion_settings(settings);  // a slave's bounds are its master's
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     const AxisView& x = s.axes[a];
@@ -127,8 +130,9 @@ std::string render_status(const StatusView& s, const homing::Settings& settings,
     std::string alarm = x.alarm == homing::AlarmCode::none
                             ? "-"
                             : fmt::format("{}: {}", homing::alarm_name(x.alarm), alarm_text(a, x, settings));
-    out += fmt::format("{:<4} {:<18} {:<11} {:>14} {:<5} {:<6} {}\n", homing::kAxisUpper[a], homing::mode_name(st.mode),
-                       disabled ? "-" : std::string(homing::phase_name(x.phase)), pos, x.homed ? "yes" : "no",
+    out += fmt::format("{:<4} {:<18} {:<11} {:>14} {:<5} {:<19} {:<6} {}\n", homing::kAxisUpper[a],
+                       homing::mode_name(st.mode), disabled ? "-" : std::string(homing::phase_name(x.phase)), pos,
+                       x.homed ? "yes" : "no", disabled ? "-" : std::string(homing::name_of(x.trust)),
                        disabled ? "-" : (x.sensor ? "on" : "off"), alarm);
     if (progress && !disabled && x.busy) {
       const homing::AxisSettings& homes_with = homing::is_commutator_slave(settings, a)
@@ -202,6 +206,8 @@ nlohmann::json status_json(const StatusView& s, const homing::Settings& settings
     e["homed"] = x.homed;
     e["sensor"] = x.sensor;
     e["busy"] = x.busy;
+    e["trust"] = std::string(homing::name_of(x.trust));
+    e["refcheck_error"] = x.refcheck_error;
     if (x.alarm == homing::AlarmCode::none)
       e["alarm"] = nullptr;
     else

@@ -19,6 +19,8 @@ struct AxisView {
   double alarm_value = 0;  // axis.<a>.alarm_value: distance travelled, misalignment, ...
   double position = 0, velocity = 0, phase_distance = 0, stop_distance = 0;
   bool homed = false, sensor = false, busy = false;
+  homing::Trust trust = homing::Trust::unknown;  // axis.<a>.trust
+  double refcheck_error = 0;                    // axis.<a>.refcheck_error: the last reference check's figure
 };
 
 struct StatusView {

@@ -22,8 +22,9 @@ void Run::exercise_motion() {
                            r_.axis(static_cast<std::size_t>(sl)).sensor);
     // Nor one whose limit switches a fault holds active: it may not move at all.
     const bool limits_stuck = r_.sim().axis_config(a).fault == sim::Fault::limits_stuck;
+    // Nor one standing on a limit switch (a move would be refused: only a jog away is its to make).
     if (master_index(r_.settings, a) < 0 && homed_axis(a) && e.soft_limits_enable && e.mode != HomingMode::disabled &&
-        !on_limit && !limits_stuck)
+        !on_limit && !limits_stuck && !on_limit_switch(a))
       cand.push_back(a);
   }
   if (cand.empty() || r_.status().alarm) return;
@@ -35,6 +36,8 @@ void Run::exercise_motion() {
   if (e.shared_limit || (slave >= 0 && r_.settings.axes[static_cast<std::size_t>(slave)].shared_limit))
     causes.add("the jogged pair's shared-limit sensor", {AlarmCode::hard_limit}, movers);
   limit_sensor_faults(causes);
+  // Soft limits past a limit switch: a jog or move may run into it.
+  if (e.limits_fitted) causes.add(std::string(1, kAxisUpper[a]) + "'s limit switch within its jogs and moves", {AlarmCode::limit_switch}, movers);
   w_->clear_alarms_seen();
   w_->set_outside_movers(movers);
   const int dir = d_.chance(0.5) ? 1 : -1;
@@ -75,6 +78,7 @@ void Run::exercise_motion() {
         acts_ |= act::event_in_jog_or_move;
         stopped_short = stopped_short_any = true;
       }
+    // (A locking indexer unlocks first: the move waits in phase unlock, seeds 5550935, 12018743.)
     r_.run_until([&] { return (!r_.any_moving() && !move_pending(a)) || !ok(); }, 120);
     settle(10);
     if (!outside && !stopped_short && !r_.status().alarm && ok() && std::abs(r_.axis(a).position_mm - target) > 1e-9)
@@ -352,13 +356,22 @@ void Run::lost_steps() {
   if (cand.empty() || r_.status().alarm) return;
   const std::size_t a = pick(cand);
   const AxisSettings& s = r_.settings.axes[a];
-  const double dir = dir_of(s);
+  // Away from the cam: where the pull-off went (a home cam's: its cam_edge side).
+  const double away = s.mode == HomingMode::home_cam && s.cam_edge == CamEdge::ahead ? dir_of(s) : -dir_of(s);
   // Never across the cam's edge: a carriage that jumps over it would show the
   // engine an edge where there is none (the simulator reports the jump as one).
   if (r_.sim().sensor_active(a)) return;
   const auto& c = r_.sim().axis_config(a);
-  const double to_cam = dir > 0 ? c.sensor_min_mm - r_.actual(a) : r_.actual(a) - c.sensor_max_mm;
-  const double lost = d_.chance(0.5) ? -dir * d_.u(0, 3) : dir * d_.u(0, std::min(s.pull_off_mm, 0.8 * to_cam));
+  const double to_cam = away < 0 ? c.sensor_min_mm - r_.actual(a) : r_.actual(a) - c.sensor_max_mm;
+  const double lost = d_.chance(0.5) ? away * d_.u(0, 3) : -away * d_.u(0, std::min(s.pull_off_mm, 0.8 * to_cam));
+  // Nor onto it from the other side: a home cam's jogs may leave it beyond
+  // its cam (seed 13004140).
+  const double x1 = r_.actual(a) + lost, margin = c.hysteresis_mm + 0.1;
+  if (s.mode == HomingMode::home_cam && std::min(r_.actual(a), x1) < c.sensor_max_mm + margin &&
+      std::max(r_.actual(a), x1) > c.sensor_min_mm - margin)
+    return;
+  // Nor onto a limit switch: a carriage that jumps past one is no overrun of the engine's.
+  if (s.limits_fitted && (r_.actual(a) + lost > c.limit_max_mm - 0.5 || r_.actual(a) + lost < c.limit_min_mm + 0.5)) return;
   say(std::string("lose ") + std::to_string(lost) + " on " + kAxisUpper[a]);
   r_.sim().lose_steps(a, lost);
   w_->carriage_jumped(a);

@@ -42,7 +42,10 @@
 //   - a homed axis has the coordinate its mode defines (switch modes: edge
 //     and pull-off, a slave with its own pull-off and compensation; absolute:
 //     the encoder; manual and unsequenced: the home position where it stood);
-//   - a reset after a hard-limit trip is taken and only a jog away moves.
+//   - a reset after a hard-limit trip is taken and only a jog away moves;
+//   - no carriage passes a limit switch by more than its stopping distance, a
+//     jog or move into one raises limit_switch, and a home cam's search
+//     reverses exactly when it meets the limit switch ahead (watch.cpp).
 // What a slave inherits (rules.hpp) is the campaign's own reading of the
 // README, not the engine's motion_settings. After every campaign a coverage
 // table (coverage.cpp) says per mode, topology and cause in how many runs it

@@ -1,6 +1,12 @@
 #pragma once
 // The campaign's only source of randomness: one generator per purpose, each
-// seeded from the run's seed, so a seed repeats a run exactly.
+// seeded from the run's seed, so a seed repeats a run exactly. A new purpose
+// takes a stream of its own, so that what the others draw stays as it was:
+//   1 the machine (machine_gen.cpp, causes_gen.cpp)    2, 3 the run's acts, its periods
+//   7 locking indexers                                  8 the run's indexer faults
+//   11 limit switches on plain switch axes              12 hard-stop axes by following error
+//   13 what goes wrong with home_cam axes               14 limit switches within reach
+//   15 the run's acts at limit switches                 16 home_cam axes (home_cam_gen.cpp)
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>

@@ -22,6 +22,17 @@ struct PairDraw {
   double hysteresis = 0;   // the slave's sensor's
   double misalignment = 1e9;
 };
+// A home_cam axis in the frame (the seek toward negative): its cam, where the
+// carriage starts, its two limit switches and what lies beyond them.
+struct CamFrame {
+  double top = 0, bottom = 0;     // the cam
+  double start = 0;
+  double seek_side = 0;           // the limit switch the seek meets
+  double far_side = 0;            // the other
+  double stop_beyond_seek = 0;    // the mechanical stops: this far beyond overtravel
+  double stop_beyond_far = 0;
+  double seek_margin = 0;         // max_seek_travel beyond the whole travel and overtravel
+};
 struct Gen {
   Dice d;
   Machine m;
@@ -81,6 +92,15 @@ struct Gen {
   void limit_switches();
   void following_error();
   void failure_policy();
+  // home_cam axes (home_cam_gen.cpp), from their own dice after everything else.
+  bool may_become_home_cam(std::size_t a) const;
+  void home_cams();
+  CamFrame home_cam_axis(std::size_t a, Dice& hc);
+  void place_home_cam(std::size_t a, const CamFrame& f);  // the simulated machine and max_seek_travel
+  void home_cam_cause(std::size_t a, CamFrame f, Dice& hk);
+  // Limit switches within reach (limits_reach_gen.cpp), from their own dice.
+  void limits_in_reach();
+  void limit_in_reach(std::size_t a, Dice& lr);
   Machine build();
 };
 

@@ -13,6 +13,12 @@ namespace campaign {
 
 enum class Role : std::uint8_t { plain, master, slave };
 
+// Where a home_cam axis starts, seen from its seek direction: the cam ahead
+// (found without reversal), behind it (the search meets the limit switch
+// ahead, reverses and finds the cam), or the carriage already on the cam.
+enum class CamStart : std::uint8_t { none, ahead, behind, on_cam };
+const char* cam_start_name(CamStart c);
+
 // Settings made wrong on purpose: the configuration check must refuse them.
 enum class Invalid : std::uint8_t {
   none,
@@ -93,6 +99,10 @@ struct AxisPlan {
   bool indexer = false;        // a locking indexer (axis.<a>.indexer_lock, fitted on the simulator)
   bool limits = false;         // end-of-travel limit switches fitted (axis.<a>.limits_fitted, on the simulator)
   bool following_error = false;  // hard-stop axis telling its stop by its encoder (stall_detect following_error)
+  CamStart cam_start = CamStart::none;  // home_cam: where its first cycle starts
+  bool cam_missing = false;    // home_cam: its cam lies beyond the limit switches
+  bool cam_at_limit = false;   // home_cam: the limit switch on its reference side lies within its latch or pull-off
+  int reach_side = 0;          // +1/-1: the limit switch at that end lies within its jogs, moves or final move
 };
 
 struct Machine {

@@ -471,7 +471,7 @@ void Gen::limit_switches() {
 // valid position. A stall output made dead or stuck on by causes() stays:
 // the encoder must home the axis all the same.
 void Gen::following_error() {
-  Dice fe(m.seed, 12);  // 7: indexers; 11: limit switches; 2, 3, 8: the run's own
+  Dice fe(m.seed, 12);  // every stream and what it draws: dice.hpp
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     AxisSettings& s = m.settings.axes[a];
     AxisPlan& p = m.plan[a];
@@ -526,6 +526,8 @@ Machine Gen::build() {
   indexers();
   limit_switches();
   following_error();
+  home_cams();
+  limits_in_reach();
   failure_policy();
   m.start_held_at_powerup = d.chance(0.15);
   m.powerup_periods = d.integer(1, 50);

@@ -133,13 +133,13 @@ void Watch::first_failure(const Status& st, AxisMask alarmed) {
 
 // The axes return_to_start sends back: each axis of the cycle that moved in
 // it, whose counted steps are its carriage's travel (it never pushed into its
-// stop, no drive homed it) and whose own alarm, if any, lets it move; a
-// gantry pair both sides or neither.
+// stop, no drive homed it), that did not start on a limit switch, and whose
+// own alarm, if any, lets it move; a gantry pair both sides or neither.
 AxisMask Watch::go_back_rule(const Status& st) const {
   AxisMask may = 0, moved = 0;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     if (!(plan.covered & axis_bit(a))) continue;
-    if (alarm_lets_go_back(st.axes[a].alarm.code) && !steps_off_[a]) may |= axis_bit(a);
+    if (alarm_lets_go_back(st.axes[a].alarm.code) && !steps_off_[a] && !started_on_limit_[a]) may |= axis_bit(a);
     if (path[a] > 1e-9) moved |= axis_bit(a);
   }
   AxisMask out = 0;

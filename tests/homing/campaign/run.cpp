@@ -5,7 +5,8 @@
 
 namespace campaign {
 
-Run::Run(std::uint64_t seed) : m_(generate(seed)), d_(seed, 2), periods_(seed, 3), indexer_events_(seed, 8) {
+Run::Run(std::uint64_t seed)
+    : m_(generate(seed)), d_(seed, 2), periods_(seed, 3), indexer_events_(seed, 8), limit_acts_(seed, 15) {
   r_.settings = m_.settings;
   r_.machine = m_.sim;
   const double max_dt = m_.max_dt_s;
@@ -115,7 +116,9 @@ void Run::add_indexer_event(std::vector<Event>& events, const CyclePlan& plan, d
 std::vector<Phase> Run::phases_run(std::size_t a) const {
   const AxisSettings e = effective(r_.settings, a);
   std::vector<Phase> p;
-  if (mode_uses_switch(e.mode)) {
+  if (e.mode == HomingMode::home_cam) {
+    p = {Phase::cam_seek, Phase::limit_reversal, Phase::cam_stop, Phase::cam_latch, Phase::pull_off};
+  } else if (mode_uses_switch(e.mode)) {
     p = {Phase::seek, Phase::stop, Phase::back_off, Phase::pull_off};
     if (e.pre_move_mode != PreMove::none) p.push_back(Phase::pre_move);
     if (mode_reapproaches(e.mode)) p.push_back(Phase::reapproach);
@@ -226,6 +229,12 @@ void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
     case EventKind::count: break;
   }
   event_cause(causes, e, r_.settings, r_.status(), plan);
+  if (e.kind == EventKind::stuck_active || e.kind == EventKind::stuck_inactive || e.kind == EventKind::wire_break)
+    for (Cause& c : causes.list)
+      if (c.needs_true_sensor && c.must && (c.axes & axis_bit(e.axis))) {
+        c.must = false;
+        c.what += " (its sensor lies since: it need not show)";
+      }
   // What no engine can see, named: a slave's sensor blinded (stuck inactive,
   // an open NO circuit) while the slave searches off it looks exactly like
   // its release edge, so the engine squares there, short of a skew it can no
@@ -249,6 +258,9 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
   const bool refused = first_fault(r_.settings).has_value();
   Causes causes = standing_causes(r_, m_, plan, refused, encoder_invalid_);
   const std::uint32_t cycles_before = r_.status().homing_cycles;
+  cam_on_start_ = 0;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (r_.sim().sensor_active(a)) cam_on_start_ |= axis_bit(a);
   w_->begin_window(plan, refused);
   w_->clear_alarms_seen();
   {
@@ -280,6 +292,7 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
       w_->fail("a home command was not accepted", std::string(command_result_name(res)));
   }
   const double limit = time_bound(r_, m_, plan);
+  AxisMask final_seen = 0;
   std::vector<bool> done(events.size(), false);
   std::vector<int> in_phase(events.size(), 0);
   while (r_.status().homing && r_.sim().time_s() - t0 < limit && ok()) {
@@ -305,6 +318,7 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
     if (button_periods > 0 && --button_periods == 0) r_.sim().set_start_button(false);
     const bool home_again = r_.pending.home_all;
     step();
+    final_move_into_limit(causes, final_seen);
     // An input the simulator changed is read by the engine in the next
     // period: the phase it then runs is the one its alarm may carry too.
     for (std::size_t i = applied_from; i < causes.list.size(); ++i)
@@ -330,6 +344,15 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
     o << "cycle ended " << state_name(r_.status().state) << ", alarms " << alarm_list(w_->alarms_seen);
     say(o.str());
   }
+  // A carriage braking after the cycle stopped (another axis's alarm, an
+  // abort, an e-stop) may run onto the limit switch its search was heading
+  // for: a trip outside homing, of that axis alone (campaign seed 571), in
+  // phase idle when it came to rest on the switch (seed 119).
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (r_.settings.axes[a].limits_fitted && w_->first_alarm[a].code == AlarmCode::limit_switch &&
+        (w_->first_alarm[a].phase == Phase::stopping || w_->first_alarm[a].phase == Phase::idle))
+      causes.add(std::string(1, kAxisUpper[a]) + "'s limit switch met braking after the cycle stopped",
+                 {AlarmCode::limit_switch}, axis_bit(a));
   if (ok()) verdict(*w_, r_, m_, causes, cycles_before);
   mark_cycle(plan, causes, ok() && w_->alarms_seen == 0 && !refused);
   if (r_.status().state == MachineState::homed && w_->alarms_seen == 0 && ok()) {
@@ -345,6 +368,27 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
   if (w_->alarms_seen) alarm_seen_ = true;
   w_->tampered = 0;
   return ok() && !r_.status().alarm && w_->alarms_seen == 0;
+}
+
+// A final move whose target lies past a limit switch must stop there with
+// limit_in_homing (the target as the truth places it, once the axis is homed).
+void Run::final_move_into_limit(Causes& causes, AxisMask& seen_final) {
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const AxisMask bit = axis_bit(a);
+    if ((seen_final & bit) || r_.axis(a).phase != Phase::final_move) continue;
+    seen_final |= bit;
+    const AxisSettings e = effective(r_.settings, a);
+    const sim::Fault f = r_.sim().axis_config(a).fault;
+    if (!e.limits_fitted || !w_->truth[a].valid || f == sim::Fault::limits_dead || f == sim::Fault::limits_stuck) continue;
+    const auto& c = r_.sim().axis_config(a);
+    const double target = e.final_position_mm - w_->truth[a].offset;
+    // Within 10 um of the switch either outcome is right: the carriage may
+    // come to rest a hair past it (seed 6617474: 1 um) or just short.
+    const double past = std::max(target - c.limit_max_mm, c.limit_min_mm - target);
+    if (past > -0.01)
+      causes.add(std::string(1, kAxisUpper[a]) + "'s final position beyond its limit switch", {AlarmCode::limit_in_homing},
+                 bit, past > 0.01);
+  }
 }
 
 namespace {
@@ -368,8 +412,25 @@ void Run::mark_machine() {
     }
     if (m_.plan[a].limits) mark("limit switches fitted", seen::present);
     if (m_.plan[a].following_error) mark("hard_stop by following error", seen::present);
+    if (m_.plan[a].reach_side) mark("a limit switch within jogs, moves or the final move", seen::present);
+    if (m_.settings.axes[a].mode == HomingMode::home_cam) {
+      for (const std::string& k : home_cam_keys(a)) mark(k, seen::present);
+      mark(std::string("home_cam starting ") + start_key(m_.plan[a].cam_start), seen::present);
+    }
   }
   mark("failure policy " + std::string(name_of(m_.settings.global.failure_policy)), seen::present);
+}
+
+const char* Run::start_key(CamStart c) {
+  return c == CamStart::on_cam ? "on the cam" : c == CamStart::behind ? "with the cam behind" : "with the cam ahead";
+}
+
+// A home_cam axis's coverage rows besides its mode: its cam edge and its switches' wiring.
+std::vector<std::string> Run::home_cam_keys(std::size_t a) const {
+  const AxisSettings& s = r_.settings.axes[a];
+  std::vector<std::string> k{std::string("home_cam cam_edge ") + (s.cam_edge == CamEdge::ahead ? "ahead" : "behind")};
+  if (s.limits_nc) k.push_back("home_cam limit switches NC");
+  return k;
 }
 
 // What a cycle reached: each cause present, and whether its own alarm showed;
@@ -402,7 +463,18 @@ void Run::mark_cycle(const CyclePlan& plan, const Causes& causes, bool clean) {
     }
     if (m_.plan[a].limits) mark("limit switches fitted", bits);
     if (m_.plan[a].following_error) mark("hard_stop by following error", bits);
+    if (r_.settings.axes[a].mode == HomingMode::home_cam) {
+      for (const std::string& k : home_cam_keys(a)) mark(k, bits);
+      if (w_->reversal_known & axis_bit(a))
+        mark(std::string("home_cam starting ") +
+                 start_key((cam_on_start_ & axis_bit(a))         ? CamStart::on_cam
+                           : (w_->reversal_expected & axis_bit(a)) ? CamStart::behind
+                                                                   : CamStart::ahead),
+             bits);
+    }
   }
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (w_->reversed & axis_bit(a)) mark("home_cam reversed at a limit switch", seen::present);
 }
 
 // Clear every cause, then reset: the reset must be taken.
@@ -490,6 +562,13 @@ void Run::recover() {
                   : "an alarm latched again right after a reset with no cause left",
              codes);
   }
+  // Now and then the technician jogs an axis off the limit switch it tripped
+  // (only away is allowed, homed or not); else the next cycle starts on it.
+  const AlarmBits limit_codes = code_bits({AlarmCode::limit_switch, AlarmCode::limit_in_homing});
+  for (std::size_t a = 0; a < kAxisCount && ok() && !r_.status().alarm; ++a) {
+    if (!(w_->axis_alarms[a] & limit_codes) || !on_limit_switch(a) || !limit_acts_.chance(0.5)) continue;
+    jog_off_limit_switch(a, r_.sim().limit_active(a, true) ? -1 : 1);
+  }
 }
 
 void Run::follow_ups() {
@@ -505,6 +584,8 @@ void Run::follow_ups() {
       }
       continue;
     }
+    limit_switch_trip();
+    if (!ok()) break;
     switch (d_.integer(0, 5)) {
       case 5: change_settings(); break;
       case 0: exercise_motion(); break;

@@ -35,13 +35,15 @@ inline constexpr std::uint32_t alarm_then_homed = 1u << 9;
 inline constexpr std::uint32_t motion_before_homing = 1u << 10;
 inline constexpr std::uint32_t event_in_jog_or_move = 1u << 11;
 inline constexpr std::uint32_t settings_changed = 1u << 12;
-inline constexpr int kCount = 13;
+inline constexpr std::uint32_t limit_switch_recovered = 1u << 13;
+inline constexpr int kCount = 14;
 inline const char* name(int i) {
   static const char* names[] = {"homed",           "homed a software-slaved gantry", "homed a commutator gantry",
                                 "event in a cycle", "jogged and moved",             "recovered from a hard-limit trip",
                                 "lost steps corrected", "cycle started by the button", "homed again",
                                 "homed after an alarm", "jogged or moved before homing",
-                                "event in a jog or move", "settings written between cycles"};
+                                "event in a jog or move", "settings written between cycles",
+                                "recovered from a limit switch trip"};
   return names[i];
 }
 }  // namespace act
@@ -84,6 +86,11 @@ class Run {
   void put_back(AxisMask mask);
   void exercise_motion();
   void hard_limit_recovery();
+  // limit_acts.cpp: a homed axis jogged or moved into a limit switch, and off it again.
+  void limit_switch_trip();
+  void final_move_into_limit(Causes& causes, AxisMask& seen_final);
+  void jog_off_limit_switch(std::size_t a, int away);
+  bool on_limit_switch(std::size_t a);  // limits fitted, not faulted, one of them active
   void lost_steps();
   void change_settings();
   void limit_sensor_faults(Causes& causes);  // indexer_faults too
@@ -101,12 +108,15 @@ class Run {
   void mark(const std::string& key, std::uint8_t bits) { coverage_[key] |= bits; }
   void mark_machine();
   void mark_cycle(const CyclePlan& plan, const Causes& causes, bool clean);
+  static const char* start_key(CamStart c);
+  std::vector<std::string> home_cam_keys(std::size_t a) const;
 
   Machine m_;
   rig::Rig r_;
   Dice d_;
   Dice periods_;
   Dice indexer_events_;  // locking-indexer faults in later cycles (their own dice: others draw as before)
+  Dice limit_acts_;      // acts at limit switches (their own dice)
   std::unique_ptr<Watch> w_;
   std::ostringstream log_;
   bool comm_lost_ = false;
@@ -117,6 +127,7 @@ class Run {
   int homed_cycles_ = 0;
   bool alarm_seen_ = false;
   RunCoverage coverage_;
+  AxisMask cam_on_start_ = 0;  // axes whose carriage stood on its cam as the cycle began
 };
 
 Outcome run_seed(std::uint64_t seed);

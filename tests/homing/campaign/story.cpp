@@ -23,6 +23,8 @@ const char* fault_name(sim::Fault f) {
     case sim::Fault::indexer_stuck_locked: return "indexer stuck locked";
     case sim::Fault::indexer_never_locks: return "indexer never locks";
     case sim::Fault::encoder_reversed: return "encoder counting the wrong way";
+    case sim::Fault::limits_dead: return "limit switches dead";
+    case sim::Fault::limits_stuck: return "limit switches stuck active";
   }
   return "?";
 }
@@ -102,6 +104,17 @@ std::string story(const Machine& m) {
     own(o, s);
     o << "\n     machine: ";
     machine_side(o, m.sim.axes[a], p);
+    if (p.limits) {
+      const sim::AxisConfig& c = m.sim.axes[a];
+      o << "; limit switches at " << c.limit_min_mm << " and " << c.limit_max_mm << " (" << (s.limits_nc ? "NC" : "NO")
+        << "), overtravel " << s.limit_overtravel_mm;
+    }
+    if (s.mode == HomingMode::home_cam)
+      o << "; home cam edge " << (s.cam_edge == CamEdge::ahead ? "ahead" : "behind") << ", starts with "
+        << cam_start_name(p.cam_start);
+    if (p.reach_side) o << "; the " << (p.reach_side > 0 ? "positive" : "negative") << " limit switch within jogs and moves";
+    if (p.cam_missing) o << "; CAM BEYOND THE LIMIT SWITCHES";
+    if (p.cam_at_limit) o << "; LIMIT SWITCH WITHIN THE LATCH OR PULL-OFF";
     if (p.short_cam) o << "; CAM SHORTER THAN THE STOP";
     if (p.rest_on_sensor) o << "; SHARED LIMIT RESTS ON ITS SENSOR";
     if (p.indexer)

@@ -39,6 +39,16 @@ Cause& Causes::sensor_fault(std::string what, AxisMask axes, bool must) {
              axes, must);
 }
 
+Cause& Causes::sensor_fault(std::string what, AxisMask axes, const Settings& s, bool must) {
+  Cause& c = sensor_fault(std::move(what), axes, must);
+  // A home cam that never shows searches on to the other limit switch; one
+  // that never releases latches on toward a limit switch.
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if ((axes & axis_bit(a)) && s.axes[a].limits_fitted)
+      c.codes |= code_bits({AlarmCode::cam_not_found, AlarmCode::limit_in_homing});
+  return c;
+}
+
 bool Causes::any_must() const {
   return std::any_of(list.begin(), list.end(), [](const Cause& c) { return c.must; });
 }
@@ -93,6 +103,58 @@ std::string cause_list(const Causes& causes) {
 
 }  // namespace
 
+// What a home cam's search must end in, from where the cycle finds it
+// (docs/limit-switches.md): a dead cam sensor or no cam between the limit
+// switches: cam_not_found, once the search has reversed at one switch and met
+// the other; a cam sensor stuck active: the latch never releases
+// (not_released, or limit_in_homing where a switch lies within max_backoff);
+// limit switches that never trip with the cam behind: the search runs on
+// into the stop, to sensor_not_found at max_seek_travel; a limit switch
+// within the latch or pull-off: limit_in_homing.
+void home_cam_causes(Causes& c, rig::Rig& r, const AxisSettings& e, std::size_t a, sim::Fault f) {
+  const auto& cfg = r.sim().axis_config(a);
+  const AxisMask bit = axis_bit(a);
+  const auto add = [&](std::string what, std::initializer_list<AlarmCode> codes, AxisMask axes, bool must) {
+    c.add(std::move(what), codes, axes, must).needs_true_sensor = true;
+  };
+  const bool dead = f == sim::Fault::sensor_stuck_inactive || (f == sim::Fault::wire_break && !e.sensor_nc);
+  const bool stuck_on = f == sim::Fault::sensor_stuck_active || (f == sim::Fault::wire_break && e.sensor_nc);
+  if (dead) add(letter(a) + "'s dead cam sensor", {AlarmCode::cam_not_found}, bit, true);
+  if (stuck_on) add(letter(a) + "'s cam sensor stuck active", {AlarmCode::not_released, AlarmCode::limit_in_homing}, bit, true);
+  if (f == sim::Fault::limits_dead && cam_lies_behind(r, e, a))
+    add(letter(a) + "'s dead limit switches with its cam behind", {AlarmCode::sensor_not_found}, bit, true);
+  if (f != sim::Fault::none) return;
+  const bool between = cfg.sensor_max_mm >= cfg.sensor_min_mm && cfg.sensor_max_mm > cfg.limit_min_mm &&
+                       cfg.sensor_min_mm < cfg.limit_max_mm;
+  if (!between) {
+    add(letter(a) + "'s cam beyond its limit switches", {AlarmCode::cam_not_found}, bit, true);
+    return;
+  }
+  // Where the latch releases and the pull-off ends, against the switch on that side.
+  const double side = e.cam_edge == CamEdge::ahead ? dir_of(e) : -dir_of(e);
+  const double edge = side > 0 ? cfg.sensor_max_mm : cfg.sensor_min_mm;
+  const double rest = edge + side * (cfg.hysteresis_mm + e.pull_off_mm);
+  const double past = (rest - (side > 0 ? cfg.limit_max_mm : cfg.limit_min_mm)) * side;
+  const double noise = 4 * cfg.noise_mm + 1e-3;
+  if (past > -noise)
+    add(letter(a) + "'s limit switch within its latch or pull-off", {AlarmCode::limit_in_homing}, bit, past > noise);
+}
+
+// A pre-move away from the sensor heading past the limit switch on that side
+// (a jog left the carriage next to it) must stop there with limit_in_homing;
+// within a hair of the switch, or where the sensor decides whether it runs,
+// it may. (A final move past a switch: Run::final_move_into_limit.)
+void pre_move_cause(Causes& c, rig::Rig& r, const AxisSettings& e, std::size_t a) {
+  const auto& cfg = r.sim().axis_config(a);
+  const bool always = e.pre_move_mode == PreMove::always;
+  if (!always && !(e.pre_move_mode == PreMove::if_sensor_active && r.sim().sensor_active(a))) return;
+  const double away = -dir_of(e);
+  const double target = r.actual(a) + away * e.pre_move_distance_mm;
+  const double past = (target - (away > 0 ? cfg.limit_max_mm : cfg.limit_min_mm)) * away;
+  if (past > -0.01)
+    c.add(letter(a) + "'s pre-move past its limit switch", {AlarmCode::limit_in_homing}, axis_bit(a), past > 0.01 && always);
+}
+
 Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, bool refused, AxisMask encoder_invalid) {
   Causes c;
   if (refused) {
@@ -108,7 +170,7 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
     const AxisSettings e = effective(r.settings, a);
     const sim::Fault f = r.sim().axis_config(a).fault;
     if (f == sim::Fault::sensor_stuck_active || f == sim::Fault::sensor_stuck_inactive || f == sim::Fault::wire_break)
-      c.sensor_fault(letter(a) + "'s faulty sensor", with_partner(r.settings, a), mover && mode_uses_switch(e.mode));
+      c.sensor_fault(letter(a) + "'s faulty sensor", with_partner(r.settings, a), r.settings, mover && mode_uses_switch(e.mode));
     if (p.short_cam) {
       // It must overrun only if the seek meets the cam fast enough: a seek
       // that starts close to it may still be accelerating (seed 1935).
@@ -167,7 +229,9 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
     if (mover && mode_uses_switch(e.mode) && f == sim::Fault::none) {
       const auto& cfg = r.sim().axis_config(a);
       const double x = r.actual(a);
-      const double depth = dir_of(e) < 0 ? cfg.sensor_max_mm - x : x - cfg.sensor_min_mm;
+      // The back-off leaves the cam away from direction; a home cam's latch toward its cam_edge side.
+      const double away = e.mode == HomingMode::home_cam && e.cam_edge == CamEdge::ahead ? dir_of(e) : -dir_of(e);
+      const double depth = away > 0 ? cfg.sensor_max_mm - x : x - cfg.sensor_min_mm;
       const bool inside = x >= cfg.sensor_min_mm && x <= cfg.sensor_max_mm;
       if (inside && depth + cfg.hysteresis_mm + 4 * cfg.noise_mm >= e.max_backoff_mm)
         c.add(letter(a) + " starting deeper in its cam than max_backoff releases", {AlarmCode::not_released}, with_partner(r.settings, a));
@@ -176,7 +240,9 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
     // cycle an alarm cut short after a pre-move "always" leaves it that much
     // further away: seed 8040760) must end in sensor_not_found, as README
     // says; near the end of the reach the trigger's detection delay decides.
-    if (mover && mode_uses_switch(e.mode) && f == sim::Fault::none && p.role != Role::slave) {
+    // (A home cam's search reverses at the limit switch: its travel covers both ways.)
+    if (mover && mode_uses_switch(e.mode) && f == sim::Fault::none && p.role != Role::slave &&
+        e.mode != HomingMode::home_cam) {
       const auto& cfg = r.sim().axis_config(a);
       const double x = r.actual(a);
       const bool inside = x >= cfg.sensor_min_mm && x <= cfg.sensor_max_mm;
@@ -234,6 +300,10 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
     if (f == sim::Fault::indexer_never_locks)
       c.add(letter(a) + "'s indexer that never locks", {AlarmCode::lock_not_confirmed}, bit,
             mover && mode_uses_switch(e.mode));
+    if (mover && e.mode == HomingMode::home_cam) home_cam_causes(c, r, e, a, f);
+    if (mover && e.limits_fitted && f == sim::Fault::none && p.role == Role::plain && mode_uses_switch(e.mode) &&
+        e.mode != HomingMode::home_cam)
+      pre_move_cause(c, r, e, a);
     // Both limit switches stuck active: the axis may not move at all.
     if (f == sim::Fault::limits_stuck)
       c.add(letter(a) + "'s limit switches stuck active", {AlarmCode::both_limits_active}, bit,
@@ -284,7 +354,7 @@ void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st,
     }
     case EventKind::stuck_active:
     case EventKind::stuck_inactive:
-    case EventKind::wire_break: c.sensor_fault(who, with_partner(s, e.axis)); break;
+    case EventKind::wire_break: c.sensor_fault(who, with_partner(s, e.axis), s); break;
     case EventKind::comm_lost:
       // It stops motion: a carriage moving when it came must show it (one
       // arriving in that very period may end the cycle without it).
@@ -416,6 +486,12 @@ double path_bound(rig::Rig& r, const Machine& m, std::size_t a, double x_start) 
   }
   if (!mode_uses_switch(e.mode)) return final_d + stop + 1e-6;
   const double over = e.max_stop_distance_mm + seek_v * m.max_dt_s + 1e-3;
+  if (e.mode == HomingMode::home_cam) {
+    // The search out to the limit switch ahead and its braking, the whole
+    // search back, the stop on the cam, the latch across it, the pull-off.
+    const double latch_stop = stop_distance_mm(latch_v, acc) + latch_v * m.max_dt_s;
+    return 2 * (e.max_seek_travel_mm + stop) + over + e.max_backoff_mm + latch_stop + e.pull_off_mm + final_d + stop + 1;
+  }
   const double index = e.mode == HomingMode::switch_index ? e.index_pitch_mm * 1.1 + stop_distance_mm(latch_v, acc) : 0;
   double b = e.pre_move_distance_mm + e.max_seek_travel_mm + over + (mode_is_pushing(e.mode) ? e.push_distance_mm : 0) +
              2 * e.max_backoff_mm + index + e.pull_off_mm + std::abs(e.switch_compensation_mm) + final_d + stop + 1;
@@ -513,6 +589,13 @@ void verdict(Watch& w, rig::Rig& r, const Machine& m, const Causes& causes, std:
     }
     if (!(w.flipped & bit) && (plan.covered & bit))
       w.fail("an axis was homed without ever being unhomed by its cycle", std::string(1, kAxisUpper[a]));
+    if ((w.reversal_known & bit) && !(w.tampered & bit) && ((w.reversed ^ w.reversal_expected) & bit)) {
+      std::ostringstream o;
+      o << kAxisUpper[a] << " started the cycle at " << w.window_start_x[a];
+      w.fail((w.reversed & bit) ? "the home cam search reversed although its cam lay ahead"
+                                : "the home cam search did not reverse although its cam lay behind",
+             o.str());
+    }
     const Truth& t = w.truth[a];
     if (!t.valid) continue;
     const double x = r.actual(a);

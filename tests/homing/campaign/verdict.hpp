@@ -24,6 +24,9 @@ struct Cause {
   AxisMask axes = 0;
   AlarmBits global = 0;  // bit per AlarmCode, as the global alarm
   bool must = false;
+  // It must show only while the axis's sensor tells the truth: a sensor fault
+  // struck during the cycle may end the search anywhere (Run::apply).
+  bool needs_true_sensor = false;
   std::optional<std::size_t> phase_axis;
   Phase phase = Phase::idle;       // the axis's phase when it struck
   Phase phase_seen = Phase::idle;  // ... and in the period the engine first read it
@@ -39,6 +42,8 @@ struct Causes {
   Cause& add(std::string what, std::initializer_list<AlarmCode> codes, AxisMask axes, bool must = false);
   // Every alarm a lying sensor can make the edge search raise.
   Cause& sensor_fault(std::string what, AxisMask axes, bool must = false);
+  // ... and, on an axis with limit switches, those a home cam's search or latch can then meet.
+  Cause& sensor_fault(std::string what, AxisMask axes, const Settings& s, bool must = false);
   bool any_must() const;
 };
 

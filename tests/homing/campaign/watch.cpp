@@ -66,6 +66,9 @@ void Watch::begin_window(const CyclePlan& p, bool is_refused) {
   path.fill(0);
   window_start_s = r_.sim().time_s();
   steps_off_.fill(false);
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    started_on_limit_[a] = effective(r_.settings, a).limits_fitted &&
+                           (r_.sim().limit_active(a, false) || r_.sim().limit_active(a, true));
   back_.fill(false);
   stop_touched_.fill(false);
   went_back_.fill(false);
@@ -84,6 +87,38 @@ void Watch::begin_window(const CyclePlan& p, bool is_refused) {
     if (m_.plan[s].role == Role::slave) rel_ref_[s] = r_.actual(s) - r_.actual(static_cast<std::size_t>(m_.plan[s].partner));
   late_allowance_.fill(0);
   slipped_.fill(false);
+  reversed = reversal_expected = reversal_known = 0;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (!(plan.movers & axis_bit(a)) || effective(r_.settings, a).mode != HomingMode::home_cam ||
+        r_.sim().axis_config(a).fault != sim::Fault::none)
+      continue;
+    reversal_known |= axis_bit(a);
+    if (cam_lies_behind(r_, effective(r_.settings, a), a)) reversal_expected |= axis_bit(a);
+  }
+}
+
+bool cam_lies_behind(rig::Rig& r, const AxisSettings& e, std::size_t a) {
+  const auto& c = r.sim().axis_config(a);
+  if (r.sim().sensor_active(a)) return false;
+  const double dir = dir_of(e);
+  const double x = r.sim().actual_position_mm(a);
+  const double near = dir > 0 ? c.sensor_min_mm : c.sensor_max_mm;
+  const double limit = dir > 0 ? c.limit_max_mm : c.limit_min_mm;
+  const bool cam = c.sensor_max_mm >= c.sensor_min_mm;
+  // A sensor reading inactive within the cam stands within its noise of an
+  // edge, and switches on where the noise drew it, on the cam's side of the
+  // carriage: just inside the near edge the cam still lies ahead (seed
+  // 4420842 on camp-cam before the merge: 1.6 um inside, noise 5.5 um).
+  const double middle = 0.5 * (c.sensor_min_mm + c.sensor_max_mm);
+  return !(cam && (middle - x) * dir > 0 && (limit - near) * dir > 0);
+}
+
+double rest_from_edge(const AxisSettings& e, double ref, double compensation_mm) {
+  if (e.mode == HomingMode::home_cam) {
+    const double side = e.cam_edge == CamEdge::ahead ? dir_of(e) : -dir_of(e);
+    return ref + side * e.pull_off_mm;
+  }
+  return rig::rest_point_mm(e, ref, compensation_mm);
 }
 
 void Watch::end_window() {
@@ -187,8 +222,14 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
   // let the seek run into the stop just behind it. A commutator slave rides
   // along with its master's output, into its stop too. Once at the stop it
   // may rest there, but never drives on into it at full current.
-  if (r_.sim().at_hard_stop(a)) {
-    if (in_window) stop_touched_[a] = true;
+  // Limit switches that never trip cannot keep a carriage off its stop: a
+  // home cam's search behind which the cam lies runs into it, losing steps
+  // until max_seek_travel (docs/limit-switches.md, fault limits_dead).
+  if (in_window && r_.sim().at_hard_stop(a)) stop_touched_[a] = true;
+  const bool limits_dead = m_.plan[a].limits && r_.sim().axis_config(a).fault == sim::Fault::limits_dead;
+  if (r_.sim().at_hard_stop(a) && limits_dead) {
+    pushed_to_stop_[a] = false;
+  } else if (r_.sim().at_hard_stop(a)) {
     const bool pushing = pushes_into_stop(e.mode);
     const bool reduced = r_.engine.outputs().axes[a].push_output ||
                          (master >= 0 && r_.engine.outputs().axes[static_cast<std::size_t>(master)].push_output);
@@ -290,6 +331,7 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
 
   const double ran_dt = r_.ran_dt_s > 0 ? r_.ran_dt_s : 1e-3;
   limit_overrun(a, x, std::max({std::abs(v_prev_[a]), std::abs(v), step / ran_dt}));
+  cam_reversal(a);
 
   x_prev_[a] = x;
   v_prev_[a] = v;
@@ -297,8 +339,9 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
 }
 
 // No carriage passes a limit switch by more than its stopping distance: the
-// stop at the axis's acceleration from the speed it had when the switch
-// tripped, one late control period of travel and the simulator's tolerance.
+// stop at the axis's acceleration from the speed it had at the end of the
+// period the switch tripped in, one late control period of travel and the
+// simulator's tolerance.
 // The switches are where the simulated machine has them (not what the engine
 // believes); a switch a fault keeps from ever tripping is not held to it.
 void Watch::limit_overrun(std::size_t a, double x, double speed) {
@@ -312,7 +355,16 @@ void Watch::limit_overrun(std::size_t a, double x, double speed) {
     past_limit_[a] = false;
     return;
   }
-  if (!past_limit_[a]) trip_speed_[a] = speed;
+  // The speed at the end of the period it tripped in is what the engine
+  // brakes from: the status of the next period reports it (a carriage still
+  // accelerating ends that period faster than it crossed: seed 2719).
+  if (!past_limit_[a]) {
+    trip_speed_[a] = speed;
+    trip_fresh_[a] = true;
+  } else if (trip_fresh_[a]) {
+    trip_speed_[a] = std::max(trip_speed_[a], std::abs(r_.status().axes[a].velocity_mm_per_s));
+    trip_fresh_[a] = false;
+  }
   past_limit_[a] = true;
   const double v0 = trip_speed_[a];
   const double allowed = stop_distance_mm(v0, accel_limit(a)) + v0 * m_.max_dt_s + kLimitTolerance_mm;
@@ -323,6 +375,31 @@ void Watch::limit_overrun(std::size_t a, double x, double speed) {
       << allowed;
     fail("a carriage passed a limit switch by more than its stopping distance", o.str());
   }
+}
+
+// A home cam's search reverses exactly when it meets the limit switch ahead
+// (docs/limit-switches.md): it enters limit_reversal only in a period whose
+// inputs show that switch active, and never seeks on in cam_seek past a
+// period that showed it (a cam trigger in the same period takes precedence;
+// both switches at once are both_limits_active). A phase entered during a
+// period runs in it (the first phase of a sequence step runs from the next
+// period: campaign seed 604), so a period that began and ended in cam_seek
+// shows what the search decided on the inputs it read.
+void Watch::cam_reversal(std::size_t a) {
+  const AxisSettings& e = eff_[a];
+  const bool read_min = limit_min_read_[a], read_max = limit_max_read_[a];
+  limit_min_read_[a] = r_.sim().limit_active(a, false);
+  limit_max_read_[a] = r_.sim().limit_active(a, true);
+  if (e.mode != HomingMode::home_cam || !e.limits_fitted || !in_window || !(plan.covered & axis_bit(a))) return;
+  const AxisStatus& as = r_.status().axes[a];
+  const bool ahead = dir_of(e) > 0 ? read_max : read_min;
+  const bool both = read_min && read_max;
+  if (as.phase == Phase::limit_reversal && phase_prev_[a] != Phase::limit_reversal) {
+    reversed |= axis_bit(a);
+    if (!ahead) fail("the home cam search reversed without meeting the limit switch ahead", fmt_axis(a, r_, r_.actual(a)));
+  }
+  if (as.phase == Phase::cam_seek && phase_prev_[a] == Phase::cam_seek && ahead && !both && !r_.status().alarm)
+    fail("the home cam search met the limit switch ahead and sought on", fmt_axis(a, r_, r_.actual(a)));
 }
 
 void Watch::racking(double engine_dt) {
@@ -456,7 +533,7 @@ void Watch::on_flip(std::size_t a, double x) {
       return;
     }
     const double comp = master_index(r_.settings, a) >= 0 ? e.switch_compensation_mm : 0.0;
-    t.rest = rig::rest_point_mm(e, ref, comp);
+    t.rest = rest_from_edge(e, ref, comp);
     t.has_rest = true;
     t.offset = e.home_position_mm - t.rest;
     t.tol = rig::edge_tolerance_mm(e, 0.001) + 1e-9;

@@ -76,6 +76,12 @@ class Watch {
   CyclePlan plan{};
   bool refused = false;
   std::uint64_t trace_axes = 0;  // HOMING_CAMPAIGN_TRACE: phase changes on stdout
+  // home_cam: the axes whose search reversed at a limit switch in this window,
+  // those whose cam lay behind the carriage (or beyond the switch ahead) as
+  // it began, and those for which that was known (no fault at the start).
+  AxisMask reversed = 0;
+  AxisMask reversal_expected = 0;
+  AxisMask reversal_known = 0;
   bool powering_up = false;      // no command may be judged yet (a start button held since power-up)
   bool powerup_started = false;  // ... and yet one was: what it moved is that failure, not another
 
@@ -122,6 +128,7 @@ class Watch {
   void braking(std::size_t a, double x, double v);
   void going_back(std::size_t a, double x, double v, bool moved);
   bool back_at_start(std::size_t a, double x) const;
+  void cam_reversal(std::size_t a);
 
   rig::Rig& r_;
   const Machine& m_;
@@ -149,6 +156,7 @@ class Watch {
   AxisMask first_axes_ = 0;      // the axes that latched in the first period any axis did
   bool abort_pending_ = false;
   bool event_pending_ = false;
+  std::array<bool, kAxisCount> started_on_limit_{};  // a limit switch active as the window began
   std::array<bool, kAxisCount> steps_off_{};  // seen pushing into its stop or homed by its drive in this window
   std::array<bool, kAxisCount> back_{};       // go_back: at rest where the window found it
   std::array<bool, kAxisCount> stop_touched_{};
@@ -166,6 +174,19 @@ class Watch {
   // Limit switches: past one since the period it tripped, at that speed.
   std::array<bool, kAxisCount> past_limit_{};
   std::array<double, kAxisCount> trip_speed_{};
+  std::array<bool, kAxisCount> trip_fresh_{};  // tripped in the last period: its end speed comes now
+  // The limit switches as the engine reads them in the next period (the
+  // simulator's levels at the end of this one).
+  std::array<bool, kAxisCount> limit_min_read_{}, limit_max_read_{};
 };
+
+// Where an axis homed on reference edge `ref` (carriage coordinates) rests:
+// pull-off away from it (a slave's compensation too), for a home cam off the
+// cam on its cam_edge side (docs/limit-switches.md).
+double rest_from_edge(const AxisSettings& e, double ref, double compensation_mm);
+
+// A home cam axis off its cam, the cam not between the carriage and the limit
+// switch ahead (behind it, or beyond that switch): its search must reverse.
+bool cam_lies_behind(rig::Rig& r, const AxisSettings& e, std::size_t a);
 
 }  // namespace campaign

@@ -1,0 +1,118 @@
+// The reference check (trust.hpp): after a restart, an axis whose last stop
+// was clean finds its switch edge at latch feedrate near where its stored
+// position puts it, instead of a full cycle. The edge is the one its method
+// homes on, crossed the same way: the trigger edge approaching from the side
+// the axis rests on, or the release edge backing off again. Accepted within
+// refcheck_tolerance: the axis is homed there, its coordinate set by the
+// edge found. Refused beyond: it stays unhomed and a full cycle is needed.
+// Either way the figure is kept (refcheck_error) and the axis goes back
+// where it started. Every step is bounded in distance: no further than
+// refcheck_tolerance plus max_stop_distance past the expected edge (the room
+// a seek may take past a trigger), max_backoff off the switch.
+#include <cmath>
+
+#include "phase_runner.hpp"
+
+namespace homing {
+
+using Step = phase_data::RefCheck::Step;
+
+void PhaseRunner::reference_check() {
+  auto& c = run.phase_data<phase_data::RefCheck>();
+  if (entry()) refcheck_begin(c);
+  switch (c.step) {
+    case Step::leave_sensor: return refcheck_leave_sensor(c);
+    case Step::approach: return refcheck_approach(c);
+    case Step::back_off: return refcheck_back_off(c);
+    case Step::go_back: return refcheck_go_back(c);
+  }
+}
+
+// The edge lies where the frame puts it: the rest point (home_position)
+// lies pull-off away from it.
+void PhaseRunner::refcheck_begin(phase_data::RefCheck& c) {
+  c.start_mm = run.motor.position_mm;
+  c.expected_mm = s.home_position_mm - away_from_reference() * rest_offset_mm() - run.offset_mm;
+  c.started_on_sensor = active();
+  if (c.started_on_sensor) return refcheck_step(c, Step::leave_sensor, c.start_mm + away_from_reference() * s.max_backoff_mm);
+  // Past the edge by the tolerance, the room a seek takes past a trigger,
+  // and the travel while the debounce time accepts the edge.
+  const double past = s.refcheck_tolerance_mm + s.max_stop_distance_mm + latch_v * s.debounce_ms / 1000.0;
+  const double target = c.expected_mm - away_from_reference() * past;
+  // Already that far past the edge, and off the switch: it is not where it was stored.
+  if ((target - c.start_mm) * -away_from_reference() <= 0) return refcheck_judge(c, c.start_mm, false);
+  refcheck_step(c, Step::approach, target);
+}
+
+void PhaseRunner::refcheck_step(phase_data::RefCheck& c, phase_data::RefCheck::Step step, double target_mm) {
+  c.step = step;
+  run.target_mm = target_mm;
+  run.phase_start_mm = run.motor.position_mm;
+}
+
+// Started on the switch (stored there, or moved onto it): its release edge
+// is the reference of a release method; a trigger method approaches again.
+void PhaseRunner::refcheck_leave_sensor(phase_data::RefCheck& c) {
+  if (edge_to(false)) {
+    if (refcheck_edge(row()) == RefcheckEdge::release) return refcheck_judge(c, edge_mm(), true);
+    const double past = s.refcheck_tolerance_mm + s.max_stop_distance_mm + latch_v * s.debounce_ms / 1000.0;
+    return refcheck_step(c, Step::approach, c.expected_mm - away_from_reference() * past);
+  }
+  move_to(run.target_mm, latch_v);
+  if (arrived()) refcheck_judge(c, run.motor.position_mm, false);
+}
+
+void PhaseRunner::refcheck_approach(phase_data::RefCheck& c) {
+  if (edge_to(true)) {
+    if (refcheck_edge(row()) == RefcheckEdge::trigger) return refcheck_judge(c, edge_mm(), true);
+    c.trigger_mm = edge_mm();
+    return refcheck_step(c, Step::back_off, edge_mm() + away_from_reference() * s.max_backoff_mm);
+  }
+  move_to(run.target_mm, latch_v);
+  if (arrived()) refcheck_judge(c, run.motor.position_mm, false);
+}
+
+void PhaseRunner::refcheck_back_off(phase_data::RefCheck& c) {
+  if (edge_to(false)) return refcheck_judge(c, edge_mm(), true);
+  move_to(run.target_mm, latch_v);
+  // Met the switch but it never released: its trigger is the only figure.
+  if (arrived()) refcheck_judge(c, c.trigger_mm, false);
+}
+
+// found: the reference edge at edge_mm; else edge_mm is as far as the search
+// went without it, and the figure says at least how far off it is. Refused,
+// the stored position is no longer offered at once (trust unknown).
+void PhaseRunner::refcheck_judge(phase_data::RefCheck& c, double edge_mm, bool found) {
+  const double error = edge_mm - c.expected_mm;
+  run.refcheck_error_mm = error;
+  c.accepted = found && std::abs(error) <= s.refcheck_tolerance_mm;
+  double back_mm = c.start_mm;
+  if (c.accepted) {
+    c.offset_mm = run.offset_mm - error;
+    run.trigger_position_mm = edge_mm + run.offset_mm;
+    run.home_correction_mm = -error;
+    // Homed resting on its switch, a shared limit would trip at once: end
+    // where a cycle ends, pull-off away from the edge.
+    if (c.started_on_sensor) back_mm = edge_mm + away_from_reference() * rest_offset_mm();
+  } else {
+    run.restored.reset();
+  }
+  refcheck_step(c, Step::go_back, back_mm);
+}
+
+// Back at seek feedrate, as a pull-off: the path was just travelled. Homed
+// only at rest there, off the switch it was checked on.
+void PhaseRunner::refcheck_go_back(phase_data::RefCheck& c) {
+  move_to(run.target_mm, seek_v);
+  if (!arrived()) return;
+  if (c.accepted) {
+    run.offset_mm = c.offset_mm;
+    run.home = home_frame(settings.axes[axis]);
+    run.homed_by_check = true;
+    run.restored.reset();
+    run.reach(Reached::assigned);
+  }
+  enter(Phase::done);
+}
+
+}  // namespace homing

@@ -1,0 +1,247 @@
+// Position trust across restarts (homing/trust.hpp): an axis that came to
+// rest under control is offered a reference check after a restart; the check
+// homes it when its switch edge lies where its stored position says, and is
+// refused with the figure when the carriage was moved meanwhile. A restart is
+// a new engine on the same simulated machine (the carriages stay where they
+// were), given the last stops the runtime kept.
+#include <catch2/catch.hpp>
+
+#include "homing/last_stop.hpp"
+#include "rig.hpp"
+
+using namespace rig;
+
+namespace {
+constexpr std::size_t X = 0, Y = 1;
+
+// The stops the runtime records at a clean shutdown of this rig.
+LastStops shut_down(Rig& r) { return last_stops_at_shutdown(r.settings, r.status(), r.engine.outputs()); }
+
+// A new engine on the same machine and settings, its carriages where they
+// were, given `stops` in its first period.
+Rig restart(Rig& before, const std::optional<LastStops>& stops) {
+  Rig after;
+  after.settings = before.settings;
+  after.machine = before.machine;
+  for (std::size_t a = 0; a < kAxisCount; ++a) after.machine.axes[a].actual_position_mm = before.actual(a);
+  after.restore = stops;
+  after.step();
+  return after;
+}
+
+// Runs cmd.refcheck of these axes to its end; the command's result.
+CommandResult refcheck(Rig& r, AxisMask axes) {
+  r.pending.refcheck_axes = axes;
+  r.step();
+  const CommandResult result = r.status().last_command_result;
+  r.run_until([&] { return !r.status().homing; }, 60);
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  return result;
+}
+
+// Homed, then shut down cleanly: what the restarted engine is given.
+struct CleanStop {
+  Rig before;
+  LastStops stops{};
+  double offset_mm = 0;  // machine coordinate less carriage position, as the cycle homed it
+};
+void home_and_stop(CleanStop& c) {
+  REQUIRE(c.before.home_all());
+  c.stops = shut_down(c.before);
+  c.offset_mm = c.before.axis(X).position_mm - c.before.actual(X);
+}
+
+}  // namespace
+
+SCENARIO("a restart after a clean stop offers a reference check, which homes the carriage left where it was without a full cycle",
+         "[trust]") {
+  CleanStop c;
+  home_and_stop(c);
+  REQUIRE(c.stops[X].clean);
+  REQUIRE(c.before.axis(X).trust == Trust::homed_this_power_on);
+
+  Rig r = restart(c.before, c.stops);
+  THEN("it is not homed, trusts its last stop, and shows the stored position") {
+    CHECK_FALSE(r.axis(X).homed);
+    CHECK(r.axis(X).trust == Trust::last_stop_clean);
+    CHECK(r.axis(X).position_mm == Approx(c.stops[X].position_mm));
+  }
+  WHEN("the reference check runs") {
+    const double start = r.actual(X);
+    r.clear_trace();
+    CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);
+    THEN("the axis is homed by the check, within the tolerance, at latch speed, and back where it started") {
+      CHECK(r.axis(X).homed);
+      CHECK(r.axis(X).trust == Trust::reference_checked);
+      CHECK(std::abs(r.axis(X).refcheck_error_mm) <= r.settings.axes[X].refcheck_tolerance_mm);
+      CHECK(r.saw(X, Phase::reference_check));
+      CHECK_FALSE(r.saw(X, Phase::seek));
+      CHECK_FALSE(r.saw(X, Phase::pull_off));
+      CHECK(r.status().homing_cycles == 0);  // a check is no homing cycle
+      CHECK_FALSE(r.status().alarm);
+      // To the edge (pull-off away) and back: a few mm, not the 100 mm of a seek.
+      CHECK(r.trace[X].path_mm < 4 * r.settings.axes[X].pull_off_mm);
+      CHECK(r.actual(X) == Approx(start).margin(1e-9));
+      CHECK(r.axis(X).phase == Phase::done);
+      // The coordinate is the one the full cycle gave this carriage, within the tolerance.
+      CHECK(r.axis(X).position_mm - r.actual(X) == Approx(c.offset_mm).margin(r.settings.axes[X].refcheck_tolerance_mm));
+    }
+    THEN("a second check is refused: the axis is homed already") {
+      CHECK(refcheck(r, axis_bit(X)) == CommandResult::refused_no_clean_stop);
+    }
+  }
+}
+
+SCENARIO("a restart after a clean stop, the carriage moved by hand: the reference check is refused with the figure",
+         "[trust]") {
+  const double moved = GENERATE(0.5, -1.6, 3.0);  // away from the switch, onto it, further away
+  CAPTURE(moved);
+  CleanStop c;
+  home_and_stop(c);
+  Rig r = restart(c.before, c.stops);
+  const double stored_at = r.actual(X);
+  REQUIRE(r.sim().place(X, stored_at + moved));
+  r.step();
+  REQUIRE(r.axis(X).trust == Trust::last_stop_clean);
+
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);  // it ran
+  THEN("the edge is found as far off as the carriage was moved, the axis stays unhomed and back where it stood") {
+    CHECK_FALSE(r.axis(X).homed);
+    CHECK(r.axis(X).trust == Trust::unknown);
+    // Moved by +d, the edge is met d later than expected: the figure is -d.
+    CHECK(r.axis(X).refcheck_error_mm == Approx(-moved).margin(0.01));
+    CHECK(r.axis(X).phase == Phase::idle);
+    CHECK_FALSE(r.status().alarm);
+    CHECK(r.actual(X) == Approx(stored_at + moved).margin(1e-9));
+  }
+  THEN("the check is not offered again, and a full cycle homes the axis") {
+    CHECK(refcheck(r, axis_bit(X)) == CommandResult::refused_no_clean_stop);
+    REQUIRE(r.home_all());
+    CHECK(r.axis(X).trust == Trust::homed_this_power_on);
+    CHECK(r.axis(X).position_mm - r.actual(X) == Approx(c.offset_mm).margin(0.01));
+  }
+}
+
+SCENARIO("a restart after an unclean stop offers no reference check", "[trust]") {
+  CleanStop c;
+  home_and_stop(c);
+  SECTION("an alarm latched when the module stopped") {
+    c.before.sim().set_estop(true);
+    c.before.step();
+    REQUIRE(c.before.status().alarm);
+    c.stops = shut_down(c.before);
+    CHECK_FALSE(c.stops[X].clean);
+  }
+  SECTION("stopped while homing (SIGTERM aborts the cycle: an alarm)") {
+    c.before.pending.home_all = true;
+    c.before.run_until([&] { return c.before.any_moving(); }, 1);
+    c.before.pending.abort = true;
+    c.before.run_until([&] { return !c.before.any_moving(); }, 5);
+    c.stops = shut_down(c.before);
+    CHECK_FALSE(c.stops[X].clean);
+  }
+  SECTION("not homed when the module stopped") {
+    c.before.pending.unhome_axes = axis_bit(X);
+    c.before.step();
+    c.stops = shut_down(c.before);
+    CHECK_FALSE(c.stops[X].clean);
+  }
+  SECTION("killed: nothing clean was recorded (the runtime wipes the mark at start)") {
+    for (LastStop& s : c.stops) s.clean = false;
+  }
+  Rig r = restart(c.before, c.stops);
+  r.clear_trace();
+  CHECK(r.axis(X).trust == Trust::unknown);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::refused_no_clean_stop);
+  CHECK(r.trace[X].path_mm == 0);
+}
+
+SCENARIO("a restart without any record of the last stops offers no reference check", "[trust]") {
+  CleanStop c;
+  home_and_stop(c);
+  Rig r = restart(c.before, std::nullopt);
+  CHECK(r.axis(X).trust == Trust::unknown);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::refused_no_clean_stop);
+}
+
+SCENARIO("a home setting changed since the last stop withdraws the reference check", "[trust]") {
+  CleanStop c;
+  home_and_stop(c);
+  Rig r = restart(c.before, c.stops);
+  REQUIRE(r.axis(X).trust == Trust::last_stop_clean);
+  r.settings.axes[X].pull_off_mm = 2;
+  r.step();
+  CHECK(r.axis(X).trust == Trust::unknown);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::refused_no_clean_stop);
+}
+
+SCENARIO("a jog before the reference check keeps the stored position: steps are counted from it", "[trust]") {
+  CleanStop c;
+  home_and_stop(c);
+  Rig r = restart(c.before, c.stops);
+  r.jog(X, +1);
+  r.run_for(0.5);
+  r.release_jogs();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  REQUIRE(r.axis(X).trust == Trust::last_stop_clean);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);
+  CHECK(r.axis(X).trust == Trust::reference_checked);
+}
+
+SCENARIO("an alarm before the reference check withdraws it (global.alarm_clears_homed)", "[trust]") {
+  CleanStop c;
+  home_and_stop(c);
+  Rig r = restart(c.before, c.stops);
+  r.sim().set_estop(true);
+  r.step();
+  r.sim().set_estop(false);
+  r.reset_alarm();
+  CHECK(r.axis(X).trust == Trust::unknown);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::refused_no_clean_stop);
+}
+
+SCENARIO("a reference check is refused for a method without a switch edge and for a gantry pair, and nothing moves",
+         "[trust]") {
+  CleanStop c;
+  CommandResult expected = CommandResult::accepted;
+  SECTION("manual: no switch edge") {
+    c.before.settings.axes[X].mode = HomingMode::manual;
+    expected = CommandResult::refused_no_switch_edge;
+  }
+  SECTION("hard stop: no switch edge") {
+    c.before.settings.axes[X].mode = HomingMode::hard_stop;
+    expected = CommandResult::refused_no_switch_edge;
+  }
+  SECTION("a software-slaved gantry") {
+    c.before.settings.axes[Y] = typical_axis();
+    c.before.settings.axes[Y].slave_of = X + 1;
+    c.before.settings.axes[Y].max_misalignment_mm = 2;
+    c.before.machine.axes[Y].actual_position_mm = 100;
+    expected = CommandResult::refused_gantry_pair;
+  }
+  home_and_stop(c);
+  REQUIRE(c.stops[X].clean);
+  Rig r = restart(c.before, c.stops);
+  CHECK(r.axis(X).trust == Trust::last_stop_clean);
+  r.clear_trace();
+  CHECK(refcheck(r, axis_bit(X)) == expected);
+  CHECK(r.trace[X].path_mm == 0);
+  CHECK(r.axis(X).trust == Trust::last_stop_clean);  // still offered: nothing was tried
+}
+
+SCENARIO("an abort during the reference check stops it with the aborted alarm", "[trust]") {
+  CleanStop c;
+  home_and_stop(c);
+  Rig r = restart(c.before, c.stops);
+  r.pending.refcheck_axes = axis_bit(X);
+  r.step();
+  REQUIRE(r.run_until([&] { return r.any_moving(); }, 1));
+  CHECK(r.status().state == MachineState::homing);
+  CHECK(r.axis(X).phase == Phase::reference_check);
+  r.pending.abort = true;
+  r.step();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(r.axis(X).alarm.code == AlarmCode::aborted);
+  CHECK(r.axis(X).alarm.phase == Phase::reference_check);
+  CHECK_FALSE(r.axis(X).homed);
+}

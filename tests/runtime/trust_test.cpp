@@ -1,0 +1,95 @@
+// The runtime's side of the position trust (docs/homing-methods.md "Position
+// trust and the reference check"), with the control loop stepped by hand on
+// the simulator: the kept last stops reach the engine, and a reference check
+// is no homing cycle in the events the plant hears of.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <map>
+#include <memory>
+
+#include "homing/last_stop.hpp"
+#include "homing/sim/simulator_io.hpp"
+#include "registers/defaults.hpp"
+#include "registers/sim_bindings.hpp"
+#include "server/control_loop.hpp"
+
+namespace {
+
+homing::Settings default_settings() {
+  std::map<std::string, std::int64_t> raw;
+  for (const auto& [name, value] : registers::persisted_defaults()) raw[name] = value;
+  return registers::settings_from_raw(raw).settings;
+}
+
+std::unique_ptr<server::ControlLoop> loop_with_carriages(const homing::Settings& settings,
+                                                         const std::array<double, homing::kAxisCount>* carriages) {
+  homing::sim::MachineConfig config = registers::default_sim_config();
+  if (carriages)
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) config.axes[a].actual_position_mm = (*carriages)[a];
+  return std::make_unique<server::ControlLoop>(settings, std::make_unique<homing::sim::SimulatorIo>(config), 1000, 1.0);
+}
+
+// Runs the command, then periods until nothing homes or moves.
+void run_command(server::ControlLoop& loop, const homing::Commands& c) {
+  loop.submit(c, false);
+  loop.run_period(0.001);
+  for (int i = 0; i < 120'000; ++i) {
+    const homing::Status st = loop.snapshot().status;
+    bool busy = st.homing;
+    for (const auto& a : st.axes) busy = busy || a.busy;
+    if (!busy) return;
+    loop.run_period(0.001);
+  }
+  FAIL("still busy after 120 s of machine time");
+}
+
+// The kinds of the events written after `after`.
+std::vector<server::StatusEventKind> events_since(const server::ControlLoop& loop, std::uint64_t after) {
+  const server::Snapshot s = loop.snapshot();
+  std::vector<server::StatusEventKind> kinds;
+  for (std::uint64_t seq = after + 1; seq <= s.events.written(); ++seq)
+    if (const auto* e = s.events.find(seq)) kinds.push_back(e->kind);
+  return kinds;
+}
+
+}  // namespace
+
+TEST_CASE("the control loop gives the engine the kept last stops, and a reference check sends no cycle events") {
+  const homing::Settings settings = default_settings();
+  homing::LastStops stops{};
+  std::array<double, homing::kAxisCount> carriages{};
+  {
+    auto before = loop_with_carriages(settings, nullptr);
+    homing::Commands home;
+    home.home_all = true;
+    const std::uint64_t written = before->snapshot().events.written();
+    run_command(*before, home);
+    const server::Snapshot s = before->snapshot();
+    REQUIRE(s.status.state == homing::MachineState::homed);
+    // A homing cycle is news: started and ended.
+    const auto kinds = events_since(*before, written);
+    CHECK(std::count(kinds.begin(), kinds.end(), server::StatusEventKind::cycle_started) == 1);
+    CHECK(std::count(kinds.begin(), kinds.end(), server::StatusEventKind::cycle_ended) == 1);
+    stops = homing::last_stops_at_shutdown(settings, s.status, s.outputs);
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) carriages[a] = s.sim.axes[a].actual_position_mm;
+  }
+  REQUIRE(stops[0].clean);
+
+  auto after = loop_with_carriages(settings, &carriages);
+  CHECK(after->snapshot().status.axes[0].trust == homing::Trust::unknown);  // nothing given yet
+  after->restore_last_stops(stops);
+  after->run_period(0);
+  CHECK(after->snapshot().status.axes[0].trust == homing::Trust::last_stop_clean);
+  CHECK(after->snapshot().status.axes[0].position_mm == Approx(stops[0].position_mm));
+
+  const std::uint64_t written = after->snapshot().events.written();
+  homing::Commands check;
+  check.refcheck_axes = homing::axis_bit(0);
+  run_command(*after, check);
+  const homing::Status st = after->snapshot().status;
+  CHECK(st.last_command_result == homing::CommandResult::accepted);
+  CHECK(st.axes[0].trust == homing::Trust::reference_checked);
+  CHECK(st.homing_cycles == 0);
+  CHECK(events_since(*after, written).empty());
+}
