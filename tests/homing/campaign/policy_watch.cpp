@@ -72,6 +72,15 @@ void Watch::policy_period(const Status& st) {
     if (abort_pending_) everything = true;
     if (newly || everything) later_failure_at(st, everything ? kAllAxes : with_partners(r_.settings, newly));
     if (event_pending_ && wind_down != FailurePolicy::stop_all) later_failure = true;
+    // A limit switch met by an axis sent back (its braking carried it onto
+    // one: a home cam seeking toward the switch it reverses at) is a new
+    // cause on an axis that keeps its first alarm: the way back stops
+    // (seed 7201525).
+    if (wind_down == FailurePolicy::return_to_start)
+      for (std::size_t a = 0; a < kAxisCount; ++a)
+        if (after[a] == After::go_back && !started_on_limit_[a] && eff_[a].limits_fitted &&
+            (r_.sim().limit_active(a, false) || r_.sim().limit_active(a, true)))
+          later_failure = true;
   }
   abort_pending_ = false;
   event_pending_ = false;

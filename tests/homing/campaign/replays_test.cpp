@@ -87,14 +87,17 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // 984, 3293, 3639, 5510656, 5512163, 7004079: the campaign's own model of
   // the policy. 162 (after the merge with the home cams): return_to_start
   // sent back an axis the cycle found on a limit switch, onto the switch
-  // (fix in failure_policy.cpp, named scenario).
+  // (fix in failure_policy.cpp, named scenario). 7201525: the campaign's
+  // own model (an axis sent back braked onto a limit switch: the way back
+  // stops, as docs/homing-methods.md says).
   const std::uint64_t seeds[] = {1,        7,        3,        8,        490,      715,      2,       173,
                                  959,      1242,     2054,     84,       4,        103,      1069,    412,
                                  627,      3972,     8001884,  31342370, 9,        5000422,  5001903, 9001798,
                                  9102373,  2258828930, 97,     877,      571,      604,      1710,    161,
                                  1022,     1177,     2719,     13003772, 12004845, 13004140, 12018743, 119,
                                  4420842,  4431542,  6617474,  2818140234, 5512019, 2652,   33,
-                                 90,       336,      984,      3293,     3639,     5510656,  5512163, 7004079, 162};
+                                 90,       336,      984,      3293,     3639,     5510656,  5512163, 7004079, 162,
+                                 7201525};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);
