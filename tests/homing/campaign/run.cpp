@@ -348,11 +348,18 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
   // abort, an e-stop) may run onto the limit switch its search was heading
   // for: a trip outside homing, of that axis alone (campaign seed 571), in
   // phase idle when it came to rest on the switch (seed 119).
-  for (std::size_t a = 0; a < kAxisCount; ++a)
-    if (r_.settings.axes[a].limits_fitted && w_->first_alarm[a].code == AlarmCode::limit_switch &&
-        (w_->first_alarm[a].phase == Phase::stopping || w_->first_alarm[a].phase == Phase::idle))
+  // Under return_to_start the braking is the first part of the way back, still
+  // in the cycle: limit_in_homing in phase return_to_start (seed 7201552).
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    const Alarm& first = w_->first_alarm[a];
+    if (!r_.settings.axes[a].limits_fitted) continue;
+    if (first.code == AlarmCode::limit_switch && (first.phase == Phase::stopping || first.phase == Phase::idle))
       causes.add(std::string(1, kAxisUpper[a]) + "'s limit switch met braking after the cycle stopped",
                  {AlarmCode::limit_switch}, axis_bit(a));
+    if (first.code == AlarmCode::limit_in_homing && first.phase == Phase::return_to_start)
+      causes.add(std::string(1, kAxisUpper[a]) + "'s limit switch met braking for the way back",
+                 {AlarmCode::limit_in_homing}, axis_bit(a));
+  }
   if (ok()) verdict(*w_, r_, m_, causes, cycles_before);
   mark_cycle(plan, causes, ok() && w_->alarms_seen == 0 && !refused);
   if (r_.status().state == MachineState::homed && w_->alarms_seen == 0 && ok()) {
