@@ -89,6 +89,57 @@ inline constexpr EnumInfo<CheckRule> kCheckRuleInfo[] = {
 static_assert(lists_every_value(kCheckRuleInfo, CheckRule::following_error_beyond_travel));
 constexpr std::span<const EnumInfo<CheckRule>> enum_table(CheckRule) { return kCheckRuleInfo; }
 
+// What to change for each rule, for a technician at a panel
+// (hmi_maps/refusals.csv "fix"; the log's line adds the figures).
+struct CheckRuleFix {
+  CheckRule value;
+  std::string_view fix;
+};
+inline constexpr CheckRuleFix kCheckRuleFix[] = {
+    {CheckRule::none, ""},
+    {CheckRule::not_positive, "write a value greater than 0"},
+    {CheckRule::latch_not_slower, "lower latch_feedrate below seek_feedrate, or raise seek_feedrate first"},
+    {CheckRule::stop_distance_too_long,
+     "lower seek_feedrate or debounce_ms, raise acceleration, or raise max_stop_distance first"},
+    {CheckRule::negative, "write 0 or more"},
+    {CheckRule::missing_distance,
+     "set the distance this mode needs (pre_move_distance, push_distance or index_pitch) above 0 first, "
+     "or choose another mode"},
+    {CheckRule::slave_invalid, "name another axis (1 = X ... 6 = C) whose mode homes, or 0 for no gantry"},
+    {CheckRule::slave_needs_sensor,
+     "give the slave a switch mode with its own sensor, or drive it through an external commutator (slave_mode 1)"},
+    {CheckRule::commutator_needs_switch_master,
+     "give the master a switch mode (switch_release, switch_reapproach, switch_index), or use a software-slaved pair"},
+    {CheckRule::soft_limits_inverted, "write soft_limit_max above soft_limit_min (raise the maximum first)"},
+    {CheckRule::outside_soft_limits,
+     "move home_position or final_position inside the soft limits, widen the limits first, or switch them off"},
+    {CheckRule::disabled_in_gantry, "set slave_of = 0 first, or give both axes a homing mode"},
+    {CheckRule::slave_of_slave, "name the pair's master (an axis that is no slave)"},
+    {CheckRule::gantry_stop_too_long,
+     "lower the master's seek and jog feedrates, raise the accelerations of both sides, or raise the slave's "
+     "max_misalignment first"},
+    {CheckRule::squaring_beyond_misalignment,
+     "bring the two pull-offs closer, lower switch_compensation, or raise the slave's max_misalignment first"},
+    {CheckRule::backoff_too_short,
+     "raise max_backoff first, or lower seek_feedrate or push_distance, or raise acceleration"},
+    {CheckRule::shared_limit_rests_on_sensor, "raise pull_off so that the axis comes to rest off the sensor"},
+    {CheckRule::shared_limit_without_sensor, "set shared_limit = 0, or choose a mode with a home sensor"},
+    {CheckRule::kind_linear_only, "leave X, Y and Z linear (kind 0); put a rotary axis on A, B or C"},
+    {CheckRule::missing_time_limit, "set drive_home_timeout_s above 0 (longer than the drive's own homing takes)"},
+    {CheckRule::indexer_in_gantry, "switch indexer_lock off, or take the axis out of the gantry (slave_of = 0)"},
+    {CheckRule::cam_needs_limits, "set limits_fitted = 1 and wire both limit switches, or choose another mode"},
+    {CheckRule::limit_overtravel_too_short,
+     "lower seek_feedrate or jog_feedrate, raise acceleration, or raise limit_overtravel to what the machine has"},
+    {CheckRule::following_error_in_noise,
+     "raise max_following_error above the encoder's noise and the lag at latch_feedrate, or lower latch_feedrate"},
+    {CheckRule::following_error_beyond_travel, "lower max_following_error, or raise max_seek_travel first"},
+};
+static_assert(lists_every_value(kCheckRuleFix, CheckRule::following_error_beyond_travel));
+constexpr std::string_view rule_fix(CheckRule rule) {
+  const auto i = static_cast<std::size_t>(rule);
+  return i < std::size(kCheckRuleFix) ? kCheckRuleFix[i].fix : std::string_view{};
+}
+
 struct SettingsFault {
   std::size_t axis = 0;
   AxisField field = AxisField::none;

@@ -204,6 +204,7 @@ std::int64_t read_raw(const Register& reg, const ModuleView& view) {
     case Key::diag_tcp_clients: return view.extras.tcp_clients;
     case Key::status_refusal_count: return view.extras.refusal_count;
     case Key::status_last_refused_register: return view.extras.last_refused_register;
+    case Key::status_last_refused_write: return view.extras.last_refused_write;
     case Key::status_last_refusal_reason: return view.extras.last_refusal_reason;
     case Key::status_unlock_lockout_s: return view.extras.unlock_lockout_s;
     case Key::status_wrong_unlock_codes: return view.extras.wrong_unlock_codes;

@@ -56,6 +56,7 @@ struct StatusExtras {
   // The last refused write (owned by the Modbus service, not the monitor).
   std::uint16_t refusal_count = 0;
   std::uint16_t last_refused_register = 0;
+  std::uint16_t last_refused_write = 0;
   std::uint16_t last_refusal_reason = 0;
   // The unlock code's guard (owned by the Modbus service).
   std::uint16_t unlock_lockout_s = 0;

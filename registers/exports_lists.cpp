@@ -22,17 +22,19 @@ std::string export_alarms_csv() {
 
 std::string export_refusals_csv() {
   using exports_detail::csv_field;
-  std::string out = "code,name,exception,text\n";
+  // The reasons' texts say what to do already; each rule has its fix beside it.
+  std::string out = "code,name,exception,text,fix\n";
   for (const RefusalReasonInfo& r : kRefusalReasonInfo) {
     if (r.value == RefusalReason::none || r.value == RefusalReason::rule) continue;  // a rule has its own codes
-    out += fmt::format("{},{},{:02X},{}\n", static_cast<int>(r.value), csv_field(r.name), static_cast<int>(r.exception),
+    out += fmt::format("{},{},{:02X},{},\n", static_cast<int>(r.value), csv_field(r.name), static_cast<int>(r.exception),
                        csv_field(r.text));
   }
   const auto rule_exception = static_cast<int>(kRefusalReasonInfo[static_cast<std::size_t>(RefusalReason::rule)].exception);
   for (const auto& r : homing::kCheckRuleInfo) {
     if (r.value == homing::CheckRule::none) continue;
-    out += fmt::format("{},{},{:02X},{}\n", kRuleReasonBase + static_cast<int>(r.value), csv_field(r.name),
-                       rule_exception, csv_field("combination refused: " + std::string(r.text)));
+    out += fmt::format("{},{},{:02X},{},{}\n", kRuleReasonBase + static_cast<int>(r.value), csv_field(r.name),
+                       rule_exception, csv_field("combination refused: " + std::string(r.text)),
+                       csv_field(homing::rule_fix(r.value)));
   }
   return out;
 }

@@ -55,7 +55,7 @@ enum class Key : std::uint8_t {
   status_last_command_result, status_interlocks, status_global_alarm, status_alarm_axis,
   status_settings_locked, status_command_count, axis_alarm_value, diag_loop_periods, diag_late_p50_us, diag_late_p99_us, diag_late_p999_us,
   diag_late_max_us, diag_engine_step_ns, diag_rss_kb, diag_tcp_clients,
-  status_refusal_count, status_last_refused_register, status_last_refusal_reason,
+  status_refusal_count, status_last_refused_register, status_last_refusal_reason, status_last_refused_write,
   status_unlock_lockout_s, status_wrong_unlock_codes,
   axis_phase, axis_alarm, axis_alarm_phase, axis_position, axis_velocity, axis_home_correction,
   axis_stop_distance, axis_trigger_position, axis_phase_distance, axis_correction_mean,

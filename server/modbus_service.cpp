@@ -28,6 +28,7 @@ std::uint16_t first_address(const std::vector<registers::Change>& changes, std::
 }  // namespace
 
 thread_local std::optional<registers::Refusal> ModbusService::refused_here_;
+thread_local std::optional<std::uint16_t> ModbusService::written_start_;
 
 Reply ModbusService::refuse(std::uint8_t fc, const registers::Refusal& r, const ClientInfo& client) {
   refused_here_ = r;
@@ -47,13 +48,15 @@ Reply ModbusService::refuse(std::uint8_t fc, const registers::Refusal& r, const 
     std::lock_guard lock(log_mutex_);
     refusal_log_.refused(who, reason, level, line, now());
   }
-  // Count, register and reason of one refusal in one word, so that a read
+  // Count, registers and reason of one refusal in one word, so that a read
   // never pairs the count of one refusal with the reason of another.
+  const std::uint16_t written = written_start_.value_or(r.address);
   std::uint64_t old = last_refusal_.load();
   std::uint64_t next = 0;
   do {
     const std::uint64_t count = (old + 1) & 0xFFFF;
-    next = count | (std::uint64_t{r.address} << 16) | (std::uint64_t{r.reason_code()} << 32);
+    next = count | (std::uint64_t{r.address} << 16) | (std::uint64_t{r.reason_code()} << 32) |
+           (std::uint64_t{written} << 48);
   } while (!last_refusal_.compare_exchange_weak(old, next));
   return fail(fc, r.code);
 }
@@ -189,6 +192,7 @@ registers::StatusExtras ModbusService::extras_now() {
   extras.refusal_count = static_cast<std::uint16_t>(refusal & 0xFFFF);
   extras.last_refused_register = static_cast<std::uint16_t>((refusal >> 16) & 0xFFFF);
   extras.last_refusal_reason = static_cast<std::uint16_t>((refusal >> 32) & 0xFFFF);
+  extras.last_refused_write = static_cast<std::uint16_t>((refusal >> 48) & 0xFFFF);
   extras.unlock_lockout_s = static_cast<std::uint16_t>(std::min<std::int64_t>(unlock_guard_.remaining(now()).count(), 0xFFFF));
   extras.wrong_unlock_codes = static_cast<std::uint16_t>(std::min<std::uint32_t>(unlock_guard_.wrong_in_a_row(), 0xFFFF));
   return extras;
@@ -225,6 +229,11 @@ Reply ModbusService::read(Target target, std::uint8_t fc, const ReadRequest& r) 
 
 std::optional<Reply> ModbusService::write(Target target, std::uint8_t fc, const WriteRequest& w,
                                           const ClientInfo& client) {
+  // What the client wrote, beside what a refusal is about (a rule may name another setting).
+  struct WrittenStart {
+    explicit WrittenStart(std::uint16_t start) { written_start_ = start; }
+    ~WrittenStart() { written_start_.reset(); }
+  } const written_start(w.start);
   if (!may_write(client))
     return refuse(fc,
                   registers::Refusal::because(registers::RefusalReason::client_read_only, w.start,

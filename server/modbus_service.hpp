@@ -97,13 +97,14 @@ class ModbusService final : public RequestHandler {
   std::int64_t sim_raw(const registers::Register& reg, const Snapshot& snap) const;
   // Logs a refused write (warn: client, reason, register, the rule in words),
   // records it for status.refusal_count / last_refused_register /
-  // last_refusal_reason, and answers its exception.
+  // last_refusal_reason / last_refused_write, and answers its exception.
   Reply refuse(std::uint8_t fc, const registers::Refusal& refusal, const ClientInfo& client);
   // A code written to security.unlock or security.unlock32, through the guard.
   std::optional<Reply> try_unlock(std::uint8_t fc, std::uint32_t code, std::uint16_t address, const ClientInfo& client);
   std::chrono::steady_clock::time_point now() const;
 
   static thread_local std::optional<registers::Refusal> refused_here_;  // refuse()'s last, for command()
+  static thread_local std::optional<std::uint16_t> written_start_;  // the write request refuse() answers
   ServiceConfig config_;
   ControlLoop& loop_;
   persistence::SettingsStore* store_;

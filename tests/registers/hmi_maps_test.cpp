@@ -87,7 +87,7 @@ TEST_CASE("alarms.csv lists every alarm code of the engine with its name, text a
 TEST_CASE("refusals.csv lists every code status.last_refusal_reason can take, with its exception") {
   const auto lines = lines_of(generated("refusals.csv"));
   REQUIRE(!lines.empty());
-  CHECK(lines[0] == "code,name,exception,text");
+  CHECK(lines[0] == "code,name,exception,text,fix");
   const std::set<std::string> rows(lines.begin() + 1, lines.end());
   const auto listed = [&](std::int64_t code, std::string_view name, std::string_view exception) {
     return std::any_of(rows.begin(), rows.end(), [&](const std::string& row) {
@@ -110,6 +110,17 @@ TEST_CASE("refusals.csv lists every code status.last_refusal_reason can take, wi
     ++expected;
   }
   CHECK(rows.size() == expected);
+  // Every combination rule says what to change, as the log does.
+  for (const auto& r : homing::kCheckRuleInfo) {
+    if (r.value == homing::CheckRule::none) continue;
+    INFO(r.name);
+    const std::string fix(homing::rule_fix(r.value));
+    CHECK(fix.size() > 10);
+    const std::string prefix = std::to_string(registers::kRuleReasonBase + static_cast<int>(r.value)) + ",";
+    const auto row = std::find_if(rows.begin(), rows.end(), [&](const std::string& l) { return l.rfind(prefix, 0) == 0; });
+    REQUIRE(row != rows.end());
+    CHECK(row->find(fix) != std::string::npos);
+  }
   // The register's value list is the same set of codes (plus 0, none).
   const auto* reg = registers::find_register("status.last_refusal_reason");
   REQUIRE(reg != nullptr);

@@ -127,3 +127,28 @@ TEST_CASE("a simulator write that moves a moving carriage's cam is refused as ca
   REQUIRE(c.write("cmd.jog_plus.x", 0) == 0);
   check_refusal(d, c, before, "sim.x.sensor_max", code(RefusalReason::carriage_moving), "carriage_moving");
 }
+
+TEST_CASE("a combination refused about another setting names both the register written and the one to change") {
+  // Y as X's software-slaved second motor: a faster seek on the master is
+  // refused because the pair could no longer stop within the slave's
+  // max_misalignment, the setting the refusal is about.
+  Daemon d({.time_scale = 2});
+  Client c = Client::tcp(d.port());
+  c.set("axis.y.slave_of", 1);
+  c.set("axis.y.acceleration", 100);  // the pair brakes at 100 mm/s²: 1.4 mm from 1000 mm/min, 2.3 from 1300
+  const LastRefusal before = last_refusal(c);
+  const std::int64_t seek = c.read("axis.x.seek_feedrate");
+  CHECK(c.write("axis.x.seek_feedrate", 1300) == MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+  CHECK(c.read("axis.x.seek_feedrate") == seek);
+  const auto v = c.read_together({"status.refusal_count", "status.last_refused_register", "status.last_refusal_reason",
+                                  "status.last_refused_write"});
+  CHECK(v[0] == before.count + 1);
+  CHECK(v[3] == registers::find_register("axis.x.seek_feedrate")->address);
+  CHECK(v[1] == registers::find_register("axis.y.max_misalignment")->address);
+  CHECK(v[2] == code(homing::CheckRule::gantry_stop_too_long));
+  // A refusal about the register written names it twice.
+  CHECK(c.write("axis.x.latch_feedrate", seek) == MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+  const auto w = c.read_together({"status.last_refused_register", "status.last_refused_write"});
+  CHECK(w[0] == registers::find_register("axis.x.latch_feedrate")->address);
+  CHECK(w[1] == w[0]);
+}
