@@ -38,6 +38,7 @@ class Monitor {
   void housekeeping(std::int64_t now_ms);
   void record_run(const homing::Status& st, const homing::Settings& settings, std::int64_t now_ms);
   void report_refcheck(const homing::Status& st, const homing::Settings& settings);
+  void report_measurements(const homing::Status& st, const homing::Settings& settings);
   void keep_sim_carriages(const Snapshot& snap, std::int64_t now_ms);
 
   ControlLoop& loop_;

@@ -71,7 +71,8 @@ TEST_CASE("over Modbus: cmd.measure.x homes X, finds its far limit switch 150 mm
   CHECK(seek >= 150'000 + c.read("axis.x.max_stop_distance"));
   CHECK(seek < 200'000);
   CHECK(seek % 1000 == 0);
-  // Written only on request.
+  // Written only on request; the log says so with the figures.
+  CHECK(wait_until([&] { return d.log().find("measurement of X: usable travel ") != std::string::npos; }, 5s));
   CHECK(c.read("axis.x.soft_limit_max") == soft_max_before);
   CHECK(c.read("axis.x.max_seek_travel") == seek_before);
 
