@@ -190,3 +190,26 @@ SCENARIO("measurement is refused, moving nothing, for axes it cannot measure", "
     CHECK(refused(r, axis_bit(X) | axis_bit(1)) == CommandResult::refused_invalid);
   }
 }
+
+SCENARIO("an abort during the measurement's travel stops the axis where it is with aborted, and no figures are published",
+         "[measure]") {
+  Rig r = limit_switch_axis();
+  r.pending.measure_axes = axis_bit(X);
+  r.step();
+  REQUIRE(r.status().last_command_result == CommandResult::accepted);
+  REQUIRE(r.run_until([&] { return r.axis(X).phase == Phase::measure_travel && r.actual(X) > 50; }, 300));
+  r.pending.abort = true;
+  r.step();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(r.axis(X).alarm.code == AlarmCode::aborted);
+  CHECK(r.axis(X).alarm.phase == Phase::measure_travel);
+  CHECK_FALSE(r.status().homing);
+  CHECK(r.actual(X) < 52);  // braked from latch feedrate
+  CHECK(r.axis(X).measurement.usable_travel_mm == 0);
+  r.reset_alarm();
+  WHEN("the axis is then homed by cmd.home") {
+    r.clear_trace();
+    REQUIRE(r.home_axes(axis_bit(X)));
+    THEN("no measurement travel follows") { CHECK_FALSE(r.saw(X, Phase::measure_travel)); }
+  }
+}
