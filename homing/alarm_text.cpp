@@ -39,6 +39,9 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
       if (a.phase == Phase::assign)
         return fmt::format("{}: shared home/limit sensor still active after the pull-off of {:g} {}", X,
                            s.pull_off_mm, u);
+      if (a.phase == Phase::measure_travel)
+        return fmt::format("{}: the far limit switch the measurement found still active after backing off {:g} {} "
+                           "(check it and limits_nc)", X, s.max_backoff_mm, u);
       return fmt::format("{}: home sensor still active after backing off {:g} {} (phase {})", X,
                          s.max_backoff_mm, u, ph);
     case AlarmCode::index_not_found:

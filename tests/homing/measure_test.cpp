@@ -213,3 +213,23 @@ SCENARIO("an abort during the measurement's travel stops the axis where it is wi
     THEN("no measurement travel follows") { CHECK_FALSE(r.saw(X, Phase::measure_travel)); }
   }
 }
+
+SCENARIO("a far limit switch that stays active after the measurement backs off max_backoff raises not_released naming the limit switch",
+         "[measure][alarms]") {
+  Rig r = limit_switch_axis();
+  bool stuck = false;
+  r.tweak_inputs = [&](Inputs& in) {
+    if (stuck) in.axes[X].limit_max_level = true;  // a switch stuck on once met
+  };
+  r.on_period = [&](Rig& rig) {
+    if (rig.actual(X) >= 150) stuck = true;
+  };
+  REQUIRE(measure(r, axis_bit(X)) == CommandResult::accepted);
+  const AxisStatus& x = r.axis(X);
+  CHECK(x.alarm.code == AlarmCode::not_released);
+  CHECK(x.alarm.phase == Phase::measure_travel);
+  CHECK(x.alarm.value == Approx(r.settings.axes[X].max_backoff_mm).margin(0.01));
+  CHECK(r.actual(X) == Approx(150 - r.settings.axes[X].max_backoff_mm).margin(0.01));
+  CHECK(describe_alarm(X, x.alarm, r.settings).find("far limit switch the measurement found still active") !=
+        std::string::npos);
+}
