@@ -193,6 +193,7 @@ void Monitor::poll(std::int64_t now_ms) {
   if (st.homing && !last_.homing) {
     run_start_ms_ = now_ms;
     run_axes_ = 0;
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) measured_at_start_[a] = st.axes[a].measurement;
     spdlog::info(st.reference_check ? "reference check started" : "homing started");
   }
   if (st.homing) {
@@ -283,11 +284,12 @@ void Monitor::keep_sim_carriages(const Snapshot& snap, std::int64_t now_ms) {
   carriages_kept_ = at;
 }
 
-// A measurement's figures, once it found its end (they are reset as one starts).
+// A measurement's figures, at the end of the cycle that found them.
 void Monitor::report_measurements(const homing::Status& st, const homing::Settings& settings) {
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     const homing::Measurement& m = st.axes[a].measurement;
-    if (m.usable_travel_mm == 0 || m.usable_travel_mm == last_.axes[a].measurement.usable_travel_mm) continue;
+    // A measurement resets its axis's figures as it starts: new ones differ from those at the start.
+    if (m.usable_travel_mm == 0 || m.usable_travel_mm == measured_at_start_[a].usable_travel_mm) continue;
     const auto unit = homing::axis_unit(settings, a);
     spdlog::info("measurement of {}: usable travel {:.3f} {} from the home position; fitting soft_limit_min {:.3f}, "
                  "soft_limit_max {:.3f}, max_seek_travel {:.3f} {} (not written: homingctl measure {} --apply writes "
