@@ -81,6 +81,7 @@ void Engine::stop_axis(const Settings& settings, std::size_t a) {
   // pulses to the other motor.
   run.in_cycle = false;
   run.checking = false;
+  run.measuring = false;
   run.aligning = false;
   if (moving) run.set_phase(Phase::stopping);
   else if (run.phase != Phase::done) run.set_phase(Phase::idle);

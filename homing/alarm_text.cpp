@@ -39,6 +39,9 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
       if (a.phase == Phase::assign)
         return fmt::format("{}: shared home/limit sensor still active after the pull-off of {:g} {}", X,
                            s.pull_off_mm, u);
+      if (a.phase == Phase::measure_travel)
+        return fmt::format("{}: the far limit switch the measurement found still active after backing off {:g} {} "
+                           "(check it and limits_nc)", X, s.max_backoff_mm, u);
       return fmt::format("{}: home sensor still active after backing off {:g} {} (phase {})", X,
                          s.max_backoff_mm, u, ph);
     case AlarmCode::index_not_found:
@@ -116,6 +119,10 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
     case AlarmCode::encoder_reversed:
       return fmt::format("{}: the encoder counted {:.3f} {} away from the mechanical stop while the motor pushed "
                          "toward it (stall_detect following_error)", X, a.value, u);
+    case AlarmCode::travel_end_not_found:
+      return fmt::format("{}: measurement found no end of travel within {:.3f} {} of the home (max_seek_travel "
+                         "{:g} {}): no {} met", X, a.value, u, s.max_seek_travel_mm, u,
+                         s.limits_fitted ? "limit switch" : "stall at a hard stop");
     case AlarmCode::switch_not_repeatable:
       return fmt::format("{}: switch not repeatable: spread {:.3f} {} over {} passes, limit {:.3f} {}", X, a.value,
                          u, latch_passes_of(s.latch_passes), s.max_latch_spread_mm, u);

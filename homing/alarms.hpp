@@ -47,8 +47,9 @@ enum class AlarmCode : std::uint8_t {
   limit_switch = 31,           // an end-of-travel limit switch tripped outside homing (hard limit)
   switch_not_repeatable = 32,  // the latch passes' spread exceeded max_latch_spread
   encoder_reversed = 33,       // hard-stop homing by following error: the encoder counted away from the stop
+  travel_end_not_found = 34,   // measurement: no end of travel within max_seek_travel of the home
 };
-inline constexpr std::uint8_t kAlarmCodeCount = 34;
+inline constexpr std::uint8_t kAlarmCodeCount = 35;
 
 // The alarm table: per code its name, what happened (text) and what a
 // maintenance technician checks (what_to_check). describe_alarm() says what
@@ -146,8 +147,12 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
      "hard-stop homing by following error: the encoder counted away from the stop while the motor pushed toward it",
      "check the encoder's counting direction (its A and B channels, the drive's encoder direction setting) and that "
      "it is this axis's encoder; nothing was homed"},
+    {AlarmCode::travel_end_not_found, "travel_end_not_found",
+     "measurement: no end of travel within max_seek_travel of the home",
+     "check the opposite limit switch and its wiring and polarity (limits_nc), or on a hard-stop axis the drive's "
+     "stall output; if the axis is longer than max_seek_travel, raise max_seek_travel for the measurement"},
 };
-static_assert(lists_every_value(kAlarmInfo, AlarmCode::encoder_reversed));
+static_assert(lists_every_value(kAlarmInfo, AlarmCode::travel_end_not_found));
 static_assert(std::size(kAlarmInfo) == kAlarmCodeCount);
 constexpr std::span<const AlarmInfo> enum_table(AlarmCode) { return kAlarmInfo; }
 

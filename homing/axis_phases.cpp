@@ -66,6 +66,7 @@ void PhaseRunner::dispatch() {
     case Phase::cam_stop: return cam_stop();
     case Phase::cam_latch: return cam_latch();
     case Phase::reference_check: return reference_check();
+    case Phase::measure_travel: return measure_travel();
     case Phase::done:
       run.entered = true;
       return;

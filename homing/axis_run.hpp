@@ -9,6 +9,7 @@
 #include "alarms.hpp"
 #include "health.hpp"
 #include "home_frame.hpp"
+#include "measure.hpp"
 #include "motion.hpp"
 #include "phases.hpp"
 #include "trust.hpp"
@@ -83,12 +84,26 @@ struct RefCheck {
   bool accepted = false;   // in go_back: the edge lay within refcheck_tolerance
   double offset_mm = 0;    // in go_back, accepted: the axis's offset that puts the edge found where expected
 };
+// The commissioning measurement (measure_phases.cpp), one phase in steps.
+struct Measure {
+  enum class Step : std::uint8_t {
+    travel,      // away from home at latch feedrate until the end is told, within max_seek_travel
+    brake,       // the end told: braking (a hard stop: still at reduced current)
+    leave,       // a limit switch: off it again at latch feedrate until it releases
+    settle,      // released (a limit switch) or pulled off the stop (a hard stop): coming to rest
+  };
+  Step step = Step::travel;
+  double toward = 0;       // +1/-1: the direction travelled, away from home
+  double start_mm = 0;     // motor position where the travel began (the bound counts from here)
+  double end_mm = 0;       // motor position where the end was told
+};
 }  // namespace phase_data
 
 using PhaseData = std::variant<std::monostate, phase_data::Seek, phase_data::Stop,
                                phase_data::BackOff, phase_data::Index, phase_data::Waiting, phase_data::Jog,
                                phase_data::PushToStop, phase_data::DriveHoming,
-                               phase_data::LimitReversal, phase_data::Return, phase_data::RefCheck>;
+                               phase_data::LimitReversal, phase_data::Return, phase_data::RefCheck,
+                               phase_data::Measure>;
 
 // How far this axis has come in the running homing cycle, in order. The
 // gantry partner waits on it.
@@ -187,6 +202,10 @@ struct AxisRun {
   bool checking = false;              // the running cycle is this axis's reference check
   bool homed_by_check = false;        // its reference came from a reference check
   double refcheck_error_mm = 0;       // reported: the last check's edge found less where it was expected
+
+  // The commissioning measurement (measure.hpp).
+  bool measuring = false;             // the running cycle homes this axis, then measures its travel
+  Measurement measurement{};          // reported: the last measurement's figures (0 until one found its end)
 
   bool homed() const { return home.has_value(); }
   // Where the axis is is no longer known: not homed, and its stored

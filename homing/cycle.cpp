@@ -54,7 +54,7 @@ void Engine::home_command(const Settings& settings, const Inputs& inputs) {
   }
 }
 
-void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all) {
+void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all, AxisMask measure) {
   plan_ = plan_cycle(settings, requested, all);
   plan_.unsequenced &= static_cast<AxisMask>(~keeps_coordinate(settings, plan_.unsequenced));
   const AxisMask covered = plan_.covered();
@@ -98,6 +98,7 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all)
     run.lose_reference();
     run.homed_by_check = false;
     run.checking = false;
+    run.measuring = (measure & axis_bit(a)) != 0;
     run.drive_referenced = false;
     run.set_phase(Phase::waiting);  // for its step
     run.entered = false;
@@ -191,8 +192,10 @@ void Engine::finish_cycle(const Settings& settings) {
   if (!cycle_active_ || wind_down_ != WindDown::none) return;  // an encoder fault failed the cycle
   for (AxisRun& run : axes_) {
     // A refused reference check leaves its axis at rest, not homed: idle, not done.
-    if (run.checking && !run.homed()) run.set_phase(Phase::idle);
+    // So does a measurement that pushed into a hard stop (its steps lost there).
+    if ((run.checking || run.measuring) && !run.homed()) run.set_phase(Phase::idle);
     run.checking = false;
+    run.measuring = false;
     run.in_cycle = false;
   }
   cycle_active_ = false;

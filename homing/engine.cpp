@@ -82,7 +82,7 @@ bool Engine::any_motion() const {
   });
 }
 
-// Commands in a fixed order: reset, abort, unhome, set position, home, reference check, jog, move.
+// Commands in a fixed order: reset, abort, unhome, set position, home, reference check, measurement, jog, move.
 void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
   const Commands& c = inputs.commands;
   if (c.reset_alarm) reset_command();
@@ -91,6 +91,7 @@ void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
   if (c.set_position_axes) set_position_commands(settings, c);
   home_command(settings, inputs);
   if (c.refcheck_axes) refcheck_command(settings, c.refcheck_axes);
+  if (c.measure_axes) measure_command(settings, c.measure_axes);
   jog_commands(settings, c);
   move_commands(settings, c);
 }

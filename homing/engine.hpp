@@ -84,7 +84,7 @@ class Engine {
   void home_command(const Settings& settings, const Inputs& inputs);
   void unhome_command(const Settings& settings, AxisMask axes);
   void set_position_commands(const Settings& settings, const Commands& c);
-  void start_cycle(const Settings& settings, AxisMask requested, bool all);
+  void start_cycle(const Settings& settings, AxisMask requested, bool all, AxisMask measure = 0);
   bool start_step(const Settings& settings);
   void assign_unsequenced(const Settings& settings, std::size_t axis);
   AxisMask keeps_coordinate(const Settings& settings, AxisMask unsequenced) const;
@@ -98,6 +98,10 @@ class Engine {
   CommandResult refcheck_refusal(const Settings& settings, std::size_t axis) const;
   void refcheck_command(const Settings& settings, AxisMask axes);
   void start_refcheck(AxisMask axes);
+
+  // The commissioning measurement (measure.cpp; its phase in measure_phases.cpp).
+  CommandResult measure_refusal(const Settings& settings, std::size_t axis) const;
+  void measure_command(const Settings& settings, AxisMask axes);
 
   // Jog and move (jog_move.cpp).
   CommandResult motion_refusal(const Settings& settings, std::size_t axis) const;

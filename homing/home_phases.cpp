@@ -81,11 +81,13 @@ void PhaseRunner::after_assign() {
 
 void PhaseRunner::final_move() {
   if (entry()) {
-    if (!final_move_wanted(s)) return enter(Phase::done);
+    if (!final_move_wanted(s)) return homed_at_rest();
     run.target_mm = s.final_position_mm - run.offset_mm;
   }
   move_to(run.target_mm, seek_v);
-  if (arrived()) enter(Phase::done);
+  if (arrived()) homed_at_rest();
 }
+
+void PhaseRunner::homed_at_rest() { enter(run.measuring ? Phase::measure_travel : Phase::done); }
 
 }  // namespace homing

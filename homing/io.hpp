@@ -58,6 +58,7 @@ struct Commands {
   AxisMask set_position_axes = 0;
   std::array<double, kAxisCount> set_position_mm{};
   AxisMask refcheck_axes = 0;  // reference check of these axes (trust.hpp), one cycle
+  AxisMask measure_axes = 0;   // commissioning measurement of one axis (measure.hpp): home, then to the opposite end
 };
 
 // Two requests that arrive within one period, as one: flags and masks join,
@@ -68,6 +69,7 @@ inline void merge(Commands& into, const Commands& c) {
   into.home_axes |= c.home_axes;
   into.unhome_axes |= c.unhome_axes;
   into.refcheck_axes |= c.refcheck_axes;
+  into.measure_axes |= c.measure_axes;
   into.abort = into.abort || c.abort;
   into.reset_alarm = into.reset_alarm || c.reset_alarm;
   for (std::size_t a = 0; a < kAxisCount; ++a) {

@@ -39,6 +39,10 @@ void Engine::check_limit_switches(const Settings& settings) {
     if (heading == 0) continue;
     const std::int8_t toward = heading < 0 ? -1 : 1;
     if (!in.limit_toward(toward)) continue;
+    // A measurement looks for the limit switch it travels toward: its end, not a hard limit.
+    if (const auto* m = run.phase_data_if<phase_data::Measure>();
+        run.in_cycle && run.phase == Phase::measure_travel && m && m->toward == toward)
+      continue;
     // Reset while still braking onto it: the trip is known, no second alarm.
     // Only that braking: a motion started since (a homing phase; jogs and
     // moves toward it are refused) trips the switch again at once.

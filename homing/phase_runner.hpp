@@ -146,6 +146,16 @@ struct PhaseRunner {
   void refcheck_back_off(phase_data::RefCheck& c);
   void refcheck_judge(phase_data::RefCheck& c, double edge_mm, bool found);
   void refcheck_go_back(phase_data::RefCheck& c);
+  // The commissioning measurement (measure_phases.cpp): one phase in steps.
+  void homed_at_rest();  // done, or on to measure_travel when the cycle measures this axis
+  void measure_travel();
+  void measure_begin(phase_data::Measure& m);
+  bool measure_end_told(const phase_data::Measure& m) const;
+  void measure_travel_on(phase_data::Measure& m);
+  void measure_brake(phase_data::Measure& m);
+  void measure_record(const phase_data::Measure& m);
+  void measure_leave(phase_data::Measure& m);
+  void measure_settle(phase_data::Measure& m);
   void begin();
   void dispatch();
 };

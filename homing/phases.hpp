@@ -37,6 +37,7 @@ enum class Phase : std::uint8_t {
   cam_latch = 25,     // home cam: leaving the cam at latch_feedrate toward its reference edge
   reference_check = 26,  // after a restart: finding the switch edge near where the stored position puts it
   return_to_start = 27,  // failure policy return_to_start: braking, then back to where the cycle found it
+  measure_travel = 28,   // commissioning measurement: from home at latch feedrate to the opposite end of travel
 };
 
 inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
@@ -78,8 +79,11 @@ inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
     {Phase::return_to_start, "return_to_start",
      "the cycle failed (global.failure_policy return_to_start): braking, then moving back to where the cycle found "
      "the axis, at the lower of jog_feedrate and seek_feedrate"},
+    {Phase::measure_travel, "measure_travel",
+     "commissioning measurement (cmd.measure.<a>): homed, travelling at latch_feedrate away from home to the "
+     "opposite limit switch (then just off it) or hard stop, within max_seek_travel"},
 };
-static_assert(lists_every_value(kPhaseInfo, Phase::return_to_start));
+static_assert(lists_every_value(kPhaseInfo, Phase::measure_travel));
 constexpr std::span<const EnumInfo<Phase>> enum_table(Phase) { return kPhaseInfo; }
 
 std::string_view phase_name(Phase phase);

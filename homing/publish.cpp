@@ -31,6 +31,7 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
     as.health = run.health;
     as.trust = run.trust();
     as.refcheck_error_mm = run.refcheck_error_mm;
+    as.measurement = run.measurement;
     as.stop_distance_mm = seek_stop_distance_mm(s);  // the figure the configuration check holds to
     if (!std::isfinite(as.stop_distance_mm)) as.stop_distance_mm = 0;
     as.phase_distance_mm = std::abs(run.motor.position_mm - run.phase_start_mm);

@@ -10,6 +10,7 @@
 #include "axes.hpp"
 #include "enum_info.hpp"
 #include "health.hpp"
+#include "measure.hpp"
 #include "phases.hpp"
 #include "trust.hpp"
 
@@ -48,8 +49,9 @@ enum class CommandResult : std::uint8_t {
   refused_no_switch_edge = 18,  // reference check: the axis's method has no switch edge to check
   refused_no_clean_stop = 19,   // reference check: axis.<a>.trust is not last_stop_clean
   refused_gantry_pair = 20,     // reference check: a gantry pair is squared by a full cycle only
+  refused_no_travel_end = 21,   // measurement: the axis homes at no end of travel, or cannot tell the opposite end
 };
-inline constexpr std::uint8_t kCommandResultCount = 21;
+inline constexpr std::uint8_t kCommandResultCount = 22;
 inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
     {CommandResult::none, "none", "no command yet"},
     {CommandResult::accepted, "accepted", "the last command started"},
@@ -83,9 +85,12 @@ inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
      "reference check refused: axis.<a>.trust is not last_stop_clean (its last stop was not clean, its home "
      "settings changed, a check already failed, or it is homed): home it with a full cycle"},
     {CommandResult::refused_gantry_pair, "refused_gantry_pair",
-     "reference check refused: the axis is one side of a gantry pair, which only a full cycle squares"},
+     "reference check or measurement refused: the axis is one side of a gantry pair, which only a full cycle squares"},
+    {CommandResult::refused_no_travel_end, "refused_no_travel_end",
+     "measurement refused: the axis does not home at an end of its travel (switch, pushing or hard-stop methods "
+     "do), or nothing tells the opposite end (limits_fitted, or hard_stop with stall_detect stall_input)"},
 };
-static_assert(lists_every_value(kCommandResultInfo, CommandResult::refused_gantry_pair));
+static_assert(lists_every_value(kCommandResultInfo, CommandResult::refused_no_travel_end));
 static_assert(std::size(kCommandResultInfo) == kCommandResultCount);
 constexpr std::span<const EnumInfo<CommandResult>> enum_table(CommandResult) { return kCommandResultInfo; }
 
@@ -163,6 +168,9 @@ struct AxisStatus {
   // The last reference check: where it found the switch edge less where the
   // stored position put it (the figure it was accepted or refused on).
   double refcheck_error_mm = 0;
+  // The last measurement (cmd.measure.<a>; measure.hpp), all 0 until one
+  // found its end: usable travel from the home position, and the settings it suggests.
+  Measurement measurement{};
 };
 
 struct Status {

@@ -88,6 +88,7 @@ std::optional<CommandRequest> command_of(const Register& reg, std::int64_t raw) 
     case Key::cmd_home: return CommandRequest{Command::home_axis, axis, true};
     case Key::cmd_unhome: return CommandRequest{Command::unhome_axis, axis, true};
     case Key::cmd_refcheck: return CommandRequest{Command::refcheck_axis, axis, true};
+    case Key::cmd_measure: return CommandRequest{Command::measure_axis, axis, true};
     case Key::cmd_move: return CommandRequest{Command::move, axis, true};
     case Key::cmd_set_position: return CommandRequest{Command::set_position, axis, true};
     case Key::cmd_jog_plus: return CommandRequest{Command::jog_plus, axis, value};
@@ -176,6 +177,10 @@ std::int64_t read_raw(const Register& reg, const ModuleView& view) {
       case Key::axis_health_warning: return raw_of(view.extras.health_warning[i]);
       case Key::axis_trust: return raw_of(a.trust);
       case Key::axis_refcheck_error: return to_raw(reg, a.refcheck_error_mm);
+      case Key::axis_measured_travel: return to_raw(reg, a.measurement.usable_travel_mm);
+      case Key::axis_measured_soft_limit_min: return to_raw(reg, a.measurement.soft_limit_min_mm);
+      case Key::axis_measured_soft_limit_max: return to_raw(reg, a.measurement.soft_limit_max_mm);
+      case Key::axis_measured_max_seek_travel: return to_raw(reg, a.measurement.max_seek_travel_mm);
       case Key::axis_homed: return a.homed ? 1 : 0;
       case Key::axis_sensor: return a.sensor ? 1 : 0;
       case Key::axis_busy: return a.busy ? 1 : 0;

@@ -70,6 +70,7 @@ enum class Command : std::uint8_t {
   unhome_axis,  // cmd.unhome.<a>: forget the axis's reference
   set_position,  // cmd.set_position.<a>: the unhomed axis's coordinate is axis.<a>.target where it stands
   refcheck_axis,  // cmd.refcheck.<a>: reference check after a restart
+  measure_axis,   // cmd.measure.<a>: commissioning measurement of the axis's travel
 };
 struct CommandRequest {
   Command command = Command::home_all;

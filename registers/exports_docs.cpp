@@ -97,6 +97,10 @@ constexpr AlarmConfirm kAlarmConfirm[] = {
     {homing::AlarmCode::encoder_reversed,
      "`axis.<a>.alarm_phase` is `push_to_stop` and `axis.<a>.alarm_value` how far the encoder counted back; jog the "
      "axis and watch the encoder's (or the drive's) position display: it counts opposite to `axis.<a>.position`"},
+    {homing::AlarmCode::travel_end_not_found,
+     "`axis.<a>.alarm_phase` is `measure_travel` and `axis.<a>.alarm_value` the distance travelled from the home "
+     "(max_seek_travel); jog the axis onto the far limit switch and watch its input (`homingctl status`), or on a "
+     "hard-stop axis the drive's stall output as the carriage meets the stop"},
 };
 
 std::string registers_reference() {

@@ -62,12 +62,13 @@ enum class Key : std::uint8_t {
   axis_correction_spread, axis_latch_spread, axis_latch_sigma, axis_latch_passes_done,
   axis_hysteresis, axis_seek_latch_difference, axis_chatter_edges, axis_index_distance, axis_index_near_edge,
   axis_gantry_skew, axis_health_warning, axis_trust, axis_refcheck_error,
+  axis_measured_travel, axis_measured_soft_limit_min, axis_measured_soft_limit_max, axis_measured_max_seek_travel,
   // discrete inputs, module
   status_alarm, status_homing, status_estop, axis_homed, axis_sensor, axis_busy,
   // coils, module
   cmd_home_all, cmd_abort, cmd_reset_alarm, host_homing_permit, cmd_lock_settings, security_unlock,
   cmd_home, cmd_unhome, cmd_jog_plus,
-  cmd_jog_minus, cmd_move, cmd_set_position, cmd_refcheck,
+  cmd_jog_minus, cmd_move, cmd_set_position, cmd_refcheck, cmd_measure,
   // holding, module: command registers (hold nothing, read 0)
   cmd_home_axes,
   // simulator unit

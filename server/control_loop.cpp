@@ -182,7 +182,8 @@ void ControlLoop::take_mailbox(Mailbox& out) {
   std::unique_lock lock(mailbox_mutex_, std::try_to_lock);
   if (!lock.owns_lock()) return;
   out.commands = pending_;
-  if (pending_from_modbus_ && (pending_.home_all || pending_.home_axes || pending_.move_axes || pending_.refcheck_axes))
+  if (pending_from_modbus_ && (pending_.home_all || pending_.home_axes || pending_.move_axes || pending_.refcheck_axes ||
+                               pending_.measure_axes))
     modbus_motion_ = true;
   pending_ = homing::Commands{};
   pending_from_modbus_ = false;
@@ -245,7 +246,7 @@ void ControlLoop::run_period(double wall_dt_s) {
     status_events_.observe(r.status, unix_now_ms());
     const bool motion = r.status.homing || r.status.state == homing::MachineState::moving;
     if (!motion && !inputs.commands.home_all && !inputs.commands.home_axes && !inputs.commands.move_axes &&
-        !inputs.commands.refcheck_axes &&
+        !inputs.commands.refcheck_axes && !inputs.commands.measure_axes &&
         std::none_of(loop_jog_.begin(), loop_jog_.end(), [](std::int8_t j) { return j != 0; }))
       modbus_motion_ = false;
     engine_us_ += (t1 - t0) / 1000.0;
@@ -363,6 +364,7 @@ void ControlLoop::thread_main() {
       pending_.home_axes = 0;
       pending_.move_axes = 0;
       pending_.refcheck_axes = 0;
+      pending_.measure_axes = 0;
     }
     run_period((now - last) * 1e-9);
     last = now;

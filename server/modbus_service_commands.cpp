@@ -27,6 +27,7 @@ std::string_view command_name(registers::Command c) {
     case Command::unhome_axis: return "unhome";
     case Command::set_position: return "set_position";
     case Command::refcheck_axis: return "refcheck";
+    case Command::measure_axis: return "measure";
   }
   return "?";
 }
@@ -45,6 +46,7 @@ void ModbusService::run_commands(const std::vector<registers::CommandRequest>& c
       case Command::home_axes: c.home_axes |= r.axes; any = true; break;
       case Command::unhome_axis: c.unhome_axes |= homing::axis_bit(a); any = true; break;
       case Command::refcheck_axis: c.refcheck_axes |= homing::axis_bit(a); any = true; break;
+      case Command::measure_axis: c.measure_axes |= homing::axis_bit(a); any = true; break;
       case Command::abort: c.abort = true; any = true; break;
       case Command::reset_alarm:
         c.reset_alarm = true;

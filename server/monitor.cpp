@@ -193,6 +193,7 @@ void Monitor::poll(std::int64_t now_ms) {
   if (st.homing && !last_.homing) {
     run_start_ms_ = now_ms;
     run_axes_ = 0;
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a) measured_at_start_[a] = st.axes[a].measurement;
     spdlog::info(st.reference_check ? "reference check started" : "homing started");
   }
   if (st.homing) {
@@ -204,6 +205,7 @@ void Monitor::poll(std::int64_t now_ms) {
     // to keep in the history, only whether the axis is where it was kept.
     if (last_.reference_check) report_refcheck(st, settings);
     else record_run(st, settings, now_ms);
+    report_measurements(st, settings);
   }
   for (std::size_t a = 0; a < homing::kAxisCount; ++a)
     if (st.axes[a].positions_set != last_.axes[a].positions_set)
@@ -280,6 +282,21 @@ void Monitor::keep_sim_carriages(const Snapshot& snap, std::int64_t now_ms) {
     return;
   }
   carriages_kept_ = at;
+}
+
+// A measurement's figures, at the end of the cycle that found them.
+void Monitor::report_measurements(const homing::Status& st, const homing::Settings& settings) {
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    const homing::Measurement& m = st.axes[a].measurement;
+    // A measurement resets its axis's figures as it starts: new ones differ from those at the start.
+    if (m.usable_travel_mm == 0 || m.usable_travel_mm == measured_at_start_[a].usable_travel_mm) continue;
+    const auto unit = homing::axis_unit(settings, a);
+    spdlog::info("measurement of {}: usable travel {:.3f} {} from the home position; fitting soft_limit_min {:.3f}, "
+                 "soft_limit_max {:.3f}, max_seek_travel {:.3f} {} (not written: homingctl measure {} --apply writes "
+                 "them)",
+                 homing::kAxisUpper[a], m.usable_travel_mm, unit, m.soft_limit_min_mm, m.soft_limit_max_mm,
+                 m.max_seek_travel_mm, unit, homing::kAxisLetters[a]);
+  }
 }
 
 }  // namespace server

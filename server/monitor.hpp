@@ -38,6 +38,7 @@ class Monitor {
   void housekeeping(std::int64_t now_ms);
   void record_run(const homing::Status& st, const homing::Settings& settings, std::int64_t now_ms);
   void report_refcheck(const homing::Status& st, const homing::Settings& settings);
+  void report_measurements(const homing::Status& st, const homing::Settings& settings);
   void keep_sim_carriages(const Snapshot& snap, std::int64_t now_ms);
 
   ControlLoop& loop_;
@@ -50,6 +51,7 @@ class Monitor {
   bool first_ = true;
   std::int64_t run_start_ms_ = 0;
   homing::AxisMask run_axes_ = 0;
+  std::array<homing::Measurement, homing::kAxisCount> measured_at_start_{};  // figures as the cycle started
   PlantEvents* events_ = nullptr;
   bool sim_behind_logged_ = false;  // LoopStats::sim_held_back_periods: said once
   // The simulator's carriages as last written to the store, and when.

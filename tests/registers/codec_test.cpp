@@ -161,3 +161,20 @@ TEST_CASE("every module row is bound: reading any of them never throws") {
     CHECK_NOTHROW(read_raw(r, view));
   }
 }
+
+TEST_CASE("the measurement's figures read as micrometres at their per-axis input registers, and cmd.measure.<a> maps to its command with the axis") {
+  homing::Settings s;
+  HostRegisters h;
+  homing::Status st;
+  StatusExtras ex;
+  st.axes[2].measurement = {148.672, -0.5, 148.172, 176};
+  const ModuleView view{s, h, st, ex};
+  CHECK(reg("axis.z.measured_travel").address == 100 + 100 * 2 + 44);
+  CHECK(read_raw(reg("axis.z.measured_travel"), view) == 148672);
+  CHECK(read_raw(reg("axis.z.measured_soft_limit_min"), view) == -500);
+  CHECK(read_raw(reg("axis.z.measured_soft_limit_max"), view) == 148172);
+  CHECK(read_raw(reg("axis.z.measured_max_seek_travel"), view) == 176000);
+  CHECK(read_raw(reg("axis.x.measured_travel"), view) == 0);  // no measurement yet
+  CHECK(reg("cmd.measure.b").address == 100 + 10 * 4 + 7);
+  CHECK(command_of(reg("cmd.measure.b"), true) == CommandRequest{Command::measure_axis, 4, true});
+}

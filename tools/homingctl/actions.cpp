@@ -10,6 +10,7 @@
 
 #include "homing/status.hpp"
 #include "homing/gantry.hpp"
+#include "homing/measure.hpp"
 #include "settings_io.hpp"
 #include "status_view.hpp"
 #include "values.hpp"
@@ -351,6 +352,101 @@ ActionResult refcheck(Connection& c, const std::string& axis, const ActionOption
                             "(tolerance {:.3f} {}): the carriage moved or lost steps while the module was off; home "
                             "it with a full cycle (homingctl home {})",
                             what, x.refcheck_error, unit, tolerance, unit, homing::kAxisLetters[i]);
+  return res;
+}
+
+}  // namespace homingctl
+
+namespace homingctl {
+
+// The figures a measurement left in axis.<a>.measured_*, in the axis's unit.
+namespace {
+struct Measured {
+  double travel = 0, soft_limit_min = 0, soft_limit_max = 0, max_seek_travel = 0;
+  std::int64_t raw_min = 0, raw_max = 0, raw_seek = 0;  // as written to the settings on --apply
+};
+Measured read_measured(Connection& c, std::string_view letter) {
+  const auto name = [&](std::string_view what) { return fmt::format("axis.{}.measured_{}", letter, what); };
+  const auto v = c.read_many({&register_named(name("travel")), &register_named(name("soft_limit_min")),
+                              &register_named(name("soft_limit_max")), &register_named(name("max_seek_travel"))});
+  Measured m;
+  m.raw_min = v.at(name("soft_limit_min"));
+  m.raw_max = v.at(name("soft_limit_max"));
+  m.raw_seek = v.at(name("max_seek_travel"));
+  m.travel = static_cast<double>(v.at(name("travel"))) / 1000.0;
+  m.soft_limit_min = static_cast<double>(m.raw_min) / 1000.0;
+  m.soft_limit_max = static_cast<double>(m.raw_max) / 1000.0;
+  m.max_seek_travel = static_cast<double>(m.raw_seek) / 1000.0;
+  return m;
+}
+
+// Through the settings path homingctl set takes: checked first, all or
+// nothing, so the module's audit log records who wrote what.
+std::expected<void, std::string> apply_measured(Connection& c, std::string_view letter, const Measured& m) {
+  const RawMap wanted{{fmt::format("axis.{}.soft_limit_min", letter), m.raw_min},
+                      {fmt::format("axis.{}.soft_limit_max", letter), m.raw_max},
+                      {fmt::format("axis.{}.max_seek_travel", letter), m.raw_seek}};
+  std::vector<const registers::Register*> regs = persisted_registers();
+  for (const auto& [name, raw] : wanted) regs.push_back(&register_named(name));
+  const RawMap current = c.read_many(regs);
+  auto plan = plan_write(current, wanted, c.options().word_order);
+  if (!plan) return std::unexpected(plan.error());
+  return execute_plan(c, *plan);
+}
+}  // namespace
+
+ActionResult measure(Connection& c, const std::string& axis, bool apply, const ActionOptions& o) {
+  const int a = axis_index(axis);
+  if (a < 0) throw std::invalid_argument(fmt::format("measure: '{}' is not an axis (x, y, z, a, b, c)", axis));
+  const auto i = static_cast<std::size_t>(a);
+  const auto letter = homing::kAxisLetters[i];
+  Session s(c, o);
+  const std::string what = fmt::format("measure {}", homing::kAxisUpper[i]);
+  auto r = s.pulse(fmt::format("cmd.measure.{}", letter));
+  if (!r) return failure(r.error());
+  if (!taken(*r)) return s.refused(what, *r);
+  if (!o.wait) return not_waited(what, *r);
+  auto st = s.wait_for(at_rest, true);
+  if (!st) return failure(st.error());
+  ActionResult res = s.finished(what, *st);
+  if (res.exit_code != 0) return res;
+  const Measured m = read_measured(c, letter);
+  if (m.travel <= 0) {
+    res.exit_code = 1;
+    res.json["ok"] = false;
+    res.message = fmt::format("{}: no travel measured (the axis found no end, or stopped before it)", what);
+    return res;
+  }
+  const auto unit = homing::axis_unit(s.settings, i);
+  const homing::AxisSettings& now = s.settings.axes[i];
+  res.json["measured_travel"] = m.travel;
+  res.json["soft_limit_min"] = m.soft_limit_min;
+  res.json["soft_limit_max"] = m.soft_limit_max;
+  res.json["max_seek_travel"] = m.max_seek_travel;
+  res.json["applied"] = false;
+  res.message = fmt::format(
+      "{}: usable travel {:.3f} {} from the home position\n"
+      "  axis.{}.soft_limit_min = {:.3f} {} (now {:.3f})\n"
+      "  axis.{}.soft_limit_max = {:.3f} {} (now {:.3f})\n"
+      "  axis.{}.max_seek_travel = {:.3f} {} (now {:.3f})",
+      what, m.travel, unit, letter, m.soft_limit_min, unit, now.soft_limit_min_mm, letter, m.soft_limit_max, unit,
+      now.soft_limit_max_mm, letter, m.max_seek_travel, unit, now.max_seek_travel_mm);
+  if (homing::travel_end(now) == homing::TravelEnd::hard_stop)
+    res.message += fmt::format("\n  {} pushed into its stop and is no longer homed: home it again", homing::kAxisUpper[i]);
+  if (!apply) {
+    res.message += fmt::format("\n  nothing written: homingctl measure {} --apply writes these", letter);
+    return res;
+  }
+  if (auto done = apply_measured(c, letter, m); !done) {
+    res.exit_code = 1;
+    res.json["ok"] = false;
+    res.message += fmt::format("\n  not written, refused: {}", done.error());
+    return res;
+  }
+  res.json["applied"] = true;
+  res.message += "\n  written to the settings";
+  if (!now.soft_limits_enable)
+    res.message += fmt::format(" (axis.{}.soft_limits_enable is off: the soft limits act once it is on)", letter);
   return res;
 }
 

@@ -42,6 +42,10 @@ ActionResult move(Connection& c, const std::string& axis, const std::string& tar
 // cmd.refcheck.<a>: the reference check after a restart; ok when the axis
 // ends homed by it (trust reference_checked), else refused with the figure.
 ActionResult refcheck(Connection& c, const std::string& axis, const ActionOptions& o);
+// cmd.measure.<a>: homes the axis, measures its travel to the opposite end and
+// prints the figures; with apply, writes soft_limit_min/max and
+// max_seek_travel through the settings path (checked, audited).
+ActionResult measure(Connection& c, const std::string& axis, bool apply, const ActionOptions& o);
 
 // Axis index of "x".."c" (case-insensitive) or -1.
 int axis_index(std::string_view letter);

@@ -1,4 +1,4 @@
-// home, refcheck, abort, reset, jog, move: commands that move (or stop) the machine,
+// home, refcheck, measure, abort, reset, jog, move: commands that move (or stop) the machine,
 // each waiting for its outcome unless --no-wait.
 #include "actions.hpp"
 #include "cli.hpp"
@@ -41,6 +41,19 @@ void add_motion_commands(Commands& commands, Context& ctx) {
       [refcheck_axis](Context& c) { return c.report(refcheck(c.connection(), *refcheck_axis, c.ao)); });
   refcheck_cmd->add_option("axis", *refcheck_axis, "x y z a b c")->required();
   commands.add_wait_options(refcheck_cmd, ctx);
+
+  auto measure_axis = std::make_shared<std::string>();
+  auto measure_apply = std::make_shared<bool>(false);
+  auto* measure_cmd = commands.add(
+      "measure",
+      "commissioning: home an axis, travel at latch feedrate to the opposite limit switch or hard stop, and print "
+      "the usable travel with the soft limits and max_seek_travel that fit it: measure x [--apply]",
+      [measure_axis, measure_apply](Context& c) {
+        return c.report(measure(c.connection(), *measure_axis, *measure_apply, c.ao));
+      });
+  measure_cmd->add_option("axis", *measure_axis, "x y z a b c")->required();
+  measure_cmd->add_flag("--apply", *measure_apply, "write the soft limits and max_seek_travel found (checked, audited)");
+  commands.add_wait_options(measure_cmd, ctx);
 
   auto* abort_cmd = commands.add("abort", "stop every motion (a running homing latches 'aborted')",
                                  [](Context& c) { return c.report(abort_motion(c.connection(), c.ao)); });
