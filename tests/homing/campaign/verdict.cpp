@@ -451,7 +451,14 @@ std::optional<Unexplained> explain(const Watch& w, const Causes& causes, const S
     if (c.phase_axis) {
       const std::size_t a = *c.phase_axis;
       const Alarm& first = w.first_alarm[a];
-      if ((c.codes & alarm_bit(first.code)) && first.phase != c.phase && first.phase != c.phase_seen) {
+      // The first alarm may be an earlier cause's on the same axis (a second
+      // drive fault on an axis stopped by its first while the failure policy
+      // lets the others finish: seed 7314363).
+      const bool earlier = std::any_of(causes.list.begin(), causes.list.end(), [&](const Cause& d) {
+        return d.phase_axis == a && (d.codes & alarm_bit(first.code)) &&
+               (first.phase == d.phase || first.phase == d.phase_seen);
+      });
+      if ((c.codes & alarm_bit(first.code)) && first.phase != c.phase && first.phase != c.phase_seen && !earlier) {
         std::ostringstream o;
         o << c.what << " struck in phase " << phase_name(c.phase) << " (" << phase_name(c.phase_seen)
           << " when the engine read it), its alarm says phase " << phase_name(first.phase);
