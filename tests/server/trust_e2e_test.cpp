@@ -8,6 +8,7 @@
 
 #include <cstdlib>
 
+#include "command_wait.hpp"
 #include "daemon.hpp"
 #include "homing/status.hpp"
 
@@ -17,23 +18,6 @@ namespace {
 
 std::int64_t v(homing::Trust t) { return static_cast<std::int64_t>(t); }
 std::int64_t v(homing::CommandResult r) { return static_cast<std::int64_t>(r); }
-
-bool at_rest(Client& c) {
-  if (c.read("status.homing") != 0) return false;
-  for (const char* a : {"x", "y", "z"})
-    if (c.read(std::string("axis.") + a + ".busy") != 0) return false;
-  return true;
-}
-
-// Writes a command coil and waits until it was judged and whatever it started ended.
-std::int64_t command(Client& c, const std::string& coil) {
-  const std::int64_t count = c.read("status.command_count");
-  REQUIRE(c.write(coil, 1) == 0);
-  REQUIRE(wait_until([&] { return c.read("status.command_count") != count; }, 5s));
-  const std::int64_t result = c.read("status.last_command_result");
-  REQUIRE(wait_until([&] { return at_rest(c); }, 60s));
-  return result;
-}
 
 void stop_cleanly(Daemon& d) {
   const auto st = d.stop(SIGTERM, 30s);
