@@ -75,6 +75,7 @@ struct Gen {
   void gantry(std::size_t mi, std::size_t si, bool commutator);
   void roles_and_modes();
   void sequence();
+  void unsequenced_soft_limits();  // no dice: after every other draw
   // --- causes -------------------------------------------------------------
   std::vector<std::size_t> axes_where(const std::function<bool(std::size_t)>& pred) const;
   template <class V>

@@ -426,6 +426,30 @@ void Gen::sequence() {
   }
 }
 
+// An unsequenced axis is assigned its home position where it stands, not at
+// the rest point its soft limits were drawn around: where they would let a
+// jog reach past a mechanical stop (no limit switch to stop it), the
+// machine's builder would not have enabled them (seed 7316777: a pushing
+// axis standing 1 mm off its stop, its soft limit 2 mm below). No dice: the
+// other draws stay as they were.
+void Gen::unsequenced_soft_limits() {
+  AxisMask sequenced = 0;
+  for (const AxisMask s : m.settings.global.sequence_steps) sequenced |= s;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    AxisSettings& s = m.settings.axes[a];
+    const sim::AxisConfig& c = m.sim.axes[a];
+    if ((sequenced & axis_bit(a)) || m.plan[a].role == Role::slave || !s.soft_limits_enable || s.limits_fitted ||
+        mode_is_absolute(s.mode) || (m.invalid != Invalid::none && m.invalid_axis == a))
+      continue;  // (the axis drawn invalid keeps what makes it so)
+    const double jog_v = mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min);
+    const double margin = stop_distance_mm(jog_v, s.acceleration_mm_per_s2) + jog_v * m.max_dt_s + 0.1;
+    const double x0 = c.actual_position_mm;
+    const double lo = x0 + (s.soft_limit_min_mm - s.home_position_mm);
+    const double hi = x0 + (s.soft_limit_max_mm - s.home_position_mm);
+    if (lo < c.hard_stop_min_mm + margin || hi > c.hard_stop_max_mm - margin) s.soft_limits_enable = false;
+  }
+}
+
 // End-of-travel limit switches on plain switch-mode axes (no gantry, no
 // shared limit, no pushing), with their own dice so that every other draw
 // stays as it was: the switches where the stops were drawn (beyond anything
@@ -529,6 +553,7 @@ Machine Gen::build() {
   home_cams();
   limits_in_reach();
   failure_policy();
+  unsequenced_soft_limits();
   m.start_held_at_powerup = d.chance(0.15);
   m.powerup_periods = d.integer(1, 50);
   m.start_by_button = d.chance(0.25);

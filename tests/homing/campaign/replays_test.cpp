@@ -93,7 +93,8 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // onto a limit switch by an axis with no alarm of its own latches
   // limit_in_homing in phase return_to_start, the cycle's own. 7314363: a
   // second drive fault on an axis its first stopped (finish_independent let
-  // the others go on) keeps the first alarm and its phase.
+  // the others go on) keeps the first alarm and its phase. 7316777: the
+  // generator's soft limits of an unsequenced axis reached past its stop.
   const std::uint64_t seeds[] = {1,        7,        3,        8,        490,      715,      2,       173,
                                  959,      1242,     2054,     84,       4,        103,      1069,    412,
                                  627,      3972,     8001884,  31342370, 9,        5000422,  5001903, 9001798,
@@ -101,7 +102,7 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
                                  1022,     1177,     2719,     13003772, 12004845, 13004140, 12018743, 119,
                                  4420842,  4431542,  6617474,  2818140234, 5512019, 2652,   33,
                                  90,       336,      984,      3293,     3639,     5510656,  5512163, 7004079, 162,
-                                 7201525,  7201552,  7314363};
+                                 7201525,  7201552,  7314363,  7316777};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);
