@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "modes.hpp"
+#include "motion.hpp"
 #include "settings.hpp"
 
 namespace homing {
@@ -52,8 +53,10 @@ constexpr TravelEnd travel_end(const AxisSettings& s) {
 // longest_seek_mm: from the end to where the seek would find the sensor.
 inline Measurement measurement_from(const AxisSettings& s, double end_machine_mm, double toward,
                                     double longest_seek_mm) {
-  const double jog_v = s.jog_feedrate_mm_per_min / 60.0;
-  const double jog_stop_mm = s.acceleration_mm_per_s2 > 0 ? jog_v * jog_v / (2 * s.acceleration_mm_per_s2) : 0;
+  const double jog_stop_mm =
+      s.acceleration_mm_per_s2 > 0
+          ? stop_distance_mm(mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min), s.acceleration_mm_per_s2)
+          : 0;
   Measurement m;
   m.usable_travel_mm = std::max(0.0, (end_machine_mm - s.home_position_mm) * toward - jog_stop_mm);
   const double far_mm = s.home_position_mm + toward * m.usable_travel_mm;
