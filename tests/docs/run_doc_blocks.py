@@ -11,7 +11,11 @@ and the command's output. The blocks are written for a reader's daemon on
 127.0.0.1:1502: that address (and mbpoll's `-p 1502`) is replaced by the
 test's, and homingctl finds the daemon through the config file it reads
 (HOMINGD_CONFIG), as it finds an installed one. A line `! command` must exit
-with 1 (refused). A document without a runnable
+with 1 (refused). A line `command   # shows: PATTERN` must succeed and print a
+line showing PATTERN: literal text, a figure `N±T` standing for any number
+within T of N (shows.py), so that a figure the text promises is checked, not
+only the exit code. A document
+without a runnable
 block fails too, so a misspelt marker cannot pass unnoticed. The daemon is
 ended by its PID with SIGTERM and must exit 0.
 
@@ -60,10 +64,29 @@ MUST_FAIL = """must_be_refused() {
 """
 
 
+# A line `command   # shows: PATTERN`: the command's output (printed as the
+# reader sees it) must hold a line showing PATTERN (shows.py). Simple commands only (no
+# pipes): the line becomes `must_show 'PATTERN' command...`.
+MUST_SHOW = """must_show() {
+  local want="$1" out
+  shift
+  out=$("$@")
+  printf '%s\\n' "$out"
+  if ! /usr/bin/python3 "$DOC_SHOWS" "$want" <<<"$out"; then echo "expected a line showing '$want' from: $*" >&2; return 1; fi
+}
+"""
+SHOWS = re.compile(r"^(?P<cmd>[^#\n]*?)\s+# shows: (?P<want>.+?)\s*$", re.M)
+
+
+def shell_quote(text):
+    return "'" + text.replace("'", "'\\''") + "'"
+
+
 def for_port(text, port):
     text = text.replace("127.0.0.1:1502", f"127.0.0.1:{port}")
     text = re.sub(r"-p 1502\b", f"-p {port}", text)
-    return MUST_FAIL + re.sub(r"(?m)^! ", "must_be_refused ", text)
+    text = SHOWS.sub(lambda m: f"must_show {shell_quote(m.group('want'))} {m.group('cmd')}", text)
+    return MUST_FAIL + MUST_SHOW + re.sub(r"(?m)^! ", "must_be_refused ", text)
 
 
 def run_document(homingd, bin_dir, doc):
@@ -79,7 +102,8 @@ def run_document(homingd, bin_dir, doc):
         config = os.path.join(scratch, "homingd.toml")
         with open(config, "w") as f:
             f.write(f'tcp = "127.0.0.1:{daemon.port}"\ndb = "{db}"\n')
-        env = dict(os.environ, HOMINGD_CONFIG=config)
+        env = dict(os.environ, HOMINGD_CONFIG=config,
+                   DOC_SHOWS=os.path.join(os.path.dirname(os.path.abspath(__file__)), "shows.py"))
         try:
             for line, text in blocks:
                 script = for_port(text, daemon.port)
