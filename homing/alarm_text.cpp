@@ -2,6 +2,8 @@
 // from the alarm table (alarms.hpp), the same words an HMI's alarm list shows.
 #include <fmt/format.h>
 
+#include <cmath>
+
 #include "alarms.hpp"
 #include "gantry.hpp"
 #include "health.hpp"
@@ -15,6 +17,32 @@ std::string following_error_note(const AxisSettings& s, std::string_view unit) {
   if (!detects_stop_by_following_error(s)) return "";
   return fmt::format(": the carriage never fell behind its steps by more than max_following_error {:g} {}",
                      s.max_following_error_mm, unit);
+}
+
+// A gantry's racking: which side carried it out, how far from square, and
+// whether the cycle found it out of square already.
+std::string misalignment_text(std::size_t axis, const Alarm& a, const Settings& settings) {
+  const char X = kAxisUpper[axis];
+  const auto u = axis_unit(settings, axis);
+  const int mi = gantry_master(settings, axis);
+  std::string who;
+  if (a.side != GantrySide::none && mi >= 0) {
+    const bool master = is_master_side(a.side);
+    const char side = kAxisUpper[master ? static_cast<std::size_t>(mi) : axis];
+    const char other = kAxisUpper[master ? axis : static_cast<std::size_t>(mi)];
+    const bool found = a.side == GantrySide::master_sensor_far || a.side == GantrySide::slave_sensor_far;
+    who = found ? fmt::format(": {} ({}) found its home sensor too far from {}'s", side, master ? "master" : "slave",
+                              other)
+                : fmt::format(": {} ({}) did not find its home sensor", side, master ? "master" : "slave");
+  }
+  const std::string start =
+      std::abs(a.rack_at_start_mm) < 0.0005
+          ? std::string{"the pair started the cycle square"}
+          : fmt::format("the pair started the cycle {:.3f} {} out of square (an earlier stop left it racked)",
+                        a.rack_at_start_mm, u);
+  return fmt::format("{}: gantry stopped during {}{}, before racking by {:.3f} {} from square, more than "
+                     "max_misalignment {:g} {}; {}",
+                     X, phase_name(a.phase), who, a.value, u, settings.axes[axis].max_misalignment_mm, u, start);
 }
 
 // What happened, with the axis letter and the figures.
@@ -49,9 +77,7 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
     case AlarmCode::slave_sensor_missing:
       return fmt::format("{}: software-slaved axis has no home sensor of its own (mode {})", X,
                          mode_name(s.mode));
-    case AlarmCode::misalignment:
-      return fmt::format("{}: gantry stopped during {} before racking by {:.3f} {}, more than "
-                         "max_misalignment {:g} {}", X, ph, a.value, u, s.max_misalignment_mm, u);
+    case AlarmCode::misalignment: return misalignment_text(axis, a, settings);
     case AlarmCode::hard_limit:
       return fmt::format("{}: shared home/limit sensor tripped at {:.3f} {} after homing", X, a.value, u);
     case AlarmCode::soft_limit:

@@ -77,8 +77,10 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
     {AlarmCode::slave_sensor_missing, "slave_sensor_missing", "a slave axis has no home sensor",
      "give the slave axis a switch mode and wire its own home sensor"},
     {AlarmCode::misalignment, "misalignment", "gantry misalignment beyond max_misalignment",
-     "check both home sensors (a dead or stuck sensor, wiring, switch_compensation) and square the gantry "
-     "mechanically"},
+     "check the home sensor of the side named (axis.<a>.alarm_side: dead or stuck, wiring, polarity, "
+     "switch_compensation); after the reset, home again: a cycle that starts racked squares the pair back, never "
+     "further than max_misalignment from square; if it stops the same way again, square the gantry mechanically, "
+     "then unhome it (cmd.unhome) so that the module forgets the old square"},
     {AlarmCode::hard_limit, "hard_limit", "shared home sensor tripped after homing",
      "jog the axis off the sensor after reset and re-home"},
     {AlarmCode::soft_limit, "soft_limit", "soft limit reached",
@@ -156,12 +158,38 @@ static_assert(lists_every_value(kAlarmInfo, AlarmCode::travel_end_not_found));
 static_assert(std::size(kAlarmInfo) == kAlarmCodeCount);
 constexpr std::span<const AlarmInfo> enum_table(AlarmCode) { return kAlarmInfo; }
 
+// A gantry's misalignment alarm: which side carried the pair out of square,
+// and whether that side had found its home sensor (axis.<a>.alarm_side).
+enum class GantrySide : std::uint8_t {
+  none = 0,
+  master_no_sensor = 1,   // the master ran on without finding its home sensor
+  master_sensor_far = 2,  // the master found its home sensor too far from the slave's
+  slave_no_sensor = 3,    // the slave ran on without finding its home sensor
+  slave_sensor_far = 4,   // the slave found its home sensor too far from the master's
+};
+inline constexpr EnumInfo<GantrySide> kGantrySideInfo[] = {
+    {GantrySide::none, "none", "not a gantry misalignment"},
+    {GantrySide::master_no_sensor, "master_no_sensor", "the master did not find its home sensor"},
+    {GantrySide::master_sensor_far, "master_sensor_far", "the master found its home sensor too far from the slave's"},
+    {GantrySide::slave_no_sensor, "slave_no_sensor", "the slave did not find its home sensor"},
+    {GantrySide::slave_sensor_far, "slave_sensor_far", "the slave found its home sensor too far from the master's"},
+};
+static_assert(lists_every_value(kGantrySideInfo, GantrySide::slave_sensor_far));
+constexpr std::span<const EnumInfo<GantrySide>> enum_table(GantrySide) { return kGantrySideInfo; }
+constexpr bool is_master_side(GantrySide s) {
+  return s == GantrySide::master_no_sensor || s == GantrySide::master_sensor_far;
+}
+
 struct Alarm {
   AlarmCode code = AlarmCode::none;
   Phase phase = Phase::idle;        // phase the axis was in when it was raised
   AxisField field = AxisField::none;  // for settings faults: the setting at fault
   double value = 0;                 // a figure for the text (distance, limit...)
   std::uint8_t rule = 0;            // settings faults: the CheckRule broken; limit alarms: 1 negative, 2 positive limit
+  // Misalignment: the side at fault, and how far out of square the cycle
+  // found the pair (`value` is how far out of square it would have come).
+  GantrySide side = GantrySide::none;
+  double rack_at_start_mm = 0;
   explicit operator bool() const { return code != AlarmCode::none; }
 };
 

@@ -172,6 +172,12 @@ struct AxisRun {
   // limit switch at the negative/positive end.
   std::int8_t limit_side = 0;
   double pair_rel0_mm = 0;      // gantry slave: slave - master motor position at cycle start
+  // Gantry slave: slave - master motor position where the pair is square as
+  // far as the module knows: when both sides were last assigned their home,
+  // or (never homed as a pair since the start) where the first cycle found it.
+  // An alarm may leave the pair racked; the next cycle counts from this.
+  std::optional<double> pair_square_mm;
+  int pair_square_master = -1;  // the master that square was measured against
   // Homed by its drive (drive mode): from then on the drive's home done must
   // stay on, or the drive has lost the reference the coordinate rests on.
   bool drive_referenced = false;

@@ -106,9 +106,16 @@ void Engine::start_cycle(const Settings& settings, AxisMask requested, bool all,
     run.aligning = false;
     run.follow_master = false;
   }
-  for (std::size_t sl = 0; sl < kAxisCount; ++sl)
-    if (const int m = gantry_master(settings, sl); m >= 0)
-      axes_[sl].pair_rel0_mm = axes_[sl].motor.position_mm - axes_[static_cast<std::size_t>(m)].motor.position_mm;
+  for (std::size_t sl = 0; sl < kAxisCount; ++sl) {
+    const int m = gantry_master(settings, sl);
+    if (m < 0) continue;
+    AxisRun& slave = axes_[sl];
+    slave.pair_rel0_mm = slave.motor.position_mm - axes_[static_cast<std::size_t>(m)].motor.position_mm;
+    if (!slave.pair_square_mm || slave.pair_square_master != m) {
+      slave.pair_square_mm = slave.pair_rel0_mm;
+      slave.pair_square_master = m;
+    }
+  }
   start_step(settings);
 }
 

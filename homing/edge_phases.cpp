@@ -87,13 +87,15 @@ void PhaseRunner::note_index(double release_mm, double index_mm) {
 }
 
 // Both sides of a gantry found their edges: how far apart they lie, each
-// from where its side stood when the cycle started, is how far out of square
-// with its sensors the pair stood (docs/health.md "Gantry skew"). The
+// from where its side stood when the pair was last square (where this cycle
+// found it, unless an alarm left it racked), is how far out of square with
+// its sensors the pair stood (docs/health.md "Gantry skew"). The
 // compensation comes later, in the pull-off; published on the slave.
 void PhaseRunner::note_gantry_skew() {
   Run& slave = is_slave ? run : partner_run();
   const Run& master = is_slave ? partner_run() : run;
-  slave.health.gantry_skew_mm = (slave.reference_mm - master.reference_mm) - slave.pair_rel0_mm;
+  slave.health.gantry_skew_mm =
+      (slave.reference_mm - master.reference_mm) - slave.pair_square_mm.value_or(slave.pair_rel0_mm);
   slave.health.gantry_skew_measured = true;
 }
 

@@ -45,6 +45,7 @@ class Engine {
   void run_motion(const Settings& settings);                                      // jog_move.cpp
   void follow_masters(const Settings& settings);                                  // gantry_guard.cpp
   void guard_gantries(const Settings& settings);
+  static GantrySide side_at_fault(const AxisRun& slave, const AxisRun& master);
   void release_commutators(const Settings& settings);
   void run_indexers(const Settings& settings, const Inputs& inputs);              // indexer.cpp
   void keep_home_frames(const Settings& settings);                                // home_frame.cpp

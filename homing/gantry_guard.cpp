@@ -26,13 +26,17 @@ void Engine::follow_masters(const Settings& settings) {
   }
 }
 
-// A gantry never racks beyond its slave's max_misalignment, stopping distance
-// included, whatever the phase or the cause (a side on its sensor, a dead or
-// stuck sensor, a squaring beyond the limit): each period, where both sides
-// would come to rest if braked now, or after running this period's commands
-// for up to two periods, is compared with their relative position at the
-// start of the cycle. Before that could pass the limit, the pair is stopped
-// with a misalignment alarm.
+// A gantry never racks beyond its slave's max_misalignment from square,
+// stopping distance included, whatever the phase or the cause (a side on its
+// sensor, a dead or stuck sensor, a squaring beyond the limit): each period,
+// where both sides would come to rest if braked now, or after running this
+// period's commands for up to two periods, is compared with where the pair is
+// square as the module knows it (pair_square_mm: where it was last assigned
+// its home, or where the first cycle found it). Before that could pass the
+// limit, the pair is stopped with a misalignment alarm. A pair an earlier
+// alarm left racked may so come back to square and up to the limit beyond,
+// and a pair found further out than the limit (max_misalignment lowered
+// since) may stay as far out on its own side.
 void Engine::guard_gantries(const Settings& settings) {
   for (std::size_t sl = 0; sl < kAxisCount; ++sl) {
     const int mi = gantry_master(settings, sl);
@@ -42,6 +46,10 @@ void Engine::guard_gantries(const Settings& settings) {
     const AxisRun& master = axes_[m];
     if (!slave.in_cycle && !master.in_cycle) continue;  // locked together outside a cycle
     const double limit = settings.axes[sl].max_misalignment_mm + (planted(Mutant::racking_allowed_0_2_mm_past_limit) ? 0.2 : 0.0);
+    const double square = slave.pair_square_mm.value_or(slave.pair_rel0_mm);
+    const double rack_at_start = slave.pair_rel0_mm - square;
+    const double low = std::min(-limit, rack_at_start - 1e-9);
+    const double high = std::max(limit, rack_at_start + 1e-9);
     auto rest = [&](const AxisRun& run, std::size_t axis, double h) {
       const MotionState at = integrate(run.motor, run.command, h);
       const double v = at.velocity_mm_per_s;
@@ -51,19 +59,38 @@ void Engine::guard_gantries(const Settings& settings) {
     // Two periods ahead: looking as far as a move's braking does (20 ms)
     // would stop square-able pairs at slow accelerations. A period later
     // than that can carry the pair past the limit by what it travels in the
-    // extra time (README "Gantries: racking").
+    // extra time (docs/homing-methods.md "Gantries: racking").
     const double horizon = 2 * last_dt_s_;
+    bool out = false;
     double worst = 0;
     for (int k = 0; k <= 4; ++k) {
       const double h = horizon * k / 4;
-      const double dev = (rest(slave, sl, h) - rest(master, m, h)) - slave.pair_rel0_mm;
-      worst = std::max(worst, std::abs(dev));
+      const double off_square = (rest(slave, sl, h) - rest(master, m, h)) - square;
+      if (off_square < low || off_square > high) out = true;
+      worst = std::max(worst, std::abs(off_square));
     }
-    if (worst > limit) {
-      raise(settings, axis_bit(sl), Alarm{AlarmCode::misalignment, slave.phase, AxisField::max_misalignment, worst, 0});
+    if (out) {
+      Alarm alarm{AlarmCode::misalignment, slave.phase, AxisField::max_misalignment, worst, 0};
+      alarm.side = side_at_fault(slave, master);
+      alarm.rack_at_start_mm = rack_at_start;
+      raise(settings, axis_bit(sl), alarm);
       follow_masters(settings);  // the slave brakes with the pair, not on its own old command
     }
   }
+}
+
+// The side that carried the pair out: the one still searching while the
+// other had found its sensor, else the one moving against the other.
+GantrySide Engine::side_at_fault(const AxisRun& slave, const AxisRun& master) {
+  const bool slave_found = slave.has_reached(Reached::stopped_on_sensor);
+  const bool master_found = master.has_reached(Reached::stopped_on_sensor);
+  bool master_side = false;
+  if (slave_found != master_found)
+    master_side = slave_found;
+  else
+    master_side = std::abs(master.motor.velocity_mm_per_s) > std::abs(slave.motor.velocity_mm_per_s);
+  if (master_side) return master_found ? GantrySide::master_sensor_far : GantrySide::master_no_sensor;
+  return slave_found ? GantrySide::slave_sensor_far : GantrySide::slave_no_sensor;
 }
 
 // The commutator output goes back to the master once the slave motor it was

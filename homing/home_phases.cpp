@@ -33,6 +33,18 @@ void PhaseRunner::set_home(Run& r, std::size_t of_axis, double reference_motor_m
   r.offset_mm = new_offset;
   r.home = home_frame(settings.axes[of_axis]);
   r.reach(Reached::assigned);
+  note_square();
+}
+
+// The moment both sides of a gantry are assigned their home, the pair stands
+// square: each side at rest at its home position from its own sensor (switch
+// compensation included). Locked from then on, it keeps this relative
+// position; the next cycle counts its racking from here (gantry_guard.cpp).
+void PhaseRunner::note_square() {
+  if (partner < 0 || !run.has_reached(Reached::assigned) || !partner_run().has_reached(Reached::assigned)) return;
+  Run& slave = is_slave ? run : partner_run();
+  const Run& master = is_slave ? partner_run() : run;
+  slave.pair_square_mm = slave.motor.position_mm - master.motor.position_mm;
 }
 
 void PhaseRunner::set_home(double reference_motor_mm, double machine_mm_at_rest) {

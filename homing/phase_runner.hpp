@@ -120,6 +120,9 @@ struct PhaseRunner {
   void aligned();
   void set_home(Run& r, std::size_t of_axis, double reference_motor_mm, double machine_mm_at_rest);
   void set_home(double reference_motor_mm, double machine_mm_at_rest);
+  double travel_within_square() const;  // search_phases.cpp
+  void fail_off_square();
+  void note_square();
   void assign();
   void after_assign();
   void final_move();

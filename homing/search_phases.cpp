@@ -41,8 +41,9 @@ void PhaseRunner::seek() {
       run.reach(Reached::stopped_on_sensor);
       return after_stop();
     }
-    // Bounded by max_seek_travel, braking in time to rest at its end.
-    run.target_mm = run.phase_start_mm + dir * s.max_seek_travel_mm;
+    // Bounded by max_seek_travel, braking in time to rest at its end; a
+    // commutator slave alone by how far it may rack the pair.
+    run.target_mm = run.phase_start_mm + dir * (commutator_slave() ? travel_within_square() : s.max_seek_travel_mm);
   }
   if (edge_to(true)) {
     const phase_data::Stop trigger{edge_mm(), dt()};
@@ -58,7 +59,7 @@ void PhaseRunner::seek() {
   const auto* seek = run.phase_data_if<phase_data::Seek>();
   move_to(run.target_mm, seek && seek->at_latch ? latch_v : seek_v);
   if (arrived()) {
-    if (commutator_slave()) return fail(AlarmCode::misalignment, travelled());
+    if (commutator_slave()) return fail_off_square();
     return fail(AlarmCode::sensor_not_found, travelled());
   }
 }
@@ -115,6 +116,27 @@ void PhaseRunner::push() {
     run.push_output = false;
     enter(row().after(Phase::push));
   }
+}
+
+// A commutator slave seeks alone while its master holds: it may bring the
+// pair back to square and up to max_misalignment beyond it, or stay as far
+// out on its own side as the cycle found it (gantry_guard.cpp).
+double PhaseRunner::travel_within_square() const {
+  const double square = run.pair_square_mm.value_or(run.pair_rel0_mm);
+  const double rack_at_start = run.pair_rel0_mm - square;
+  const double limit = s.max_misalignment_mm;
+  const double off = (run.motor.position_mm - partner_run().motor.position_mm) - square;
+  const double edge = dir > 0 ? std::max(limit, rack_at_start) : std::min(-limit, rack_at_start);
+  return std::max(0.0, (edge - off) * dir);
+}
+
+void PhaseRunner::fail_off_square() {
+  const double square = run.pair_square_mm.value_or(run.pair_rel0_mm);
+  Alarm alarm{AlarmCode::misalignment, run.phase, AxisField::max_misalignment,
+              std::abs((run.motor.position_mm - partner_run().motor.position_mm) - square), 0};
+  alarm.side = GantrySide::slave_no_sensor;
+  alarm.rack_at_start_mm = run.pair_rel0_mm - square;
+  ctx.alarms.raise(axis_bit(axis), alarm);
 }
 
 }  // namespace homing

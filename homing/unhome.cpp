@@ -1,5 +1,7 @@
 // Service: unhome axes on request (a technician who moved a carriage by hand,
-// or who wants the next home-all to assign an unsequenced axis afresh).
+// or who wants the next home-all to assign an unsequenced axis afresh). A
+// gantry pair also forgets where it was square: squared by hand, it would
+// otherwise count its racking from a square that no longer holds.
 #include "engine.hpp"
 #include "gantry.hpp"
 
@@ -24,7 +26,10 @@ void Engine::unhome_command(const Settings& settings, AxisMask axes) {
     return;
   }
   for (std::size_t a = 0; a < kAxisCount; ++a)
-    if (with_partners & axis_bit(a)) axes_[a].lose_reference();
+    if (with_partners & axis_bit(a)) {
+      axes_[a].lose_reference();
+      axes_[a].pair_square_mm.reset();
+    }
   last_result_ = CommandResult::accepted;
 }
 

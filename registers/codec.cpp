@@ -157,6 +157,8 @@ std::int64_t read_raw(const Register& reg, const ModuleView& view) {
       case Key::axis_alarm: return raw_of(a.alarm.code);
       case Key::axis_alarm_phase: return a.alarm ? raw_of(a.alarm.phase) : 0;
       case Key::axis_alarm_value: return a.alarm ? to_raw(reg, a.alarm.value) : 0;
+      case Key::axis_alarm_side: return a.alarm ? raw_of(a.alarm.side) : 0;
+      case Key::axis_alarm_rack_at_start: return a.alarm ? to_raw(reg, a.alarm.rack_at_start_mm) : 0;
       case Key::axis_position: return to_raw(reg, a.position_mm);
       case Key::axis_velocity: return to_raw(reg, a.velocity_mm_per_s);
       case Key::axis_home_correction: return to_raw(reg, a.home_correction_mm);

@@ -34,8 +34,10 @@ constexpr AlarmConfirm kAlarmConfirm[] = {
     {homing::AlarmCode::slave_sensor_missing,
      "`homingctl check` names the slave; `axis.<a>.mode` of the slave is not a switch or pushing mode"},
     {homing::AlarmCode::misalignment,
-     "`axis.<a>.alarm_value` is the difference between the two sides; press each gantry switch by hand and watch "
-     "`axis.<a>.sensor` of both axes; `homingctl trace` of both axes"},
+     "on the slave, `axis.<a>.alarm_side` names the side that carried the pair out (and whether it had found its "
+     "switch), `axis.<a>.alarm_value` how far out of square it would have come and `axis.<a>.alarm_rack_at_start` how "
+     "far out the cycle found it; press each gantry switch by hand and watch `axis.<a>.sensor` of both axes; "
+     "`homingctl trace` of both axes"},
     {homing::AlarmCode::hard_limit,
      "`axis.<a>.sensor` reads 1: the axis stands on its home sensor, which `shared_limit` makes a hard limit"},
     {homing::AlarmCode::soft_limit,

@@ -108,6 +108,7 @@ constexpr auto kPhases = values_of(homing::kPhaseInfo);
 constexpr auto kSimFaults = values_of(homing::sim::kFaultInfo);
 constexpr auto kHealthWarnings = values_of(homing::kHealthWarningInfo);
 constexpr auto kTrusts = values_of(homing::kTrustInfo);
+constexpr auto kGantrySides = values_of(homing::kGantrySideInfo);
 // Why a write was refused: the reasons (registers/errors.hpp), then one code
 // per configuration rule at kRuleReasonBase + the rule (homing::CheckRule).
 constexpr auto kRefusalReasons = [] {
@@ -155,6 +156,7 @@ constexpr ValueList kValueLists[] = {
     {"sim_fault", kSimFaults},
     {"health_warning", kHealthWarnings},
     {"trust", kTrusts},
+    {"gantry_side", kGantrySides},
     {"refusal_reason", kRefusalReasons},
 };
 
@@ -296,6 +298,10 @@ constexpr auto kModuleAxisRows = std::to_array<Row>({
     {.pattern = "axis.<a>.health_warning", .table = IR, .offset = 40, .type = Type::enumeration, .access = Access::r, .max = last_value(kHealthWarnings), .key = Key::axis_health_warning, .values = kHealthWarnings, .description = "what the trend of the homing history says of this axis's switch or gantry (a warning, not an alarm: the axis stays homed; docs/health.md)"},
     {.pattern = "axis.<a>.trust", .table = IR, .offset = 41, .type = Type::enumeration, .access = Access::r, .max = last_value(kTrusts), .key = Key::axis_trust, .values = kTrusts, .description = "how far the axis's position can be believed: unknown, last_stop_clean (a reference check is offered: cmd.refcheck.<a>), reference_checked, homed_this_power_on"},
     {.pattern = "axis.<a>.refcheck_error", .table = IR, .offset = 42, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_refcheck_error, .description = "last reference check: where the switch edge was found less where the stored position put it (refused beyond refcheck_tolerance; when the edge was not found at all, as far as the search went)"},
+    // A gantry's misalignment alarm, on the slave (docs/homing-methods.md "Gantries: racking"): with
+    // axis.<a>.alarm_value (how far out of square) they read as the log's text does.
+    {.pattern = "axis.<a>.alarm_side", .table = IR, .offset = 39, .type = Type::enumeration, .access = Access::r, .max = last_value(kGantrySides), .key = Key::axis_alarm_side, .values = kGantrySides, .description = "misalignment alarm: the side of the gantry that carried the pair out, master or slave, and whether it had found its home sensor; 0 for every other alarm"},
+    {.pattern = "axis.<a>.alarm_rack_at_start", .table = IR, .offset = 52, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_alarm_rack_at_start, .description = "misalignment alarm: how far out of square (slave minus master) the pair stood when the cycle started, 0 when it started square (an earlier alarm can leave it racked)"},
     // The commissioning measurement (docs/homing-methods.md "Commissioning measurement"): 0 until one found its end.
     {.pattern = "axis.<a>.measured_travel", .table = IR, .offset = 44, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_measured_travel, .description = "last measurement (cmd.measure.<a>): usable travel from home_position toward the opposite end, where the end was found less the stop distance from jog_feedrate"},
     {.pattern = "axis.<a>.measured_soft_limit_min", .table = IR, .offset = 46, .type = Type::i32, .access = Access::r, .quantity = LEN, .min = type_min(Type::i32), .max = type_max(Type::i32), .key = Key::axis_measured_soft_limit_min, .description = "last measurement: suggested soft_limit_min (machine coordinates; written only by homingctl measure --apply)"},

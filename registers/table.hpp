@@ -63,6 +63,7 @@ enum class Key : std::uint8_t {
   axis_hysteresis, axis_seek_latch_difference, axis_chatter_edges, axis_index_distance, axis_index_near_edge,
   axis_gantry_skew, axis_health_warning, axis_trust, axis_refcheck_error,
   axis_measured_travel, axis_measured_soft_limit_min, axis_measured_soft_limit_max, axis_measured_max_seek_travel,
+  axis_alarm_side, axis_alarm_rack_at_start,
   // discrete inputs, module
   status_alarm, status_homing, status_estop, axis_homed, axis_sensor, axis_busy,
   // coils, module

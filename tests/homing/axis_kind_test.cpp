@@ -46,8 +46,9 @@ SCENARIO("misalignment of a linear gantry slave on A reads in mm", "[alarms][gan
   REQUIRE(r.axis(kA).alarm.code == AlarmCode::misalignment);
   const std::string text = describe_alarm(kA, r.axis(kA).alarm, r.settings);
   INFO(text);
-  CHECK_THAT(text, Catch::StartsWith("A: gantry stopped during seek before racking by ") &&
-                       Catch::Contains(" mm, more than max_misalignment 2 mm"));
+  CHECK_THAT(text, Catch::StartsWith("A: gantry stopped during seek: A (slave) did not find its home sensor, before "
+                                      "racking by ") &&
+                       Catch::Contains(" mm from square, more than max_misalignment 2 mm; the pair started the cycle square"));
   CHECK_THAT(text, !Catch::Contains("deg"));
 }
 
@@ -59,7 +60,7 @@ TEST_CASE("a slave reads in its master's unit, whatever its own kind says") {
   Alarm a{AlarmCode::misalignment};
   a.phase = Phase::seek;
   a.value = 2.5;
-  CHECK_THAT(describe_alarm(kA, a, r.settings), Catch::Contains("racking by 2.500 mm, more than max_misalignment 2 mm"));
+  CHECK_THAT(describe_alarm(kA, a, r.settings), Catch::Contains("racking by 2.500 mm from square, more than max_misalignment 2 mm"));
   // Once no longer a slave, A is what its own setting says.
   r.settings.axes[kA].slave_of = 0;
   CHECK(axis_unit(r.settings, kA) == "deg");

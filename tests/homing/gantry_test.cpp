@@ -1,6 +1,7 @@
 // Gantry topologies: hardware-slaved (one axis, pushing), software-slaved
 // squaring (slave_of, slave_mode 0) and an external commutator (slave_mode 1).
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
@@ -377,4 +378,115 @@ SCENARIO("an axis that is no gantry slave measures no skew", "[gantry][health]")
   Rig r;
   REQUIRE(r.home_all());
   for (std::size_t a = 0; a < kAxisCount; ++a) CHECK_FALSE(r.axis(a).health.gantry_skew_measured);
+}
+
+namespace {
+
+// Slave - master carriage positions: where the pair stands against square
+// (both rigs start their carriages at 100, so square is 0 until homed).
+double rack_mm(Rig& r) { return r.actual(1) - r.actual(0); }
+
+// Runs home-all and records the largest rack from `square_mm` on the way.
+bool home_all_watching(Rig& r, double square_mm, double& worst_mm) {
+  worst_mm = 0;
+  r.on_period = [&](Rig& rr) { worst_mm = std::max(worst_mm, std::abs(rack_mm(rr) - square_mm)); };
+  const bool homed = r.home_all();
+  r.on_period = nullptr;
+  return homed;
+}
+
+}  // namespace
+
+SCENARIO("a gantry an alarm left racked squares back on the next home, never further than the limit from square",
+         "[gantry][recovery]") {
+  for (const bool commutator : {false, true}) {
+    DYNAMIC_SECTION((commutator ? "external commutator" : "software-slaved")) {
+      Rig r = commutator ? commutator_gantry(100) : software_gantry(100);
+      const double limit = r.settings.axes[1].max_misalignment_mm;
+      r.set_fault(1, sim::Fault::wire_break);
+      double worst = 0;
+      REQUIRE_FALSE(home_all_watching(r, 0, worst));
+      const Alarm first = r.axis(1).alarm;
+      REQUIRE(first.code == AlarmCode::misalignment);
+      THEN("the alarm names the slave, which did not find its sensor, in a pair that started square") {
+        CHECK(first.side == GantrySide::slave_no_sensor);
+        CHECK(first.rack_at_start_mm == Approx(0).margin(1e-9));
+        const std::string text = describe_alarm(1, first, r.settings);
+        INFO(text);
+        CHECK_THAT(text, Catch::Contains("Y (slave) did not find its home sensor") &&
+                             Catch::Contains("the pair started the cycle square"));
+      }
+      THEN("it stopped racked by close to its limit, not beyond") {
+        CHECK(worst <= limit + 1e-6);
+        CHECK(std::abs(rack_mm(r)) > 0.5 * limit);
+      }
+      WHEN("the wire is mended and the alarm reset, one home-all squares it") {
+        const double racked = rack_mm(r);
+        r.set_fault(1, sim::Fault::none);
+        r.reset_alarm();
+        r.step();
+        REQUIRE_FALSE(r.status().alarm);
+        REQUIRE(home_all_watching(r, 0, worst));
+        const double tol = edge_tolerance_mm(r.settings.axes[0], r.dt_s);
+        CHECK(std::abs(racked) > 0.5 * limit);
+        CHECK(worst <= limit + 1e-6);
+        CHECK(r.actual(0) == Approx(1.05).margin(tol));
+        CHECK(r.actual(1) == Approx(1.05).margin(tol));
+        CHECK(r.axis(1).homed);
+      }
+      WHEN("the wire stays broken, the next home stops again, naming the same side and the rack it started with") {
+        const double racked = rack_mm(r);
+        r.reset_alarm();
+        r.step();
+        REQUIRE_FALSE(home_all_watching(r, 0, worst));
+        const Alarm again = r.axis(1).alarm;
+        CHECK(again.code == AlarmCode::misalignment);
+        CHECK(again.side == GantrySide::slave_no_sensor);
+        CHECK(again.rack_at_start_mm == Approx(racked).margin(1e-6));  // the simulator keeps every step
+        CHECK(worst <= std::max(limit, std::abs(racked)) + 1e-6);
+        CHECK_THAT(describe_alarm(1, again, r.settings),
+                   Catch::Contains(fmt::format("the pair started the cycle {:.3f} mm out of square", racked)));
+      }
+      WHEN("the gantry is unhomed, the module forgets that square and counts from where the pair stands") {
+        r.reset_alarm();
+        r.step();
+        r.pending.unhome_axes = axis_bit(0);
+        r.step();
+        REQUIRE_FALSE(home_all_watching(r, rack_mm(r), worst));
+        CHECK(r.axis(1).alarm.code == AlarmCode::misalignment);
+        CHECK(r.axis(1).alarm.rack_at_start_mm == Approx(0).margin(1e-9));
+      }
+    }
+  }
+}
+
+SCENARIO("a gantry whose master's sensor is dead names the master", "[gantry][recovery]") {
+  Rig r = software_gantry(100);
+  r.set_fault(0, sim::Fault::sensor_stuck_inactive);
+  r.home_all();
+  const Alarm a = r.axis(1).alarm;
+  REQUIRE(a.code == AlarmCode::misalignment);
+  CHECK(a.side == GantrySide::master_no_sensor);
+  CHECK_THAT(describe_alarm(1, a, r.settings), Catch::Contains("X (master) did not find its home sensor"));
+}
+
+SCENARIO("a gantry homed square counts the next cycle's racking from that square, not from where an alarm left it",
+         "[gantry][recovery]") {
+  // Homed square first; then a dead slave sensor racks it; mended, it squares
+  // back to where it was homed.
+  Rig r = software_gantry(101.5);  // the slave starts 1.5 mm out: the first cycle squares it
+  REQUIRE(r.home_all());
+  const double square = rack_mm(r);
+  const double limit = r.settings.axes[1].max_misalignment_mm;
+  r.set_fault(1, sim::Fault::sensor_stuck_inactive);
+  double worst = 0;
+  REQUIRE_FALSE(home_all_watching(r, square, worst));
+  CHECK(worst <= limit + 1e-6);
+  CHECK(r.axis(1).alarm.rack_at_start_mm == Approx(0).margin(1e-6));
+  r.set_fault(1, sim::Fault::none);
+  r.reset_alarm();
+  r.step();
+  REQUIRE(home_all_watching(r, square, worst));
+  CHECK(worst <= limit + 1e-6);
+  CHECK(rack_mm(r) == Approx(square).margin(2 * edge_tolerance_mm(r.settings.axes[0], r.dt_s)));
 }

@@ -26,8 +26,8 @@ StatusView read_status(Connection& c, const homing::Settings& settings) {
     for (const char* f : {"homed", "sensor", "busy"}) regs.push_back(&register_named(ax(a, f)));
     if (settings.axes[a].mode == homing::HomingMode::disabled) continue;
     for (const char* f :
-         {"phase", "alarm", "alarm_phase", "alarm_value", "position", "velocity", "phase_distance", "stop_distance",
-          "trust", "refcheck_error"})
+         {"phase", "alarm", "alarm_phase", "alarm_value", "alarm_side", "alarm_rack_at_start", "position", "velocity",
+          "phase_distance", "stop_distance", "trust", "refcheck_error"})
       regs.push_back(&register_named(ax(a, f)));
   }
   const auto v = c.read_many(regs);
@@ -53,6 +53,8 @@ StatusView read_status(Connection& c, const homing::Settings& settings) {
     x.alarm = static_cast<homing::AlarmCode>(get(ax(a, "alarm")));
     x.alarm_phase = static_cast<homing::Phase>(get(ax(a, "alarm_phase")));
     x.alarm_value = mm(ax(a, "alarm_value"));
+    x.alarm_side = static_cast<homing::GantrySide>(get(ax(a, "alarm_side")));
+    x.alarm_rack_at_start = mm(ax(a, "alarm_rack_at_start"));
     x.position = mm(ax(a, "position"));
     x.velocity = mm(ax(a, "velocity"));
     x.phase_distance = mm(ax(a, "phase_distance"));
@@ -69,6 +71,8 @@ std::string alarm_text(std::size_t axis, const AxisView& a, const homing::Settin
   alarm.code = a.alarm;
   alarm.phase = a.alarm_phase;
   alarm.value = a.alarm_value;  // the figure the engine quoted when it raised the alarm
+  alarm.side = a.alarm_side;
+  alarm.rack_at_start_mm = a.alarm_rack_at_start;
   if (a.alarm == homing::AlarmCode::settings_fault || a.alarm == homing::AlarmCode::slave_sensor_missing) {
     if (auto f = homing::check_axis(settings, axis)) {
       alarm.field = f->field;
@@ -214,6 +218,7 @@ nlohmann::json status_json(const StatusView& s, const homing::Settings& settings
       e["alarm"] = {{"code", static_cast<int>(x.alarm)},
                     {"name", std::string(homing::alarm_name(x.alarm))},
                     {"phase", std::string(homing::phase_name(x.alarm_phase))},
+                    {"side", std::string(homing::name_of(x.alarm_side))},
                     {"text", alarm_text(a, x, settings)}};
     if (x.busy) e["phase_distance"] = x.phase_distance;
     j["axes"].push_back(e);

@@ -17,6 +17,8 @@ struct AxisView {
   homing::AlarmCode alarm = homing::AlarmCode::none;
   homing::Phase alarm_phase = homing::Phase::idle;
   double alarm_value = 0;  // axis.<a>.alarm_value: distance travelled, misalignment, ...
+  homing::GantrySide alarm_side = homing::GantrySide::none;  // misalignment: the side at fault
+  double alarm_rack_at_start = 0;  // misalignment: how far out of square the cycle found the pair
   double position = 0, velocity = 0, phase_distance = 0, stop_distance = 0;
   bool homed = false, sensor = false, busy = false;
   homing::Trust trust = homing::Trust::unknown;  // axis.<a>.trust

@@ -204,7 +204,7 @@ void Watch::braking(std::size_t a, double x, double v) {
 double Watch::back_tolerance(std::size_t a) const {
   const int m = master_index(r_.settings, a);
   if (m >= 0 && r_.settings.axes[a].slave_mode == SlaveMode::external_commutator)
-    return r_.settings.axes[a].max_misalignment_mm + kRackingTolerance_mm + late_allowance_[a];
+    return r_.settings.axes[a].max_misalignment_mm + std::abs(rack0_[a]) + kRackingTolerance_mm + late_allowance_[a];
   return 1e-6;
 }
 

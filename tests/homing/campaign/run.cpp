@@ -256,7 +256,10 @@ void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
 bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_button) {
   const CyclePlan plan = plan_cycle(r_.settings, all, mask);
   const bool refused = first_fault(r_.settings).has_value();
-  Causes causes = standing_causes(r_, m_, plan, refused, encoder_invalid_);
+  std::array<std::optional<double>, kAxisCount> rack{};
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (m_.plan[a].role == Role::slave) rack[a] = w_->pair_rack(a);
+  Causes causes = standing_causes(r_, m_, plan, refused, encoder_invalid_, rack);
   const std::uint32_t cycles_before = r_.status().homing_cycles;
   cam_on_start_ = 0;
   for (std::size_t a = 0; a < kAxisCount; ++a)
@@ -465,6 +468,8 @@ void Run::mark_cycle(const CyclePlan& plan, const Causes& causes, bool clean) {
       const std::uint8_t pair = static_cast<std::uint8_t>(bits | (w_->axis_alarms[mi] ? seen::alarmed : 0));
       mark(k, pair);
       mark(k + ", master " + std::string(mode_name(m_.settings.axes[mi].mode)), pair);
+      if (!m_.plan[a].bad_skew && std::abs(w_->rack_at_window_start(a)) > 0.5 * m_.settings.axes[a].max_misalignment_mm)
+        mark("gantry starting racked by an earlier stop", static_cast<std::uint8_t>(pair | seen::present));
     } else if (m_.settings.axes[a].mode != HomingMode::disabled) {
       mark("mode " + std::string(mode_name(m_.settings.axes[a].mode)), bits);
     }
@@ -502,6 +507,17 @@ void Run::put_back(AxisMask mask) {
   w_->carriages_placed();
   // The inputs (the encoders) show the new places after a period.
   for (int i = 0; i < 3; ++i) step();
+  // A gantry moved by hand: the technician unhomes it, as the alarm's text
+  // says, so the module forgets where it was square (docs/homing-methods.md
+  // "Gantries: racking").
+  AxisMask pairs = 0;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if ((mask & axis_bit(a)) && partner_index(r_.settings, a) >= 0) pairs |= axis_bit(a);
+  if (!pairs) return;
+  say("unhome the gantry moved by hand: " + std::to_string(pairs));
+  r_.pending.unhome_axes |= pairs;
+  step();
+  w_->pair_unhomed(pairs);
 }
 
 void Run::recover() {
@@ -510,9 +526,12 @@ void Run::recover() {
   r_.sim().set_homing_permit(true);
   comm_lost_ = false;
   settle(10);
-  AxisMask faulted = 0;
+  AxisMask faulted = 0, sensor_faulted = 0, past_cam = 0;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     auto c = r_.sim().axis_config(a);
+    if (c.fault == sim::Fault::sensor_stuck_active || c.fault == sim::Fault::sensor_stuck_inactive ||
+        c.fault == sim::Fault::wire_break)
+      sensor_faulted |= axis_bit(a);
     if (c.fault != sim::Fault::none) {
       // An indexer's fault leaves the carriage where it was: nothing to put back.
       const bool indexer = c.fault == sim::Fault::indexer_stuck_locked || c.fault == sim::Fault::indexer_never_locks;
@@ -527,7 +546,21 @@ void Run::recover() {
     const auto& c = r_.sim().axis_config(a);
     const double x = r_.actual(a);
     const bool past = dir_of(e) > 0 ? x > c.sensor_max_mm : x < c.sensor_min_mm;
-    if (mode_uses_switch(e.mode) && (past || m_.plan[a].short_cam) && !w_->truth[a].valid) faulted |= axis_bit(a);
+    if (mode_uses_switch(e.mode) && (past || m_.plan[a].short_cam) && !w_->truth[a].valid) {
+      faulted |= axis_bit(a);
+      past_cam |= axis_bit(a);
+    }
+  }
+  // Half the time a gantry whose sensor failed stays where its alarm left it
+  // (the wire mended, the gantry not touched): the next cycle starts racked
+  // and must square it back (docs/homing-methods.md "Gantries: racking").
+  for (std::size_t s = 0; s < kAxisCount; ++s) {
+    if (m_.plan[s].role != Role::slave) continue;
+    const AxisMask pair = static_cast<AxisMask>(axis_bit(s) | axis_bit(static_cast<std::size_t>(m_.plan[s].partner)));
+    if ((sensor_faulted & pair) && !(past_cam & pair) && d_.chance(0.5)) {
+      faulted &= static_cast<AxisMask>(~pair);
+      say(std::string("gantry ") + kAxisUpper[s] + " left where its alarm stopped it");
+    }
   }
   put_back(faulted);
   w_->dead_sensor = 0;

@@ -155,7 +155,21 @@ void pre_move_cause(Causes& c, rig::Rig& r, const AxisSettings& e, std::size_t a
     c.add(letter(a) + "'s pre-move past its limit switch", {AlarmCode::limit_in_homing}, axis_bit(a), past > 0.01 && always);
 }
 
-Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, bool refused, AxisMask encoder_invalid) {
+// How far a gantry's squaring goes beyond what its guard allows, as a skew
+// of a pair that started square would: the correction `needed` (carriages,
+// from where the cycle finds them) may take a pair found `rack` out of square
+// back to square and up to the limit beyond, or keep it out on its own side.
+double squaring_beyond(double needed, double rack, double limit) {
+  if (rack < 0) {
+    needed = -needed;
+    rack = -rack;
+  }
+  if (needed <= 0) return std::max(0.0, -needed - rack);
+  return needed + std::min(rack, limit);
+}
+
+Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, bool refused, AxisMask encoder_invalid,
+                       const std::array<std::optional<double>, kAxisCount>& rack) {
   Causes c;
   if (refused) {
     Cause& k = c.add(std::string("the configuration check's refusal (") + invalid_name(m.invalid) + " on " + letter(m.invalid_axis) + ")",
@@ -260,15 +274,16 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
     if ((plan.unsequenced & bit) && r.settings.axes[a].shared_limit)
       c.add(letter(a) + " unsequenced on its shared-limit sensor", {AlarmCode::hard_limit}, bit);
     if (p.role == Role::slave && mover) {
-      // The skew from where this cycle starts (earlier cycles may have racked
-      // the pair within its limit, squarer or less square).
+      // The squaring from where this cycle starts (an earlier alarm may have
+      // left the pair racked: it may square back).
       const std::size_t mi = static_cast<std::size_t>(p.partner);
-      const double skew = std::abs(p.rest_rel_mm - (r.actual(a) - r.actual(mi)));
       const double limit = r.settings.axes[a].max_misalignment_mm;
-      if (p.bad_skew || skew > p.budget_mm + 1e-3)
+      const double needed = p.rest_rel_mm - (r.actual(a) - r.actual(mi));
+      const double skew = rack[a] ? squaring_beyond(needed, *rack[a], limit) : std::abs(needed);
+      if (p.bad_skew || !rack[a] || skew > p.budget_mm + 1e-3)
         c.add(letter(a) + "'s skew beyond its max misalignment",
               {AlarmCode::misalignment, AlarmCode::not_released, AlarmCode::sensor_not_found, AlarmCode::slave_sensor_missing},
-              static_cast<AxisMask>(bit | axis_bit(mi)), skew > limit + p.extras_mm);
+              static_cast<AxisMask>(bit | axis_bit(mi)), rack[a] && skew > limit + p.extras_mm);
     }
     // A drive that homes itself: what its fault, or an answer after its
     // time limit, must raise when its step comes.

@@ -48,7 +48,11 @@ struct Causes {
 };
 
 // What is wrong with the machine as the cycle starts.
-Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, bool refused, AxisMask encoder_invalid);
+// rack: per gantry slave, how far out of square (from where it was last
+// square, as the module counts) the pair stands as the cycle starts; nullopt
+// when a side lost steps or slipped since (then a misalignment may come).
+Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, bool refused, AxisMask encoder_invalid,
+                       const std::array<std::optional<double>, kAxisCount>& rack);
 // An event applied while the cycle ran (the status as it stood when it was applied).
 void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st, const CyclePlan& plan);
 // A locking indexer's fault applied while the cycle ran: exactly the alarm it

@@ -83,8 +83,14 @@ void Watch::begin_window(const CyclePlan& p, bool is_refused) {
     // The cycle assigns these again: the old truth no longer holds.
     if (!refused && ((plan.covered | plan.unsequenced) & axis_bit(a))) truth[a].valid = false;
   }
-  for (std::size_t s = 0; s < kAxisCount; ++s)
-    if (m_.plan[s].role == Role::slave) rel_ref_[s] = r_.actual(s) - r_.actual(static_cast<std::size_t>(m_.plan[s].partner));
+  for (std::size_t s = 0; s < kAxisCount; ++s) {
+    if (m_.plan[s].role != Role::slave) continue;
+    rel_ref_[s] = r_.actual(s) - r_.actual(static_cast<std::size_t>(m_.plan[s].partner));
+    if (!square_[s]) square_[s] = carriage_rel(s);
+    rack0_[s] = carriage_rel(s) - *square_[s];
+    rack0_uncertain_[s] = square_uncertain_[s];
+    pair_unhomed_seen_[s] = false;
+  }
   late_allowance_.fill(0);
   slipped_.fill(false);
   reversed = reversal_expected = reversal_known = 0;
@@ -139,16 +145,44 @@ void Watch::carriages_placed() {
     if (m_.plan[s].role == Role::slave) rel_ref_[s] = r_.actual(s) - r_.actual(static_cast<std::size_t>(m_.plan[s].partner));
 }
 
+double Watch::carriage_rel(std::size_t slave) const {
+  return r_.actual(slave) - r_.actual(static_cast<std::size_t>(m_.plan[slave].partner));
+}
+
+std::optional<double> Watch::pair_rack(std::size_t slave) const {
+  if (square_uncertain_[slave]) return std::nullopt;
+  return square_[slave] ? carriage_rel(slave) - *square_[slave] : 0.0;
+}
+
+void Watch::pair_unhomed(AxisMask axes) {
+  for (std::size_t s = 0; s < kAxisCount; ++s)
+    if (m_.plan[s].role == Role::slave &&
+        (axes & (axis_bit(s) | axis_bit(static_cast<std::size_t>(m_.plan[s].partner))))) {
+      square_[s].reset();
+      square_uncertain_[s] = false;
+    }
+}
+
+// A side's carriage went where its steps did not take it: the module's square
+// (counted in steps) and the carriages' part by as much, until it squares again.
+void Watch::square_unsure(std::size_t a) {
+  for (std::size_t s = 0; s < kAxisCount; ++s)
+    if (m_.plan[s].role == Role::slave && (s == a || static_cast<std::size_t>(m_.plan[s].partner) == a))
+      square_uncertain_[s] = true;
+}
+
 void Watch::settings_changed() {
   for (std::size_t a = 0; a < kAxisCount; ++a) eff_[a] = effective(r_.settings, a);
 }
 
 void Watch::pair_slipped(std::size_t a) {
+  square_unsure(a);
   for (std::size_t s = 0; s < kAxisCount; ++s)
     if (m_.plan[s].role == Role::slave && (s == a || static_cast<std::size_t>(m_.plan[s].partner) == a)) slipped_[s] = true;
 }
 
 void Watch::carriage_jumped(std::size_t a) {
+  square_unsure(a);
   truth[a].valid = false;
   x_prev_[a] = r_.actual(a);
 }
@@ -413,15 +447,39 @@ void Watch::racking(double engine_dt) {
       late_allowance_[s] += late_s * (std::abs(r_.status().axes[s].velocity_mm_per_s) +
                                       std::abs(r_.status().axes[mi].velocity_mm_per_s));
     const double rel = r_.actual(s) - r_.actual(mi);
-    const double dev = std::abs(rel - rel_ref_[s]);
-    // The promise as written (README "Gantries: racking"): never beyond
-    // max_misalignment, late periods included; 1 µm for the arithmetic.
+    const double signed_dev = rel - rel_ref_[s];
+    double dev = std::abs(signed_dev);
+    // The promise as written (docs/homing-methods.md "Gantries: racking"):
+    // never beyond max_misalignment from square, late periods included; 1 µm
+    // for the arithmetic. Counted on the carriages from where the window
+    // found them (lost steps before it cancel out), in a band the rack the
+    // window found (on the step outputs, from where the pair was last square)
+    // shifts: a racked pair may come back to square and the limit beyond.
     // Locked outside a cycle the pair stays locked, unless a side's drive
     // faulted while it moved: the other side brakes on, within the limit the
     // rule set sizes for exactly that (a gantry's stop below max_misalignment).
     const double locked = slipped_[s] ? r_.settings.axes[s].max_misalignment_mm + kRackingTolerance_mm : 1e-6;
     const double limit =
         in_window ? r_.settings.axes[s].max_misalignment_mm + kRackingTolerance_mm + late_allowance_[s] : locked;
+    if (in_window) {
+      const AxisStatus& ss_now = r_.status().axes[s];
+      const AxisStatus& ms_now = r_.status().axes[mi];
+      if (!ss_now.homed || !ms_now.homed) {
+        pair_unhomed_seen_[s] = true;
+      } else if (pair_unhomed_seen_[s]) {
+        square_[s] = rel;  // assigned: square from here
+        square_uncertain_[s] = false;
+        pair_unhomed_seen_[s] = false;
+      }
+      // After lost steps or a slip (before this window or in it: a side's
+      // drive faulted, the other brakes on) the module's square is not the
+      // carriages': they may stand as far out as the limit, either way.
+      const double r0 = rack0_[s];
+      const double unsure = rack0_uncertain_[s] || square_uncertain_[s] ? limit : 0.0;
+      const double low = std::min(-limit, r0 - kRackingTolerance_mm) - r0 - unsure;
+      const double high = std::max(limit, r0 + kRackingTolerance_mm) - r0 + unsure;
+      dev = signed_dev < low ? low - signed_dev + limit : (signed_dev > high ? signed_dev - high + limit : 0.0);
+    }
     // Locked and homed, both sides have the same machine position (each was
     // assigned the master's home position at its own rest point).
     const AxisStatus& ss = r_.status().axes[s];
@@ -435,8 +493,9 @@ void Watch::racking(double engine_dt) {
     }
     if (dev > limit) {
       std::ostringstream o;
-      o << "slave " << kAxisUpper[s] << " vs master " << kAxisUpper[mi] << ": " << dev << " from "
-        << (in_window ? "where the cycle started" : "where the pair was locked") << ", allowed " << limit << "; "
+      o << "slave " << kAxisUpper[s] << " vs master " << kAxisUpper[mi] << ": " << signed_dev << " from "
+        << (in_window ? "where the cycle started" : "where the pair was locked") << ", allowed " << limit
+        << (in_window ? " from square; the window found it " + std::to_string(rack0_[s]) + " out of square" : "") << "; "
         << fmt_axis(mi, r_, r_.actual(mi)) << "; " << fmt_axis(s, r_, r_.actual(s));
       std::string topology = r_.settings.axes[s].slave_mode == SlaveMode::external_commutator ? " (external commutator" : " (software-slaved";
       topology += m_.plan[s].differs ? ", the slave's own inherited fields differ)" : ")";

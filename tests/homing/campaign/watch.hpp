@@ -2,6 +2,7 @@
 // The invariants checked every control period against the simulator's truth,
 // and the truth itself: where each homed axis's machine coordinate must be.
 #include <array>
+#include <optional>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -48,6 +49,14 @@ class Watch {
   void begin_window(const CyclePlan& plan, bool refused);
   void end_window();                     // the machine is at rest after the cycle
   void set_outside_movers(AxisMask mask);  // jogs and moves between cycles
+  // A gantry slave's pair: how far out of square its carriages stand now,
+  // counted from where they stood when the pair was last assigned its home
+  // (or where the first cycle found it), as the module counts; nullopt once a
+  // side lost steps or slipped since (the module's square is then not the
+  // carriages'), 0 when nothing is known yet.
+  std::optional<double> pair_rack(std::size_t slave) const;
+  void pair_unhomed(AxisMask axes);  // the module was told to forget these pairs' square
+  double rack_at_window_start(std::size_t slave) const { return rack0_[slave]; }
   void carriage_jumped(std::size_t a);   // lost steps: coordinates no longer known
   void assign_unsequenced();             // a home-all ended: unsequenced axes now hold their home position
   void carriages_placed();               // put back by hand: gantries locked where they stand now
@@ -164,6 +173,16 @@ class Watch {
   std::array<bool, kAxisCount> went_back_{};  // go_back: moved after it had come to rest
   // Gantry racking.
   std::array<double, kAxisCount> rel_ref_{};   // per slave
+  // Per slave: the carriages' slave - master when the pair was last square;
+  // a side lost steps or slipped since; how far from square the window found
+  // them; the pair seen unhomed in this window (its next assignment squares it).
+  std::array<std::optional<double>, kAxisCount> square_{};
+  std::array<bool, kAxisCount> square_uncertain_{};
+  std::array<double, kAxisCount> rack0_{};
+  std::array<bool, kAxisCount> rack0_uncertain_{};
+  std::array<bool, kAxisCount> pair_unhomed_seen_{};
+  double carriage_rel(std::size_t slave) const;
+  void square_unsure(std::size_t axis);
   std::array<double, kAxisCount> late_allowance_{};
   std::array<bool, kAxisCount> slipped_{};      // per slave: a side's drive faulted outside a cycle  // per slave: travel in periods later than the guard looks
   // Sensor edges as they stood before this period (the reference of an axis assigned now).
