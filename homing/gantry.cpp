@@ -64,6 +64,30 @@ Settings motion_settings(const Settings& settings) {
   return out;
 }
 
+bool inherited_from_master(AxisField field, SlaveMode mode) {
+  switch (field) {
+    case AxisField::none:
+    case AxisField::mode:
+    case AxisField::sensor_nc:
+    case AxisField::debounce_ms:
+    case AxisField::shared_limit:
+    case AxisField::switch_compensation:
+    case AxisField::max_misalignment:
+    case AxisField::slave_of:
+    case AxisField::slave_mode:
+    case AxisField::indexer_lock:
+    case AxisField::lock_timeout_ms:
+    case AxisField::limits_fitted:
+    case AxisField::limits_nc:
+    case AxisField::limit_overtravel:
+    case AxisField::acceleration:
+    case AxisField::max_skew_change:
+    case AxisField::refcheck_tolerance: return false;
+    case AxisField::pull_off: return mode == SlaveMode::external_commutator;
+    default: return true;
+  }
+}
+
 // Any axis slave_of names, not only the master of a valid pair: a fault that
 // refuses the pair is about a slave already, in its master's unit.
 AxisKind axis_kind(const Settings& settings, std::size_t axis) {

@@ -29,6 +29,16 @@ bool is_commutator_slave(const Settings& settings, std::size_t axis);
 // asked for more than it can do, in homing, jog, move and every stop.
 Settings motion_settings(const Settings& settings);
 
+// Whether a gantry slave moves with its master's value of this setting
+// (motion_settings copies it) and nothing reads its own while it is a slave:
+// writing it on the slave would change nothing, so the write path refuses
+// it and names the master's register instead. The slave's own mode (which
+// makes it a slave), sensor and limit-switch settings, indexer, acceleration
+// (the pair takes the lower), switch compensation, max_misalignment,
+// max_skew_change and refcheck_tolerance are its own; its pull-off too,
+// unless a commutator pair pulls off on one output.
+bool inherited_from_master(AxisField field, SlaveMode mode);
+
 // The kind an axis moves with: its own axis.<a>.kind, or, for a slave (any
 // axis whose slave_of names another axis), its master's, like its other
 // motion settings: a slave's own kind is not used while it is a slave. It
@@ -44,7 +54,8 @@ std::string_view axis_unit(const Settings& settings, std::size_t axis);
 // from its motion settings: it only corrects the gantry's skew from its
 // master's reference edge, slowly (seek at the latch feedrate), on its own
 // switch edge (no pre-move, push, index or final move), never further than
-// the allowed misalignment (max_seek_travel = max_misalignment).
+// the allowed misalignment from square (its seek is bounded by that:
+// search_phases.cpp, travel_within_square).
 AxisSettings commutator_slave_homing(AxisSettings pair_motion);
 
 }  // namespace homing

@@ -57,6 +57,7 @@ enum class RefusalReason : std::uint8_t {
   axis_disabled,        // cmd.home_axes names an axis whose mode is disabled
   homing_blocked,       // cmd.home_axes while an alarm, e-stop, drive fault, lost link or missing permit blocks homing
   unlock_locked_out,    // security.unlock after too many wrong codes in a row: not even compared until the lockout ends
+  slave_inherits,       // a gantry slave's own value of a setting it takes from its master
 };
 // Each reason with the exception it is answered with, its name and its text.
 struct RefusalReasonInfo {
@@ -95,8 +96,11 @@ inline constexpr RefusalReasonInfo kRefusalReasonInfo[] = {
      "homing cannot start now (alarm, e-stop, drive fault, lost link or missing permit): see status.interlocks"},
     {RefusalReason::unlock_locked_out, ExceptionCode::server_device_busy, "unlock_locked_out",
      "too many wrong unlock codes in a row: every unlock is refused until status.unlock_lockout_s reads 0"},
+    {RefusalReason::slave_inherits, ExceptionCode::illegal_data_value, "slave_inherits",
+     "a gantry slave homes and moves with its master's value of this setting: write it on the master "
+     "(status.last_refused_register names it)"},
 };
-static_assert(homing::lists_every_value(kRefusalReasonInfo, RefusalReason::unlock_locked_out));
+static_assert(homing::lists_every_value(kRefusalReasonInfo, RefusalReason::slave_inherits));
 constexpr std::span<const RefusalReasonInfo> enum_table(RefusalReason) { return kRefusalReasonInfo; }
 
 inline constexpr std::uint16_t kRuleReasonBase = 100;

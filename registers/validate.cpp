@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "homing/gantry.hpp"
 #include "homing/settings_check.hpp"
 #include "registers/defaults.hpp"
 #include "registers/lookup.hpp"
@@ -116,6 +117,36 @@ bool AcceptedWrite::changes_persisted() const {
   return std::any_of(changes.begin(), changes.end(), [](const Change& c) { return c.reg->persisted; });
 }
 
+// A change to a setting a gantry slave takes from its master, while it is a
+// slave before and after the request: it would change nothing. (A request
+// that makes the axis a slave may still carry its own values: they are
+// then the ones it returns to when it is no longer one.)
+std::optional<Refusal> slave_inherits_refusal(const std::vector<Change>& changes, const homing::Settings& before,
+                                              const homing::Settings& after) {
+  for (const Change& c : changes) {
+    const Register& reg = *c.reg;
+    if (!reg.persisted || !reg.per_axis()) continue;
+    const auto axis = static_cast<std::size_t>(reg.axis);
+    const int master = homing::gantry_master(after, axis);
+    if (master < 0 || homing::gantry_master(before, axis) != master) continue;
+    const std::string name = reg.name();
+    const std::string_view field_name = std::string_view(name).substr(name.find('.', 5) + 1);
+    homing::AxisField field = homing::AxisField::none;
+    for (const auto& f : homing::kAxisFieldInfo)
+      if (f.name == field_name) field = f.value;
+    if (!homing::inherited_from_master(field, after.axes[axis].slave_mode)) continue;
+    const std::string master_reg = fmt::format("axis.{}.{}", homing::kAxisLetters[static_cast<std::size_t>(master)], field_name);
+    const Register* on_master = find_register(master_reg);
+    return Refusal::because(
+        RefusalReason::slave_inherits, on_master ? on_master->address : reg.address,
+        fmt::format("{}: {} is a gantry slave of {} and homes and moves with {}'s {}; write {} instead; nothing "
+                    "was written",
+                    name, homing::kAxisUpper[axis], homing::kAxisUpper[static_cast<std::size_t>(master)],
+                    homing::kAxisUpper[static_cast<std::size_t>(master)], field_name, master_reg));
+  }
+  return std::nullopt;
+}
+
 std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t start,
                                                      std::span<const std::uint16_t> values, WordOrder order,
                                                      const homing::Settings& settings,
@@ -147,6 +178,8 @@ std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t 
     }
     if (old_raw != w.raw) result.changes.push_back({&reg, old_raw, w.raw});
   }
+
+  if (auto refused = slave_inherits_refusal(result.changes, settings, result.settings)) return std::unexpected(*refused);
 
   // The engine's own rule set, on the settings as they would be after the
   // request: a write may not break a rule (the whole configuration is checked,

@@ -2,9 +2,11 @@
 // combinations that cannot work are 03, and nothing is applied on a refusal.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <array>
 #include <vector>
 
+#include "homing/gantry.hpp"
 #include "registers/defaults.hpp"
 #include "registers/lookup.hpp"
 #include "registers/validate.hpp"
@@ -213,12 +215,96 @@ TEST_CASE("a slave of a slave is refused at write time") {
   refused_naming(write_one("axis.z.slave_of", 2, s), "itself a slave");
 }
 
-TEST_CASE("a slave's own feedrates and direction may differ: they are not used") {
+TEST_CASE("a gantry slave's own value of a setting it takes from its master is refused, naming the master's") {
   homing::Settings s = with_x_y_homing();
-  s.axes[1].slave_of = 1;
-  CHECK(write_one("axis.y.seek_feedrate", 5000, s));
-  CHECK(write_one("axis.y.direction", 1, s));
-  CHECK(write_one("axis.y.latch_feedrate", 900, s));
+  s.axes[1].slave_of = 1;  // Y, software-slaved to X
+  for (const char* name : {"axis.y.seek_feedrate", "axis.y.direction", "axis.y.latch_feedrate", "axis.y.home_position",
+                           "axis.y.soft_limit_max", "axis.y.kind"}) {
+    INFO(name);
+    const Register& r = reg(name);
+    const auto refused = write_one(name, r.default_raw == r.max ? r.min : r.max, s);
+    REQUIRE_FALSE(refused);
+    CHECK(refused.error().code == ExceptionCode::illegal_data_value);
+    CHECK(refused.error().reason == RefusalReason::slave_inherits);
+    const std::string on_master = "axis.x." + std::string(name).substr(7);
+    CHECK(refused.error().address == reg(on_master.c_str()).address);  // status.last_refused_register: where to write it
+    CHECK_THAT(refused.error().message, Catch::Contains("Y is a gantry slave of X") &&
+                                            Catch::Contains("write " + on_master + " instead") &&
+                                            Catch::Contains("nothing was written"));
+  }
+  THEN("its own settings are taken: sensor, pull-off, compensation, misalignment, acceleration") {
+    CHECK(write_one("axis.y.sensor_nc", 1, s));
+    CHECK(write_one("axis.y.pull_off", 1500, s));
+    CHECK(write_one("axis.y.switch_compensation", -300, s));
+    CHECK(write_one("axis.y.max_misalignment", 1500, s));
+    CHECK(write_one("axis.y.debounce_ms", 3, s));
+  }
+  THEN("a value written unchanged is taken (an exported file imported again)") {
+    CHECK(write_one("axis.y.seek_feedrate", reg("axis.y.seek_feedrate").default_raw, s));
+  }
+  THEN("a commutator slave's pull-off is its master's too") {
+    homing::Settings c = s;
+    c.axes[1].slave_mode = homing::SlaveMode::external_commutator;
+    const auto refused = write_one("axis.y.pull_off", 1500, c);
+    REQUIRE_FALSE(refused);
+    CHECK(refused.error().reason == RefusalReason::slave_inherits);
+  }
+  THEN("an axis that is no slave yet takes them, and a request that makes it one may carry them") {
+    homing::Settings free = with_x_y_homing();
+    CHECK(write_one("axis.y.seek_feedrate", 5000, free));
+    const Register& feed = reg("axis.y.seek_feedrate");
+    const Register& slave_of = reg("axis.y.slave_of");
+    // One request from the lower of the two addresses to the higher, every
+    // register between written with its current value.
+    const std::uint16_t first = std::min(slave_of.address, feed.address);
+    const std::uint16_t last = std::max(slave_of.address, feed.address);
+    std::vector<std::uint16_t> words(static_cast<std::size_t>(last - first + 1), 0);
+    for (std::uint16_t a = first; a <= last; ++a) {
+      const Register* r = find_register(Unit::module, Table::holding_register, a);
+      if (r && r->address == a) {
+        std::int64_t raw = setting_raw(free, *r);
+        if (r == &slave_of) raw = 1;
+        if (r == &feed) raw = 900;
+        encode_words(*r, raw, WordOrder::high_first, std::span(words).subspan(a - first, r->words()));
+      }
+    }
+    const auto ok = validate_write(Table::holding_register, first, words, WordOrder::high_first, free,
+                                   default_host_registers());
+    REQUIRE(ok);
+    CHECK(ok->settings.axes[1].slave_of == 1);
+    CHECK(ok->settings.axes[1].seek_feedrate_mm_per_min == 900);
+  }
+}
+
+// The refusal above is only honest while the engine truly ignores these:
+// every setting the write path calls inherited leaves what the slave moves
+// with (motion_settings) unchanged, on both gantry topologies.
+TEST_CASE("every setting a slave is refused changes nothing the slave moves with") {
+  for (const homing::SlaveMode mode : {homing::SlaveMode::own_output, homing::SlaveMode::external_commutator}) {
+    homing::Settings s = with_x_y_homing();
+    s.axes[1].slave_of = 1;
+    s.axes[1].slave_mode = mode;
+    const homing::Settings before = homing::motion_settings(s);
+    int inherited = 0;
+    for (const Register& r : registers_of(Unit::module)) {
+      if (!r.persisted || r.axis != 1) continue;
+      const std::string field = r.name().substr(7);
+      homing::AxisField f = homing::AxisField::none;
+      for (const auto& info : homing::kAxisFieldInfo)
+        if (info.name == field) f = info.value;
+      if (!homing::inherited_from_master(f, mode)) continue;
+      ++inherited;
+      INFO(r.name());
+      homing::Settings changed = s;
+      const std::int64_t raw = setting_raw(s, r);
+      set_setting_raw(changed, r, raw == r.max ? r.min : r.max);
+      const homing::Settings after = homing::motion_settings(changed);
+      for (const Register& other : registers_of(Unit::module))
+        if (other.persisted && other.axis == 1) CHECK(setting_raw(after, other) == setting_raw(before, other));
+      CHECK(homing::axis_kind(changed, 1) == homing::axis_kind(s, 1));
+    }
+    CHECK(inherited >= 20);
+  }
 }
 
 TEST_CASE("a gantry that could not stop within its misalignment is refused at write time") {

@@ -7,6 +7,7 @@
 
 #include "daemon.hpp"
 #include "homing/status.hpp"
+#include "registers/lookup.hpp"
 
 using namespace e2e;
 
@@ -60,11 +61,15 @@ void make_gantry(Client& c, int slave_mode) {
 TEST_CASE("over Modbus a slave whose own direction, feedrates and mode differ homes square, never racking past its limit") {
   Daemon d({.time_scale = 10});
   Client c = Client::tcp(d.port());
-  make_gantry(c, 0);
-  // Accepted: the slave's own motion settings are not used (it inherits its master's).
+  // Written before Y becomes a slave: its own values, not used while it is one.
   c.set("axis.y.direction", 1);
   c.set("axis.y.seek_feedrate", 3000);
   c.set("axis.y.latch_feedrate", 700);
+  make_gantry(c, 0);
+  // Once it is a slave, a change to one of them is refused, naming X's register to write instead.
+  CHECK(c.write("axis.y.seek_feedrate", 2500) == 3);
+  CHECK(c.read("status.last_refused_register") == registers::find_register("axis.x.seek_feedrate")->address);
+  CHECK(c.read("axis.y.seek_feedrate") == 3000);
   c.set("axis.y.mode", 3);
   c.set("axis.y.acceleration", 2000);
   c.set("sim.y.sensor_max", um(0.8));  // the slave's switch sits 0.8 mm further out

@@ -158,33 +158,45 @@ std::expected<std::vector<Block>, std::string> blocks_of(const std::vector<Plann
 }
 
 // The daemon checks each request on its own: an order of the blocks in which
-// every intermediate state passes too.
+// every intermediate state passes too. Searched depth first, the blocks that
+// pass earliest tried first (a greedy order can dead-end: making an axis a
+// gantry slave first refuses a later write of a setting it then takes from
+// its master), within a bound on the checks tried.
+bool find_order(std::vector<Block>& blocks, std::vector<Block>& ordered, registers::WordOrder order,
+                const ModuleState& state, std::string& first_refusal, int& budget) {
+  if (blocks.empty()) return true;
+  for (std::size_t i = 0; i < blocks.size(); ++i) {
+    if (--budget < 0) return false;
+    auto ok = registers::validate_write(Table::holding_register, blocks[i].start, blocks[i].words, order,
+                                        state.settings, state.host);
+    if (!ok) {
+      if (first_refusal.empty()) first_refusal = ok.error().message;
+      continue;
+    }
+    ModuleState next = state;
+    next.settings = ok->settings;
+    next.host = ok->host;
+    Block b = std::move(blocks[i]);
+    blocks.erase(blocks.begin() + static_cast<long>(i));
+    ordered.push_back(std::move(b));
+    if (find_order(blocks, ordered, order, next, first_refusal, budget)) return true;
+    blocks.insert(blocks.begin() + static_cast<long>(i), std::move(ordered.back()));
+    ordered.pop_back();
+  }
+  return false;
+}
+
 std::expected<std::vector<Block>, std::string> passing_order(std::vector<Block> blocks, registers::WordOrder order,
                                                              ModuleState state) {
   std::vector<Block> ordered;
   std::string first_refusal;
-  while (!blocks.empty()) {
-    bool placed = false;
-    for (std::size_t i = 0; i < blocks.size(); ++i) {
-      auto ok = registers::validate_write(Table::holding_register, blocks[i].start, blocks[i].words, order,
-                                          state.settings, state.host);
-      if (!ok) {
-        if (first_refusal.empty()) first_refusal = ok.error().message;
-        continue;
-      }
-      state.settings = ok->settings;
-      state.host = ok->host;
-      ordered.push_back(std::move(blocks[i]));
-      blocks.erase(blocks.begin() + static_cast<long>(i));
-      placed = true;
-      break;
-    }
-    if (!placed)
-      return std::unexpected(fmt::format(
-          "the values are valid together, but the module checks each write request on its own and no order of "
-          "the {} requests passes: {}. Change fewer settings at a time (or use import, which does the same)",
-          ordered.size() + blocks.size(), first_refusal));
-  }
+  const std::size_t count = blocks.size();
+  int budget = 20000;
+  if (!find_order(blocks, ordered, order, state, first_refusal, budget))
+    return std::unexpected(fmt::format(
+        "the values are valid together, but the module checks each write request on its own and no order of "
+        "the {} requests passes: {}. Change fewer settings at a time (or use import, which does the same)",
+        count, first_refusal));
   return ordered;
 }
 
