@@ -2,7 +2,8 @@
 // homingd and its simulator: cmd.measure.x homes X and travels to its far
 // limit switch; axis.x.measured_* give the usable travel and the settings
 // that fit it, and no setting changes. An axis without limit switches is
-// refused with its own result, moving nothing.
+// refused with its own result, moving nothing. A hard-stop axis measures
+// against its far stop by the stall input.
 #include <catch2/catch.hpp>
 
 #include <cstdlib>
@@ -81,4 +82,38 @@ TEST_CASE("over Modbus: a measurement whose far limit switch is dead stops max_s
   CHECK(std::llabs(c.read("axis.x.alarm_value") - 120'000) <= 10);
   CHECK(c.read("sim.x.actual_position") < 1'100 + 120'000);
   CHECK(c.read("axis.x.measured_travel") == 0);
+}
+
+// The hard-stop path over the wire: X homes against its stop at -5 mm (no
+// switch, no limit switches), then pushes at reduced current into the far
+// stop at 145 mm until the drive's stall input; the figures come back over
+// Modbus and the axis is left to be homed again (steps may be lost at the stop).
+TEST_CASE("over Modbus: cmd.measure.x of a hard-stop axis pushes into the far stop and publishes 149 mm of travel less the jog's stop, leaving X unhomed") {
+  Daemon d({.time_scale = 10});
+  Client c = Client::tcp(d.port());
+  c.set("sim.x.hard_stop_min", -5'000);
+  c.set("sim.x.hard_stop_max", 145'000);
+  c.set("sim.x.actual_position", 3'000);
+  c.set("sim.x.sensor_min", 1'000);  // no switch in the way
+  c.set("sim.x.sensor_max", 0);
+  c.set("axis.x.mode", static_cast<std::int64_t>(homing::HomingMode::hard_stop));
+  c.set("axis.x.stall_timeout_ms", 20'000);
+  c.set("axis.x.latch_feedrate", 300);
+
+  REQUIRE(command(c, "cmd.measure.x") == v(homing::CommandResult::accepted));
+  REQUIRE(c.read("status.alarm") == 0);
+  // Rested at pull_off (1 mm) below the far stop; the stop was reached, never passed.
+  CHECK(std::llabs(c.read("sim.x.actual_position") - 144'000) <= 10);
+  // Homed 1 mm above the stop at -5 as 0: the far stop is 149 mm in machine coordinates,
+  // less the stop distance from jog_feedrate (1000 mm/min at 500 mm/s²: 0.278 mm). The
+  // motor runs on against the stop, its steps lost, until the stall input is seen: at
+  // 300 mm/min and the 10x clock's 10 ms periods about 0.17 mm more (never less).
+  const std::int64_t travel = c.read("axis.x.measured_travel");
+  INFO("measured_travel " << travel);
+  CHECK(travel >= 149'000 - 278 - 20);
+  CHECK(travel <= 149'000 - 278 + 250);
+  CHECK(c.read("axis.x.measured_soft_limit_min") == 0);
+  CHECK(c.read("axis.x.measured_soft_limit_max") == travel);
+  CHECK(c.read("axis.x.homed") == 0);
+  CHECK(c.read("axis.x.phase") == static_cast<std::int64_t>(homing::Phase::idle));
 }
