@@ -1,6 +1,6 @@
 #pragma once
 // How good the reference of one homing cycle is: the figures measured from
-// the edges the phases already see (README "Switch health", docs/health.md).
+// the edges the phases already see (docs/health.md).
 // Pure arithmetic; the phases feed it, publish() reports it.
 #include <array>
 #include <cstddef>

@@ -1,4 +1,4 @@
-// Locking indexers (axis.<a>.indexer_lock, README "Locking indexer"): the one
+// Locking indexers (axis.<a>.indexer_lock, docs/homing-methods.md "Locking indexer"): the one
 // place that decides whether an axis with one may move. It runs after every
 // path that sets a motion command (homing phases, jog, move, final move,
 // gantry follow), so whichever set it, the command of an axis that is not

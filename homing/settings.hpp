@@ -143,7 +143,7 @@ struct AxisSettings {
   double stall_timeout_ms = 0;  // hard-stop homing: longest push toward the stop before stall_timeout
   AxisKind kind = AxisKind::linear;  // Settings gives each axis its default_kind
   double drive_home_timeout_s = 0;  // drive mode: the drive must report home done within this
-  // Locking indexer (README "Locking indexer"): unlock before any motion of
+  // Locking indexer (docs/homing-methods.md "Locking indexer"): unlock before any motion of
   // this axis, lock again once it rests, each confirmed within lock_timeout_ms.
   bool indexer_lock = false;
   double lock_timeout_ms = 0;

@@ -1,4 +1,4 @@
-// The locking indexer (axis.<a>.indexer_lock, README "Locking indexer") on
+// The locking indexer (axis.<a>.indexer_lock, docs/homing-methods.md "Locking indexer") on
 // the simulator: unlocked before every motion of its axis, locked again once
 // it rests, and nothing moves while it is locked. Its alarms have their own
 // scenarios in alarms_test.cpp.

@@ -178,7 +178,7 @@ struct Rig {
     settings.axes[a] = typical_axis();
     settings.global.sequence_steps[static_cast<std::size_t>(step_no - 1)] |= axis_bit(a);
   }
-  // Gives axis a locking indexer (README "Locking indexer"): on in the
+  // Gives axis a locking indexer (docs/homing-methods.md "Locking indexer"): on in the
   // settings and fitted on the simulated machine, pin out/in after delay_ms.
   void fit_indexer(std::size_t a, double delay_ms = 50, double timeout_ms = 500) {
     settings.axes[a].indexer_lock = true;

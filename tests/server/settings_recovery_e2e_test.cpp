@@ -1,4 +1,4 @@
-// README "Settings: durable, audited, recoverable": a database damaged while
+// docs/operating.md "Settings: durable, audited, recoverable": a database damaged while
 // homingd was down is found at the next start, the last good backup restored
 // (the log says so); with no good backup the module starts on defaults with
 // the settings_lost alarm, which blocks homing until cmd.reset_alarm. The

@@ -1,4 +1,4 @@
-// README "homingd options": SIGTERM "stops all motion (controlled
+// docs/operating.md "homingd options": SIGTERM "stops all motion (controlled
 // deceleration)". The real daemon moves an axis at a known speed and
 // acceleration over Modbus/TCP, gets SIGTERM, and its log's account of the
 // stop must show the axis braking at its acceleration: v²/2a of travel in

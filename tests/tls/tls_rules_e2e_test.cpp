@@ -1,4 +1,4 @@
-// README "Modbus/TCP Security", Details: "TLS 1.2 (ECDHE with AES-GCM or
+// docs/operating.md "Modbus/TCP Security (TLS)", Details: "TLS 1.2 (ECDHE with AES-GCM or
 // ChaCha20-Poly1305) and TLS 1.3 only; no renegotiation; no session
 // resumption", and "a CRL past its next update refuses every client until a
 // fresh one is installed". The real homingd against OpenSSL clients that

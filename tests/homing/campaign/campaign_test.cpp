@@ -19,8 +19,10 @@
 // of every cycle (verdict.cpp) it checks against the simulator's truth:
 //   - no gantry racks beyond its max misalignment (1 um for the arithmetic,
 //     plus exactly what periods later than the guard looks ahead can add:
-//     README "Gantries: racking") from where its cycle started, and a locked
-//     pair stays locked (up to its limit when one side's drive faults);
+//     docs/homing-methods.md "Gantries: racking") from where it was last
+//     square (a pair an alarm left racked may come back to square and the
+//     limit beyond), and a locked pair stays locked (up to its limit when
+//     one side's drive faults);
 //   - no carriage touches a mechanical stop except at reduced current (the
 //     push output on), and no homed carriage passes an enforced soft limit;
 //   - nothing moves that its configuration or the script does not move

@@ -34,7 +34,7 @@ inline int partner_index(const Settings& s, std::size_t a) {
   return m >= 0 ? m : slave_index(s, a);
 }
 
-// The campaign's own reading of README "Gantries: what a slave inherits",
+// The campaign's own reading of docs/homing-methods.md "Gantries: what a slave inherits",
 // written here rather than taken from homing/gantry.hpp so that a wrong rule
 // in the engine shows as a failure instead of becoming the expectation.
 // A pair is one the rule set takes: the slave names another axis that is no
@@ -96,7 +96,7 @@ inline AxisSettings effective(const Settings& s, std::size_t a) {
 }
 
 // The mode whose edge a slave squares on: a commutator slave searches its
-// own edge alone at latch feedrate (README "Gantries: topologies") and has no
+// own edge alone at latch feedrate (docs/homing-methods.md "Gantries: topologies") and has no
 // index input of its own, so an index master's slave squares on its release
 // edge; otherwise the mode it homes with.
 inline HomingMode squaring_mode(const Settings& s, std::size_t a) {

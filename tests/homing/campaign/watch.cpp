@@ -48,7 +48,7 @@ void Watch::begin_window(const CyclePlan& p, bool is_refused) {
   in_window = true;
   plan = p;
   // An unsequenced axis homed when the cycle starts keeps its coordinate
-  // (README "Sequence"): only one whose coordinate is its absolute encoder's is
+  // (docs/homing-methods.md "Sequence"): only one whose coordinate is its absolute encoder's is
   // read again. A gantry pair is kept or assigned together.
   AxisMask kept = 0;
   for (std::size_t a = 0; a < kAxisCount; ++a)
@@ -286,7 +286,7 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
   }
 
   // A locking indexer holds its axis: the motor never runs while the pin is
-  // in (README "Locking indexer"), except braking after the pin went in
+  // in (docs/homing-methods.md "Locking indexer"), except braking after the pin went in
   // on its own under an axis unlocked for motion (lock_engaged).
   if (r_.sim().moved_while_locked(a) && !(lock_struck & bit))
     fail("the motor ran while its locking indexer was locked", fmt_axis(a, r_, x));

@@ -18,7 +18,7 @@ static_assert(kAlarmCodeCount <= 64, "AlarmBits holds one bit per alarm code");
 constexpr AlarmBits alarm_bit(AlarmCode code) { return AlarmBits{1} << static_cast<unsigned>(code); }
 
 // What the racking check allows beyond max_misalignment besides the travel
-// of periods later than the guard looks ahead (README "Gantries: racking"):
+// of periods later than the guard looks ahead (docs/homing-methods.md "Gantries: racking"):
 // the simulation's floating-point arithmetic.
 inline constexpr double kRackingTolerance_mm = 1e-3;
 // What the limit-switch check allows past a switch besides the stop from the
