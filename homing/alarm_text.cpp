@@ -135,6 +135,10 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
       return fmt::format("{}: home cam not found: the search reversed at one limit switch and met the other "
                          "after {:.3f} {} without the cam", X, a.value, u);
     case AlarmCode::limit_in_homing:
+      if (a.phase == Phase::return_to_start)
+        return fmt::format("{}: {} limit switch met at {:.3f} {} while going back to where the cycle found it "
+                           "(failure policy return_to_start)",
+                           X, a.rule == 1 ? "negative" : "positive", a.value, u);
       return fmt::format("{}: {} limit switch met during {} at {:.3f} {}", X, a.rule == 1 ? "negative" : "positive",
                          ph, a.value, u);
     case AlarmCode::both_limits_active:

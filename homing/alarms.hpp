@@ -133,9 +133,9 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
      "check the home cam's sensor and its wiring and polarity (sensor_nc), and that the cam lies between "
      "the limit switches; then reset and home again"},
     {AlarmCode::limit_in_homing, "limit_in_homing", "a limit switch was met during a homing phase that must not reach one",
-     "check that the home cam lies well inside the limit switches (max_backoff, pull_off and the final "
-     "position must not reach a limit), and the limit switches' wiring; reset, jog off the limit switch and home "
-     "again"},
+     "check that the home sensor or cam lies well inside the limit switches (max_backoff, pull_off and the final "
+     "position must not reach a limit), that an axis sent back by return_to_start did not start next to one, and "
+     "the limit switches' wiring; reset, jog off the limit switch and home again"},
     {AlarmCode::both_limits_active, "both_limits_active", "both limit switches read active at once",
      "check the limit switches' wiring (a broken wire on NC switches), their polarity (limits_nc) and supply; "
      "then reset"},

@@ -61,12 +61,17 @@ void Engine::guard_gantries(const Settings& settings) {
     // than that can carry the pair past the limit by what it travels in the
     // extra time (docs/homing-methods.md "Gantries: racking").
     const double horizon = 2 * last_dt_s_;
+    // Going back to where the cycle found it (return_to_start), the pair
+    // heads for a place it stood in: within the limit of that place is
+    // allowed too, or a pair found at its limit could never arrive.
+    const bool returning = wind_down_ == WindDown::returning;
     bool out = false;
     double worst = 0;
     for (int k = 0; k <= 4; ++k) {
       const double h = horizon * k / 4;
       const double off_square = (rest(slave, sl, h) - rest(master, m, h)) - square;
-      if (off_square < low || off_square > high) out = true;
+      const bool near_start = returning && std::abs(off_square - rack_at_start) <= limit;
+      if ((off_square < low || off_square > high) && !near_start) out = true;
       worst = std::max(worst, std::abs(off_square));
     }
     if (out) {

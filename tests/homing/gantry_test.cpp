@@ -490,3 +490,38 @@ SCENARIO("a gantry homed square counts the next cycle's racking from that square
   CHECK(worst <= limit + 1e-6);
   CHECK(rack_mm(r) == Approx(square).margin(2 * edge_tolerance_mm(r.settings.axes[0], r.dt_s)));
 }
+
+SCENARIO("a gantry an alarm left racked, aborted under return_to_start, goes back to where the cycle found it",
+         "[gantry][recovery][failure_policy]") {
+  // Campaign seed 20005266: the pair went back to its racked start, which
+  // lies at the edge of what square allows; the guard took the arrival for
+  // racking and stopped every axis on its way back.
+  for (const bool commutator : {false, true}) {
+    DYNAMIC_SECTION((commutator ? "external commutator" : "software-slaved")) {
+      Rig r = commutator ? commutator_gantry(100) : software_gantry(100);
+      r.settings.global.failure_policy = FailurePolicy::return_to_start;
+      r.set_fault(1, sim::Fault::wire_break);
+      REQUIRE_FALSE(r.home_all());
+      REQUIRE(r.axis(1).alarm.code == AlarmCode::misalignment);
+      r.set_fault(1, sim::Fault::none);
+      // The limit lowered since: the pair now stands beyond it, at the very edge of what it may keep.
+      r.settings.axes[1].max_misalignment_mm = 0.9 * std::abs(rack_mm(r));
+      r.reset_alarm();
+      r.step();
+      const double x0 = r.actual(0), y0 = r.actual(1);
+      r.pending.home_all = true;
+      r.step();
+      // Aborted once the pair has squared back on its switches: going back, one side
+      // moves alone, fast, toward a place at the edge of what the pair may keep.
+      REQUIRE(r.run_until([&] { return std::abs(rack_mm(r) - (y0 - x0)) > 1.5; }, 60));
+      REQUIRE(r.status().homing);
+      r.dt_s = 0.015;  // long control periods: the guard looks further ahead
+      r.pending.abort = true;
+      r.step();
+      r.run_until([&] { return !r.status().homing && !r.any_moving(); }, 60);
+      CHECK(r.axis(1).alarm.code == AlarmCode::aborted);
+      CHECK(r.actual(0) == Approx(x0).margin(1e-6));
+      CHECK(r.actual(1) == Approx(y0).margin(commutator ? 2.0 : 1e-6));  // a commutator slave rides back with its master
+    }
+  }
+}

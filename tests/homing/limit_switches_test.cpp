@@ -108,6 +108,21 @@ SCENARIO("a limit switch met in a phase that must not reach one: limit_in_homing
   CHECK_FALSE(r.home_all());
   CHECK(r.axis(0).alarm.code == AlarmCode::limit_in_homing);
   CHECK(r.axis(0).alarm.phase == Phase::cam_latch);
+  CHECK_THAT(describe_alarm(0, r.axis(0).alarm, r.settings),
+             Catch::StartsWith("X: negative limit switch met during cam_latch at ") &&
+                 Catch::Contains("check that the home sensor or cam lies well inside the limit switches"));
+}
+
+SCENARIO("limit_in_homing met on the way back of return_to_start says so, not a homing phase",
+         "[limits][alarms][failure_policy]") {
+  // The text of the alarm as raised in phase return_to_start (campaign seed 7201552).
+  Rig r;
+  const Alarm a{AlarmCode::limit_in_homing, Phase::return_to_start, AxisField::none, 12.5, 2};
+  const std::string text = describe_alarm(0, a, r.settings);
+  INFO(text);
+  CHECK_THAT(text, Catch::StartsWith("X: positive limit switch met at 12.500 mm while going back to where the cycle "
+                                     "found it (failure policy return_to_start)") &&
+                       Catch::Contains("that an axis sent back by return_to_start did not start next to one"));
 }
 
 SCENARIO("home_cam without limit switches is refused before anything moves", "[limits][home_cam][rules]") {
