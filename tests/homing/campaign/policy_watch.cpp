@@ -109,12 +109,20 @@ void Watch::first_failure(const Status& st, AxisMask alarmed) {
   bool everything = st.global_alarm != AlarmCode::none;
   for (std::size_t a = 0; a < kAxisCount; ++a)
     if (alarmed & axis_bit(a)) everything = everything || stops_everything(st.axes[a].alarm.code);
+  // The script's abort landed in the period of another failure: the engine
+  // sees the limit switches and the drives before the commands, so the
+  // abort finds the policy at work and stops it where it is (seed 21050675).
+  bool aborted_failure = false;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if ((alarmed & axis_bit(a)) && st.axes[a].alarm.code == AlarmCode::aborted) aborted_failure = true;
+  const bool abort_stops_policy = abort_pending_ && !aborted_failure;
   abort_pending_ = false;
   event_pending_ = false;
   // A cycle runs: it ran before this period, or it started in it (an alarm
   // as its first step begins, an absolute axis's invalid encoder).
   if (!in_window || refused || !(homing_prev_ || st.homing) || everything) return;
   wind_down = r_.settings.global.failure_policy;
+  if (abort_stops_policy) later_failure = true;
   if (wind_down == FailurePolicy::finish_independent) {
     // The step that runs: the one the cycle still shows (an alarm as a step
     // begins belongs to the new step), else the one it showed before.
