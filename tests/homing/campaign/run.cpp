@@ -554,10 +554,14 @@ void Run::recover() {
   // Half the time a gantry whose sensor failed stays where its alarm left it
   // (the wire mended, the gantry not touched): the next cycle starts racked
   // and must square it back (docs/homing-methods.md "Gantries: racking").
+  // Not one left standing on a switch it ran deep into (seed 21086452: its
+  // back-off, bounded by max_backoff, could not leave it).
   for (std::size_t s = 0; s < kAxisCount; ++s) {
     if (m_.plan[s].role != Role::slave) continue;
-    const AxisMask pair = static_cast<AxisMask>(axis_bit(s) | axis_bit(static_cast<std::size_t>(m_.plan[s].partner)));
-    if ((sensor_faulted & pair) && !(past_cam & pair) && d_.chance(0.5)) {
+    const std::size_t mi = static_cast<std::size_t>(m_.plan[s].partner);
+    const AxisMask pair = static_cast<AxisMask>(axis_bit(s) | axis_bit(mi));
+    const bool on_switch = r_.sim().sensor_active(s) || r_.sim().sensor_active(mi);
+    if ((sensor_faulted & pair) && !(past_cam & pair) && !on_switch && d_.chance(0.5)) {
       faulted &= static_cast<AxisMask>(~pair);
       say(std::string("gantry ") + kAxisUpper[s] + " left where its alarm stopped it");
     }
