@@ -428,9 +428,15 @@ void Watch::cam_reversal(std::size_t a) {
   const AxisStatus& as = r_.status().axes[a];
   const bool ahead = dir_of(e) > 0 ? read_max : read_min;
   const bool both = read_min && read_max;
+  // Under a locking indexer's unlock the status shows unlock while the
+  // search runs beneath it: the reversal may have been decided in any period
+  // of the hold (campaign seed 184458299: on the switch when the unlock
+  // began, moved off it by lost steps before the pin came out).
+  if (as.phase == Phase::unlock) ahead_while_held_[a] = (phase_prev_[a] == Phase::unlock && ahead_while_held_[a]) || ahead;
+  const bool decided_held = phase_prev_[a] == Phase::unlock && ahead_while_held_[a];
   if (as.phase == Phase::limit_reversal && phase_prev_[a] != Phase::limit_reversal) {
     reversed |= axis_bit(a);
-    if (!ahead) fail("the home cam search reversed without meeting the limit switch ahead", fmt_axis(a, r_, r_.actual(a)));
+    if (!ahead && !decided_held) fail("the home cam search reversed without meeting the limit switch ahead", fmt_axis(a, r_, r_.actual(a)));
   }
   if (as.phase == Phase::cam_seek && phase_prev_[a] == Phase::cam_seek && ahead && !both && !r_.status().alarm)
     fail("the home cam search met the limit switch ahead and sought on", fmt_axis(a, r_, r_.actual(a)));

@@ -197,6 +197,9 @@ class Watch {
   // The limit switches as the engine reads them in the next period (the
   // simulator's levels at the end of this one).
   std::array<bool, kAxisCount> limit_min_read_{}, limit_max_read_{};
+  // The switch ahead read in some period while a locking indexer held the
+  // axis (status shows unlock; the phase under it runs and decides).
+  std::array<bool, kAxisCount> ahead_while_held_{};
 };
 
 // Where an axis homed on reference edge `ref` (carriage coordinates) rests:
