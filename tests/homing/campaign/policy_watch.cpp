@@ -97,6 +97,7 @@ void Watch::policy_period(const Status& st) {
   global_prev_ = st.global_alarm;
   homing_prev_ = st.homing;
   step_prev_ = st.sequence_step;
+  cycles_prev_ = st.homing_cycles;
 }
 
 // The first alarm of a running cycle: what the policy lets each axis do.
@@ -120,7 +121,12 @@ void Watch::first_failure(const Status& st, AxisMask alarmed) {
   event_pending_ = false;
   // A cycle runs: it ran before this period, or it started in it (an alarm
   // as its first step begins, an absolute axis's invalid encoder).
-  if (!in_window || refused || !(homing_prev_ || st.homing) || everything) return;
+  // A cycle that completed in this very period (its last step done, counted
+  // in status.homing_cycles) is over: a fault raised after it in the same
+  // period (an indexer's lock timing out) belongs to no cycle, and every axis
+  // stops (seed 21090731).
+  const bool completed_now = !st.homing && st.homing_cycles != cycles_prev_;
+  if (!in_window || refused || !(homing_prev_ || st.homing) || completed_now || everything) return;
   wind_down = r_.settings.global.failure_policy;
   if (abort_stops_policy) later_failure = true;
   if (wind_down == FailurePolicy::finish_independent) {

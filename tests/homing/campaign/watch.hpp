@@ -159,6 +159,7 @@ class Watch {
   // The failure policy.
   bool homing_prev_ = false;
   int step_prev_ = 0;
+  std::uint32_t cycles_prev_ = 0;  // status.homing_cycles at the end of the last period
   AxisMask alarmed_prev_ = 0;
   AlarmCode global_prev_ = AlarmCode::none;
   std::array<AlarmCode, kAxisCount> code_prev_{};
