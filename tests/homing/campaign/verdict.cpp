@@ -284,6 +284,18 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
         c.add(letter(a) + "'s skew beyond its max misalignment",
               {AlarmCode::misalignment, AlarmCode::not_released, AlarmCode::sensor_not_found, AlarmCode::slave_sensor_missing},
               static_cast<AxisMask>(bit | axis_bit(mi)), rack[a] && skew > limit + p.extras_mm);
+      // The gantry guard looks two periods ahead (docs/homing-methods.md
+      // "Gantries: racking"): once one side of a software-slaved pair has
+      // found its sensor, the other, still seeking, is predicted on at seek
+      // for two of the latest periods and then braking. Where that reaches
+      // the limit, the guard may stop a pair that never racked (seed
+      // 21040289: 112 mm/s, 15 ms periods, limit 4.93 mm).
+      const AxisSettings pe = effective(r.settings, a);
+      const double seek_v = mm_per_min_to_mm_per_s(pe.seek_feedrate_mm_per_min);
+      const double look_ahead = stop_distance_mm(seek_v, pe.acceleration_mm_per_s2) + 2 * seek_v * m.max_dt_s;
+      if (!p.commutator && skew + look_ahead > limit)
+        c.add(letter(a) + "'s pair seeking faster than the gantry guard's look-ahead allows", {AlarmCode::misalignment},
+              static_cast<AxisMask>(bit | axis_bit(mi)));
     }
     // A drive that homes itself: what its fault, or an answer after its
     // time limit, must raise when its step comes.
