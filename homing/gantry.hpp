@@ -2,7 +2,9 @@
 // Gantry pairs: which axes form one, and what a slave inherits from its master.
 // The engine, the configuration check, the register validation and the tools
 // all ask these functions, so the answer is the same everywhere.
+#include <algorithm>
 #include <cstddef>
+#include <optional>
 #include <string_view>
 
 #include "settings.hpp"
@@ -57,5 +59,30 @@ std::string_view axis_unit(const Settings& settings, std::size_t axis);
 // the allowed misalignment from square (its seek is bounded by that:
 // search_phases.cpp, travel_within_square).
 AxisSettings commutator_slave_homing(AxisSettings pair_motion);
+
+// Where a gantry pair may stand during a cycle, in slave − master motor
+// position: within max_misalignment of square (where the pair was last
+// assigned its home, else where the cycle found it), widened to the rack
+// the cycle started with, so that a pair an alarm left racked may come back
+// to square and up to the limit beyond, and a pair found further out (the
+// limit lowered since) may stay as far out on its own side. The gantry
+// guard (gantry_guard.cpp) and a commutator slave's lone seek
+// (search_phases.cpp) both hold the pair to it.
+struct SquareBand {
+  double square_mm = 0;         // slave − master where the pair is square
+  double rack_at_start_mm = 0;  // how far from square the cycle found it
+  double low_mm = 0;            // the furthest off square allowed, each way
+  double high_mm = 0;
+  double off_square(double slave_mm, double master_mm) const { return slave_mm - master_mm - square_mm; }
+  bool within(double off) const { return off >= low_mm && off <= high_mm; }
+};
+inline SquareBand square_band(std::optional<double> square_mm, double rel_at_start_mm, double limit_mm) {
+  SquareBand b;
+  b.square_mm = square_mm.value_or(rel_at_start_mm);
+  b.rack_at_start_mm = rel_at_start_mm - b.square_mm;
+  b.low_mm = std::min(-limit_mm, b.rack_at_start_mm - 1e-9);
+  b.high_mm = std::max(limit_mm, b.rack_at_start_mm + 1e-9);
+  return b;
+}
 
 }  // namespace homing

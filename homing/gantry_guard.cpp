@@ -46,10 +46,7 @@ void Engine::guard_gantries(const Settings& settings) {
     const AxisRun& master = axes_[m];
     if (!slave.in_cycle && !master.in_cycle) continue;  // locked together outside a cycle
     const double limit = settings.axes[sl].max_misalignment_mm + (planted(Mutant::racking_allowed_0_2_mm_past_limit) ? 0.2 : 0.0);
-    const double square = slave.pair_square_mm.value_or(slave.pair_rel0_mm);
-    const double rack_at_start = slave.pair_rel0_mm - square;
-    const double low = std::min(-limit, rack_at_start - 1e-9);
-    const double high = std::max(limit, rack_at_start + 1e-9);
+    const SquareBand band = square_band(slave.pair_square_mm, slave.pair_rel0_mm, limit);
     auto rest = [&](const AxisRun& run, std::size_t axis, double h) {
       const MotionState at = integrate(run.motor, run.command, h);
       const double v = at.velocity_mm_per_s;
@@ -69,15 +66,15 @@ void Engine::guard_gantries(const Settings& settings) {
     double worst = 0;
     for (int k = 0; k <= 4; ++k) {
       const double h = horizon * k / 4;
-      const double off_square = (rest(slave, sl, h) - rest(master, m, h)) - square;
-      const bool near_start = returning && std::abs(off_square - rack_at_start) <= limit;
-      if ((off_square < low || off_square > high) && !near_start) out = true;
+      const double off_square = band.off_square(rest(slave, sl, h), rest(master, m, h));
+      const bool near_start = returning && std::abs(off_square - band.rack_at_start_mm) <= limit;
+      if (!band.within(off_square) && !near_start) out = true;
       worst = std::max(worst, std::abs(off_square));
     }
     if (out) {
       Alarm alarm{AlarmCode::misalignment, slave.phase, AxisField::max_misalignment, worst, 0};
       alarm.side = side_at_fault(slave, master);
-      alarm.rack_at_start_mm = rack_at_start;
+      alarm.rack_at_start_mm = band.rack_at_start_mm;
       raise(settings, axis_bit(sl), alarm);
       follow_masters(settings);  // the slave brakes with the pair, not on its own old command
     }

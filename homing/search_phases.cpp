@@ -122,20 +122,17 @@ void PhaseRunner::push() {
 // pair back to square and up to max_misalignment beyond it, or stay as far
 // out on its own side as the cycle found it (gantry_guard.cpp).
 double PhaseRunner::travel_within_square() const {
-  const double square = run.pair_square_mm.value_or(run.pair_rel0_mm);
-  const double rack_at_start = run.pair_rel0_mm - square;
-  const double limit = s.max_misalignment_mm;
-  const double off = (run.motor.position_mm - partner_run().motor.position_mm) - square;
-  const double edge = dir > 0 ? std::max(limit, rack_at_start) : std::min(-limit, rack_at_start);
-  return std::max(0.0, (edge - off) * dir);
+  const SquareBand band = square_band(run.pair_square_mm, run.pair_rel0_mm, s.max_misalignment_mm);
+  const double off = band.off_square(run.motor.position_mm, partner_run().motor.position_mm);
+  return std::max(0.0, ((dir > 0 ? band.high_mm : band.low_mm) - off) * dir);
 }
 
 void PhaseRunner::fail_off_square() {
-  const double square = run.pair_square_mm.value_or(run.pair_rel0_mm);
+  const SquareBand band = square_band(run.pair_square_mm, run.pair_rel0_mm, s.max_misalignment_mm);
   Alarm alarm{AlarmCode::misalignment, run.phase, AxisField::max_misalignment,
-              std::abs((run.motor.position_mm - partner_run().motor.position_mm) - square), 0};
+              std::abs(band.off_square(run.motor.position_mm, partner_run().motor.position_mm)), 0};
   alarm.side = GantrySide::slave_no_sensor;
-  alarm.rack_at_start_mm = run.pair_rel0_mm - square;
+  alarm.rack_at_start_mm = band.rack_at_start_mm;
   ctx.alarms.raise(axis_bit(axis), alarm);
 }
 
