@@ -53,6 +53,7 @@ struct Row {
   std::uint8_t slot = 0;
   std::span<const EnumValue> values{};
   std::string_view description;
+  Effect effect = Effect::none;
 };
 
 // Raw limits shared by many rows (µm or millidegree): ±100 m is far beyond any
@@ -172,7 +173,7 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "global.allowed_without_homing", .offset = 10, .type = Type::enumeration, .max = 2, .def = 1, .fills = fills<&G::allowed_without_homing>, .values = kAllowed, .description = "what may move before the machine is homed"},
     {.pattern = "global.alarm_clears_homed", .offset = 11, .max = 1, .def = 1, .fills = fills<&G::alarm_clears_homed>, .description = "flag (0/1): an alarm clears the homed state of every axis"},
     {.pattern = "global.watchdog_ms", .offset = 12, .quantity = Quantity::time_ms, .max = 60'000, .fills = fills<&G::watchdog_ms>, .description = "host watchdog: stop motion started over Modbus when host.heartbeat does not change for this long; 0 = off"},
-    {.pattern = "global.history_max_rows", .offset = 14, .type = Type::u32, .min = 100, .max = 1'000'000, .def = 10'000, .fills = fills<&G::history_max_rows>, .description = "rows kept in the audit log and in the homing history each (oldest pruned)"},
+    {.pattern = "global.history_max_rows", .offset = 14, .type = Type::u32, .min = 100, .max = 1'000'000, .def = 10'000, .fills = fills<&G::history_max_rows>, .description = "rows kept in the audit log and in the homing history each (oldest pruned)", .effect = Effect::history_limits},
     // The health trend (docs/health.md): at most 100 cycles, the fewest runs global.history_max_rows keeps.
     {.pattern = "global.trend_cycles", .offset = 41, .max = 100, .def = 20, .fills = fills<&G::trend_cycles>, .description = "health trend: after each cycle an axis's last this many cycles in the homing history are compared (docs/health.md); 0 = off"},
     {.pattern = "global.trend_growth_pct", .offset = 42, .min = 1, .max = 1000, .def = 50, .fills = fills<&G::trend_growth_pct>, .description = "health trend: hysteresis, latch spread, seek-latch difference or chatter grown by more than this percentage over the trend cycles raises axis.<a>.health_warning"},
@@ -377,6 +378,7 @@ constexpr Register expand_row(Unit unit, const Row& r, int axis) {
   g.slot = r.slot;
   g.values = r.values;
   g.description = r.description;
+  g.effect = r.effect;
   if (axis < 0) {
     g.address = r.offset;
     g.default_raw = r.def.v[0];

@@ -129,6 +129,13 @@ struct ValueList {
   std::span<const EnumValue> values;
 };
 
+// What the runtime does beyond applying a setting when a write changes it,
+// declared on the setting's row so that no transport names a setting.
+enum class Effect : std::uint8_t {
+  none,
+  history_limits,  // the audit log and the homing history are pruned to the new row count
+};
+
 // One register, expanded (per-axis rows already carry their axis and address).
 struct Register {
   std::string_view pattern;  // "axis.<a>.mode": <a> becomes the axis letter
@@ -149,6 +156,7 @@ struct Register {
   std::uint8_t offset = 0;  // offset inside the per-axis block (per-axis rows)
   std::span<const EnumValue> values{};  // enum values / bitmask bits
   std::string_view description;
+  Effect effect = Effect::none;  // settings rows: what else a change of it does
 
   constexpr std::uint16_t words() const { return type == Type::u32 || type == Type::i32 ? 2 : 1; }
   constexpr bool per_axis() const { return axis >= 0; }

@@ -10,6 +10,7 @@
 #include "file_record.hpp"
 #include "registers/lookup.hpp"
 #include "write_log.hpp"
+#include "write_plan.hpp"
 
 namespace server {
 namespace {
@@ -18,12 +19,6 @@ using registers::ExceptionCode;
 using registers::Table;
 
 Reply fail(std::uint8_t fc, ExceptionCode code) { return exception_reply(fc, static_cast<std::uint8_t>(code)); }
-
-// The address of the first register a refused write is about: the first
-// value it changes, else the first register it names.
-std::uint16_t first_address(const std::vector<registers::Change>& changes, std::uint16_t start) {
-  return changes.empty() ? start : changes.front().reg->address;
-}
 
 }  // namespace
 
@@ -234,123 +229,87 @@ std::optional<Reply> ModbusService::write(Target target, std::uint8_t fc, const 
     explicit WrittenStart(std::uint16_t start) { written_start_ = start; }
     ~WrittenStart() { written_start_.reset(); }
   } const written_start(w.start);
-  if (!may_write(client))
-    return refuse(fc,
-                  registers::Refusal::because(registers::RefusalReason::client_read_only, w.start,
-                                              fmt::format("{} is not in --write-allow; nothing was written",
-                                                          client.address)),
-                  client);
-  const auto unit = target == Target::module ? registers::Unit::module : registers::Unit::simulator;
-  if (auto refused = access_refusal(client, unit, w.table, w.start, w.values.size()))
-    return refuse(fc,
-                  registers::Refusal::because(registers::RefusalReason::role, w.start,
-                                              *refused + "; nothing was written"),
-                  client);
   if (target == Target::module) return write_module(fc, w.table, w.start, w.values, client);
+  if (auto r = client_refusal(registers::Unit::simulator, w.table, w.start, w.values.size(), client, may_write(client)))
+    return refuse(fc, *r, client);
   return write_sim(fc, w.table, w.start, w.values, client);
 }
 
+// Decided whole first (server/write_plan.hpp), then carried out: the commit,
+// the lock, the settings and what their rows declare, the host registers,
+// the commands.
 std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, std::uint16_t start,
                                                  std::span<const std::uint16_t> values, const ClientInfo& client) {
+  const homing::Status status = loop_.snapshot().status;  // one machine snapshot per request
   std::vector<registers::CommandRequest> commands;
   {
     std::lock_guard lock(mutex_);
-    auto accepted = registers::validate_write(table, start, values, config_.word_order, settings_, host_);
-    if (!accepted) return refuse(fc, accepted.error(), client);
-    if (auto refused = registers::refusal_now(*accepted, loop_.snapshot().status))
-      return refuse(fc, *refused, client);
-    if (accepted->host.unlock_code != 0) {
-      const std::uint32_t code = accepted->host.unlock_code;
-      accepted->host.unlock_code = 0;
-      std::uint16_t address = start;
-      for (const auto& c : accepted->changes)
-        if (c.reg->key == registers::Key::security_unlock) address = c.reg->address;
-      if (auto refused = try_unlock(fc, code, address, client)) return refused;
+    const WriteState state{.settings = settings_,
+                           .host = host_,
+                           .status = status,
+                           .order = config_.word_order,
+                           .client_may_write = may_write(client),
+                           .locked = locked_,
+                           .unlock_guard = unlock_guard_,
+                           .now = now(),
+                           .machine_check = &config_.machine_check};
+    auto plan = plan_write(table, start, values, client, state);
+    if (!plan) {
+      if (plan.error().wrong_unlock_code) count_wrong_unlock_code(*plan.error().wrong_unlock_code, client);
+      return refuse(fc, plan.error().refusal, client);
     }
-    if (accepted->changes_persisted()) {
-      using registers::RefusalReason;
-      const std::uint16_t about = first_address(accepted->changes, start);
-      const std::string changes = describe_changes(accepted->changes, registers::kinds_of(accepted->settings));
-      if (locked_)
+    if (store_ && !plan->stored.empty()) {
+      auto committed = store_->commit(plan->stored, source_of(client));
+      if (!committed)
         return refuse(fc,
-                      registers::Refusal::because(RefusalReason::locked, about,
-                                                  "settings are locked (write the unlock code to security.unlock): " +
-                                                      changes),
+                      registers::Refusal::because(registers::RefusalReason::storage_failed, plan->about,
+                                                  "settings not stored: " + committed.error().message + "; " +
+                                                      plan->changes),
                       client);
-      if (config_.machine_check) {
-        if (auto problem = config_.machine_check(accepted->settings))
-          return refuse(fc,
-                        registers::Refusal::because(RefusalReason::wiring, about,
-                                                    "the machine's wiring cannot do it: " + *problem + "; " + changes),
-                        client);
-      }
-      if (loop_.snapshot().status.homing)
-        return refuse(
-            fc, registers::Refusal::because(RefusalReason::busy, about, "a homing cycle runs: " + changes), client);
-      std::vector<persistence::SettingWrite> writes;
-      for (const auto& c : accepted->changes)
-        if (c.reg->persisted) writes.push_back({c.reg->name(), c.new_raw});
-      if (store_) {
-        auto committed = store_->commit(writes, source_of(client));
-        if (!committed)
-          return refuse(fc,
-                        registers::Refusal::because(RefusalReason::storage_failed, about,
-                                                    "settings not stored: " + committed.error().message + "; " +
-                                                        changes),
-                        client);
-      }
-      const bool new_limit = accepted->settings.global.history_max_rows != settings_.global.history_max_rows;
-      settings_ = accepted->settings;
+    }
+    if (plan->unlock_code) unlock(*plan->unlock_code, client);
+    if (plan->accepted.changes_persisted()) {
+      settings_ = plan->accepted.settings;
       loop_.set_settings(settings_);
-      if (new_limit && store_) {
-        const auto rows = settings_.global.history_max_rows;
-        if (auto r = store_->set_limits(rows, rows); !r)
-          spdlog::warn("history limit not applied: {}", r.error().message);
-      }
-      spdlog::info("settings changed by {} {}: {}", client.transport, client.address,
-                   changes);
+      for (const registers::Effect e : plan->effects) apply_effect(e);
+      spdlog::info("settings changed by {} {}: {}", client.transport, client.address, plan->changes);
     }
     const std::uint16_t old_heartbeat = host_.heartbeat;
-    host_ = accepted->host;
+    host_ = plan->accepted.host;
     if (host_.heartbeat != old_heartbeat) loop_.heartbeat_written(host_.heartbeat);
-    commands = std::move(accepted->commands);
+    commands = std::move(plan->accepted.commands);
   }
   run_commands(commands, client);
   return std::nullopt;
 }
 
-// Under mutex_.
-std::optional<Reply> ModbusService::try_unlock(std::uint8_t fc, std::uint32_t code, std::uint16_t address,
-                                               const ClientInfo& client) {
-  using registers::RefusalReason;
-  const auto at = now();
-  const UnlockGuard::Outcome outcome = unlock_guard_.attempt(code, at);
-  switch (outcome.verdict) {
-    case UnlockVerdict::locked_out:
-      return refuse(fc,
-                    registers::Refusal::because(
-                        RefusalReason::unlock_locked_out, address,
-                        fmt::format("{} wrong unlock codes in a row: every unlock is refused for {} s more "
-                                    "(status.unlock_lockout_s); the code written was not tried, settings stay locked",
-                                    outcome.wrong_in_a_row, unlock_guard_.remaining(at).count())),
-                    client);
-    case UnlockVerdict::wrong:
-      if (outcome.lockout_started)
-        spdlog::warn("security.unlock: {} wrong unlock codes in a row, the last from {} {}: every unlock is refused "
-                     "for {} s (status.unlock_lockout_s), longer with each further wrong code",
-                     outcome.wrong_in_a_row, client.transport, client.address, outcome.lockout.count());
-      return refuse(fc,
-                    registers::Refusal::because(RefusalReason::wrong_unlock_code, address,
-                                                fmt::format("wrong unlock code written to security.unlock ({} in a "
-                                                            "row); settings stay locked",
-                                                            outcome.wrong_in_a_row)),
-                    client);
-    case UnlockVerdict::right: break;
+// Under mutex_: what a changed setting's row declares beyond the setting.
+void ModbusService::apply_effect(registers::Effect effect) {
+  switch (effect) {
+    case registers::Effect::none: return;
+    case registers::Effect::history_limits:
+      if (!store_) return;
+      if (auto r = store_->set_limits(settings_.global.history_max_rows, settings_.global.history_max_rows); !r)
+        spdlog::warn("history limit not applied: {}", r.error().message);
+      return;
   }
+}
+
+// Under mutex_: a wrong code the plan refused, counted by the guard.
+void ModbusService::count_wrong_unlock_code(std::uint32_t code, const ClientInfo& client) {
+  const UnlockGuard::Outcome outcome = unlock_guard_.attempt(code, now());
+  if (outcome.lockout_started)
+    spdlog::warn("security.unlock: {} wrong unlock codes in a row, the last from {} {}: every unlock is refused "
+                 "for {} s (status.unlock_lockout_s), longer with each further wrong code",
+                 outcome.wrong_in_a_row, client.transport, client.address, outcome.lockout.count());
+}
+
+// Under mutex_: the right code, once the rest of its request has passed.
+void ModbusService::unlock(std::uint32_t code, const ClientInfo& client) {
+  (void)unlock_guard_.attempt(code, now());  // clears the count of wrong codes
   if (locked_) spdlog::info("settings unlocked by {} {}", client.transport, client.address);
   locked_ = false;
   extras_.settings_locked = false;
-  return std::nullopt;
 }
 
 }  // namespace server

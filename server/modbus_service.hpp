@@ -26,6 +26,7 @@
 #include "request_decoder.hpp"
 #include "request_handler.hpp"
 #include "unlock_guard.hpp"
+#include "write_plan.hpp"
 
 namespace server {
 
@@ -42,7 +43,7 @@ struct ServiceConfig {
   std::function<std::chrono::steady_clock::time_point()> clock;
   // What the machine behind can do (GPIO wiring): settings it cannot run are
   // refused with exception 03 and the returned reason. Empty: anything.
-  std::function<std::optional<std::string>(const homing::Settings&)> machine_check;
+  MachineCheck machine_check;
   DeviceIdentity identity;  // FC 43, FC 17
 };
 
@@ -99,8 +100,10 @@ class ModbusService final : public RequestHandler {
   // records it for status.refusal_count / last_refused_register /
   // last_refusal_reason / last_refused_write, and answers its exception.
   Reply refuse(std::uint8_t fc, const registers::Refusal& refusal, const ClientInfo& client);
-  // A code written to security.unlock or security.unlock32, through the guard.
-  std::optional<Reply> try_unlock(std::uint8_t fc, std::uint32_t code, std::uint16_t address, const ClientInfo& client);
+  // Under mutex_: the effects of an accepted plan (server/write_plan.hpp) and of a refused wrong code.
+  void apply_effect(registers::Effect effect);
+  void count_wrong_unlock_code(std::uint32_t code, const ClientInfo& client);
+  void unlock(std::uint32_t code, const ClientInfo& client);
   std::chrono::steady_clock::time_point now() const;
 
   static thread_local std::optional<registers::Refusal> refused_here_;  // refuse()'s last, for command()

@@ -12,7 +12,7 @@ std::chrono::seconds UnlockGuard::lockout_after(std::uint32_t wrong) const {
   return std::min(grown, std::max(policy_.max_lockout, policy_.first_lockout));
 }
 
-UnlockGuard::Outcome UnlockGuard::attempt(std::uint32_t written, Clock::time_point now) {
+UnlockGuard::Outcome UnlockGuard::judge(std::uint32_t written, Clock::time_point now) const {
   Outcome out;
   if (now < locked_until_) {
     out.verdict = UnlockVerdict::locked_out;
@@ -22,17 +22,25 @@ UnlockGuard::Outcome UnlockGuard::attempt(std::uint32_t written, Clock::time_poi
   // Every bit looked at whatever the value: the time of the answer says nothing.
   const bool right = code_ != 0 && ((written ^ code_) == 0);
   if (right) {
-    wrong_in_a_row_ = 0;
     out.verdict = UnlockVerdict::right;
     return out;
   }
-  if (wrong_in_a_row_ < UINT32_MAX) ++wrong_in_a_row_;
   out.verdict = UnlockVerdict::wrong;
-  out.wrong_in_a_row = wrong_in_a_row_;
-  out.lockout = lockout_after(wrong_in_a_row_);
-  if (out.lockout.count() > 0) {
-    out.lockout_started = true;
-    locked_until_ = now + out.lockout;
+  out.wrong_in_a_row = wrong_in_a_row_ < UINT32_MAX ? wrong_in_a_row_ + 1 : wrong_in_a_row_;
+  out.lockout = lockout_after(out.wrong_in_a_row);
+  out.lockout_started = out.lockout.count() > 0;
+  return out;
+}
+
+UnlockGuard::Outcome UnlockGuard::attempt(std::uint32_t written, Clock::time_point now) {
+  const Outcome out = judge(written, now);
+  switch (out.verdict) {
+    case UnlockVerdict::locked_out: break;
+    case UnlockVerdict::right: wrong_in_a_row_ = 0; break;
+    case UnlockVerdict::wrong:
+      wrong_in_a_row_ = out.wrong_in_a_row;
+      if (out.lockout_started) locked_until_ = now + out.lockout;
+      break;
   }
   return out;
 }

@@ -33,6 +33,11 @@ class UnlockGuard {
   // code 0: no code configured, every attempt is wrong.
   UnlockGuard(std::uint32_t code, UnlockPolicy policy) : code_(code), policy_(policy) {}
 
+  // What attempt() would answer, without counting anything (the write path
+  // decides before it acts: server/write_plan.hpp). A wrong code's outcome
+  // (the count it makes, the lockout it begins) comes with it.
+  Outcome judge(std::uint32_t written, Clock::time_point now) const;
+  // Judges and records: a wrong code counts, a right one clears the count.
   Outcome attempt(std::uint32_t written, Clock::time_point now);
   // Whole seconds left of the lockout, rounded up; 0 when codes are compared.
   std::chrono::seconds remaining(Clock::time_point now) const;

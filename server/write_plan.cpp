@@ -1,0 +1,105 @@
+#include "write_plan.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "client_role.hpp"
+#include "write_log.hpp"
+
+namespace server {
+namespace {
+
+using registers::Refusal;
+using registers::RefusalReason;
+
+std::unexpected<PlannedRefusal> refused(Refusal r) { return std::unexpected(PlannedRefusal{std::move(r), {}}); }
+
+// The register a security.unlock(32) value came in, for the refusal.
+std::uint16_t unlock_address(const registers::AcceptedWrite& w, std::uint16_t start) {
+  for (const registers::Change& c : w.changes)
+    if (c.reg->key == registers::Key::security_unlock) return c.reg->address;
+  return start;
+}
+
+// 5: the unlock code the request carries. Judged whether or not settings are
+// locked, so that a code is never tried for free.
+std::optional<PlannedRefusal> unlock_refusal(std::uint32_t code, std::uint16_t address, const WriteState& state) {
+  const UnlockGuard::Outcome outcome = state.unlock_guard.judge(code, state.now);
+  switch (outcome.verdict) {
+    case UnlockVerdict::right: return std::nullopt;
+    case UnlockVerdict::locked_out:
+      return PlannedRefusal{
+          Refusal::because(RefusalReason::unlock_locked_out, address,
+                           fmt::format("{} wrong unlock codes in a row: every unlock is refused for {} s more "
+                                       "(status.unlock_lockout_s); the code written was not tried, settings stay "
+                                       "locked",
+                                       outcome.wrong_in_a_row, state.unlock_guard.remaining(state.now).count())),
+          std::nullopt};
+    case UnlockVerdict::wrong:
+      return PlannedRefusal{
+          Refusal::because(RefusalReason::wrong_unlock_code, address,
+                           fmt::format("wrong unlock code written to security.unlock ({} in a row); settings stay "
+                                       "locked",
+                                       outcome.wrong_in_a_row)),
+          code};
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<Refusal> client_refusal(registers::Unit unit, registers::Table table, std::uint16_t start,
+                                      std::size_t count, const ClientInfo& client, bool client_may_write) {
+  if (!client_may_write)
+    return Refusal::because(RefusalReason::client_read_only, start,
+                            fmt::format("{} is not in --write-allow; nothing was written", client.address));
+  if (auto why = access_refusal(client, unit, table, start, count))
+    return Refusal::because(RefusalReason::role, start, *why + "; nothing was written");
+  return std::nullopt;
+}
+
+std::expected<WritePlan, PlannedRefusal> plan_write(registers::Table table, std::uint16_t start,
+                                                    std::span<const std::uint16_t> values, const ClientInfo& client,
+                                                    const WriteState& state) {
+  if (auto r = client_refusal(registers::Unit::module, table, start, values.size(), client, state.client_may_write))
+    return refused(std::move(*r));
+  auto accepted = registers::validate_write(table, start, values, state.order, state.settings, state.host);
+  if (!accepted) return refused(std::move(accepted.error()));
+  if (auto r = registers::refusal_now(*accepted, state.status)) return refused(std::move(*r));
+
+  WritePlan plan;
+  bool unlocks = false;
+  if (const std::uint32_t code = accepted->host.unlock_code; code != 0) {
+    accepted->host.unlock_code = 0;  // a code is never kept (security.unlock reads 0)
+    if (auto r = unlock_refusal(code, unlock_address(*accepted, start), state)) return std::unexpected(std::move(*r));
+    plan.unlock_code = code;
+    unlocks = true;
+  }
+  if (accepted->changes_persisted()) {
+    plan.about = accepted->changes.empty() ? start : accepted->changes.front().reg->address;
+    plan.changes = describe_changes(accepted->changes, registers::kinds_of(accepted->settings));
+    if (state.locked && !unlocks)
+      return refused(Refusal::because(RefusalReason::locked, plan.about,
+                                      "settings are locked (write the unlock code to security.unlock): " +
+                                          plan.changes));
+    if (state.machine_check && *state.machine_check) {
+      if (auto problem = (*state.machine_check)(accepted->settings))
+        return refused(Refusal::because(RefusalReason::wiring, plan.about,
+                                        "the machine's wiring cannot do it: " + *problem + "; " + plan.changes));
+    }
+    if (state.status.homing)
+      return refused(Refusal::because(RefusalReason::busy, plan.about, "a homing cycle runs: " + plan.changes));
+    for (const registers::Change& c : accepted->changes) {
+      if (!c.reg->persisted) continue;
+      plan.stored.push_back({c.reg->name(), c.new_raw});
+      if (c.reg->effect != registers::Effect::none &&
+          std::find(plan.effects.begin(), plan.effects.end(), c.reg->effect) == plan.effects.end())
+        plan.effects.push_back(c.reg->effect);
+    }
+  }
+  plan.accepted = std::move(*accepted);
+  return plan;
+}
+
+}  // namespace server

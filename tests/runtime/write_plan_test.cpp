@@ -1,0 +1,218 @@
+// The write path's decision (server/write_plan.hpp): every refusal in its
+// fixed order, each shown against the one after it in the same request, what
+// an accepted plan carries, and that deciding changes nothing (the unlock
+// guard counts a wrong code only when the service records the refusal).
+#include <catch2/catch.hpp>
+
+#include <chrono>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "homing/status.hpp"
+#include "registers/defaults.hpp"
+#include "registers/errors.hpp"
+#include "registers/lookup.hpp"
+#include "server/unlock_guard.hpp"
+#include "server/write_plan.hpp"
+
+using namespace std::chrono_literals;
+using registers::RefusalReason;
+using registers::Table;
+
+namespace {
+
+constexpr std::uint32_t kCode = 4321;
+constexpr std::uint16_t kHomeAxes = 40;     // cmd.home_axes
+constexpr std::uint16_t kTrendCycles = 41;  // global.trend_cycles (default 20)
+constexpr std::uint16_t kUnlock = 30;       // security.unlock
+
+// One request's world: defaults, an idle machine, settings unlocked.
+struct World {
+  homing::Settings settings = registers::default_settings();
+  registers::HostRegisters host = registers::default_host_registers();
+  homing::Status status{};
+  server::UnlockGuard guard{kCode, server::UnlockPolicy{}};
+  server::UnlockGuard::Clock::time_point now{};
+  bool client_may_write = true;
+  bool locked = false;
+  server::MachineCheck machine_check;
+  server::ClientInfo client{1, server::Transport::tcp, "127.0.0.1:50000"};
+
+  std::expected<server::WritePlan, server::PlannedRefusal> plan(Table table, std::uint16_t start,
+                                                                std::vector<std::uint16_t> values) const {
+    const server::WriteState state{.settings = settings,
+                                   .host = host,
+                                   .status = status,
+                                   .client_may_write = client_may_write,
+                                   .locked = locked,
+                                   .unlock_guard = guard,
+                                   .now = now,
+                                   .machine_check = &machine_check};
+    return server::plan_write(table, start, values, client, state);
+  }
+  void homing_runs() {
+    status.homing = true;
+    status.interlocks |= homing::interlock::homing_active;
+  }
+  void wiring_refuses() {
+    machine_check = [](const homing::Settings&) { return std::optional<std::string>("no GPIO line for it"); };
+  }
+};
+
+RefusalReason reason_of(const std::expected<server::WritePlan, server::PlannedRefusal>& p) {
+  REQUIRE_FALSE(p.has_value());
+  return p.error().refusal.reason;
+}
+
+std::uint16_t address_of(const std::expected<server::WritePlan, server::PlannedRefusal>& p) {
+  REQUIRE_FALSE(p.has_value());
+  return p.error().refusal.address;
+}
+
+}  // namespace
+
+TEST_CASE("plan_write: a client outside --write-allow is refused before its certificate role is looked at") {
+  World w;
+  w.client_may_write = false;
+  w.client.access = server::Access::read_only;
+  const auto p = w.plan(Table::holding_register, kTrendCycles, {5});
+  CHECK(reason_of(p) == RefusalReason::client_read_only);
+  CHECK(p.error().refusal.code == registers::ExceptionCode::illegal_function);
+}
+
+TEST_CASE("plan_write: a role that may not write is refused before the value is range-checked") {
+  World w;
+  w.client.access = server::Access::read_only;
+  CHECK(reason_of(w.plan(Table::holding_register, kTrendCycles, {60000})) == RefusalReason::role);
+  w.client.access = server::Access::commands;  // commands, not settings
+  CHECK(reason_of(w.plan(Table::holding_register, kTrendCycles, {5})) == RefusalReason::role);
+}
+
+TEST_CASE("plan_write: a value out of range is refused before the machine's state is looked at") {
+  World w;
+  w.homing_runs();
+  // cmd.home_axes naming no axis (a request fault), and trend_cycles out of range, while a cycle runs.
+  CHECK(reason_of(w.plan(Table::holding_register, kTrendCycles, {60000})) == RefusalReason::out_of_range);
+  CHECK(reason_of(w.plan(Table::holding_register, kHomeAxes, {0})) == RefusalReason::no_axis_named);
+}
+
+TEST_CASE("plan_write: a command the machine cannot carry out now is refused before the settings lock") {
+  World w;
+  w.locked = true;
+  w.status.interlocks |= homing::interlock::estop;
+  // cmd.home_axes (X) and global.trend_cycles in one request: the command's refusal comes first.
+  const auto p = w.plan(Table::holding_register, kHomeAxes, {1, 5});
+  CHECK(reason_of(p) == RefusalReason::homing_blocked);
+  CHECK(address_of(p) == kHomeAxes);
+  CHECK(p.error().refusal.code == registers::ExceptionCode::server_device_failure);
+}
+
+TEST_CASE("plan_write: while a cycle runs the command register is refused before the setting beside it") {
+  World w;
+  w.homing_runs();
+  const auto p = w.plan(Table::holding_register, kHomeAxes, {1, 5});
+  CHECK(reason_of(p) == RefusalReason::busy);
+  CHECK(address_of(p) == kHomeAxes);
+  CHECK(p.error().refusal.message.find("cmd.home_axes") != std::string::npos);
+}
+
+TEST_CASE("plan_write: a wrong unlock code is refused and handed back to be counted, without counting it") {
+  World w;
+  w.locked = true;
+  const auto p = w.plan(Table::holding_register, kUnlock, {1234});
+  CHECK(reason_of(p) == RefusalReason::wrong_unlock_code);
+  REQUIRE(p.error().wrong_unlock_code);
+  CHECK(*p.error().wrong_unlock_code == 1234);
+  CHECK(p.error().refusal.message.find("1 in a row") != std::string::npos);
+  CHECK(w.guard.wrong_in_a_row() == 0);  // deciding counted nothing
+}
+
+TEST_CASE("plan_write: during a lockout every unlock is refused without being tried, the right code too") {
+  World w;
+  w.locked = true;
+  for (std::uint32_t n = 1; n <= 5; ++n) w.guard.attempt(n, w.now);  // the fifth begins the lockout
+  REQUIRE(w.guard.remaining(w.now) > 0s);
+  const auto p = w.plan(Table::holding_register, kUnlock, {static_cast<std::uint16_t>(kCode)});
+  CHECK(reason_of(p) == RefusalReason::unlock_locked_out);
+  CHECK_FALSE(p.error().wrong_unlock_code);  // nothing to count: the code was not tried
+  w.now += w.guard.remaining(w.now);
+  const auto after = w.plan(Table::holding_register, kUnlock, {static_cast<std::uint16_t>(kCode)});
+  REQUIRE(after.has_value());
+  CHECK(after->unlock_code == kCode);
+}
+
+TEST_CASE("plan_write: the right unlock code plans the unlock and keeps no code in the host registers") {
+  World w;
+  w.locked = true;
+  const auto p = w.plan(Table::holding_register, kUnlock, {static_cast<std::uint16_t>(kCode)});
+  REQUIRE(p.has_value());
+  CHECK(p->unlock_code == kCode);
+  CHECK(p->accepted.host.unlock_code == 0);
+  CHECK(p->stored.empty());
+}
+
+TEST_CASE("plan_write: a locked setting is refused before the wiring is asked") {
+  World w;
+  w.locked = true;
+  w.wiring_refuses();
+  const auto p = w.plan(Table::holding_register, kTrendCycles, {5});
+  CHECK(reason_of(p) == RefusalReason::locked);
+  CHECK(address_of(p) == kTrendCycles);
+}
+
+TEST_CASE("plan_write: settings the wiring cannot run are refused before a running cycle is") {
+  World w;
+  w.wiring_refuses();
+  w.homing_runs();
+  const auto p = w.plan(Table::holding_register, kTrendCycles, {5});
+  CHECK(reason_of(p) == RefusalReason::wiring);
+  CHECK(p.error().refusal.message.find("no GPIO line for it") != std::string::npos);
+}
+
+TEST_CASE("plan_write: a setting written while a homing cycle runs is refused as busy with the change in words") {
+  World w;
+  w.homing_runs();
+  const auto p = w.plan(Table::holding_register, kTrendCycles, {5});
+  CHECK(reason_of(p) == RefusalReason::busy);
+  CHECK(p.error().refusal.code == registers::ExceptionCode::server_device_busy);
+  CHECK(p.error().refusal.message.find("global.trend_cycles") != std::string::npos);
+}
+
+TEST_CASE("plan_write: an accepted setting plans its durable row, the first register it changes and nothing else") {
+  World w;
+  const auto p = w.plan(Table::holding_register, kTrendCycles, {5});
+  REQUIRE(p.has_value());
+  REQUIRE(p->stored.size() == 1);
+  CHECK(p->stored[0].name == "global.trend_cycles");
+  CHECK(p->stored[0].value == 5);
+  CHECK(p->about == kTrendCycles);
+  CHECK(p->accepted.settings.global.trend_cycles == 5);
+  CHECK(p->effects.empty());
+  CHECK_FALSE(p->unlock_code);
+  CHECK(w.settings.global.trend_cycles == 20);  // the snapshot is untouched
+}
+
+TEST_CASE("plan_write: a new history length carries the effect its register row declares, an unchanged one none") {
+  World w;
+  const registers::Register* rows = registers::find_register("global.history_max_rows");
+  REQUIRE(rows);
+  CHECK(rows->effect == registers::Effect::history_limits);
+  const auto changed = w.plan(Table::holding_register, rows->address, {0, 500});
+  REQUIRE(changed.has_value());
+  CHECK(changed->effects == std::vector<registers::Effect>{registers::Effect::history_limits});
+  const auto same = w.plan(Table::holding_register, rows->address, {0, 10'000});  // the default
+  REQUIRE(same.has_value());
+  CHECK(same->effects.empty());
+  CHECK(same->stored.empty());
+}
+
+TEST_CASE("plan_write: a heartbeat is planned as a host value, stored nowhere, even while locked and homing") {
+  World w;
+  w.locked = true;
+  w.homing_runs();
+  const auto p = w.plan(Table::holding_register, 20, {77});  // host.heartbeat
+  REQUIRE(p.has_value());
+  CHECK(p->accepted.host.heartbeat == 77);
+  CHECK(p->stored.empty());
+}
