@@ -280,10 +280,14 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
       const double limit = r.settings.axes[a].max_misalignment_mm;
       const double needed = p.rest_rel_mm - (r.actual(a) - r.actual(mi));
       const double skew = rack[a] ? squaring_beyond(needed, *rack[a], limit) : std::abs(needed);
+      // Certain only while both sensors tell the truth: a side's sensor that
+      // lies during the cycle (a wire break read as a trigger) may square the
+      // pair on an edge that is not there (seed 185003649).
       if (p.bad_skew || !rack[a] || skew > p.budget_mm + 1e-3)
         c.add(letter(a) + "'s skew beyond its max misalignment",
               {AlarmCode::misalignment, AlarmCode::not_released, AlarmCode::sensor_not_found, AlarmCode::slave_sensor_missing},
-              static_cast<AxisMask>(bit | axis_bit(mi)), rack[a] && skew > limit + p.extras_mm);
+              static_cast<AxisMask>(bit | axis_bit(mi)), rack[a] && skew > limit + p.extras_mm)
+            .needs_true_sensor = true;
       // The gantry guard looks two periods ahead (docs/homing-methods.md
       // "Gantries: racking"): once one side of a software-slaved pair has
       // found its sensor, the other, still seeking, is predicted on at seek
