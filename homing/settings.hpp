@@ -195,6 +195,9 @@ struct GlobalSettings {
   std::uint16_t trend_cycles = 0;
   std::uint16_t trend_growth_pct = 0;
   double trend_min_change_mm = 0;
+  // Not used by the engine: an HMI's edit session (server/edit_sessions.hpp)
+  // left this long without a write or a commit is discarded.
+  std::uint16_t edit_timeout_s = 0;
   friend bool operator==(const GlobalSettings&, const GlobalSettings&) = default;
 };
 

@@ -119,6 +119,7 @@ std::int64_t host_raw(const HostRegisters& host, const Register& reg) {
     case Key::host_homing_permit: return host.homing_permit ? 1 : 0;
     case Key::security_unlock: return 0;  // a code is never read back
     case Key::cmd_home_axes: return 0;    // a command: it holds nothing
+    case Key::edit_command: return 0;     // a command: it holds nothing
     case Key::cmd_jog_plus: return host.jog_plus.at(axis_index(reg)) ? 1 : 0;
     case Key::cmd_jog_minus: return host.jog_minus.at(axis_index(reg)) ? 1 : 0;
     default: unbound(reg, "host");
@@ -132,6 +133,7 @@ void set_host_raw(HostRegisters& host, const Register& reg, std::int64_t raw) {
     case Key::host_homing_permit: host.homing_permit = raw != 0; return;
     case Key::security_unlock: host.unlock_code = static_cast<std::uint32_t>(raw); return;
     case Key::cmd_home_axes: return;  // a command (validate_write), nothing held
+    case Key::edit_command: return;   // the Modbus service's edit sessions, nothing held
     case Key::cmd_jog_plus: host.jog_plus.at(axis_index(reg)) = raw != 0; return;
     case Key::cmd_jog_minus: host.jog_minus.at(axis_index(reg)) = raw != 0; return;
     default: unbound(reg, "host");
@@ -215,6 +217,8 @@ std::int64_t read_raw(const Register& reg, const ModuleView& view) {
     case Key::status_last_refusal_reason: return view.extras.last_refusal_reason;
     case Key::status_unlock_lockout_s: return view.extras.unlock_lockout_s;
     case Key::status_wrong_unlock_codes: return view.extras.wrong_unlock_codes;
+    case Key::edit_state: return view.extras.edit_state;
+    case Key::edit_staged: return view.extras.edit_staged;
     case Key::status_alarm: return st.alarm ? 1 : 0;
     case Key::status_homing: return st.homing ? 1 : 0;
     case Key::status_estop: return st.estop ? 1 : 0;

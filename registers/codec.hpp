@@ -61,6 +61,9 @@ struct StatusExtras {
   // The unlock code's guard (owned by the Modbus service).
   std::uint16_t unlock_lockout_s = 0;
   std::uint16_t wrong_unlock_codes = 0;
+  // The reading client's edit session (owned by the Modbus service, per request).
+  std::uint16_t edit_state = 0;  // 0 none, 1 open, 2 expired
+  std::uint16_t edit_staged = 0;
 };
 
 // ---- coils and command registers -> commands ----

@@ -58,6 +58,11 @@ enum class RefusalReason : std::uint8_t {
   homing_blocked,       // cmd.home_axes while an alarm, e-stop, drive fault, lost link or missing permit blocks homing
   unlock_locked_out,    // security.unlock after too many wrong codes in a row: not even compared until the lockout ends
   slave_inherits,       // a gantry slave's own value of a setting it takes from its master
+  edit_session_open,    // edit.command = begin while this client's edit session is open
+  edit_no_session,      // edit.command = commit or discard without an edit session
+  edit_session_expired, // a settings write or a commit after the edit session timed out
+  edit_mixed,           // in an edit session, one request with settings and other registers
+  edit_sessions_full,   // edit.command = begin while the most edit sessions are open
 };
 // Each reason with the exception it is answered with, its name and its text.
 struct RefusalReasonInfo {
@@ -99,8 +104,19 @@ inline constexpr RefusalReasonInfo kRefusalReasonInfo[] = {
     {RefusalReason::slave_inherits, ExceptionCode::illegal_data_value, "slave_inherits",
      "a gantry slave homes and moves with its master's value of this setting: write it on the master "
      "(status.last_refused_register names it)"},
+    {RefusalReason::edit_session_open, ExceptionCode::server_device_busy, "edit_session_open",
+     "an edit session of this client is open: commit it (edit.command = 2) or discard it (3) before beginning another"},
+    {RefusalReason::edit_no_session, ExceptionCode::illegal_data_value, "edit_no_session",
+     "no edit session is open for this client: begin one (edit.command = 1), write the settings, then commit"},
+    {RefusalReason::edit_session_expired, ExceptionCode::server_device_failure, "edit_session_expired",
+     "this client's edit session timed out (global.edit_timeout_s) and its staged settings were discarded: "
+     "begin again (edit.command = 1) or discard (3) to write settings one at a time"},
+    {RefusalReason::edit_mixed, ExceptionCode::illegal_data_value, "edit_mixed",
+     "in an edit session settings are staged alone: write commands, the heartbeat and targets in their own requests"},
+    {RefusalReason::edit_sessions_full, ExceptionCode::server_device_busy, "edit_sessions_full",
+     "the most edit sessions (32) are open: try again once another client commits, discards or times out"},
 };
-static_assert(homing::lists_every_value(kRefusalReasonInfo, RefusalReason::slave_inherits));
+static_assert(homing::lists_every_value(kRefusalReasonInfo, RefusalReason::edit_sessions_full));
 constexpr std::span<const RefusalReasonInfo> enum_table(RefusalReason) { return kRefusalReasonInfo; }
 
 inline constexpr std::uint16_t kRuleReasonBase = 100;

@@ -134,6 +134,15 @@ constexpr EnumValue kAxisBits[] = {{0, "x", "X"}, {1, "y", "Y"}, {2, "z", "Z"},
 constexpr EnumValue kAlarmAxis[] = {{0, "none", "no axis alarm"}, {1, "x", "X"}, {2, "y", "Y"},
                                     {3, "z", "Z"}, {4, "a", "A"},  {5, "b", "B"}, {6, "c", "C"}};
 
+// An HMI's edit session (docs/hmi-integration.md "Edit sessions").
+constexpr EnumValue kEditCommands[] = {{0, "none", "nothing (reads 0)"},
+                                       {1, "begin", "begin an edit session: settings written from now are staged"},
+                                       {2, "commit", "check the staged settings together and apply all or none"},
+                                       {3, "discard", "drop the staged settings and end the session"}};
+constexpr EnumValue kEditStates[] = {{0, "none", "no edit session: settings writes apply at once"},
+                                     {1, "open", "settings writes are staged until the commit"},
+                                     {2, "expired", "timed out and discarded: settings writes are refused until begin or discard"}};
+
 // Named for hmi_maps/enums.csv; a static_assert below proves every row's list is here.
 constexpr ValueList kValueLists[] = {
     {"mode", kModes},
@@ -159,6 +168,8 @@ constexpr ValueList kValueLists[] = {
     {"trust", kTrusts},
     {"gantry_side", kGantrySides},
     {"refusal_reason", kRefusalReasons},
+    {"edit_command", kEditCommands},
+    {"edit_state", kEditStates},
 };
 
 // ---- module unit ----
@@ -183,6 +194,8 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "global.permit_required", .offset = 13, .max = 1, .fills = fills<&G::permit_required>, .description = "flag (0/1): homing needs host.homing_permit (or the permit input) on"},
     {.pattern = "security.unlock", .offset = 30, .max = 65535, .key = Key::security_unlock, .description = "write the unlock code (homingd --unlock-code) to allow settings writes; reads 0"},
     {.pattern = "security.unlock32", .offset = 32, .type = Type::u32, .max = 4294967295LL, .key = Key::security_unlock, .description = "the unlock code as one 32-bit value (both words in one request, FC 16): for a --unlock-code above 65535; reads 0"},
+    {.pattern = "edit.command", .offset = 50, .type = Type::enumeration, .max = 3, .key = Key::edit_command, .values = kEditCommands, .description = "this connection's edit session: 1 begin (settings written from now are staged), 2 commit (checked together, all applied or none), 3 discard; reads 0"},
+    {.pattern = "global.edit_timeout_s", .offset = 62, .quantity = Quantity::time_s, .min = 5, .max = 3600, .def = 60, .fills = fills<&G::edit_timeout_s>, .description = "an edit session left this long without a write or a commit is discarded (logged); that client's settings writes are then refused until it begins again or discards"},
     {.pattern = "cmd.home_axes", .offset = 40, .type = Type::bitmask, .max = 63, .key = Key::cmd_home_axes, .values = kAxisBits, .description = "write a bitmask of axes (bit 0 = X ... bit 5 = C): one cycle homes exactly those (with their gantry partners) in sequence-step order (reads back 0)"},
     {.pattern = "host.heartbeat", .offset = 20, .max = 65535, .key = Key::host_heartbeat, .description = "the master changes this at least once per watchdog period (not persisted)"},
     // input registers: status
@@ -202,6 +215,8 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "status.last_refusal_reason", .table = IR, .offset = 14, .type = Type::enumeration, .access = Access::r, .max = kRefusalReasons.back().value, .key = Key::status_last_refusal_reason, .values = kRefusalReasons, .description = "why the last write was refused (hmi_maps/refusals.csv); 100 and up: the configuration rule it broke"},
     {.pattern = "status.unlock_lockout_s", .table = IR, .offset = 15, .access = Access::r, .max = 65535, .key = Key::status_unlock_lockout_s, .description = "seconds until security.unlock is tried again after too many wrong codes in a row; 0 = not locked out"},
     {.pattern = "status.wrong_unlock_codes", .table = IR, .offset = 16, .access = Access::r, .max = 65535, .key = Key::status_wrong_unlock_codes, .description = "wrong unlock codes in a row since the last right one (the lockout grows with it)"},
+    {.pattern = "edit.state", .table = IR, .offset = 18, .type = Type::enumeration, .access = Access::r, .max = 2, .key = Key::edit_state, .values = kEditStates, .description = "the reading client's edit session: 0 none, 1 open, 2 expired (timed out and discarded)"},
+    {.pattern = "edit.staged", .table = IR, .offset = 19, .access = Access::r, .max = 65535, .key = Key::edit_staged, .description = "settings staged in the reading client's open edit session"},
     {.pattern = "status.last_refused_write", .table = IR, .offset = 17, .access = Access::r, .max = 65535, .key = Key::status_last_refused_write, .description = "protocol address of the first register of the last refused write request, as the client wrote it (in the unit written to); status.last_refused_register names the one to change"},
     // input registers: diagnostics of the running daemon
     {.pattern = "diag.loop_periods", .table = IR, .offset = 20, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .key = Key::diag_loop_periods, .description = "control periods run since start"},

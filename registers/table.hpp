@@ -56,7 +56,7 @@ enum class Key : std::uint8_t {
   status_settings_locked, status_command_count, axis_alarm_value, diag_loop_periods, diag_late_p50_us, diag_late_p99_us, diag_late_p999_us,
   diag_late_max_us, diag_engine_step_ns, diag_rss_kb, diag_tcp_clients,
   status_refusal_count, status_last_refused_register, status_last_refusal_reason, status_last_refused_write,
-  status_unlock_lockout_s, status_wrong_unlock_codes,
+  status_unlock_lockout_s, status_wrong_unlock_codes, edit_state, edit_staged,
   axis_phase, axis_alarm, axis_alarm_phase, axis_position, axis_velocity, axis_home_correction,
   axis_stop_distance, axis_trigger_position, axis_phase_distance, axis_correction_mean,
   axis_correction_spread, axis_latch_spread, axis_latch_sigma, axis_latch_passes_done,
@@ -71,7 +71,7 @@ enum class Key : std::uint8_t {
   cmd_home, cmd_unhome, cmd_jog_plus,
   cmd_jog_minus, cmd_move, cmd_set_position, cmd_refcheck, cmd_measure,
   // holding, module: command registers (hold nothing, read 0)
-  cmd_home_axes,
+  cmd_home_axes, edit_command,
   // simulator unit
   sim_seed, sim_actual_position, sim_sensor_min, sim_sensor_max, sim_hysteresis, sim_noise,
   sim_bounce_ms, sim_sensor_nc, sim_hard_stop_min, sim_hard_stop_max, sim_index_pitch,

@@ -153,9 +153,14 @@ std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t 
                                                      const HostRegisters& host) {
   auto decoded = decode_write(Unit::module, table, start, values, order, kinds_of(settings));
   if (!decoded) return std::unexpected(decoded.error());
+  return validate_raw_writes(*decoded, settings, host);
+}
 
+std::expected<AcceptedWrite, Refusal> validate_raw_writes(std::span<const RawWrite> writes,
+                                                          const homing::Settings& settings,
+                                                          const HostRegisters& host) {
   AcceptedWrite result{{}, settings, host, {}};
-  for (const RawWrite& w : *decoded) {
+  for (const RawWrite& w : writes) {
     const Register& reg = *w.reg;
     std::int64_t old_raw = 0;
     if (reg.table == Table::coil) {

@@ -62,6 +62,12 @@ std::expected<AcceptedWrite, Refusal> validate_write(Table table, std::uint16_t 
                                                      const homing::Settings& settings,
                                                      const HostRegisters& host);
 
+// The same for writes already decoded and range-checked (decode_write), in
+// address order: an edit session's staged settings at its commit.
+std::expected<AcceptedWrite, Refusal> validate_raw_writes(std::span<const RawWrite> writes,
+                                                          const homing::Settings& settings,
+                                                          const HostRegisters& host);
+
 // An accepted write whose command register the module cannot carry out now,
 // judged on the published status (homing::homing_refusal_of) before anything
 // of the write is applied: 06 while a homing cycle or a motion runs, 04 while

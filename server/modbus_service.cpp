@@ -105,6 +105,14 @@ void ModbusService::set_extras(const registers::StatusExtras& extras) {
 void ModbusService::disconnected(const ClientInfo& client) {
   // A jog moves only while its client is there to stop it.
   loop_.release_jogs(client.id);
+  // An edit session ends with its connection, as a transaction does.
+  std::lock_guard lock(mutex_);
+  const std::string owner = EditSessions::owner_of(client);
+  if (edits_.state(owner) == EditState::open)
+    spdlog::info("edit session of {} discarded: the connection closed before its commit ({} staged settings not "
+                 "applied)",
+                 owner, edits_.staged_count(owner));
+  edits_.close(owner);
 }
 
 Reply ModbusService::handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) {
@@ -159,7 +167,7 @@ Reply ModbusService::dispatch(Target target, std::span<const std::uint8_t> pdu, 
 
 Reply ModbusService::apply(Target target, const Request& request, const ClientInfo& client) {
   const auto fc = static_cast<std::uint8_t>(request.function);
-  if (const auto* r = std::get_if<ReadRequest>(&request.body)) return read(target, fc, *r);
+  if (const auto* r = std::get_if<ReadRequest>(&request.body)) return read(target, fc, *r, client);
   if (const auto* w = std::get_if<WriteRequest>(&request.body)) {
     if (auto refused = write(target, fc, *w, client)) return *refused;
     if (request.function == FunctionCode::write_single_coil)
@@ -169,9 +177,9 @@ Reply ModbusService::apply(Target target, const Request& request, const ClientIn
   }
   if (const auto* rw = std::get_if<ReadWriteRequest>(&request.body)) {
     // The read range must be valid too before anything is written.
-    if (Reply probe = read(target, fc, rw->read); probe.pdu.size() == 2 && (probe.pdu[0] & 0x80)) return probe;
+    if (Reply probe = read(target, fc, rw->read, client); probe.pdu.size() == 2 && (probe.pdu[0] & 0x80)) return probe;
     if (auto refused = write(target, fc, rw->write, client)) return *refused;
-    return read(target, fc, rw->read);
+    return read(target, fc, rw->read, client);
   }
   if (const auto* f = std::get_if<FileRecordRequest>(&request.body))
     return read_trace_records(*f, [this](std::size_t axis) { return trace_file(loop_.trace(axis)); });
@@ -200,7 +208,7 @@ void ModbusService::with_module_view(const std::function<void(const registers::M
   use(registers::ModuleView{settings_, host_, snap.status, extras});
 }
 
-Reply ModbusService::read(Target target, std::uint8_t fc, const ReadRequest& r) {
+Reply ModbusService::read(Target target, std::uint8_t fc, const ReadRequest& r, const ClientInfo& client) {
   const Snapshot snap = loop_.snapshot();
   const bool bits = r.table == Table::coil || r.table == Table::discrete_input;
   std::vector<std::uint16_t> words(bits ? 0 : r.count);
@@ -208,7 +216,10 @@ Reply ModbusService::read(Target target, std::uint8_t fc, const ReadRequest& r) 
   std::optional<registers::Refusal> refused;
   if (target == Target::module) {
     std::lock_guard lock(mutex_);
-    const registers::StatusExtras extras = extras_now();
+    registers::StatusExtras extras = extras_now();
+    const std::string owner = EditSessions::owner_of(client);
+    extras.edit_state = static_cast<std::uint16_t>(edits_.state(owner));
+    extras.edit_staged = static_cast<std::uint16_t>(std::min<std::size_t>(edits_.staged_count(owner), 0xFFFF));
     const registers::ModuleView view{settings_, host_, snap.status, extras};
     refused = bits ? registers::read_module_bits(r.table, r.start, flags, view)
                    : registers::read_module_words(r.table, r.start, words, config_.word_order, view);
@@ -244,6 +255,9 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
   std::vector<registers::CommandRequest> commands;
   {
     std::lock_guard lock(mutex_);
+    expire_edit_sessions();
+    const std::string owner = EditSessions::owner_of(client);
+    const std::vector<registers::RawWrite> staged = edits_.staged(owner);
     const WriteState state{.settings = settings_,
                            .host = host_,
                            .status = status,
@@ -252,20 +266,46 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
                            .locked = locked_,
                            .unlock_guard = unlock_guard_,
                            .now = now(),
-                           .machine_check = &config_.machine_check};
+                           .machine_check = &config_.machine_check,
+                           .edit_state = edits_.state(owner),
+                           .edit_staged = staged,
+                           .edit_sessions_full = edits_.open_count() >= EditSessions::kMaxSessions};
     auto plan = plan_write(table, start, values, client, state);
     if (!plan) {
       if (plan.error().wrong_unlock_code) count_wrong_unlock_code(*plan.error().wrong_unlock_code, client);
+      if (state.edit_state == EditState::open) edits_.touch(owner, now());  // a refused commit keeps the session
       return refuse(fc, plan.error().refusal, client);
+    }
+    switch (plan->edit) {
+      case EditAction::none:
+      case EditAction::commit: break;
+      case EditAction::begin:
+        edits_.begin(owner, now());
+        spdlog::info("edit session of {} begun: settings written from now are staged until its commit", owner);
+        return std::nullopt;
+      case EditAction::stage:
+        edits_.stage(owner, plan->to_stage, now());
+        return std::nullopt;
+      case EditAction::discard:
+        spdlog::info("edit session of {} discarded by its client ({} staged settings dropped)", owner, staged.size());
+        edits_.close(owner);
+        return std::nullopt;
     }
     if (store_ && !plan->stored.empty()) {
       auto committed = store_->commit(plan->stored, source_of(client));
-      if (!committed)
+      if (!committed) {
+        if (state.edit_state == EditState::open) edits_.touch(owner, now());
         return refuse(fc,
                       registers::Refusal::because(registers::RefusalReason::storage_failed, plan->about,
                                                   "settings not stored: " + committed.error().message + "; " +
                                                       plan->changes),
                       client);
+      }
+    }
+    if (plan->edit == EditAction::commit) {
+      edits_.close(owner);
+      spdlog::info("edit session of {} committed: {} staged settings, {} changed", owner, staged.size(),
+                   plan->stored.size());
     }
     if (plan->unlock_code) unlock(*plan->unlock_code, client);
     if (plan->accepted.changes_persisted()) {
@@ -281,6 +321,20 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, Table table, s
   }
   run_commands(commands, client);
   return std::nullopt;
+}
+
+// Under mutex_: sessions left longer than global.edit_timeout_s end, logged.
+void ModbusService::expire_edit_sessions() {
+  const std::chrono::seconds timeout{settings_.global.edit_timeout_s};
+  for (const EditSessions::Expired& e : edits_.expire(now(), timeout))
+    spdlog::warn("edit session of {} discarded: no write or commit for {} s (global.edit_timeout_s); its {} staged "
+                 "settings were not applied, and its settings writes are refused until it begins again or discards",
+                 e.owner, timeout.count(), e.staged);
+}
+
+void ModbusService::flush_edit_sessions() {
+  std::lock_guard lock(mutex_);
+  expire_edit_sessions();
 }
 
 // Under mutex_: what a changed setting's row declares beyond the setting.

@@ -26,6 +26,7 @@
 #include "request_decoder.hpp"
 #include "request_handler.hpp"
 #include "unlock_guard.hpp"
+#include "edit_sessions.hpp"
 #include "write_plan.hpp"
 
 namespace server {
@@ -63,6 +64,9 @@ class ModbusService final : public RequestHandler {
   // Writes the refusal counts of an interval that has passed (the monitor
   // calls it now and then, so a flood's last counts are not kept back).
   void flush_refusal_log();
+  // Ends the edit sessions left longer than global.edit_timeout_s (the
+  // monitor calls it now and then, so the log says so when it happens).
+  void flush_edit_sessions();
 
   // A command coil written from outside Modbus (the MQTT edge node's NCMD):
   // the very path of an FC 05 write by this client to the module unit, so the
@@ -86,7 +90,7 @@ class ModbusService final : public RequestHandler {
   Reply route(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client);
   Reply dispatch(Target target, std::span<const std::uint8_t> pdu, const ClientInfo& client);
   Reply apply(Target target, const Request& request, const ClientInfo& client);
-  Reply read(Target target, std::uint8_t fc, const ReadRequest& request);
+  Reply read(Target target, std::uint8_t fc, const ReadRequest& request, const ClientInfo& client);
   registers::StatusExtras extras_now();  // under mutex_
   // Validates and applies a write; nullopt when accepted.
   std::optional<Reply> write(Target target, std::uint8_t fc, const WriteRequest& request, const ClientInfo& client);
@@ -103,6 +107,7 @@ class ModbusService final : public RequestHandler {
   // Under mutex_: the effects of an accepted plan (server/write_plan.hpp) and of a refused wrong code.
   void apply_effect(registers::Effect effect);
   void count_wrong_unlock_code(std::uint32_t code, const ClientInfo& client);
+  void expire_edit_sessions();
   void unlock(std::uint32_t code, const ClientInfo& client);
   std::chrono::steady_clock::time_point now() const;
 
@@ -122,6 +127,7 @@ class ModbusService final : public RequestHandler {
   // The last refused write: count (bits 0-15), register (16-31), reason (32-47).
   std::atomic<std::uint64_t> last_refusal_{0};
   UnlockGuard unlock_guard_;  // under mutex_
+  EditSessions edits_;        // under mutex_
   std::mutex log_mutex_;      // refusal_log_ (refuse() runs with and without mutex_)
   RefusalLog refusal_log_;
 };

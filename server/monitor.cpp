@@ -99,6 +99,7 @@ void Monitor::housekeeping(std::int64_t now_ms) {
   refresh_diagnostics();
   service_.set_extras(extras_);
   service_.flush_refusal_log();
+  service_.flush_edit_sessions();
   if (store_)
     if (auto r = store_->backup_if_due(); !r) spdlog::warn("settings backup not written: {}", r.error().message);
   if (events_) events_->settings_changes();

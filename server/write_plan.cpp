@@ -47,6 +47,86 @@ std::optional<PlannedRefusal> unlock_refusal(std::uint32_t code, std::uint16_t a
   return std::nullopt;
 }
 
+// edit.command: begin, commit or discard this client's session. The row
+// stands alone in the map, so the request holds nothing else.
+std::expected<WritePlan, PlannedRefusal> plan_edit_command(const registers::RawWrite& w, const WriteState& state) {
+  const std::uint16_t address = w.reg->address;
+  WritePlan plan;
+  switch (w.raw) {
+    case 1:  // begin
+      if (state.edit_state == EditState::open)
+        return refused(Refusal::because(RefusalReason::edit_session_open, address,
+                                        "edit.command = begin: this client's edit session is already open; commit "
+                                        "(2) or discard (3) it first"));
+      if (state.edit_state == EditState::none && state.edit_sessions_full)
+        return refused(Refusal::because(RefusalReason::edit_sessions_full, address,
+                                        fmt::format("edit.command = begin: {} edit sessions are open, the most",
+                                                    EditSessions::kMaxSessions)));
+      plan.edit = EditAction::begin;
+      return plan;
+    case 2: {  // commit
+      if (state.edit_state == EditState::none)
+        return refused(Refusal::because(RefusalReason::edit_no_session, address,
+                                        "edit.command = commit: no edit session is open for this client; nothing "
+                                        "was written"));
+      if (state.edit_state == EditState::expired)
+        return refused(Refusal::because(RefusalReason::edit_session_expired, address,
+                                        "edit.command = commit: this client's edit session timed out "
+                                        "(global.edit_timeout_s) and its staged settings were discarded; nothing "
+                                        "was written"));
+      auto committed = plan_decoded_write(state.edit_staged, address, state);
+      if (!committed) return committed;
+      committed->edit = EditAction::commit;
+      return committed;
+    }
+    case 3:  // discard
+      if (state.edit_state == EditState::none)
+        return refused(Refusal::because(RefusalReason::edit_no_session, address,
+                                        "edit.command = discard: no edit session is open for this client"));
+      plan.edit = EditAction::discard;
+      return plan;
+    default: return plan;  // 0: nothing
+  }
+}
+
+// A settings write while the client's session is open: range-checked (done),
+// staged alone, refused while settings are locked or after the session timed out.
+std::expected<WritePlan, PlannedRefusal> plan_staging(std::span<const registers::RawWrite> writes,
+                                                      std::uint16_t start, const WriteState& state) {
+  const registers::Register& first =
+      *std::find_if(writes.begin(), writes.end(), [](const auto& w) { return w.reg->persisted; })->reg;
+  const std::uint16_t about = first.address;
+  if (state.edit_state == EditState::expired)
+    return refused(Refusal::because(RefusalReason::edit_session_expired, about,
+                                    fmt::format("{}: this client's edit session timed out (global.edit_timeout_s) "
+                                                "and its staged settings were discarded; begin again (edit.command "
+                                                "= 1) or discard (3); nothing was written",
+                                                first.name())));
+  // A host value the request only carries along unchanged (a tool's block
+  // filling a gap between two settings) is no effect; anything else is.
+  const auto carried_along = [&](const registers::RawWrite& w) {
+    return !registers::command_of(*w.reg, w.raw) && w.reg->key != registers::Key::security_unlock &&
+           registers::host_raw(state.host, *w.reg) == w.raw;
+  };
+  for (const registers::RawWrite& w : writes)
+    if (!w.reg->persisted && !carried_along(w))
+      return refused(Refusal::because(RefusalReason::edit_mixed, start,
+                                      fmt::format("{} is no setting: in an edit session settings are staged alone, "
+                                                  "write it in its own request; nothing was written",
+                                                  w.reg->name())));
+  if (state.locked)
+    return refused(Refusal::because(RefusalReason::locked, about,
+                                    fmt::format("settings are locked (write the unlock code to security.unlock): {} "
+                                                "not staged",
+                                                first.name())));
+  WritePlan plan;
+  plan.edit = EditAction::stage;
+  for (const registers::RawWrite& w : writes)
+    if (w.reg->persisted) plan.to_stage.push_back(w);
+  plan.about = about;
+  return plan;
+}
+
 }  // namespace
 
 std::optional<Refusal> client_refusal(registers::Unit unit, registers::Table table, std::uint16_t start,
@@ -64,7 +144,19 @@ std::expected<WritePlan, PlannedRefusal> plan_write(registers::Table table, std:
                                                     const WriteState& state) {
   if (auto r = client_refusal(registers::Unit::module, table, start, values.size(), client, state.client_may_write))
     return refused(std::move(*r));
-  auto accepted = registers::validate_write(table, start, values, state.order, state.settings, state.host);
+  auto decoded =
+      registers::decode_write(registers::Unit::module, table, start, values, state.order, registers::kinds_of(state.settings));
+  if (!decoded) return refused(std::move(decoded.error()));
+  for (const registers::RawWrite& w : *decoded)
+    if (w.reg->key == registers::Key::edit_command) return plan_edit_command(w, state);
+  const bool settings = std::any_of(decoded->begin(), decoded->end(), [](const auto& w) { return w.reg->persisted; });
+  if (settings && state.edit_state != EditState::none) return plan_staging(*decoded, start, state);
+  return plan_decoded_write(*decoded, start, state);
+}
+
+std::expected<WritePlan, PlannedRefusal> plan_decoded_write(std::span<const registers::RawWrite> writes,
+                                                            std::uint16_t start, const WriteState& state) {
+  auto accepted = registers::validate_raw_writes(writes, state.settings, state.host);
   if (!accepted) return refused(std::move(accepted.error()));
   if (auto r = registers::refusal_now(*accepted, state.status)) return refused(std::move(*r));
 

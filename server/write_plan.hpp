@@ -21,6 +21,12 @@
 //  6. locked: it changes settings while they stay locked
 //  7. wiring: the machine behind cannot run the new settings
 //  8. busy: it changes settings while a homing cycle runs
+//
+// An edit session (server/edit_sessions.hpp) changes what a settings write
+// means: edit.command is decided here too (begin, commit, discard), and while
+// the client's session is open its settings writes are planned as staged
+// (checks 1 to 3's ranges, then the lock), their rules and the rest checked
+// over the whole staged set at the commit.
 #include <chrono>
 #include <cstdint>
 #include <expected>
@@ -34,6 +40,7 @@
 #include "homing/status.hpp"
 #include "persistence/settings_store.hpp"
 #include "registers/validate.hpp"
+#include "edit_sessions.hpp"
 #include "request_handler.hpp"
 #include "unlock_guard.hpp"
 
@@ -53,6 +60,18 @@ struct WriteState {
   const UnlockGuard& unlock_guard;
   UnlockGuard::Clock::time_point now;
   const MachineCheck* machine_check = nullptr;  // null: the machine runs anything
+  // The client's edit session: its state, what it staged, whether another may begin.
+  EditState edit_state = EditState::none;
+  std::span<const registers::RawWrite> edit_staged{};
+  bool edit_sessions_full = false;
+};
+
+enum class EditAction : std::uint8_t {
+  none,     // no edit session involved: applied as planned
+  begin,    // the client's session begins
+  stage,    // settings staged into the open session (to_stage), nothing applied
+  commit,   // the staged set, planned as one write, is applied and the session ends
+  discard,  // the session (open or expired) ends, nothing applied
 };
 
 struct WritePlan {
@@ -66,6 +85,8 @@ struct WritePlan {
   std::string changes;      // what it changes, in words, for the log and a failed commit
   // The effects declared on the rows it changes (registers::Effect), each once.
   std::vector<registers::Effect> effects;
+  EditAction edit = EditAction::none;
+  std::vector<registers::RawWrite> to_stage;  // EditAction::stage
 };
 
 struct PlannedRefusal {
@@ -77,6 +98,13 @@ struct PlannedRefusal {
 std::expected<WritePlan, PlannedRefusal> plan_write(registers::Table table, std::uint16_t start,
                                                     std::span<const std::uint16_t> values, const ClientInfo& client,
                                                     const WriteState& state);
+
+// Checks 3 (after the decoding: slave inheritance and rules) to 8 for writes
+// already decoded and range-checked, in address order: an edit session's
+// staged settings at its commit. `start` names the request where a refusal
+// is about no register of its own.
+std::expected<WritePlan, PlannedRefusal> plan_decoded_write(std::span<const registers::RawWrite> writes,
+                                                            std::uint16_t start, const WriteState& state);
 
 // Checks 1 and 2 alone, for writes to the simulator unit.
 std::optional<registers::Refusal> client_refusal(registers::Unit unit, registers::Table table, std::uint16_t start,

@@ -50,12 +50,12 @@ TEST_CASE("a new module's failure policy stops every axis, in the table and in t
 
 TEST_CASE("persisted defaults hold every persisted register and no runtime value") {
   const auto rows = persisted_defaults();
-  // 6 sequence steps + 10 global settings (single_axis_homing the sixth, then trend_cycles,
-  // trend_growth_pct and trend_min_change of the health trend, failure_policy), 42 settings per axis (30, plus
+  // 6 sequence steps + 11 global settings (single_axis_homing the sixth, then trend_cycles,
+  // trend_growth_pct and trend_min_change of the health trend, failure_policy, edit_timeout_s), 42 settings per axis (30, plus
   // indexer_lock and lock_timeout_ms of the locking indexer, allowed_without_homing, limits_fitted,
   // limits_nc, cam_edge and limit_overtravel, latch_passes, max_latch_spread, max_skew_change,
   // stall_detect and max_following_error, refcheck_tolerance of the reference check, global failure_policy)
-  CHECK(rows.size() == 6 + 10 + 43 * homing::kAxisCount);
+  CHECK(rows.size() == 6 + 11 + 43 * homing::kAxisCount);
   for (const auto& [name, raw] : rows) {
     const Register* r = find_register(name);
     REQUIRE(r);

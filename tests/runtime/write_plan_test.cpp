@@ -14,6 +14,7 @@
 #include "registers/errors.hpp"
 #include "registers/lookup.hpp"
 #include "server/unlock_guard.hpp"
+#include "server/edit_sessions.hpp"
 #include "server/write_plan.hpp"
 
 using namespace std::chrono_literals;
@@ -38,6 +39,9 @@ struct World {
   bool locked = false;
   server::MachineCheck machine_check;
   server::ClientInfo client{1, server::Transport::tcp, "127.0.0.1:50000"};
+  server::EditState edit_state = server::EditState::none;
+  std::vector<registers::RawWrite> edit_staged;
+  bool edit_full = false;
 
   std::expected<server::WritePlan, server::PlannedRefusal> plan(Table table, std::uint16_t start,
                                                                 std::vector<std::uint16_t> values) const {
@@ -48,7 +52,10 @@ struct World {
                                    .locked = locked,
                                    .unlock_guard = guard,
                                    .now = now,
-                                   .machine_check = &machine_check};
+                                   .machine_check = &machine_check,
+                                   .edit_state = edit_state,
+                                   .edit_staged = edit_staged,
+                                   .edit_sessions_full = edit_full};
     return server::plan_write(table, start, values, client, state);
   }
   void homing_runs() {
@@ -215,4 +222,128 @@ TEST_CASE("plan_write: a heartbeat is planned as a host value, stored nowhere, e
   REQUIRE(p.has_value());
   CHECK(p->accepted.host.heartbeat == 77);
   CHECK(p->stored.empty());
+}
+
+// ---- edit sessions (server/edit_sessions.hpp) ----
+
+namespace {
+
+constexpr std::uint16_t kEdit = 50;  // edit.command
+
+registers::RawWrite staged(std::string_view name, std::int64_t raw) { return {registers::find_register(name), raw}; }
+
+}  // namespace
+
+TEST_CASE("plan_write: edit.command begins a session once, and not beyond the most sessions") {
+  World w;
+  const auto p = w.plan(Table::holding_register, kEdit, {1});
+  REQUIRE(p.has_value());
+  CHECK(p->edit == server::EditAction::begin);
+  w.edit_state = server::EditState::open;
+  CHECK(reason_of(w.plan(Table::holding_register, kEdit, {1})) == RefusalReason::edit_session_open);
+  w.edit_state = server::EditState::none;
+  w.edit_full = true;
+  CHECK(reason_of(w.plan(Table::holding_register, kEdit, {1})) == RefusalReason::edit_sessions_full);
+  w.edit_state = server::EditState::expired;  // an expired session begins again in its own place
+  CHECK(w.plan(Table::holding_register, kEdit, {1})->edit == server::EditAction::begin);
+}
+
+TEST_CASE("plan_write: in an open session a setting is staged, even one its rules refuse alone, and nothing is planned to apply") {
+  World w;
+  w.edit_state = server::EditState::open;
+  // 12000 mm/min alone breaks X's stop distance: staged, judged at the commit.
+  const auto p = w.plan(Table::holding_register, registers::find_register("axis.x.seek_feedrate")->address, {12000});
+  REQUIRE(p.has_value());
+  CHECK(p->edit == server::EditAction::stage);
+  REQUIRE(p->to_stage.size() == 1);
+  CHECK(p->to_stage[0].raw == 12000);
+  CHECK(p->stored.empty());
+  CHECK(p->accepted.changes.empty());
+  // Its range is still checked at once.
+  CHECK(reason_of(w.plan(Table::holding_register, registers::find_register("axis.x.seek_feedrate")->address, {65000})) ==
+        RefusalReason::out_of_range);
+}
+
+TEST_CASE("plan_write: in a session, settings are staged alone, not while locked, and never after the timeout") {
+  World w;
+  w.edit_state = server::EditState::open;
+  CHECK(reason_of(w.plan(Table::holding_register, kHomeAxes, {1, 5})) == RefusalReason::edit_mixed);
+  // A heartbeat alone is no setting: applied at once, session or not.
+  const auto hb = w.plan(Table::holding_register, 20, {9});
+  REQUIRE(hb.has_value());
+  CHECK(hb->edit == server::EditAction::none);
+  w.locked = true;
+  CHECK(reason_of(w.plan(Table::holding_register, kTrendCycles, {5})) == RefusalReason::locked);
+  w.locked = false;
+  w.edit_state = server::EditState::expired;
+  CHECK(reason_of(w.plan(Table::holding_register, kTrendCycles, {5})) == RefusalReason::edit_session_expired);
+  CHECK(reason_of(w.plan(Table::holding_register, kEdit, {2})) == RefusalReason::edit_session_expired);
+}
+
+TEST_CASE("plan_write: a commit plans the staged set as one write, and its rules are judged over the whole set") {
+  World w;
+  w.edit_state = server::EditState::open;
+  std::vector<registers::RawWrite> set{staged("axis.x.seek_feedrate", 12000), staged("axis.x.acceleration", 5000)};
+  w.edit_staged = set;
+  const auto p = w.plan(Table::holding_register, kEdit, {2});
+  REQUIRE(p.has_value());
+  CHECK(p->edit == server::EditAction::commit);
+  CHECK(p->stored.size() == 2);
+  CHECK(p->accepted.settings.axes[0].seek_feedrate_mm_per_min == 12000);
+  // Without the acceleration the same feedrate breaks the stop-distance rule: refused, nothing planned.
+  set.pop_back();
+  w.edit_staged = set;
+  const auto refused = w.plan(Table::holding_register, kEdit, {2});
+  CHECK(reason_of(refused) == RefusalReason::rule);
+  // A commit while a cycle runs is busy, as a direct write is.
+  set.push_back(staged("axis.x.acceleration", 5000));
+  w.edit_staged = set;
+  w.homing_runs();
+  CHECK(reason_of(w.plan(Table::holding_register, kEdit, {2})) == RefusalReason::busy);
+}
+
+TEST_CASE("plan_write: commit and discard without a session are refused, discard ends an expired one") {
+  World w;
+  CHECK(reason_of(w.plan(Table::holding_register, kEdit, {2})) == RefusalReason::edit_no_session);
+  CHECK(reason_of(w.plan(Table::holding_register, kEdit, {3})) == RefusalReason::edit_no_session);
+  w.edit_state = server::EditState::expired;
+  CHECK(w.plan(Table::holding_register, kEdit, {3})->edit == server::EditAction::discard);
+}
+
+TEST_CASE("edit sessions: staged values by register, the later write winning, in address order, expired past the timeout") {
+  server::EditSessions s;
+  using T = server::EditSessions::Clock::time_point;
+  const T t0{};
+  const std::string hmi = "tcp 10.0.0.5:40000";
+  CHECK(s.state(hmi) == server::EditState::none);
+  REQUIRE(s.begin(hmi, t0) == server::EditSessions::Begun::begun);
+  CHECK(s.begin(hmi, t0) == server::EditSessions::Begun::already_open);
+  const registers::RawWrite later[] = {staged("axis.y.pull_off", 3000), staged("axis.x.pull_off", 2000)};
+  s.stage(hmi, later, t0);
+  const registers::RawWrite again[] = {staged("axis.x.pull_off", 2500)};
+  s.stage(hmi, again, t0 + 50s);
+  const auto set = s.staged(hmi);
+  REQUIRE(set.size() == 2);
+  CHECK(set[0].reg->name() == "axis.x.pull_off");
+  CHECK(set[0].raw == 2500);
+  CHECK(set[1].reg->name() == "axis.y.pull_off");
+  CHECK(s.expire(t0 + 100s, 60s).empty());  // 50 s since its last write
+  const auto gone = s.expire(t0 + 111s, 60s);
+  REQUIRE(gone.size() == 1);
+  CHECK(gone[0].owner == hmi);
+  CHECK(gone[0].staged == 2);
+  CHECK(s.state(hmi) == server::EditState::expired);
+  CHECK(s.staged(hmi).empty());
+  s.close(hmi);
+  CHECK(s.state(hmi) == server::EditState::none);
+}
+
+TEST_CASE("edit sessions: at most 32 open at once, and a session belongs to its connection") {
+  server::EditSessions s;
+  const server::EditSessions::Clock::time_point t{};
+  for (int i = 0; i < 32; ++i)
+    REQUIRE(s.begin("tcp 10.0.0." + std::to_string(i) + ":1", t) == server::EditSessions::Begun::begun);
+  CHECK(s.begin("tcp 10.0.1.1:1", t) == server::EditSessions::Begun::full);
+  const server::ClientInfo a{1, server::Transport::tcp, "10.0.0.5:40000"}, b{2, server::Transport::tcp, "10.0.0.5:40001"};
+  CHECK(server::EditSessions::owner_of(a) != server::EditSessions::owner_of(b));
 }

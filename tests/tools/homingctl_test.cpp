@@ -66,12 +66,15 @@ TEST_CASE("homingctl set: engineering units and enum names, several values in on
   CHECK(c.read("axis.x.home_position") == -5000);
   CHECK(c.read("axis.x.latch_feedrate") == 80);
 
-  // Two settings that only work together, in two requests: max_stop_distance first.
+  // Settings that only work together, in several requests: staged in one edit
+  // session and applied at its commit, in one transaction.
   r = ctl(d, {"set", "axis.y.seek_feedrate=12000", "axis.y.max_stop_distance=50", "axis.y.max_backoff=60"});
   SHOW(r);
   REQUIRE(r.code() == 0);
   CHECK(c.read("axis.y.seek_feedrate") == 12000);
   CHECK(c.read("axis.y.max_stop_distance") == 50000);
+  CHECK(d.log().find("committed: 3 staged settings, 3 changed") != std::string::npos);
+  CHECK(c.read("edit.state") == 0);
 
   // --dry-run writes nothing.
   r = ctl(d, {"set", "--dry-run", "axis.z.pull_off=3"});
@@ -109,14 +112,19 @@ TEST_CASE("homingctl set: a refused write says why, names the setting, and chang
   r = ctl(d, {"set", "axis.x.position=3"});
   CHECK(r.code() == 1);
   CHECK(r.err.find("read-only") != std::string::npos);
-  // Without the local check the module's exception is put in words.
-  r = ctl(d, {"set", "--no-check", "axis.x.seek_feedrate=20000"});
+  // Without the local check the module's exception is put in words, with
+  // the reason the module gives and the register it is about; the edit
+  // session it ran in is discarded.
+  r = ctl(d, {"set", "--no-check", "axis.x.seek_feedrate=20000", "axis.x.pull_off=2"});
   {
     SHOW(r);
     CHECK(r.code() == 1);
-    CHECK(r.err.find("exception 03") != std::string::npos);
+    CHECK(r.err.find("refused the change at its commit: exception 03") != std::string::npos);
     CHECK(r.err.find("cannot work together") != std::string::npos);
+    CHECK(r.err.find("(about axis.x.") != std::string::npos);
+    CHECK(r.err.find("nothing was changed") != std::string::npos);
   }
+  CHECK(d.log().find("discarded by its client (2 staged settings dropped)") != std::string::npos);
   CHECK(holding_snapshot(c) == before);
 
   // During a homing cycle the module answers 06: said in words.

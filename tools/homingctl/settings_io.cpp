@@ -143,61 +143,16 @@ std::expected<std::vector<Block>, std::string> blocks_of(const std::vector<Plann
     b.start = static_cast<std::uint16_t>(lo);
     for (std::uint32_t a = lo; a < hi; ++a) {
       b.words.push_back(word_of(static_cast<std::uint16_t>(a), true));
-      b.old_words.push_back(word_of(static_cast<std::uint16_t>(a), false));
     }
     while (b.words.size() > 123) {
-      Block head{b.start, {b.words.begin(), b.words.begin() + 120}, {b.old_words.begin(), b.old_words.begin() + 120}};
+      Block head{b.start, {b.words.begin(), b.words.begin() + 120}};
       blocks.push_back(head);
       b.start = static_cast<std::uint16_t>(b.start + 120);
       b.words.erase(b.words.begin(), b.words.begin() + 120);
-      b.old_words.erase(b.old_words.begin(), b.old_words.begin() + 120);
     }
     blocks.push_back(b);
   }
   return blocks;
-}
-
-// The daemon checks each request on its own: an order of the blocks in which
-// every intermediate state passes too. Searched depth first, the blocks that
-// pass earliest tried first (a greedy order can dead-end: making an axis a
-// gantry slave first refuses a later write of a setting it then takes from
-// its master), within a bound on the checks tried.
-bool find_order(std::vector<Block>& blocks, std::vector<Block>& ordered, registers::WordOrder order,
-                const ModuleState& state, std::string& first_refusal, int& budget) {
-  if (blocks.empty()) return true;
-  for (std::size_t i = 0; i < blocks.size(); ++i) {
-    if (--budget < 0) return false;
-    auto ok = registers::validate_write(Table::holding_register, blocks[i].start, blocks[i].words, order,
-                                        state.settings, state.host);
-    if (!ok) {
-      if (first_refusal.empty()) first_refusal = ok.error().message;
-      continue;
-    }
-    ModuleState next = state;
-    next.settings = ok->settings;
-    next.host = ok->host;
-    Block b = std::move(blocks[i]);
-    blocks.erase(blocks.begin() + static_cast<long>(i));
-    ordered.push_back(std::move(b));
-    if (find_order(blocks, ordered, order, next, first_refusal, budget)) return true;
-    blocks.insert(blocks.begin() + static_cast<long>(i), std::move(ordered.back()));
-    ordered.pop_back();
-  }
-  return false;
-}
-
-std::expected<std::vector<Block>, std::string> passing_order(std::vector<Block> blocks, registers::WordOrder order,
-                                                             ModuleState state) {
-  std::vector<Block> ordered;
-  std::string first_refusal;
-  const std::size_t count = blocks.size();
-  int budget = 20000;
-  if (!find_order(blocks, ordered, order, state, first_refusal, budget))
-    return std::unexpected(fmt::format(
-        "the values are valid together, but the module checks each write request on its own and no order of "
-        "the {} requests passes: {}. Change fewer settings at a time (or use import, which does the same)",
-        count, first_refusal));
-  return ordered;
 }
 
 }  // namespace
@@ -218,31 +173,50 @@ std::expected<WritePlan, std::string> plan_write(const RawMap& current, const Ra
     if (auto f = homing::new_fault(before.settings, after.settings))
       return std::unexpected(fmt::format("{}; nothing was written", homing::describe_fault(*f, after.settings)));
 
+  // Staged in one edit session and checked together at its commit: any order.
   auto blocks = blocks_of(plan.changes, current, wanted, order);
   if (!blocks) return std::unexpected(blocks.error());
-  if (!check) {
-    plan.blocks = std::move(*blocks);
-    return plan;
-  }
-  auto ordered = passing_order(std::move(*blocks), order, before);
-  if (!ordered) return std::unexpected(ordered.error());
-  plan.blocks = std::move(*ordered);
+  plan.blocks = std::move(*blocks);
   return plan;
 }
 
-std::expected<void, std::string> execute_plan(Connection& c, const WritePlan& plan) {
-  for (std::size_t i = 0; i < plan.blocks.size(); ++i) {
-    const Block& b = plan.blocks[i];
-    const int ex = c.write_words(Unit::module, b.start, b.words);
-    if (ex == 0) continue;
-    std::string undo;
-    for (std::size_t k = i; k-- > 0;) {
-      const Block& w = plan.blocks[k];
-      if (c.write_words(Unit::module, w.start, w.old_words) != 0) undo = " (and writing back an earlier part failed too: check the settings)";
+namespace {
+
+// Why the module refused the last write, from its refusal registers.
+std::string refusal_reason(Connection& c) {
+  const std::int64_t code = c.read("status.last_refusal_reason");
+  const Register& reason = register_named("status.last_refusal_reason");
+  for (const registers::EnumValue& v : reason.values)
+    if (v.value == code) {
+      const std::int64_t at = c.read("status.last_refused_register");
+      const Register* about = registers::find_register(Unit::module, Table::holding_register, static_cast<std::uint16_t>(at));
+      return fmt::format("{}{}{}", v.meaning, about ? " (about " : "", about ? about->name() + ")" : "");
     }
-    return std::unexpected(fmt::format("the module refused: {}{}{}", exception_sentence(ex),
-                                       i > 0 ? "; the part already written was restored" : "", undo));
-  }
+  return fmt::format("reason {}", code);
+}
+
+}  // namespace
+
+// One edit session (docs/hmi-integration.md "Edit sessions"): every block is
+// staged, then the commit checks them together and applies all or none, in
+// one transaction, so neither another client nor a power cut ever sees the
+// change half made. On any refusal the session is discarded.
+std::expected<void, std::string> execute_plan(Connection& c, const WritePlan& plan) {
+  if (plan.blocks.empty()) return {};
+  const Register& edit = register_named("edit.command");
+  if (const int ex = c.write(edit, 1))
+    return std::unexpected(fmt::format("the module refused to begin an edit session: {}: {}", exception_sentence(ex),
+                                       refusal_reason(c)));
+  auto give_up = [&](std::string what) -> std::expected<void, std::string> {
+    (void)c.write(edit, 3);  // discard: nothing of it was applied
+    return std::unexpected(std::move(what) + "; nothing was changed");
+  };
+  for (const Block& b : plan.blocks)
+    if (const int ex = c.write_words(Unit::module, b.start, b.words))
+      return give_up(fmt::format("the module refused: {}: {}", exception_sentence(ex), refusal_reason(c)));
+  if (const int ex = c.write(edit, 2))
+    return give_up(fmt::format("the module refused the change at its commit: {}: {}", exception_sentence(ex),
+                               refusal_reason(c)));
   return {};
 }
 

@@ -33,8 +33,7 @@ registers::AxisKinds kinds_for(Connection& c, const std::vector<const registers:
 
 struct Block {
   std::uint16_t start = 0;
-  std::vector<std::uint16_t> words;      // new words
-  std::vector<std::uint16_t> old_words;  // words before (to undo)
+  std::vector<std::uint16_t> words;  // new words
 };
 struct PlannedChange {
   const registers::Register* reg = nullptr;
@@ -42,7 +41,7 @@ struct PlannedChange {
   std::int64_t new_raw = 0;
 };
 struct WritePlan {
-  std::vector<Block> blocks;  // in the order to write (each passes the daemon's check)
+  std::vector<Block> blocks;  // staged in one edit session, checked together at its commit
   std::vector<PlannedChange> changes;
   registers::AxisKinds kinds = registers::default_kinds();  // after the write: the units of the changes
 };
@@ -55,8 +54,10 @@ struct WritePlan {
 std::expected<WritePlan, std::string> plan_write(const RawMap& current, const RawMap& wanted,
                                                  registers::WordOrder order, bool check = true);
 
-// Writes the plan's blocks in order. If the daemon refuses a block, the blocks
-// already written are written back to their old values; the error says why.
+// Writes the plan's blocks in one edit session and commits it: the module
+// applies all of them in one transaction or none. A refusal (of a block or
+// at the commit) discards the session and says why (the module's refusal
+// reason and the register it is about).
 std::expected<void, std::string> execute_plan(Connection& c, const WritePlan& plan);
 
 // ---- the settings file (persistence/settings_file.hpp's format) ----
