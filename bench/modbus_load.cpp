@@ -12,7 +12,10 @@
 //   mixed     read10, read125, read10, write10 (3 reads : 1 write)
 //   durable   FC16, 10 registers at --durable-addr (unit --unit), one client
 //             word toggling between two values so every write changes a
-//             setting (homingd commits it to SQLite before answering)
+//             setting (homingd commits it to SQLite before answering); with
+//             several clients each writes its own settings (client i: the
+//             axis block i % 6 above --durable-addr, word 7, 5 or 3), so that
+//             no write finds its value already there
 // Transports: libmodbus TCP (default), --raw (hand-built MBAP frames over a
 // plain socket: the client side of the TCP ping-pong floor), --rtu DEVICE.
 // --home: a side connection (not counted) reads status.state (input register
@@ -97,7 +100,7 @@ int raw_request(int fd, std::uint16_t tid, std::uint8_t unit, const std::vector<
   return 0;
 }
 
-std::vector<std::uint8_t> raw_pdu(Op op, const Config& c, const std::uint16_t* words, int count) {
+std::vector<std::uint8_t> raw_pdu(Op op, const Config& c, const std::uint16_t* words, int count, int durable_addr) {
   std::vector<std::uint8_t> p;
   auto put16 = [&](int v) {
     p.push_back(static_cast<std::uint8_t>(v >> 8));
@@ -109,7 +112,7 @@ std::vector<std::uint8_t> raw_pdu(Op op, const Config& c, const std::uint16_t* w
     put16(op == Op::read10 ? 10 : 125);
   } else {
     p.push_back(16);
-    put16(op == Op::durable ? c.durable_addr : c.write_addr);
+    put16(op == Op::durable ? durable_addr : c.write_addr);
     put16(count);
     p.push_back(static_cast<std::uint8_t>(count * 2));
     for (int i = 0; i < count; ++i) put16(words[i]);
@@ -137,7 +140,10 @@ int exception_of(int err) {
   return -1;
 }
 
-void run_client(const Config& c, ClientResult& r, const std::atomic<bool>& go, const std::atomic<std::int64_t>& deadline_ns) {
+void run_client(const Config& c, int index, ClientResult& r, const std::atomic<bool>& go,
+                const std::atomic<std::int64_t>& deadline_ns) {
+  const int durable_addr = c.durable_addr + 100 * (index % 6);
+  const int durable_word = 7 - 2 * ((index / 6) % 3);
   modbus_t* ctx = nullptr;
   int fd = -1;
   auto connect = [&] {
@@ -165,7 +171,7 @@ void run_client(const Config& c, ClientResult& r, const std::atomic<bool>& go, c
     modbus_set_slave(ctx, c.unit);
   }
   if (r.connected && !c.raw && uses(Op::durable) &&
-      modbus_read_registers(ctx, c.durable_addr, 10, durable_words) != 10)
+      modbus_read_registers(ctx, durable_addr, 10, durable_words) != 10)
     std::memset(durable_words, 0, sizeof(durable_words));
   r.latency_us.reserve(1 << 16);
   while (!go) std::this_thread::yield();
@@ -185,11 +191,11 @@ void run_client(const Config& c, ClientResult& r, const std::atomic<bool>& go, c
       }
     }
     const Op op = c.ops[i % c.ops.size()];
-    if (op == Op::durable) durable_words[7] ^= 1;
+    if (op == Op::durable) durable_words[durable_word] ^= 1;
     int outcome = 0;
     if (c.raw) {
       const bool w = op == Op::write10 || op == Op::durable;
-      const auto pdu = raw_pdu(op, c, op == Op::durable ? durable_words : write_words, w ? 10 : 0);
+      const auto pdu = raw_pdu(op, c, op == Op::durable ? durable_words : write_words, w ? 10 : 0, durable_addr);
       outcome = raw_request(fd, ++tid, static_cast<std::uint8_t>(op == Op::write10 ? c.write_unit : c.unit), pdu);
     } else {
       int rc = -1;
@@ -201,7 +207,7 @@ void run_client(const Config& c, ClientResult& r, const std::atomic<bool>& go, c
           rc = modbus_write_registers(ctx, c.write_addr, 10, write_words);
           modbus_set_slave(ctx, c.unit);
           break;
-        case Op::durable: rc = modbus_write_registers(ctx, c.durable_addr, 10, durable_words); break;
+        case Op::durable: rc = modbus_write_registers(ctx, durable_addr, 10, durable_words); break;
       }
       outcome = rc >= 0 ? 0 : exception_of(errno);
     }
@@ -296,7 +302,8 @@ int main(int argc, char** argv) {
   std::vector<std::thread> threads;
   std::atomic<bool> go{false};
   std::atomic<std::int64_t> deadline{INT64_MAX};
-  for (auto& r : results) threads.emplace_back([&, rp = &r] { run_client(c, *rp, go, deadline); });
+  for (std::size_t i = 0; i < results.size(); ++i)
+    threads.emplace_back([&, i] { run_client(c, static_cast<int>(i), results[i], go, deadline); });
   HomeResult home;
   std::thread home_thread;
   if (c.home) home_thread = std::thread([&] { run_home(c, home, go, deadline); });

@@ -46,6 +46,8 @@ void SettingsStore::close() {
   if (impl_->backup_dirty && !impl_->opt.read_only) {
     if (auto s = impl_->backup_locked(); !s) impl_->log->warn("{}", s.error().message);
   }
+  impl_->update_stmt.reset();  // statements of this connection go before it
+  impl_->audit_stmt.reset();
   impl_->db.close();
 }
 
@@ -64,63 +66,93 @@ std::optional<std::int64_t> SettingsStore::value(const std::string& name) const 
 }
 
 Result<std::vector<Change>> SettingsStore::commit(const std::vector<SettingWrite>& writes, const ChangeSource& source) {
+  auto changes = commit_batch({BatchEntry{&writes, source}});
+  if (!changes) return std::unexpected(changes.error());
+  return std::move(changes->front());
+}
+
+Result<std::vector<std::vector<Change>>> SettingsStore::commit_batch(const std::vector<BatchEntry>& entries) {
   std::lock_guard lock(impl_->mu);
-  auto changes = impl_->commit_locked(writes, source);
+  auto changes = impl_->commit_locked(entries);
   if (!changes) {
     changes.error().message += "; nothing was written, the old settings stay in force";
     return changes;
   }
-  if (!changes->empty() && impl_->opt.backup_on_commit) {
+  const bool any = std::any_of(changes->begin(), changes->end(), [](const auto& c) { return !c.empty(); });
+  if (any && impl_->opt.backup_on_commit) {
     if (auto s = impl_->backup_if_due_locked(); !s) impl_->log->warn("{}", s.error().message);
   }
   return changes;
 }
 
-Result<std::vector<Change>> SettingsStore::Impl::commit_locked(const std::vector<SettingWrite>& writes,
-                                                               const ChangeSource& source) {
+Status SettingsStore::Impl::prepare_write_statements() {
+  if (!update_stmt) {
+    auto upd = db.prepare("UPDATE settings SET value = ? WHERE name = ?");
+    if (!upd) return std::unexpected(upd.error());
+    update_stmt.emplace(std::move(*upd));
+  }
+  if (!audit_stmt) {
+    auto aud = db.prepare(
+        "INSERT INTO audit(time_ms, transport, client, name, old_value, new_value) VALUES(?, ?, ?, ?, ?, ?)");
+    if (!aud) return std::unexpected(aud.error());
+    audit_stmt.emplace(std::move(*aud));
+  }
+  return {};
+}
+
+Result<std::vector<std::vector<Change>>> SettingsStore::Impl::commit_locked(const std::vector<BatchEntry>& entries) {
   if (!db) return fail(ErrorKind::internal, fmt::format("{}: commit on a closed settings store", path));
   if (opt.read_only)
     return fail(ErrorKind::read_only, fmt::format("{}: opened read-only; settings cannot be written", path));
   auto working = values;
-  std::vector<Change> changes;
-  for (const auto& w : writes) {
-    auto it = working.find(w.name);
-    if (it == working.end())
-      return fail(ErrorKind::invalid, fmt::format("{}: unknown register '{}'; nothing written", path, w.name));
-    if (it->second != w.value) {
-      changes.push_back({w.name, it->second, w.value});
-      it->second = w.value;
+  std::vector<std::vector<Change>> changes(entries.size());
+  bool any = false;
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    for (const auto& w : *entries[i].writes) {
+      auto it = working.find(w.name);
+      if (it == working.end())
+        return fail(ErrorKind::invalid, fmt::format("{}: unknown register '{}'; nothing written", path, w.name));
+      if (it->second != w.value) {
+        changes[i].push_back({w.name, it->second, w.value});
+        it->second = w.value;
+        any = true;
+      }
     }
   }
-  if (changes.empty()) return changes;  // already durable
+  if (!any) return changes;  // already durable
 
   const std::int64_t t = now_ms();
+  if (auto s = prepare_write_statements(); !s) return std::unexpected(s.error());
   auto txn = sql::Transaction::begin(db, "starting a settings write");
   if (!txn) return std::unexpected(txn.error());
-  auto upd = db.prepare("UPDATE settings SET value = ? WHERE name = ?");
-  if (!upd) return std::unexpected(upd.error());
-  auto aud = db.prepare(
-      "INSERT INTO audit(time_ms, transport, client, name, old_value, new_value) VALUES(?, ?, ?, ?, ?, ?)");
-  if (!aud) return std::unexpected(aud.error());
-  for (const auto& c : changes) {
-    upd->bind(1, c.new_value).bind(2, std::string_view(c.name));
-    if (auto s = upd->run(fmt::format("writing setting '{}'", c.name)); !s) return std::unexpected(s.error());
-    aud->bind(1, t)
-        .bind(2, std::string_view(source.transport))
-        .bind(3, std::string_view(source.client))
-        .bind(4, std::string_view(c.name))
-        .bind(5, c.old_value)
-        .bind(6, c.new_value);
-    if (auto s = aud->run("writing the audit log"); !s) return std::unexpected(s.error());
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    const ChangeSource& source = entries[i].source;
+    for (const auto& c : changes[i]) {
+      update_stmt->bind(1, c.new_value).bind(2, std::string_view(c.name));
+      if (auto s = update_stmt->run(fmt::format("writing setting '{}'", c.name)); !s) return std::unexpected(s.error());
+      audit_stmt->bind(1, t)
+          .bind(2, std::string_view(source.transport))
+          .bind(3, std::string_view(source.client))
+          .bind(4, std::string_view(c.name))
+          .bind(5, c.old_value)
+          .bind(6, c.new_value);
+      if (auto s = audit_stmt->run("writing the audit log"); !s) return std::unexpected(s.error());
+    }
   }
-  auto prune = db.prepare("DELETE FROM audit WHERE id <= (SELECT max(id) FROM audit) - ?");
-  if (!prune) return std::unexpected(prune.error());
-  prune->bind(1, static_cast<std::int64_t>(std::max<std::size_t>(opt.audit_max_rows, 1)));
-  if (auto s = prune->run("pruning the audit log"); !s) return std::unexpected(s.error());
   if (auto s = txn->commit("committing a settings write"); !s) return std::unexpected(s.error());
   values = std::move(working);
   backup_dirty = true;
   return changes;
+}
+
+Status SettingsStore::prune_audit() {
+  std::lock_guard lock(impl_->mu);
+  auto& m = *impl_;
+  if (!m.db || m.opt.read_only) return {};
+  auto prune = m.db.prepare("DELETE FROM audit WHERE id <= (SELECT max(id) FROM audit) - ?");
+  if (!prune) return std::unexpected(prune.error());
+  prune->bind(1, static_cast<std::int64_t>(std::max<std::size_t>(m.opt.audit_max_rows, 1)));
+  return prune->run("pruning the audit log");
 }
 
 bool SettingsStore::settings_lost() const {

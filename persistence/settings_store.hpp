@@ -234,6 +234,21 @@ class SettingsStore {
   // audited. On any error nothing changes, on disk or in load().
   Result<std::vector<Change>> commit(const std::vector<SettingWrite>& writes, const ChangeSource& source);
 
+  // Several clients' writes in one transaction (group commit: one fsync for
+  // all of them), applied in order, each audited with its own source. The
+  // changes of each, in the same order; on any error none of them is written.
+  struct BatchEntry {
+    const std::vector<SettingWrite>* writes = nullptr;
+    ChangeSource source;
+  };
+  Result<std::vector<std::vector<Change>>> commit_batch(const std::vector<BatchEntry>& entries);
+
+  // Deletes the audit rows beyond audit_max_rows, oldest first. Off the write
+  // path: the runtime calls it now and then (and set_limits does), so a
+  // write's answer never waits for it; the log holds at most what the
+  // writes between two calls add beyond the limit.
+  Status prune_audit();
+
   bool settings_lost() const;
   Status acknowledge_settings_lost(const ChangeSource& source);
   // A change made by a service command rather than a settings write (an

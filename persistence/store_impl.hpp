@@ -29,8 +29,13 @@ struct SettingsStore::Impl {
   std::int64_t now_ms() const;
   const char* vfs() const { return opt.vfs.empty() ? nullptr : opt.vfs.c_str(); }
 
-  // Both require `mu` held.
-  Result<std::vector<Change>> commit_locked(const std::vector<SettingWrite>& writes, const ChangeSource& source);
+  // Prepared once, on the first write (statements of `db`; reset before it closes).
+  std::optional<sql::Stmt> update_stmt;
+  std::optional<sql::Stmt> audit_stmt;
+
+  // Require `mu` held.
+  Result<std::vector<std::vector<Change>>> commit_locked(const std::vector<BatchEntry>& entries);
+  Status prepare_write_statements();
   Status backup_locked();
   Status backup_if_due_locked();
 };

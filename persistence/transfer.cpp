@@ -57,15 +57,15 @@ Result<ImportReport> SettingsStore::import_file(const std::string& file, const V
   std::vector<SettingWrite> writes;
   writes.reserve(entries.size());
   for (const auto& [name, value] : *raw) writes.push_back({name, value});
-  auto changes = m.commit_locked(writes, ChangeSource{"import", file});
+  auto changes = m.commit_locked({SettingsStore::BatchEntry{&writes, ChangeSource{"import", file}}});
   if (!changes) {
     changes.error().message += fmt::format("; nothing was imported from {}", file);
     return std::unexpected(changes.error());
   }
-  if (!changes->empty()) {
+  if (!changes->front().empty()) {
     if (auto s = m.backup_if_due_locked(); !s) m.log->warn("{}", s.error().message);
   }
-  report.changes = std::move(*changes);
+  report.changes = std::move(changes->front());
   m.log->info("settings imported from {}: {} changed, {} not in the file (kept)", file, report.changes.size(),
               report.not_in_file.size());
   return report;

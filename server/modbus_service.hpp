@@ -8,6 +8,7 @@
 // serves the simulator unit.
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <functional>
 #include <mutex>
@@ -104,6 +105,15 @@ class ModbusService final : public RequestHandler {
   // records it for status.refusal_count / last_refused_register /
   // last_refusal_reason / last_refused_write, and answers its exception.
   Reply refuse(std::uint8_t fc, const registers::Refusal& refusal, const ClientInfo& client);
+  // The write path (modbus_service_write.cpp): a batch of writes decided in
+  // turn and committed together.
+  struct WriteTicket;
+  void process_batch(const std::vector<WriteTicket*>& batch);
+  void carry_out(WriteTicket& t, WritePlan& plan, const std::string& owner, std::size_t staged);
+  std::mutex batch_mutex_;
+  std::condition_variable batch_done_;
+  std::vector<WriteTicket*> batch_queue_;  // under batch_mutex_
+  bool batch_leader_ = false;              // under batch_mutex_: a thread decides and commits a batch
   // Under mutex_: the effects of an accepted plan (server/write_plan.hpp) and of a refused wrong code.
   void apply_effect(registers::Effect effect);
   void count_wrong_unlock_code(std::uint32_t code, const ClientInfo& client);

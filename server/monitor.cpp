@@ -100,8 +100,11 @@ void Monitor::housekeeping(std::int64_t now_ms) {
   service_.set_extras(extras_);
   service_.flush_refusal_log();
   service_.flush_edit_sessions();
-  if (store_)
+  if (store_) {
     if (auto r = store_->backup_if_due(); !r) spdlog::warn("settings backup not written: {}", r.error().message);
+    // The audit log's bound, kept here rather than on a write's path.
+    if (auto r = store_->prune_audit(); !r) spdlog::warn("audit log not pruned: {}", r.error().message);
+  }
   if (events_) events_->settings_changes();
 }
 

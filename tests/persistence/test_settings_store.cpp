@@ -124,13 +124,15 @@ TEST_CASE("a stored setting no register uses any more is kept but ignored and re
   CHECK(test::sql_int(dir.file("settings.db"), "SELECT value FROM settings WHERE name='axis.x.obsolete'") == 7);
 }
 
-TEST_CASE("the audit log keeps only the newest rows up to its limit", "[persistence]") {
+TEST_CASE("the audit log keeps only the newest rows up to its limit, pruned off the write path", "[persistence]") {
   test::TempDir dir;
   OpenReport report;
   auto o = test::options();
   o.audit_max_rows = 5;
   auto store = test::open_ok(dir.file("settings.db"), report, o);
   for (int i = 1; i <= 12; ++i) REQUIRE(store.commit({{"global.watchdog_ms", 1000 + i}}, test::kTcp));
+  CHECK(store.recent_changes(100)->size() == 12);  // a write never waits for the pruning
+  REQUIRE(store.prune_audit());
   auto audit = store.recent_changes(100);
   REQUIRE(audit);
   REQUIRE(audit->size() == 5);
@@ -138,7 +140,41 @@ TEST_CASE("the audit log keeps only the newest rows up to its limit", "[persiste
   CHECK(audit->back().new_value == 1008);
   REQUIRE(store.set_limits(3, 100));
   REQUIRE(store.commit({{"global.watchdog_ms", 7}}, test::kTcp));
+  REQUIRE(store.prune_audit());
   CHECK(store.recent_changes(100)->size() == 3);
+}
+
+TEST_CASE("a batch of several clients' writes is one transaction, each change audited with its own client",
+          "[persistence]") {
+  test::TempDir dir;
+  OpenReport report;
+  const std::string file = dir.file("settings.db");
+  {
+    auto store = test::open_ok(file, report);
+    const std::vector<SettingWrite> hmi{{"axis.x.seek_feedrate", 2000}},
+        plc{{"axis.x.home_position", 3000}, {"axis.x.seek_feedrate", 2500}};
+    const ChangeSource a{"tcp", "10.0.0.5:40000"}, b{"rtu", "unit 1"};
+    auto changes = store.commit_batch({{&hmi, a}, {&plc, b}});
+    REQUIRE(changes);
+    REQUIRE(changes->size() == 2);
+    REQUIRE((*changes)[0].size() == 1);
+    REQUIRE((*changes)[1].size() == 2);
+    CHECK((*changes)[1][1].old_value == 2000);  // in order: the second sees the first
+    auto audit = store.recent_changes(10);
+    REQUIRE(audit);
+    REQUIRE(audit->size() == 3);
+    CHECK(audit->back().client == "10.0.0.5:40000");
+    CHECK(audit->front().client == "unit 1");
+    // One unknown name refuses the whole batch.
+    const std::vector<SettingWrite> bad{{"axis.x.nonsense", 1}};
+    const std::vector<SettingWrite> good{{"global.watchdog_ms", 4000}};
+    CHECK_FALSE(store.commit_batch({{&good, a}, {&bad, b}}));
+    CHECK(store.value("global.watchdog_ms") == 500);
+  }
+  auto again = test::open_ok(file, report);
+  CHECK(again.value("axis.x.seek_feedrate") == 2500);
+  CHECK(again.value("axis.x.home_position") == 3000);
+  CHECK(again.value("global.watchdog_ms") == 500);
 }
 
 TEST_CASE("a service change is one audit row with its client, changes no setting and is pruned like the others",
