@@ -10,6 +10,12 @@
 //   write10   FC16, 10 holding registers at --write-addr (unit --write-unit),
 //             writing back the values read there at connect (no state change)
 //   mixed     read10, read125, read10, write10 (3 reads : 1 write)
+//   production  what an HMI, a PLC and a SCADA poller send, in one poll cycle:
+//             FC4 status block (input 0-17), FC4 axis X block (input 100-153),
+//             FC2 discrete inputs (0-2), FC1 command coils (0-4), FC6 the host
+//             heartbeat (holding 20, a counter), FC4 status block again, FC3
+//             axis X settings (holding 100-139), FC5 cmd.reset_alarm (coil 2):
+//             no simulator writes, no settings writes
 //   durable   FC16, 10 registers at --durable-addr (unit --unit), one client
 //             word toggling between two values so every write changes a
 //             setting (homingd commits it to SQLite before answering); with
@@ -40,7 +46,7 @@
 
 namespace {
 
-enum class Op { read10, read125, write10, durable };
+enum class Op { read10, read125, write10, durable, status, axis_inputs, discretes, coils, heartbeat, axis_settings, command };
 
 struct Config {
   std::string host, rtu, mix;
@@ -106,6 +112,16 @@ std::vector<std::uint8_t> raw_pdu(Op op, const Config& c, const std::uint16_t* w
     p.push_back(static_cast<std::uint8_t>(v >> 8));
     p.push_back(static_cast<std::uint8_t>(v & 0xFF));
   };
+  switch (op) {
+    case Op::status: p = {4}; put16(0); put16(18); return p;
+    case Op::axis_inputs: p = {4}; put16(100); put16(54); return p;
+    case Op::discretes: p = {2}; put16(0); put16(3); return p;
+    case Op::coils: p = {1}; put16(0); put16(5); return p;
+    case Op::heartbeat: p = {6}; put16(20); put16(words[0]); return p;
+    case Op::axis_settings: p = {3}; put16(100); put16(40); return p;
+    case Op::command: p = {5}; put16(2); put16(0xFF00); return p;
+    default: break;
+  }
   if (op == Op::read10 || op == Op::read125) {
     p.push_back(3);
     put16(c.read_addr);
@@ -177,6 +193,8 @@ void run_client(const Config& c, int index, ClientResult& r, const std::atomic<b
   while (!go) std::this_thread::yield();
   std::uint16_t tid = 0;
   std::uint16_t values[125];
+  std::uint8_t bits[8];
+  std::uint16_t heartbeat = 0;
   long done = 0;
   for (std::size_t i = 0;; ++i) {
     if (c.max_requests > 0 && done >= c.max_requests) break;
@@ -192,10 +210,12 @@ void run_client(const Config& c, int index, ClientResult& r, const std::atomic<b
     }
     const Op op = c.ops[i % c.ops.size()];
     if (op == Op::durable) durable_words[durable_word] ^= 1;
+    if (op == Op::heartbeat) ++heartbeat;
     int outcome = 0;
     if (c.raw) {
       const bool w = op == Op::write10 || op == Op::durable;
-      const auto pdu = raw_pdu(op, c, op == Op::durable ? durable_words : write_words, w ? 10 : 0, durable_addr);
+      const std::uint16_t* words = op == Op::durable ? durable_words : op == Op::heartbeat ? &heartbeat : write_words;
+      const auto pdu = raw_pdu(op, c, words, w ? 10 : 0, durable_addr);
       outcome = raw_request(fd, ++tid, static_cast<std::uint8_t>(op == Op::write10 ? c.write_unit : c.unit), pdu);
     } else {
       int rc = -1;
@@ -208,6 +228,13 @@ void run_client(const Config& c, int index, ClientResult& r, const std::atomic<b
           modbus_set_slave(ctx, c.unit);
           break;
         case Op::durable: rc = modbus_write_registers(ctx, durable_addr, 10, durable_words); break;
+        case Op::status: rc = modbus_read_input_registers(ctx, 0, 18, values); break;
+        case Op::axis_inputs: rc = modbus_read_input_registers(ctx, 100, 54, values); break;
+        case Op::discretes: rc = modbus_read_input_bits(ctx, 0, 3, bits); break;
+        case Op::coils: rc = modbus_read_bits(ctx, 0, 5, bits); break;
+        case Op::heartbeat: rc = modbus_write_register(ctx, 20, heartbeat); break;
+        case Op::axis_settings: rc = modbus_read_registers(ctx, 100, 40, values); break;
+        case Op::command: rc = modbus_write_bit(ctx, 2, 1); break;
       }
       outcome = rc >= 0 ? 0 : exception_of(errno);
     }
@@ -289,6 +316,8 @@ int main(int argc, char** argv) {
   else if (c.mix == "write10") c.ops = {Op::write10};
   else if (c.mix == "mixed") c.ops = {Op::read10, Op::read125, Op::read10, Op::write10};
   else if (c.mix == "durable") c.ops = {Op::durable};
+  else if (c.mix == "production")
+    c.ops = {Op::status, Op::axis_inputs, Op::discretes, Op::coils, Op::heartbeat, Op::status, Op::axis_settings, Op::command};
   else {
     std::fprintf(stderr, "modbus_load: --mix read10|read125|write10|mixed|durable\n");
     return 2;

@@ -173,7 +173,7 @@ def rss_kib(pid):
 # --- the sections -----------------------------------------------------------------
 
 def throughput(b, clients_list, results):
-    """homingd vs the references on the same load (mix 'mixed'), homing cycles
+    """homingd vs the references on the same load (mix 'production'), homing cycles
     running; the bare server's rounds also run the bare 1 ms loop."""
     for clients in clients_list:
         rows = {k: [] for k in ("floor", "bare", "homingd", "pymodbus", "loop_floor", "loop_homingd", "ratio_rps",
@@ -188,7 +188,7 @@ def throughput(b, clients_list, results):
             b.note("loop_floor", floor_argv)
             lf = subprocess.Popen(floor_argv, stdout=subprocess.PIPE, text=True)
             try:
-                bare = b.load(port, clients, "mixed", extra=["--home"])
+                bare = b.load(port, clients, "production", extra=["--home"])
                 lf_out, _ = lf.communicate(timeout=30)
             finally:
                 b.stop(srv)
@@ -197,7 +197,7 @@ def throughput(b, clients_list, results):
             port = free_port()
             hd = b.homingd(port)
             try:
-                mine = b.load(port, clients, "mixed", extra=["--home"])
+                mine = b.load(port, clients, "production", extra=["--home"])
                 diag = b.read_diag(port)
             finally:
                 b.stop(hd)
@@ -205,14 +205,14 @@ def throughput(b, clients_list, results):
             port = free_port()
             pp = b.start("tcp_pingpong", [b.path("tcp_pingpong"), "--port", str(port)])
             try:
-                floor = b.load(port, clients, "mixed", extra=["--raw"])
+                floor = b.load(port, clients, "production", extra=["--raw"])
             finally:
                 b.stop(pp)
             port = free_port()
             py = b.start("pymodbus_server", [PYTHON, os.path.join(ROOT, "bench", "pymodbus_server.py"),
                                              "--port", str(port)])
             try:
-                pym = b.load(port, clients, "mixed", extra=["--home"])
+                pym = b.load(port, clients, "production", extra=["--home"])
             finally:
                 b.stop(py)
             rows["floor"].append(floor)
@@ -228,7 +228,7 @@ def throughput(b, clients_list, results):
 
 
 def mixes(b, clients, results):
-    for mix in ("read10", "read125", "write10"):
+    for mix in ("read10", "read125", "write10", "mixed"):
         rows = {k: [] for k in ("floor", "bare", "homingd", "pymodbus", "ratio_rps", "ratio_p99")}
         for r in range(b.rounds):
             log(f"mix {mix}: {clients} clients, round {r + 1}/{b.rounds}")
@@ -505,7 +505,7 @@ def mqtt(b, results, clients=8):
         port = free_port()
         hd = b.homingd(port)
         try:
-            b.load(port, clients, "mixed", duration=max(b.duration, 3), extra=["--home"])
+            b.load(port, clients, "production", duration=max(b.duration, 3), extra=["--home"])
             rows["without"].append(b.read_diag(port))
         finally:
             b.stop(hd)
@@ -538,7 +538,7 @@ def mqtt(b, results, clients=8):
             try:
                 time.sleep(0.5)  # the birth
                 c0, m0, t0 = homing_cycles(port), dict(counted), time.monotonic()
-                b.load(port, clients, "mixed", duration=max(b.duration, 3), extra=["--home"])
+                b.load(port, clients, "production", duration=max(b.duration, 3), extra=["--home"])
                 c1, m1, t1 = homing_cycles(port), dict(counted), time.monotonic()
                 rows["with"].append(b.read_diag(port))
             finally:
@@ -559,7 +559,7 @@ def mqtt_section(m, clients=8):
     w = L.append
     w("## MQTT: the Sparkplug B edge node beside none")
     w("")
-    w(f"homingd under the same load ({clients} Modbus clients, mix `mixed`, homing cycles running), once without and "
+    w(f"homingd under the same load ({clients} Modbus clients, mix `production`, homing cycles running), once without and "
       "once with `--mqtt` to Debian's mosquitto on loopback, a subscriber on `spBv1.0/#` counting what the broker "
       "carries (births, value changes, events). Lateness is the control loop's own (diag registers).")
     w("")
@@ -732,16 +732,16 @@ def report(b, results, info, args, started, out_path, causes):
     # Throughput tables.
     w("## Modbus TCP: homingd against the protocol stack, a Python peer and the floor")
     w("")
-    w("Load: `modbus_load`, libmodbus clients, one request in flight per connection, mix `mixed` (FC3 of 10 "
-      "registers, FC3 of 125, FC3 of 10, FC16 of 10, repeated), for "
+    w("Load: `modbus_load`, libmodbus clients, one request in flight per connection, mix `production`: what an "
+      "HMI, a PLC and a SCADA poller send in one poll cycle, repeated: FC4 of the status block (input 0–17), FC4 "
+      "of axis X's block (input 100–153), FC2 of the status discrete inputs (0–2), FC1 of the command coils "
+      "(0–4), FC6 of the host heartbeat (holding 20, a counter), FC4 of the status block again, FC3 of axis X's "
+      "settings (holding 100–139), FC5 of `cmd.reset_alarm` (coil 2). For "
       f"{b.duration:g} s per round. During every round a side connection (not counted) starts a home-all "
       "whenever no cycle runs (`--home`), so homingd homes all axes on its simulator "
       "(`--time-scale 10`: a cycle lasts a fraction of a second) throughout the load; the references get the "
-      "same side traffic. homingd's reads go to the module (unit 1, holding registers 100…), its FC16 to the "
-      "simulator unit (247, `sim.x.sensor_min`…`hard_stop_min`, 102–111, written back unchanged): the module "
-      "has no 10 contiguous writable registers that are not persisted settings, and settings writes are refused "
-      "with exception 06 during a cycle by design (their cost is the durable-write section). The references "
-      "answer any unit from a plain mapping.")
+      "same side traffic and answer any unit from a plain mapping. Simulator writes, settings writes and TLS "
+      "are their own rows (request mixes below, durable settings writes, TLS).")
     w("")
     w("- **floor**: `tcp_pingpong` (a thread per connection answering each frame with a frame of the "
       "Modbus answer's size, nothing parsed) driven by `modbus_load --raw` (hand-built frames, no libmodbus "
@@ -791,8 +791,12 @@ def report(b, results, info, args, started, out_path, causes):
               f"| {med(r['ratio_rps']):.2f}× | {fmt(med([x['p99_us'] for x in r['bare']]), 1)} "
               f"| {fmt(med([x['p99_us'] for x in r['homingd']]), 1)} | {med(r['ratio_p99']):.2f}× |")
         w("")
-        w("`read10`: FC3 of 10 registers; `read125`: FC3 of 125; `write10`: FC16 of 10 (simulator unit on "
-          "homingd, see above); `mixed` is the table above.")
+        w("`read10`: FC3 of 10 registers; `read125`: FC3 of 125; `write10`: FC16 of 10 to homingd's simulator "
+          "unit (247, `sim.x.sensor_min`…`hard_stop_min`, 102–111, written back unchanged; each is applied "
+          "inside the control loop and answered once a published period shows it); `mixed`: read10, read125, "
+          "read10, write10. The module has no 10 contiguous writable registers that are not persisted settings, "
+          "and settings writes are refused with exception 06 during a cycle by design (their cost is the "
+          "durable-write section).")
         w("")
 
     # Control loop.
