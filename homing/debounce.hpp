@@ -19,6 +19,9 @@ class Debouncer {
   bool settle(double now_s, double debounce_s, AcceptedEdge& out);
   bool stable() const { return stable_; }
   bool raw() const { return raw_; }
+  // A change is waiting for its debounce time: settle() may accept it later
+  // with no new transition, so time alone moves this filter on.
+  bool settling() const { return pending_; }
   // Engine time of the last raw transition (or of the reset).
   double last_change_s() const { return last_change_t_; }
   // Raw transitions and accepted changes so far: their difference is the

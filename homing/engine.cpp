@@ -82,6 +82,17 @@ bool Engine::any_motion() const {
   });
 }
 
+bool Engine::quiet() const {
+  if (cycle_active_ || wind_down_ != WindDown::none) return false;
+  for (const AxisRun& run : axes_) {
+    // busy(): a cycle, jog, move or stop, motion, an indexer unlocking or locking.
+    if (run.busy() || run.command.target_velocity_mm_per_s != 0) return false;
+    if (run.phase != Phase::idle && run.phase != Phase::done) return false;
+  }
+  return std::none_of(inputs_.begin(), inputs_.end(),
+                      [](const InputChannel& c) { return c.reset || c.filter.settling(); });
+}
+
 // Commands in a fixed order: reset, abort, unhome, set position, home, reference check, measurement, jog, move.
 void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
   const Commands& c = inputs.commands;

@@ -31,6 +31,12 @@ class Engine {
   StepResult step(const Settings& settings, const Inputs& inputs, double dt_s);
   const Outputs& outputs() const { return outputs_; }
   const Status& status() const { return status_; }
+  // Nothing that time alone moves on: no cycle or wind-down, every axis
+  // idle and at rest with no motion commanded and its indexer settled, no
+  // home input's debounce pending. While quiet, a step with any dt and the
+  // same inputs changes nothing but the engine's time and heartbeat, so the
+  // runtime may run periods far apart until an input or a command changes.
+  bool quiet() const;
 
  private:
   // One period, in this order (engine.cpp).

@@ -17,6 +17,8 @@ class BounceQueue {
   // Pops the earliest toggle at or before until_s; false when none is due.
   bool pop_due(double until_s, double& time_s);
   std::size_t pending() const { return count_; }
+  // Time of the earliest pending toggle (pending() > 0).
+  double next_s() const { return times_s_[0]; }
   void clear() { count_ = 0; }
 
  private:

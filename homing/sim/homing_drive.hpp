@@ -17,6 +17,8 @@ class HomingDrive {
                double dt_s);
   bool done(const AxisConfig& config) const { return referenced_ && config.fault != Fault::drive_done_lost; }
   bool homing() const { return homing_; }
+  // Left with this request it does nothing: not homing, no new request to answer.
+  bool at_rest(bool request) const { return !homing_ && request == prev_request_; }
 
  private:
   bool referenced_ = false;  // powered up unreferenced

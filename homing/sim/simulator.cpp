@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "carriage.hpp"
@@ -203,6 +204,26 @@ bool Simulator::in_motion(std::size_t axis, const Outputs& next) const {
   const AxisOutputs& drive = next.axes[o];
   return connected(axis, o, next) &&
          (drive.motor.velocity_mm_per_s != 0 || drive.motion.target_velocity_mm_per_s != 0);
+}
+
+double Simulator::quiet_for_s(const Outputs& outputs) const {
+  double quiet_s = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < kAxisCount; ++i) {
+    const Axis& ax = axes_[i];
+    const AxisConfig& c = config_.axes[i];
+    const std::size_t o = driving_output(i);
+    if (in_motion(i, outputs) || !ax.drive.at_rest(out_request(i, o, outputs.axes[o])) || ax.held_since_s >= 0)
+      return 0;
+    if (ax.bounce.pending() > 0) quiet_s = std::min(quiet_s, ax.bounce.next_s() - time_s_);
+    // The pin moves once the unlock output has wanted it to for its delay (advance_indexer).
+    const bool wants_in = !outputs.axes[i].indexer_unlock;
+    if (config_.indexer[i] && c.fault != Fault::indexer_stuck_locked && wants_in != ax.pin_in &&
+        !(wants_in && c.fault == Fault::indexer_never_locks)) {
+      const double delay_s = (wants_in ? c.lock_delay_ms : c.unlock_delay_ms) / 1000.0;
+      quiet_s = std::min(quiet_s, delay_s - ax.pin_timer_s);
+    }
+  }
+  return std::max(quiet_s, 0.0);
 }
 
 void Simulator::advance_axis(std::size_t i, std::size_t output, const AxisOutputs& out, bool linked,

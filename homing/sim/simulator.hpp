@@ -48,6 +48,12 @@ class Simulator {
   // be run would move it (its output runs and is connected to it).
   bool in_motion(std::size_t axis, const Outputs& next) const;
 
+  // How long the machine stays as it is when left running outputs
+  // (MachineIo::quiet_for_s): 0 when a carriage moves or would move, or a
+  // drive homes or has a request to answer; else the time to the next
+  // bounce toggle or indexer pin move; infinity when nothing is scheduled.
+  double quiet_for_s(const Outputs& outputs) const;
+
   // Knobs at run time (as Modbus writes them). set_axis_config keeps the
   // carriage where it is (its actual_position_mm is ignored: use place()).
   void set_axis_config(std::size_t axis, const AxisConfig& config);

@@ -21,6 +21,7 @@ class SimulatorIo final : public MachineIo {
     if (dt_s > 0) sim_.advance(outputs, dt_s);
   }
   Inputs read() override { return sim_.inputs(); }
+  double quiet_for_s(const Outputs& outputs) const override { return sim_.quiet_for_s(outputs); }
   SimulatorControls* simulator_controls() override { return &controls_; }
 
  private:
