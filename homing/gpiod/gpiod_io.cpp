@@ -1,7 +1,9 @@
 #include "gpiod_io.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <fmt/format.h>
 
 namespace homing::gpiod {
@@ -52,14 +54,27 @@ std::expected<void, std::string> GpiodIo::request_all(const BackendConfig& c) {
     out.id = *id;
     return {};
   };
+  // A level input is requested with its edges' events too, so that an edge
+  // wakes an idle control loop. A line that cannot give events (a GPIO
+  // expander without an interrupt) is read as a plain level: it is then seen
+  // only in the periods the loop runs, at the latest at its slow tick while idle.
   auto level = [&](const std::optional<LineSpec>& spec, std::int64_t debounce_ns,
                    std::unique_ptr<LevelInput>& out) -> std::expected<void, std::string> {
     if (!spec) return {};
-    auto id = api.request_input(*spec);
-    if (!id) return std::unexpected(id.error());
+    bool events = true;
+    auto id = api.request_input_events(*spec);
+    if (!id) {
+      events = false;
+      id = api.request_input(*spec);
+      if (!id) return std::unexpected(id.error());
+      options_.warn(fmt::format("gpiod: {}: no edge events on this line; read as a level in each control period, "
+                                "so while idle a change shows at the loop's slow tick",
+                                describe(*spec)));
+    }
     auto v = api.get_value(*id);
     if (!v) return std::unexpected(v.error());
-    out = std::make_unique<LevelInput>(api, *id, debounce_ns, *v);
+    out = std::make_unique<LevelInput>(api, *id, debounce_ns, *v, events);
+    if (events) watch(*id);
     return {};
   };
   auto edges = [&](const std::optional<LineSpec>& spec,
@@ -70,6 +85,7 @@ std::expected<void, std::string> GpiodIo::request_all(const BackendConfig& c) {
     auto v = api.get_value(*id);
     if (!v) return std::unexpected(v.error());
     out = std::make_unique<EdgeInput>(api, *id, *v);
+    watch(*id);
     return {};
   };
   for (std::size_t i = 0; i < kAxisCount; ++i) {
@@ -97,6 +113,30 @@ std::expected<void, std::string> GpiodIo::request_all(const BackendConfig& c) {
 }
 
 GpiodIo::~GpiodIo() { shutdown(); }
+
+void GpiodIo::watch(LineId line) {
+  if (const int fd = lines_->event_fd(line); fd >= 0) event_fds_.push_back(fd);
+}
+
+double GpiodIo::quiet_for_s(const Outputs& outputs) const {
+  (void)outputs;  // the engine is quiet: they move nothing
+  if (shut_down_) return 0;
+  double quiet_s = std::numeric_limits<double>::infinity();
+  auto settling = [&](const std::unique_ptr<LevelInput>& in) {
+    // A debounced change counts at its time: the loop must run a period then.
+    if (in && in->settling())
+      quiet_s = std::min(quiet_s, static_cast<double>(in->settles_at_ns() - period_end_ns_) * 1e-9);
+  };
+  for (const Axis& a : axes_) {
+    if (!a.configured) continue;
+    // Edges after the end of the last period: the next period takes them.
+    if ((a.home && a.home->has_pending()) || (a.index && a.index->has_pending())) return 0;
+    for (const auto* in : {&a.drive_fault, &a.stall, &a.home_done, &a.unlocked, &a.limit_min, &a.limit_max})
+      settling(*in);
+  }
+  for (const auto* in : {&estop_, &drive_fault_, &start_button_, &homing_permit_}) settling(*in);
+  return std::max(quiet_s, 0.0);
+}
 
 void GpiodIo::write(OutputLine& out, bool value) {
   if (!out.id || out.value == value) return;

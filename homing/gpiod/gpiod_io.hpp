@@ -52,6 +52,11 @@ class GpiodIo final : public MachineIo {
   // commutator, the drive's home request, the indexer's unlock and the lamp.
   void apply(const Outputs& outputs) override;
   void shutdown() override;
+  // Idle: nothing changes of itself but a debounced input about to count
+  // (or an edge left for the next period). Every input line with events
+  // wakes the loop on an edge.
+  double quiet_for_s(const Outputs& outputs) const override;
+  std::span<const int> event_fds() const override { return event_fds_; }
 
   // For tests and diagnostics (nullptr for an axis without step/dir).
   StepGenerator* generator(std::size_t axis) { return axes_[axis].generator.get(); }
@@ -76,12 +81,15 @@ class GpiodIo final : public MachineIo {
   std::expected<void, std::string> request_all(const BackendConfig& config);
   void write(OutputLine& out, bool value);
   void input_failed(const std::string& message);
+  // The line's event descriptor (if it has one) is among event_fds().
+  void watch(LineId line);
 
   std::unique_ptr<LineApi> lines_;
   RunOptions options_;
   std::array<Axis, kAxisCount> axes_{};
   std::unique_ptr<LevelInput> estop_, drive_fault_, start_button_, homing_permit_;
   OutputLine lamp_;
+  std::vector<int> event_fds_;
   std::unique_ptr<PulseThread> pulse_thread_;
   std::int64_t playback_delay_ns_ = 0;
   std::int64_t dir_setup_ns_ = 0;

@@ -94,7 +94,7 @@ std::expected<LineId, std::string> GpiodLines::request(const LineSpec& spec, Kin
   errno = 0;
   if (gpiod_line_request(*line, &cfg, initial ? 1 : 0) != 0)
     return std::unexpected(errno == EBUSY ? errors::busy(spec, "") : errors::request_failed(spec, errno));
-  lines_.push_back(Line{spec, *line});
+  lines_.push_back(Line{spec, *line, kind == Kind::events});
   return static_cast<LineId>(lines_.size() - 1);
 }
 
@@ -120,6 +120,11 @@ std::expected<bool, std::string> GpiodLines::get_value(LineId id) {
   const int v = gpiod_line_get_value(l.handle);
   if (v < 0) return std::unexpected(fmt::format("{}: read failed: {}", describe(l.spec), std::strerror(errno)));
   return v != 0;
+}
+
+int GpiodLines::event_fd(LineId id) {
+  const Line& l = lines_.at(static_cast<std::size_t>(id));
+  return l.events ? gpiod_line_event_get_fd(l.handle) : -1;
 }
 
 std::expected<std::size_t, std::string> GpiodLines::read_events(LineId id, std::span<LineEvent> out) {

@@ -27,6 +27,7 @@ class GpiodLines final : public LineApi {
   std::expected<void, std::string> set_value(LineId line, bool value) override;
   std::expected<bool, std::string> get_value(LineId line) override;
   std::expected<std::size_t, std::string> read_events(LineId line, std::span<LineEvent> out) override;
+  int event_fd(LineId line) override;
 
  private:
   struct ChipDeleter {
@@ -40,6 +41,7 @@ class GpiodLines final : public LineApi {
   struct Line {
     LineSpec spec;
     gpiod_line* handle = nullptr;  // owned by its chip; released in the destructor
+    bool events = false;           // requested for both edges' events
   };
   enum class Kind { output, input, events };
 

@@ -45,6 +45,14 @@ void EdgeInput::take(std::int64_t start_ns, std::int64_t end_ns, bool rising_onl
 }
 
 std::expected<bool, std::string> LevelInput::sample(std::int64_t now_ns) {
+  // Drained first, so the descriptor no longer wakes the loop for what this
+  // read sees; an edge after the drain leaves it readable for the next one.
+  LineEvent discarded[16];
+  while (events_) {
+    auto got = lines_.read_events(line_, discarded);
+    if (!got) return std::unexpected(got.error());
+    if (*got < std::size(discarded)) break;
+  }
   auto v = lines_.get_value(line_);
   if (!v) return std::unexpected(v.error());
   if (*v != raw_) {

@@ -25,6 +25,8 @@ class EdgeInput {
   // once when it is late). Only changes of level count: a repeated event
   // type means its partner was lost, and the level is what matters.
   void take(std::int64_t start_ns, std::int64_t end_ns, bool rising_only, InputEdges& edges, bool& level);
+  // Transitions left for a later period (after the end of the last one taken).
+  bool has_pending() const { return !pending_.empty(); }
 
  private:
   struct Pending {
@@ -39,14 +41,21 @@ class EdgeInput {
 
 class LevelInput {
  public:
-  LevelInput(LineApi& lines, LineId line, std::int64_t debounce_ns, bool level)
-      : lines_(lines), line_(line), debounce_ns_(debounce_ns), stable_(level), raw_(level) {}
+  // events: the line was requested with its edges' events, only so that an
+  // edge wakes an idle control loop; sample() discards them (the level read
+  // after is what counts).
+  LevelInput(LineApi& lines, LineId line, std::int64_t debounce_ns, bool level, bool events = false)
+      : lines_(lines), line_(line), events_(events), debounce_ns_(debounce_ns), stable_(level), raw_(level) {}
   // The level at now_ns: a change counts once it has lasted debounce_ns.
   std::expected<bool, std::string> sample(std::int64_t now_ns);
+  // A change waits for its debounce time: it counts at settles_at_ns().
+  bool settling() const { return raw_ != stable_; }
+  std::int64_t settles_at_ns() const { return raw_since_ns_ + debounce_ns_; }
 
  private:
   LineApi& lines_;
   LineId line_;
+  bool events_;
   std::int64_t debounce_ns_;
   bool stable_;
   bool raw_;

@@ -49,6 +49,10 @@ class LineApi {
   virtual std::expected<bool, std::string> get_value(LineId line) = 0;
   // Never blocks: returns the events queued so far (at most out.size()).
   virtual std::expected<std::size_t, std::string> read_events(LineId line, std::span<LineEvent> out) = 0;
+  // A descriptor readable while the line has events queued (a line requested
+  // with request_input_events), -1 for any other: the control loop waits on
+  // it while idle, so an input edge wakes it.
+  virtual int event_fd(LineId line) = 0;
 };
 
 }  // namespace homing::gpiod

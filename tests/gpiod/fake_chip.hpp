@@ -1,12 +1,18 @@
 #pragma once
 // A fake GPIO chip behind the LineApi seam: chips and lines declared by the
 // test, outputs recorded as edges with the fake time, inputs played as
-// kernel events. Errors come from the same texts as the libgpiod one.
+// kernel events. Errors come from the same texts as the libgpiod one. A line
+// requested with events has an eventfd that, like the kernel's line
+// descriptor, is readable while it has events queued.
+#include <sys/eventfd.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstdint>
 #include <deque>
 #include <map>
 #include <mutex>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -31,7 +37,13 @@ class Chip final : public LineApi {
     std::map<unsigned, std::string> names;
     std::map<unsigned, std::string> busy;  // offset -> consumer
     int open_errno = 0;                    // e.g. EACCES
+    std::set<unsigned> no_events;          // lines that refuse an events request (no interrupt)
   };
+
+  ~Chip() override {
+    for (const Line& l : lines_)
+      if (l.event_fd >= 0) close(l.event_fd);
+  }
 
   std::int64_t now_ns = 0;  // stamped on every recorded write
   std::map<std::string, ChipDef> chips{{"gpiochip0", ChipDef{}}};
@@ -46,7 +58,7 @@ class Chip final : public LineApi {
   }
   std::expected<LineId, std::string> request_input(const LineSpec& spec) override { return request(spec, false); }
   std::expected<LineId, std::string> request_input_events(const LineSpec& spec) override {
-    return request(spec, false);
+    return request(spec, false, true);
   }
   std::expected<void, std::string> set_value(LineId id, bool value) override {
     std::lock_guard lock(mutex_);
@@ -62,13 +74,22 @@ class Chip final : public LineApi {
   }
   std::expected<std::size_t, std::string> read_events(LineId id, std::span<LineEvent> out) override {
     std::lock_guard lock(mutex_);
-    auto& q = lines_.at(static_cast<std::size_t>(id)).events;
+    Line& l = lines_.at(static_cast<std::size_t>(id));
+    auto& q = l.events;
     std::size_t n = 0;
     while (n < out.size() && !q.empty()) {
       out[n++] = q.front();
       q.pop_front();
     }
+    if (q.empty() && l.event_fd >= 0) {
+      std::uint64_t count = 0;
+      [[maybe_unused]] const ssize_t r = ::read(l.event_fd, &count, sizeof count);  // no longer readable
+    }
     return n;
+  }
+  int event_fd(LineId id) override {
+    std::lock_guard lock(mutex_);
+    return lines_.at(static_cast<std::size_t>(id)).event_fd;
   }
 
   // --- test side ---------------------------------------------------------
@@ -79,6 +100,19 @@ class Chip final : public LineApi {
     Line& l = by_role(role);
     l.value = level;
     l.events.push_back(LineEvent{kernel_ts_ns, level});
+    if (l.event_fd >= 0) {
+      const std::uint64_t one = 1;
+      [[maybe_unused]] const ssize_t w = ::write(l.event_fd, &one, sizeof one);
+    }
+  }
+  // The line's descriptor is readable (an event is queued).
+  bool event_pending(const std::string& role) {
+    std::lock_guard lock(mutex_);
+    return !by_role(role).events.empty();
+  }
+  bool has_events(const std::string& role) {
+    std::lock_guard lock(mutex_);
+    return by_role(role).event_fd >= 0;
   }
   // The level changes and the kernel's event is lost.
   void set_level_silently(const std::string& role, bool level) {
@@ -115,6 +149,7 @@ class Chip final : public LineApi {
     bool value = false;
     bool fail_writes = false;
     std::deque<LineEvent> events;
+    int event_fd = -1;  // requested with events
   };
 
   Line& by_role(const std::string& role) {
@@ -123,7 +158,7 @@ class Chip final : public LineApi {
     throw std::logic_error("fake chip: no line requested as " + role);
   }
 
-  std::expected<LineId, std::string> request(const LineSpec& spec, bool output) {
+  std::expected<LineId, std::string> request(const LineSpec& spec, bool output, bool events = false) {
     std::string chip_name = spec.chip;
     unsigned offset = 0;
     if (chip_name.empty()) {
@@ -151,6 +186,7 @@ class Chip final : public LineApi {
       }
     }
     if (auto b = def.busy.find(offset); b != def.busy.end()) return std::unexpected(errors::busy(spec, b->second));
+    if (events && def.no_events.contains(offset)) return std::unexpected(errors::request_failed(spec, EIO));
     for (const Line& l : lines_)
       if (l.spec.chip == chip_name && l.offset == offset) return std::unexpected(errors::busy(spec, "homingd"));
     Line l;
@@ -158,6 +194,7 @@ class Chip final : public LineApi {
     l.spec.chip = chip_name;
     l.offset = offset;
     l.output = output;
+    if (events) l.event_fd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
     lines_.push_back(l);
     return static_cast<LineId>(lines_.size() - 1);
   }
