@@ -27,9 +27,10 @@ std::int64_t monotonic_ns() {
 }
 
 ControlLoop::ControlLoop(const homing::Settings& settings, std::unique_ptr<homing::MachineIo> io, int period_us,
-                         double time_scale, Clock watchdog_clock)
+                         double time_scale, Clock watchdog_clock, std::unique_ptr<LoopWaiter> waiter)
     : settings_(settings), io_(std::move(io)), period_us_(std::max(period_us, 50)),
-      time_scale_(time_scale > 0 ? time_scale : 1.0), watchdog_clock_(std::move(watchdog_clock)) {
+      time_scale_(time_scale > 0 ? time_scale : 1.0), waiter_(waiter ? std::move(waiter) : make_poll_waiter()),
+      watchdog_clock_(std::move(watchdog_clock)) {
   heartbeat_changed_ns_ = watchdog_clock_();
   simulator_follows_settings();
   // A first period with no elapsed time: the engine learns the inputs' levels.
@@ -57,53 +58,79 @@ void ControlLoop::start(int rt_priority) {
 void ControlLoop::stop() {
   if (!running_) return;
   stop_requested_ = true;
+  waiter_->wake();
   if (thread_.joinable()) thread_.join();
   running_ = false;
 }
 
+// Every piece of mailbox news wakes a quiet loop: it is taken in the period
+// that follows (at the full rate the loop is not waiting: the next period
+// takes it anyway). The wake comes after the lock is released, so the woken
+// loop finds the mailbox free.
 void ControlLoop::submit(const homing::Commands& c, bool from_modbus) {
-  std::lock_guard lock(mailbox_mutex_);
-  homing::merge(pending_, c);
-  pending_from_modbus_ = pending_from_modbus_ || from_modbus;
+  {
+    std::lock_guard lock(mailbox_mutex_);
+    homing::merge(pending_, c);
+    pending_from_modbus_ = pending_from_modbus_ || from_modbus;
+  }
+  waiter_->wake();
 }
 
 void ControlLoop::set_jog(std::size_t axis, std::int8_t direction, std::uint64_t owner) {
-  std::lock_guard lock(mailbox_mutex_);
-  if (direction == 0) {
-    // Only the client that holds a jog (or nobody) can release it.
-    if (jog_owner_[axis] == owner || jog_dir_[axis] == 0) jog_dir_[axis] = 0;
-    return;
+  {
+    std::lock_guard lock(mailbox_mutex_);
+    if (direction == 0) {
+      // Only the client that holds a jog (or nobody) can release it.
+      if (jog_owner_[axis] == owner || jog_dir_[axis] == 0) jog_dir_[axis] = 0;
+    } else {
+      jog_dir_[axis] = direction;
+      jog_owner_[axis] = owner;
+      pending_from_modbus_ = true;
+    }
   }
-  jog_dir_[axis] = direction;
-  jog_owner_[axis] = owner;
-  pending_from_modbus_ = true;
+  waiter_->wake();
 }
 
 void ControlLoop::release_jogs(std::uint64_t owner) {
-  std::lock_guard lock(mailbox_mutex_);
-  for (std::size_t a = 0; a < homing::kAxisCount; ++a)
-    if (jog_dir_[a] != 0 && jog_owner_[a] == owner) jog_dir_[a] = 0;
+  {
+    std::lock_guard lock(mailbox_mutex_);
+    for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+      if (jog_dir_[a] != 0 && jog_owner_[a] == owner) jog_dir_[a] = 0;
+  }
+  waiter_->wake();
 }
 
 void ControlLoop::set_settings(const homing::Settings& settings) {
-  std::lock_guard lock(mailbox_mutex_);
-  new_settings_ = settings;
-  settings_pending_ = true;
+  {
+    std::lock_guard lock(mailbox_mutex_);
+    new_settings_ = settings;
+    settings_pending_ = true;
+  }
+  waiter_->wake();
 }
 
 void ControlLoop::restore_last_stops(const homing::LastStops& stops) {
-  std::lock_guard lock(mailbox_mutex_);
-  restore_pending_ = stops;
+  {
+    std::lock_guard lock(mailbox_mutex_);
+    restore_pending_ = stops;
+  }
+  waiter_->wake();
 }
 
 void ControlLoop::set_permit_coil(bool on) {
-  std::lock_guard lock(mailbox_mutex_);
-  permit_coil_ = on;
+  {
+    std::lock_guard lock(mailbox_mutex_);
+    permit_coil_ = on;
+  }
+  waiter_->wake();
 }
 
 void ControlLoop::raise_settings_lost() {
-  std::lock_guard lock(mailbox_mutex_);
-  settings_lost_pending_ = true;
+  {
+    std::lock_guard lock(mailbox_mutex_);
+    settings_lost_pending_ = true;
+  }
+  waiter_->wake();
 }
 
 void ControlLoop::heartbeat_written(std::uint16_t value) {
@@ -127,6 +154,7 @@ bool ControlLoop::edit_sim(const SimEdit& edit, std::chrono::milliseconds timeou
     seq = ++next_edit_seq_;
     sim_edits_.push_back(PendingEdit{&edit, seq});
   }
+  waiter_->wake();  // a quiet loop runs it at once: the answer comes within a period
   auto shown = [&] { return snapshot_.sim_edits_applied >= seq; };
   {
     std::unique_lock lock(snapshot_mutex_);
@@ -178,9 +206,9 @@ LoopStats ControlLoop::stats() const {
 // Never blocks: when the server holds the mailbox, its news waits one period.
 // Taken before the machine advances, so that a simulator edit (a carriage
 // placed, a fault) is already in the inputs the commands are judged on.
-void ControlLoop::take_mailbox(Mailbox& out) {
+bool ControlLoop::take_mailbox(Mailbox& out) {
   std::unique_lock lock(mailbox_mutex_, std::try_to_lock);
-  if (!lock.owns_lock()) return;
+  if (!lock.owns_lock()) return false;
   out.commands = pending_;
   if (pending_from_modbus_ && (pending_.home_all || pending_.home_axes || pending_.move_axes || pending_.refcheck_axes ||
                                pending_.measure_axes))
@@ -208,6 +236,7 @@ void ControlLoop::take_mailbox(Mailbox& out) {
   settings_lost_pending_ = false;
   out.restore = restore_pending_;
   restore_pending_.reset();
+  return true;
 }
 
 bool ControlLoop::watchdog_expired() const {
@@ -225,32 +254,11 @@ void ControlLoop::run_period(double wall_dt_s) {
   const double nominal = period_us_ * 1e-6;
   const int steps = sim_dt <= 0 ? 1 : std::max(1, static_cast<int>(std::ceil(sim_dt / nominal - 1e-9)));
   const double dt = sim_dt / steps;
+  bool mailbox_taken = false;
   for (int i = 0; i < steps; ++i) {
     Mailbox mail;
-    if (i == 0) take_mailbox(mail);
-    io_->advance(outputs_, dt);
-    homing::Inputs inputs = io_->read();
-    inputs.commands = mail.commands;
-    inputs.commands.jog = loop_jog_;
-    inputs.homing_permit = inputs.homing_permit || loop_permit_;
-    inputs.settings_lost = mail.settings_lost;
-    inputs.restore = mail.restore;
-    inputs.communication_lost = watchdog_expired();
-    const std::int64_t t0 = monotonic_ns();
-    const homing::StepResult r = engine_.step(settings_, inputs, dt);
-    const std::int64_t t1 = monotonic_ns();
-    outputs_ = r.outputs;
-    io_->apply(outputs_);  // real hardware plays them from the instant the period began
-    machine_time_s_ += dt;
-    record_trace(r.status);
-    status_events_.observe(r.status, unix_now_ms());
-    const bool motion = r.status.homing || r.status.state == homing::MachineState::moving;
-    if (!motion && !inputs.commands.home_all && !inputs.commands.home_axes && !inputs.commands.move_axes &&
-        !inputs.commands.refcheck_axes && !inputs.commands.measure_axes &&
-        std::none_of(loop_jog_.begin(), loop_jog_.end(), [](std::int8_t j) { return j != 0; }))
-      modbus_motion_ = false;
-    engine_us_ += (t1 - t0) / 1000.0;
-    ++engine_steps_;
+    if (i == 0) mailbox_taken = take_mailbox(mail);
+    step_engine(dt, mail);
   }
   if (trace_pending_) {
     std::unique_lock trace_lock(trace_mutex_, std::try_to_lock);
@@ -262,19 +270,56 @@ void ControlLoop::run_period(double wall_dt_s) {
   loop_stats_.engine_us_total = engine_us_;
   loop_stats_.engine_steps = engine_steps_;
   ++loop_stats_.periods;
+  // Quiet only when this period left nothing behind: its mailbox taken, its
+  // trace and snapshot published (else the next period, at the full rate,
+  // does it), and neither the engine nor the machine has anything under way.
+  const bool may_rest = mailbox_taken && !trace_pending_ && !stop_requested_ && engine_.quiet();
+  const double io_quiet_for_s = may_rest ? io_->quiet_for_s(outputs_) : 0;
+  quiet_ = false;
+  io_quiet_for_s_ = 0;
   std::unique_lock lock(snapshot_mutex_, std::try_to_lock);
   if (!lock.owns_lock()) return;  // a reader is copying: publish next period
+  io_quiet_for_s_ = io_quiet_for_s;
+  quiet_ = io_quiet_for_s > 0;
   Snapshot& s = snapshot_;
   s.status = engine_.status();
   s.outputs = outputs_;
   s.periods = loop_stats_.periods;
   if (s.events.written() != status_events_.written()) s.events = status_events_;  // rare: no copy per period
-  if (++stats_publish_tick_ % 64 == 0) stats_ = loop_stats_;  // the histogram is 32 KiB: copy it now and then
+  // The histogram is 32 KiB: copied now and then, and in every quiet period
+  // (a few a second), so the figures are current while idle.
+  if (++stats_publish_tick_ % 64 == 0 || quiet_) stats_ = loop_stats_;
   publish_sim(s);
   const bool edits_shown = s.sim_edits_applied != edits_applied_;
   s.sim_edits_applied = edits_applied_;
   lock.unlock();
   if (edits_shown) published_.notify_all();  // a simulator write waits for this
+}
+
+void ControlLoop::step_engine(double dt, const Mailbox& mail) {
+  io_->advance(outputs_, dt);
+  homing::Inputs inputs = io_->read();
+  inputs.commands = mail.commands;
+  inputs.commands.jog = loop_jog_;
+  inputs.homing_permit = inputs.homing_permit || loop_permit_;
+  inputs.settings_lost = mail.settings_lost;
+  inputs.restore = mail.restore;
+  inputs.communication_lost = watchdog_expired_ = watchdog_expired();
+  const std::int64_t t0 = monotonic_ns();
+  const homing::StepResult r = engine_.step(settings_, inputs, dt);
+  const std::int64_t t1 = monotonic_ns();
+  outputs_ = r.outputs;
+  io_->apply(outputs_);  // real hardware plays them from the instant the period began
+  machine_time_s_ += dt;
+  record_trace(r.status);
+  status_events_.observe(r.status, unix_now_ms());
+  const bool motion = r.status.homing || r.status.state == homing::MachineState::moving;
+  if (!motion && !inputs.commands.home_all && !inputs.commands.home_axes && !inputs.commands.move_axes &&
+      !inputs.commands.refcheck_axes && !inputs.commands.measure_axes &&
+      std::none_of(loop_jog_.begin(), loop_jog_.end(), [](std::int8_t j) { return j != 0; }))
+    modbus_motion_ = false;
+  engine_us_ += (t1 - t0) / 1000.0;
+  ++engine_steps_;
 }
 
 void ControlLoop::publish_sim(Snapshot& s) const {
@@ -334,53 +379,111 @@ void ControlLoop::end_stop_report(bool still_moving) {
 }
 
 void ControlLoop::thread_main() {
-  const std::int64_t period_ns = std::int64_t{period_us_} * 1000;
-  std::int64_t last = monotonic_ns();
-  std::int64_t deadline = last + period_ns;
-  std::int64_t stop_started = 0;
-  for (;;) {
-    timespec ts{static_cast<time_t>(deadline / 1'000'000'000), static_cast<long>(deadline % 1'000'000'000)};
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {}
-    const std::int64_t now = monotonic_ns();
-    const double lateness_us = (now - deadline) / 1000.0;
-    // Loop-private figures: published with the snapshot, never behind a lock here.
-    loop_stats_.max_lateness_us = std::max(loop_stats_.max_lateness_us, lateness_us);
-    const auto bucket = static_cast<std::size_t>(std::clamp(lateness_us, 0.0, double(LoopStats::kBuckets - 1)));
-    ++loop_stats_.lateness_us_histogram[bucket];
-    if (now - deadline > period_ns) ++loop_stats_.late_periods;
-    if (stop_requested_ && stop_started == 0) {
-      // Stop safely: abort whatever moves, let it decelerate, then leave.
-      homing::Commands abort{};
-      abort.abort = true;
-      submit(abort, false);
-      stop_started = now;
-      begin_stop_report();
-    }
-    if (stop_started != 0) {
-      // Nothing starts moving again while the stop runs.
-      std::lock_guard lock(mailbox_mutex_);
-      jog_dir_.fill(0);
-      pending_.home_all = false;
-      pending_.home_axes = 0;
-      pending_.move_axes = 0;
-      pending_.refcheck_axes = 0;
-      pending_.measure_axes = 0;
-    }
-    run_period((now - last) * 1e-9);
-    last = now;
-    if (stop_started != 0) {
-      const Snapshot s = snapshot();
-      bool moving = false;
-      for (const auto& a : s.status.axes) moving = moving || a.velocity_mm_per_s != 0;
-      if (!moving || now - stop_started > 10'000'000'000LL) {
-        end_stop_report(moving);
-        break;
-      }
-    }
-    deadline += period_ns;
-    if (now - deadline > period_ns) deadline = now + period_ns;  // far behind: do not burst
-  }
+  while (run_turn()) {}
   io_->shutdown();
+}
+
+std::int64_t ControlLoop::quiet_deadline_ns() const {
+  std::int64_t until = last_period_ns_ + std::int64_t{kQuietTickMs} * 1'000'000;
+  // The machine's next scheduled change (a time-scaled simulator's seconds
+  // pass faster than the wall clock's).
+  const double io_wall_s = io_quiet_for_s_ / time_scale_;
+  if (io_wall_s < kQuietTickMs * 1e-3) until = std::min<std::int64_t>(until, last_period_ns_ + std::llround(io_wall_s * 1e9));
+  // The watchdog: communication_lost shows in the period its deadline passes
+  // (once shown, nothing is left to wait for until a heartbeat or a command).
+  const std::uint32_t ms = settings_.global.watchdog_ms;
+  if (ms != 0 && modbus_motion_ && !watchdog_expired_) {
+    const std::int64_t left_ns = heartbeat_changed_ns_.load() + std::int64_t{ms} * 1'000'000 + 1 - watchdog_clock_();
+    until = std::min(until, waiter_->now_ns() + std::max<std::int64_t>(left_ns, 0));
+  }
+  return until;
+}
+
+void ControlLoop::record_lateness(std::int64_t late_ns) {
+  // Loop-private figures: published with the snapshot, never behind a lock here.
+  const double lateness_us = late_ns / 1000.0;
+  loop_stats_.max_lateness_us = std::max(loop_stats_.max_lateness_us, lateness_us);
+  const auto bucket = static_cast<std::size_t>(std::clamp(lateness_us, 0.0, double(LoopStats::kBuckets - 1)));
+  ++loop_stats_.lateness_us_histogram[bucket];
+  if (late_ns > std::int64_t{period_us_} * 1000) ++loop_stats_.late_periods;
+}
+
+bool ControlLoop::run_turn() {
+  const std::int64_t period_ns = std::int64_t{period_us_} * 1000;
+  if (!turns_begun_) {
+    turns_begun_ = true;
+    last_period_ns_ = waiter_->now_ns();
+    deadline_ns_ = last_period_ns_ + period_ns;
+  }
+  const bool quiet_wait = quiet_ && !stop_requested_;
+  std::int64_t now = 0;
+  if (quiet_wait) {
+    const std::int64_t until = quiet_deadline_ns();
+    const bool woken = waiter_->wait_until(until, io_->event_fds());
+    now = waiter_->now_ns();
+    // Never sooner than a period after the last: the engine plans what the
+    // wake brings on a period of the nominal length at least.
+    if (now < last_period_ns_ + period_ns) {
+      waiter_->sleep_until(last_period_ns_ + period_ns);
+      now = waiter_->now_ns();
+    }
+    ++loop_stats_.quiet_periods;
+    if (woken) ++loop_stats_.woken_periods;
+    else record_lateness(now - std::max(until, last_period_ns_ + period_ns));
+  } else {
+    waiter_->sleep_until(deadline_ns_);
+    now = waiter_->now_ns();
+    record_lateness(now - deadline_ns_);
+  }
+  if (stop_requested_ && stop_started_ns_ == 0) {
+    // Stop safely: abort whatever moves, let it decelerate, then leave.
+    homing::Commands abort{};
+    abort.abort = true;
+    submit(abort, false);
+    stop_started_ns_ = now;
+    begin_stop_report();
+  }
+  if (stop_started_ns_ != 0) {
+    // Nothing starts moving again while the stop runs.
+    std::lock_guard lock(mailbox_mutex_);
+    jog_dir_.fill(0);
+    pending_.home_all = false;
+    pending_.home_axes = 0;
+    pending_.move_axes = 0;
+    pending_.refcheck_axes = 0;
+    pending_.measure_axes = 0;
+  }
+  const double wall_dt_s = (now - last_period_ns_) * 1e-9;
+  const double nominal_s = period_us_ * 1e-6;
+  if (quiet_wait && wall_dt_s >= 2 * nominal_s) {
+    // The stretch was quiet: the machine ran outputs of rest and nothing was
+    // scheduled in it. One engine step covers it, with no mailbox (a
+    // time-scaled simulator is not held back for it: there is nothing to
+    // compute), then the period proper runs with its nominal length, so the
+    // engine plans whatever the wake brought on a period's dt, not the
+    // stretch's (its look-aheads and braking use the last dt).
+    step_engine((wall_dt_s - nominal_s) * time_scale_, Mailbox{});
+    run_period(nominal_s);
+  } else {
+    run_period(wall_dt_s);
+  }
+  last_period_ns_ = now;
+  if (stop_started_ns_ != 0) {
+    const Snapshot s = snapshot();
+    bool moving = false;
+    for (const auto& a : s.status.axes) moving = moving || a.velocity_mm_per_s != 0;
+    if (!moving || now - stop_started_ns_ > 10'000'000'000LL) {
+      end_stop_report(moving);
+      return false;
+    }
+  }
+  if (quiet_wait) {
+    deadline_ns_ = now + period_ns;  // the full-rate deadlines start again from this period
+  } else {
+    deadline_ns_ += period_ns;
+    if (now - deadline_ns_ > period_ns) deadline_ns_ = now + period_ns;  // far behind: do not burst
+  }
+  return true;
 }
 
 }  // namespace server

@@ -3,6 +3,10 @@
 // deadlines on CLOCK_MONOTONIC) it advances the machine, steps the engine and
 // publishes a snapshot. The Modbus side talks to it only through mailboxes
 // that the loop takes with try_lock, so a busy server never delays a period.
+// While quiet (nothing moves, nothing pending, nothing scheduled) it runs a
+// period only on a wake (any mailbox news), an input event, the machine's
+// next scheduled change, the watchdog's deadline or the slow tick
+// (kQuietTickMs), and returns to the full rate in the period that follows.
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -22,6 +26,7 @@
 #include "homing/last_stop.hpp"
 #include "homing/machine_io.hpp"
 #include "homing/sim/simulator_controls.hpp"
+#include "loop_waiter.hpp"
 #include "trace.hpp"
 
 namespace server {
@@ -48,6 +53,10 @@ struct LoopStats {
   // Periods in which the simulated machine was held back (ControlLoop::kSimCatchUpMaxS):
   // the computer could not keep up with --time-scale, so the simulation ran slower.
   std::uint64_t sim_held_back_periods = 0;
+  // Periods that ended a quiet wait (the loop ran none in the stretch
+  // before them), and of those the ones a wake or an input event began.
+  std::uint64_t quiet_periods = 0;
+  std::uint64_t woken_periods = 0;
   double max_lateness_us = 0;
   double engine_us_total = 0;
   std::uint64_t engine_steps = 0;
@@ -92,8 +101,10 @@ class ControlLoop {
 
   // watchdog_clock: the wall clock (monotonic_ns) in homingd; a test may give
   // one that follows its simulated periods, so the watchdog is deterministic.
+  // waiter: how the thread waits (nullptr: make_poll_waiter()); a test gives
+  // a fake on its own clock and drives run_turn() by hand.
   ControlLoop(const homing::Settings& settings, std::unique_ptr<homing::MachineIo> io, int period_us,
-              double time_scale, Clock watchdog_clock = monotonic_ns);
+              double time_scale, Clock watchdog_clock = monotonic_ns, std::unique_ptr<LoopWaiter> waiter = nullptr);
   ~ControlLoop();
   ControlLoop(const ControlLoop&) = delete;
   ControlLoop& operator=(const ControlLoop&) = delete;
@@ -103,7 +114,10 @@ class ControlLoop {
   void start(int rt_priority = 0);
   // Begins the stop without waiting: motion decelerates (abort) and no new
   // motion command is taken from now on.
-  void request_stop() { stop_requested_ = true; }
+  void request_stop() {
+    stop_requested_ = true;
+    waiter_->wake();
+  }
   // Stops motion (abort, decelerate) and joins the thread.
   void stop();
   // After stop(): how the axes that moved came to rest.
@@ -140,6 +154,22 @@ class ControlLoop {
   // Runs one period by hand (tests step the loop without a thread).
   void run_period(double wall_dt_s);
 
+  // One turn of the control thread: waits as the thread does, then runs the
+  // period. At the full rate the wait is to the next deadline; while quiet
+  // until a wake, an input event, the machine's next scheduled change, the
+  // watchdog's deadline or the slow tick, whichever comes first, yet never
+  // less than a period after the last one. The thread loops on it; tests
+  // drive it by hand with a fake waiter. False once a requested stop has
+  // come to rest (the thread then ends).
+  bool run_turn();
+  // The last period ended quiet: the next wait is a quiet one.
+  bool quiet() const { return quiet_; }
+
+  // The slow tick while quiet: the longest a quiet loop goes without a
+  // period, so status.heartbeat, the machine time and inputs read without
+  // line events still move on (and systemd's watchdog hears from it).
+  static constexpr int kQuietTickMs = 50;
+
   // The most wall-clock time one period advances a simulated machine. A
   // period simulates the wall time since the last one times --time-scale,
   // in steps of the nominal period; when the computer cannot compute that
@@ -159,7 +189,13 @@ class ControlLoop {
     bool settings_lost = false;
     std::optional<homing::LastStops> restore;
   };
-  void take_mailbox(Mailbox& out);
+  // Returns false when the server held the mailbox (its news waits a period).
+  bool take_mailbox(Mailbox& out);
+  // One engine step of dt_s on the machine's inputs and this mailbox.
+  void step_engine(double dt_s, const Mailbox& mail);
+  // When the next quiet wait must end at the latest (loop clock).
+  std::int64_t quiet_deadline_ns() const;
+  void record_lateness(std::int64_t late_ns);
   bool watchdog_expired() const;
   void record_trace(const homing::Status& status);
   // A simulated machine is wired as settings_ say (external commutators).
@@ -170,6 +206,7 @@ class ControlLoop {
   std::unique_ptr<homing::MachineIo> io_;
   int period_us_;
   double time_scale_;
+  std::unique_ptr<LoopWaiter> waiter_;
   homing::Engine engine_;
   homing::Outputs outputs_{};
 
@@ -194,6 +231,7 @@ class ControlLoop {
   std::array<std::int8_t, homing::kAxisCount> loop_jog_{};
   bool loop_permit_ = false;
   bool modbus_motion_ = false;
+  bool watchdog_expired_ = false;  // in the last engine step
 
   std::atomic<std::uint16_t> heartbeat_value_{0};
   const Clock watchdog_clock_;
@@ -206,6 +244,14 @@ class ControlLoop {
   std::array<AxisTrace, homing::kAxisCount> published_trace_;  // default-initialised: see TraceSample
 
   std::uint64_t edits_applied_ = 0;  // loop-private: last simulator edit run
+
+  // Loop-private: the quiet idle (run_turn).
+  bool quiet_ = false;           // the last period ended quiet
+  double io_quiet_for_s_ = 0;    // then: MachineIo::quiet_for_s, machine seconds
+  bool turns_begun_ = false;
+  std::int64_t last_period_ns_ = 0;  // loop clock: when the last period ran
+  std::int64_t deadline_ns_ = 0;     // the next full-rate deadline
+  std::int64_t stop_started_ns_ = 0;
 
   mutable std::mutex snapshot_mutex_;
   std::condition_variable published_;  // with snapshot_mutex_: snapshot_.sim_edits_applied grew

@@ -44,17 +44,23 @@ bool beat_until(Client& c, std::uint16_t& beat, bool& alarm, const std::function
       10s, 20ms);
 }
 
-// These registers watched over the next `periods` control periods (10 s at
-// most): "nothing moved" across the whole window.
-SteadyWatch watch_still(Client& c, const std::vector<std::string>& names, std::int64_t periods) {
+// These registers watched while machine_s of machine time passes (10 s at
+// most): "nothing moved" across the whole window. At rest the control loop
+// idles, a period per slow tick that advances the machine by the whole
+// stretch (docs/architecture.md), so the window is counted on the wall clock
+// at the daemon's time scale (a machine at rest is never held back), and
+// holds at least a few periods, so the loop is seen running through it.
+SteadyWatch watch_still(Client& c, const std::vector<std::string>& names, double machine_s, double time_scale) {
   const auto from = c.read("diag.loop_periods");
+  const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                        std::chrono::duration<double>(machine_s / time_scale));
   return watch_steady(
       [&] {
         std::vector<std::int64_t> v;
         for (const auto& n : names) v.push_back(c.read(n));
         return v;
       },
-      [&] { return c.read("diag.loop_periods") >= from + periods; }, 10s);
+      [&] { return Clock::now() >= until && c.read("diag.loop_periods") >= from + 3; }, 10s);
 }
 
 bool active(int phase) {
@@ -191,8 +197,9 @@ TEST_CASE("commands in the wrong state are refused with their code and move noth
   CHECK((c.read("status.interlocks") & homing::interlock::estop) != 0);
   REQUIRE(c.write("cmd.home_all", 1) == 0);
   REQUIRE(wait_until([&] { return result_of(c) == static_cast<int>(homing::CommandResult::refused_estop); }, 2s));
-  // Nothing starts: watched over 200 control periods (2 s of machine time).
-  const SteadyWatch refused_home = watch_still(c, {"status.homing", "sim.x.actual_position", "sim.z.actual_position"}, 200);
+  // Nothing starts: watched over 2 s of machine time.
+  const SteadyWatch refused_home =
+      watch_still(c, {"status.homing", "sim.x.actual_position", "sim.z.actual_position"}, 2.0, 10);
   CHECK(refused_home.window_ended);
   CHECK(refused_home.steady);
   CHECK(refused_home.first == std::vector<std::int64_t>{0, actual_x, actual_z});
@@ -204,7 +211,7 @@ TEST_CASE("commands in the wrong state are refused with their code and move noth
   CHECK((c.read("status.interlocks") & homing::interlock::alarm_latched) != 0);
   REQUIRE(c.write("cmd.jog_plus.x", 1) == 0);
   REQUIRE(wait_until([&] { return result_of(c) == static_cast<int>(homing::CommandResult::refused_alarm); }, 2s));
-  const SteadyWatch refused_jog = watch_still(c, {"axis.x.velocity", "sim.x.actual_position"}, 200);
+  const SteadyWatch refused_jog = watch_still(c, {"axis.x.velocity", "sim.x.actual_position"}, 2.0, 10);
   CHECK(refused_jog.window_ended);
   CHECK(refused_jog.steady);
   CHECK(refused_jog.first == std::vector<std::int64_t>{0, actual_x});
@@ -247,8 +254,8 @@ TEST_CASE("a jog whose client disconnects stops") {
     jogger.close();  // the connection goes, without writing 0
   }
   REQUIRE(wait_until([&] { return watcher.read("axis.x.velocity") == 0 && watcher.read("axis.x.busy") == 0; }, 3s));
-  // At rest for good: watched over 300 control periods (3 s of machine time).
-  const SteadyWatch still = watch_still(watcher, {"axis.x.position", "sim.x.actual_position"}, 300);
+  // At rest for good: watched over 3 s of machine time.
+  const SteadyWatch still = watch_still(watcher, {"axis.x.position", "sim.x.actual_position"}, 3.0, 10);
   INFO("samples " << still.samples);
   CHECK(still.window_ended);
   CHECK(still.steady);
@@ -281,8 +288,8 @@ TEST_CASE("an expired watchdog stops a homing cycle with communication lost on t
   CHECK(c.read("axis.z.alarm_phase") == static_cast<int>(Phase::seek));
   CHECK(c.read("status.homing") == 0);
   REQUIRE(wait_until([&] { return c.read("axis.z.velocity") == 0; }, 5s));
-  // Stopped for good: watched over 500 control periods (1 s of machine time).
-  const SteadyWatch still = watch_still(c, {"sim.z.actual_position", "axis.z.position"}, 500);
+  // Stopped for good: watched over 1 s of machine time.
+  const SteadyWatch still = watch_still(c, {"sim.z.actual_position", "axis.z.position"}, 1.0, 2);
   INFO("samples " << still.samples);
   CHECK(still.window_ended);
   CHECK(still.steady);
