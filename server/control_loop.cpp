@@ -292,8 +292,17 @@ void ControlLoop::run_period(double wall_dt_s) {
   publish_sim(s);
   const bool edits_shown = s.sim_edits_applied != edits_applied_;
   s.sim_edits_applied = edits_applied_;
+  // Idle periods and the first one after: a watcher that follows an idle
+  // loop's pace (wait_for_period) waits for these.
+  const bool idle_news = s.quiet || quiet_;
+  s.quiet = quiet_;
   lock.unlock();
-  if (edits_shown) published_.notify_all();  // a simulator write waits for this
+  if (edits_shown || idle_news) published_.notify_all();  // a simulator write waits for this
+}
+
+bool ControlLoop::wait_for_period(std::uint64_t after, std::chrono::milliseconds timeout) {
+  std::unique_lock lock(snapshot_mutex_);
+  return published_.wait_for(lock, timeout, [&] { return snapshot_.periods > after || !snapshot_.quiet; });
 }
 
 void ControlLoop::step_engine(double dt, const Mailbox& mail) {

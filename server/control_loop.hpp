@@ -41,6 +41,9 @@ struct Snapshot {
   std::uint64_t sim_edits_applied = 0;  // sequence number of the last simulator edit shown here
   double machine_time_s = 0;
   std::uint64_t periods = 0;
+  // The period ended quiet: the loop idles (a period at its slow tick) until
+  // something comes (ControlLoop::kQuietTickMs).
+  bool quiet = false;
   StatusEvents events;  // what changed period by period, for readers that sample
 };
 
@@ -145,6 +148,11 @@ class ControlLoop {
   bool edit_sim(const SimEdit& edit, std::chrono::milliseconds timeout);
 
   Snapshot snapshot() const;
+  // While the loop idles: waits until a period after `after` is published
+  // (at its slow tick, or at once when something wakes it) or the timeout.
+  // False on the timeout. A watcher that polls the snapshot follows an idle
+  // loop's pace with it instead of waking at its own.
+  bool wait_for_period(std::uint64_t after, std::chrono::milliseconds timeout);
   // The trace of the last finished homing cycle of one axis.
   AxisTrace trace(std::size_t axis) const;
   LoopStats stats() const;

@@ -118,7 +118,11 @@ void Monitor::start() {
   thread_ = std::thread([this] {
     while (!stop_) {
       poll(unix_ms());
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      // While the loop idles nothing changes between its periods: the next
+      // look comes with its next period (a command's wakes it at once), so
+      // an idle daemon does not wake 100 times a second for this thread.
+      if (last_quiet_) loop_.wait_for_period(last_periods_, std::chrono::milliseconds(100));
+      else std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
   });
 }
@@ -167,6 +171,8 @@ void Monitor::judge_health(std::size_t axis, const homing::Settings& settings) {
 void Monitor::poll(std::int64_t now_ms) {
   const Snapshot snap = loop_.snapshot();
   const homing::Status& st = snap.status;
+  last_periods_ = snap.periods;
+  last_quiet_ = snap.quiet;
   if (first_) {
     // Nothing to report of the state at start, except an alarm already
     // latched (settings_lost, an e-stop pressed): it is logged like any other.

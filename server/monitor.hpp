@@ -53,7 +53,10 @@ class Monitor {
   homing::AxisMask run_axes_ = 0;
   std::array<homing::Measurement, homing::kAxisCount> measured_at_start_{};  // figures as the cycle started
   PlantEvents* events_ = nullptr;
-  bool sim_behind_logged_ = false;  // LoopStats::sim_held_back_periods: said once
+  bool sim_behind_logged_ = false;
+  // The last snapshot looked at: its period, and whether the loop idled.
+  std::uint64_t last_periods_ = 0;
+  bool last_quiet_ = false;  // LoopStats::sim_held_back_periods: said once
   // The simulator's carriages as last written to the store, and when.
   std::optional<std::array<double, homing::kAxisCount>> carriages_kept_;
   std::int64_t carriages_kept_ms_ = 0;

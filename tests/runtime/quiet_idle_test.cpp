@@ -132,6 +132,19 @@ TEST_CASE("an idle loop runs a period at the slow tick only, each advancing the 
   CHECK(l.loop->stats().engine_steps - steps0 == 10);
 }
 
+TEST_CASE("a watcher of an idle loop waits for its next period, and not at all while it runs at the full rate") {
+  Loop l = Loop::simulated();
+  REQUIRE(l.snap().quiet);
+  const std::uint64_t p = l.snap().periods;
+  CHECK_FALSE(l.loop->wait_for_period(p, std::chrono::milliseconds(1)));  // stepped by hand: nothing comes
+  l.turn();
+  CHECK(l.loop->wait_for_period(p, std::chrono::milliseconds(0)));
+  l.loop->submit(homing::Commands{.home_all = true}, true);
+  l.turn();
+  REQUIRE_FALSE(l.snap().quiet);  // homing: the full rate
+  CHECK(l.loop->wait_for_period(l.snap().periods, std::chrono::milliseconds(0)));
+}
+
 TEST_CASE("a time-scaled simulator idles too, and its machine time keeps pace with the scale") {
   Loop l = Loop::simulated(registers::default_settings(), 20);
   const double t0_s = l.snap().machine_time_s;
