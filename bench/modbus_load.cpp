@@ -22,6 +22,9 @@
 //             several clients each writes its own settings (client i: the
 //             axis block i % 6 above --durable-addr, word 7, 5 or 3), so that
 //             no write finds its value already there
+// --pause-ms N: each client waits N ms after each answer (not counted), so a
+// daemon idles between requests: write10 then times a simulator write that
+// must wake its control loop (bench/run_benchmarks.py, idle).
 // Transports: libmodbus TCP (default), --raw (hand-built MBAP frames over a
 // plain socket: the client side of the TCP ping-pong floor), --rtu DEVICE.
 // --home: a side connection (not counted) reads status.state (input register
@@ -55,6 +58,7 @@ struct Config {
   char parity = 'E';
   double duration_s = 3;
   long max_requests = 0;
+  int pause_ms = 0;
   bool raw = false, home = false;
   std::vector<Op> ops;
 };
@@ -252,6 +256,7 @@ void run_client(const Config& c, int index, ClientResult& r, const std::atomic<b
       disconnect();
       r.connected = false;
     }
+    if (c.pause_ms > 0) std::this_thread::sleep_for(std::chrono::milliseconds(c.pause_ms));
   }
   disconnect();
 }
@@ -293,7 +298,7 @@ int main(int argc, char** argv) {
                 {{"host", "127.0.0.1"}, {"port", "1502"}, {"clients", "1"}, {"duration", "3"}, {"mix", "mixed"},
                  {"unit", "1"}, {"write-unit", "247"}, {"read-addr", "100"}, {"write-addr", "102"},
                  {"durable-addr", "120"}, {"requests", "0"}, {"raw", "false"}, {"home", "false"}, {"rtu", ""},
-                 {"baud", "19200"}, {"parity", "E"}});
+                 {"baud", "19200"}, {"parity", "E"}, {"pause-ms", "0"}});
   Config c;
   c.host = a.str("host");
   c.port = static_cast<int>(a.num("port"));
@@ -306,6 +311,7 @@ int main(int argc, char** argv) {
   c.write_addr = static_cast<int>(a.num("write-addr"));
   c.durable_addr = static_cast<int>(a.num("durable-addr"));
   c.max_requests = a.num("requests");
+  c.pause_ms = static_cast<int>(a.num("pause-ms"));
   c.raw = a.flag("raw");
   c.home = a.flag("home");
   c.rtu = a.str("rtu");
