@@ -1,7 +1,7 @@
 // What wakes an idle control loop on a cabinet (homing/gpiod/gpiod_io.hpp):
 // every input line is requested with its edges' events, their descriptors
 // are the backend's event_fds(), a period's read() drains them, and a
-// debounced input about to count keeps the loop at the full rate.
+// debounced input about to count wakes the loop when it counts.
 #include <catch2/catch.hpp>
 
 #include <poll.h>
@@ -61,7 +61,7 @@ TEST_CASE("an e-stop edge read in a period shows in that period's inputs") {
   CHECK(b.period(Outputs{}, kMs).estop);
 }
 
-TEST_CASE("a debounced input that changed keeps the loop at the full rate until it counts") {
+TEST_CASE("a debounced input that changed tells the loop to wake when its debounce time ends") {
   fixture::Backend b;  // input_debounce_ms = 10
   b.period(Outputs{}, kMs);
   b.chip->play("start_button", b.now_ns + 100'000, true);  // pressed
