@@ -321,3 +321,33 @@ TEST_CASE("a simulator write to a running quiet loop wakes it: the write is not 
   CHECK(wait_for([&] { return loop.stats().woken_periods >= woken + 3; }));
   loop.stop();
 }
+
+TEST_CASE("a simulator's next scheduled change ends a quiet wait at its time") {
+  homing::Settings settings = registers::default_settings();
+  settings.axes[0].debounce_ms = 2;  // settles long before the contact stops bouncing
+  Loop l = Loop::simulated(settings);
+  l.turn();
+  // The carriage placed onto its switch, whose contact bounces for up to 30 ms.
+  REQUIRE(l.loop->edit_sim(
+      [](homing::sim::SimulatorControls& sim, const homing::Outputs&) {
+        homing::sim::AxisConfig c = sim.view().config.axes[0];
+        c.bounce_ms = 30;
+        sim.set_axis_config(0, c);
+        sim.place(0, (c.sensor_min_mm + c.sensor_max_mm) / 2);
+      },
+      std::chrono::seconds(1)));
+  l.waiter->wake();  // as a running loop's edit does (stepped by hand, the edit ran at once)
+  l.turn();          // the edge and its bounce begin in this period
+  l.waiter->waits.clear();
+  for (int i = 0; i < 100 && (l.waiter->waits.empty() || !l.waiter->last().quiet ||
+                              l.waiter->last().deadline_ns - l.waiter->last().from_ns == kTickNs);
+       ++i)
+    l.turn();
+  // A quiet wait shorter than the slow tick: it ended at the next bounce toggle.
+  REQUIRE(l.waiter->last().quiet);
+  CHECK(l.waiter->last().deadline_ns - l.waiter->last().from_ns < kTickNs);
+  CHECK(l.waiter->last().ended_ns == l.waiter->last().deadline_ns);
+  for (int i = 0; i < 20; ++i) l.turn();  // the bounce over: the slow tick again
+  CHECK(l.waiter->last().deadline_ns - l.waiter->last().from_ns == kTickNs);
+  CHECK(l.snap().status.axes[0].sensor);
+}
