@@ -168,7 +168,7 @@ TEST_CASE("after an idle stretch a start command wakes the loop and starts the c
   l.loop->submit(home, true);
   const double before_s = l.snap().machine_time_s;
   l.turn();
-  const FakeWaiter::Wait& woken = l.waiter->last();
+  const FakeWaiter::Wait woken = l.waiter->last();  // a copy: the next turn grows the vector
   CHECK(woken.quiet);
   CHECK(woken.ended_ns - woken.from_ns == 17 * kMs);
   CHECK(l.snap().status.homing);
@@ -188,7 +188,7 @@ TEST_CASE("a wake right after a period still leaves a whole period before the ne
   l.turn();
   // The wait ended at once; the loop then slept to one period after the last.
   REQUIRE(l.waiter->waits.size() >= 2);
-  const FakeWaiter::Wait& spacing = l.waiter->last();
+  const FakeWaiter::Wait spacing = l.waiter->last();
   CHECK_FALSE(spacing.quiet);
   CHECK(spacing.deadline_ns == last_period_ns + kPeriodNs);
   CHECK(l.loop->quiet());  // a reset with nothing to reset leaves it idle
