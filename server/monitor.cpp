@@ -211,6 +211,17 @@ void Monitor::poll(std::int64_t now_ms) {
       if (st.axes[a].busy) run_axes_ |= homing::axis_bit(a);
   }
   if (!st.homing && last_.homing) {
+    // The loop saw every period of the cycle: its axes come from the cycle's
+    // end event too, so a cycle shorter than a few of this thread's looks
+    // (a busy machine, 50 ms at --time-scale 10) still records all its axes.
+    for (std::uint64_t seq = snap.events.written(); seq > cycle_events_taken_; --seq) {
+      const StatusEvent* e = snap.events.find(seq);
+      if (!e) break;
+      if (e->kind != StatusEventKind::cycle_ended) continue;
+      run_axes_ |= e->axes;
+      break;
+    }
+    cycle_events_taken_ = snap.events.written();
     // A reference check is no homing cycle: it measured nothing of the switch
     // to keep in the history, only whether the axis is where it was kept.
     if (last_.reference_check) report_refcheck(st, settings);

@@ -51,6 +51,7 @@ class Monitor {
   bool first_ = true;
   std::int64_t run_start_ms_ = 0;
   homing::AxisMask run_axes_ = 0;
+  std::uint64_t cycle_events_taken_ = 0;  // the last cycle_ended event whose axes joined run_axes_
   std::array<homing::Measurement, homing::kAxisCount> measured_at_start_{};  // figures as the cycle started
   PlantEvents* events_ = nullptr;
   bool sim_behind_logged_ = false;
