@@ -352,15 +352,21 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
 void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st, const CyclePlan& plan) {
   const std::string who = std::string(event_name(e.kind)) + " on " + letter(e.axis);
   // Axes the cycle still runs, and those moving now.
-  AxisMask running = 0, moving = 0;
+  AxisMask running = 0, moving = 0, moving_on = 0;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const AxisStatus& as = st.axes[a];
     if ((plan.covered & axis_bit(a)) && as.phase != Phase::done) running |= with_partner(s, a);
     // A jog or move held while its indexer unlocks shows phase unlock; in a
     // cycle an axis of the cycle in unlock is one of those running.
     const bool held = as.phase == Phase::unlock && !(plan.covered & axis_bit(a));
-    if (as.velocity_mm_per_s != 0 || as.phase == Phase::jog || as.phase == Phase::move || held)
-      moving |= with_partner(s, a);
+    const bool commanded = as.phase == Phase::jog || as.phase == Phase::move || held;
+    if (as.velocity_mm_per_s != 0 || commanded) moving |= with_partner(s, a);
+    // Still moving in the period that reads the event: a last crawl that
+    // ends within half a millisecond at its acceleration may end in it, and
+    // then there is nothing left to stop (seed 186002100: X's pull-off at
+    // 0.05 mm/s, 51,000 mm/s²).
+    if (std::abs(as.velocity_mm_per_s) > effective(s, a).acceleration_mm_per_s2 * 5e-4 || commanded)
+      moving_on |= with_partner(s, a);
   }
   // Under return_to_start every axis of the cycle may still move (back)
   // after a failure: a lost link or a withdrawn permit may stop it then.
@@ -390,7 +396,7 @@ void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st,
       // It stops motion: a carriage moving when it came must show it (one
       // arriving in that very period may end the cycle without it).
       c.add("the communication loss", {AlarmCode::communication_lost},
-            static_cast<AxisMask>(running | moving | may_go_back), moving != 0);
+            static_cast<AxisMask>(running | moving | may_go_back), moving_on != 0);
       break;
     case EventKind::permit_off:
       c.add("the permit withdrawn", {AlarmCode::permit_withdrawn}, static_cast<AxisMask>(running | may_go_back),
