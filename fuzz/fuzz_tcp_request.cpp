@@ -1,7 +1,7 @@
 // libFuzzer target: the Modbus/TCP request path. The input is the byte stream
-// a client sends on one connection. It goes through server::serve_mbap_stream,
-// the framing loop server/tcp_server.cpp runs on a socket (a bad MBAP header
-// or an incomplete frame ends the connection), which hands every frame's unit
+// a client sends on one connection. It goes through server::TcpConnection,
+// the state machine the TCP server's event loops run for each socket (a bad
+// MBAP header ends the connection), which hands every frame's unit
 // id and PDU to ModbusService::handle and tells it at the end that the client
 // left. The same stream is played against three services: open, a client
 // outside --write-allow, and settings locked by an unlock code

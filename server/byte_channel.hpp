@@ -1,6 +1,6 @@
 #pragma once
-// The bytes of one connection as the framing loop moves them
-// (server/channel_stream.hpp): a plain socket, or a TLS session on one
+// The bytes of one connection as its event loop moves them
+// (server/tcp_connection.hpp): a plain socket, or a TLS session on one
 // (server/tls_channel.hpp). No call waits; each says what it waits for, and
 // the loop waits on fd() with its own deadlines.
 #include <cstddef>

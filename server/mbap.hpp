@@ -1,6 +1,6 @@
 #pragma once
 // The MBAP header of a Modbus/TCP frame and the check the framing loop
-// (server/mbap_stream.hpp) applies to it before reading the rest of the frame.
+// (server/mbap_framer.hpp) applies to it before reading the rest of the frame.
 #include <cstddef>
 #include <cstdint>
 #include <span>

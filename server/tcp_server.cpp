@@ -15,54 +15,32 @@
 #include <cstring>
 #include <vector>
 
-#include "channel_stream.hpp"
-#include "mbap_stream.hpp"
+#include "tcp_connection.hpp"
 
 namespace server {
 namespace {
 
 // Plain Modbus TCP: the socket as it is.
+class PlainHandshake final : public ChannelHandshake {
+ public:
+  explicit PlainHandshake(int fd) : fd_(fd) {}
+  OpenStep step(ClientInfo&) override { return OpenStep::opened(); }
+  std::unique_ptr<ByteChannel> channel() override { return std::make_unique<SocketChannel>(fd_); }
+
+ private:
+  int fd_;
+};
+
 class PlainOpener final : public ChannelOpener {
  public:
   Transport transport() const override { return Transport::tcp; }
-  std::expected<std::unique_ptr<ByteChannel>, std::string> open(int fd, ClientInfo&,
-                                                                 const std::atomic<bool>&) override {
-    return std::make_unique<SocketChannel>(fd);
-  }
+  std::unique_ptr<ChannelHandshake> begin(int fd) override { return std::make_unique<PlainHandshake>(fd); }
 };
 
-std::int64_t steady_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
-// Notes when its connection last sent a request (the least recently active
-// connection is the one that gives way when the server is full) and hands
-// everything on.
-class ActivityHandler final : public RequestHandler {
- public:
-  ActivityHandler(RequestHandler& inner, std::atomic<std::int64_t>& last_active_ns)
-      : inner_(inner), last_active_ns_(last_active_ns) {}
-  Reply handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) override {
-    last_active_ns_.store(steady_ns());
-    return inner_.handle(unit, pdu, client);
-  }
-  void disconnected(const ClientInfo& client) override { inner_.disconnected(client); }
-  void bus_event(Transport transport, BusEvent event) override { inner_.bus_event(transport, event); }
-
- private:
-  RequestHandler& inner_;
-  std::atomic<std::int64_t>& last_active_ns_;
-};
-
-const char* end_reason(StreamEnd end, bool stopping) {
-  switch (end) {
-    case StreamEnd::no_next_frame: return stopping ? "server stopping" : "idle timeout (--idle-timeout-s)";
-    case StreamEnd::closed: return "closed by the client";
-    case StreamEnd::malformed_header: return "malformed MBAP header";
-    case StreamEnd::incomplete_frame: return "incomplete frame";
-  }
-  return "?";
+int loop_count(int configured) {
+  if (configured > 0) return configured;
+  const unsigned cores = std::thread::hardware_concurrency();
+  return cores == 0 ? 1 : static_cast<int>(cores);
 }
 
 }  // namespace
@@ -87,10 +65,18 @@ TcpServer::TcpServer(ListenConfig config, RequestHandler& handler, std::unique_p
       handler_(handler),
       opener_(std::move(opener)),
       refusals_("connections", std::chrono::seconds(config_.refusal_log_interval_s),
-                [](spdlog::level::level_enum level, const std::string& line) { spdlog::log(level, "{}", line); }) {}
+                [](spdlog::level::level_enum level, const std::string& line) { spdlog::log(level, "{}", line); }),
+      // One request in flight per connection at most: never more threads than that.
+      workers_(static_cast<std::size_t>(std::max(1, config_.max_clients))) {
+  const int loops = loop_count(config_.event_loops);
+  for (int i = 0; i < loops; ++i)
+    loops_.push_back(std::make_unique<EventLoop>(
+        EventLoop::Shared{handler_, workers_, connections_mutex_, active_, stop_, name()}));
+}
 
 TcpServer::~TcpServer() {
   stop();
+  workers_.join();  // before the loops go: a request running posts its answer to its loop
   reap(true);
   if (listen_fd_ >= 0) ::close(listen_fd_);
 }
@@ -111,6 +97,8 @@ std::expected<void, std::string> TcpServer::listen() {
 }
 
 void TcpServer::run() {
+  std::vector<std::thread> threads;
+  for (auto& loop : loops_) threads.emplace_back([&loop] { loop->run(); });
   while (!stop_) {
     pollfd p{listen_fd_, POLLIN, 0};
     const int rc = ::poll(&p, 1, 200);
@@ -122,7 +110,7 @@ void TcpServer::run() {
     if (rc <= 0) continue;
     sockaddr_in peer{};
     socklen_t len = sizeof(peer);
-    const int fd = ::accept4(listen_fd_, reinterpret_cast<sockaddr*>(&peer), &len, SOCK_CLOEXEC);
+    const int fd = ::accept4(listen_fd_, reinterpret_cast<sockaddr*>(&peer), &len, SOCK_CLOEXEC | SOCK_NONBLOCK);
     if (fd < 0) continue;
     char ip[INET_ADDRSTRLEN] = "?";
     ::inet_ntop(AF_INET, &peer.sin_addr, ip, sizeof(ip));
@@ -138,16 +126,25 @@ void TcpServer::run() {
     const int one = 1;
     ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
     ++active_;
-    ClientInfo info(next_id_++, opener_->transport(), address);
-    Connection& c = connections_.emplace_back();
-    c.fd = fd;
-    c.peer = who;
-    c.address = address;
-    c.last_active_ns = steady_ns();
-    c.thread = std::thread([this, &c, info] { serve(c, info); });
+    ConnectionEntry& entry = connections_.emplace_back();
+    entry.fd = fd;
+    entry.peer = who;
+    entry.address = address;
+    entry.last_active_ns = steady_now_ns();
+    auto connection = std::make_unique<TcpConnection>(
+        fd, ClientInfo(next_id_++, opener_->transport(), address), opener_->begin(fd), opener_->handshake_timeout_ms(),
+        config_.idle_timeout_s * 1000, std::chrono::steady_clock::now());
+    quietest_loop().adopt(entry, std::move(connection));
   }
+  for (auto& loop : loops_) loop->wake();
+  for (std::thread& t : threads) t.join();
   std::lock_guard lock(connections_mutex_);
   refusals_.flush_all(std::chrono::steady_clock::now());
+}
+
+EventLoop& TcpServer::quietest_loop() {
+  return **std::min_element(loops_.begin(), loops_.end(),
+                            [](const auto& a, const auto& b) { return a->connections() < b->connections(); });
 }
 
 void TcpServer::refuse(const std::string& ip, const std::string& reason, const std::string& line) {
@@ -156,9 +153,9 @@ void TcpServer::refuse(const std::string& ip, const std::string& reason, const s
 }
 
 bool TcpServer::make_room(const Peer& peer, const std::string& address) {
-  std::vector<Connection*> open;
+  std::vector<ConnectionEntry*> open;
   std::vector<HeldConnection> held;
-  for (Connection& c : connections_) {
+  for (ConnectionEntry& c : connections_) {
     if (c.finished || c.fd < 0 || !c.closed_for.empty()) continue;
     open.push_back(&c);
     held.push_back({c.peer, c.last_active_ns.load()});
@@ -179,10 +176,10 @@ bool TcpServer::make_room(const Peer& peer, const std::string& address) {
                          name(), address, config_.max_clients));
       return false;
     case Admission::Kind::admit_closing: {
-      Connection& victim = *open[a.close];
+      ConnectionEntry& victim = *open[a.close];
       victim.closed_for = address;
-      ::shutdown(victim.fd, SHUT_RDWR);  // its thread sees the end and closes it
-      const double idle_s = static_cast<double>(steady_ns() - victim.last_active_ns.load()) / 1e9;
+      ::shutdown(victim.fd, SHUT_RDWR);  // its loop sees the end and closes it
+      const double idle_s = static_cast<double>(steady_now_ns() - victim.last_active_ns.load()) / 1e9;
       spdlog::warn("{}: closed {} (the least recently active connection that may give way: last request {:.1f} s ago) "
                    "to make room for {}{}: {} clients connected, the maximum (--max-clients)",
                    name(), victim.address, idle_s, address, peer.privileged ? " (privileged)" : "",
@@ -193,53 +190,14 @@ bool TcpServer::make_room(const Peer& peer, const std::string& address) {
   return false;
 }
 
-void TcpServer::serve(Connection& c, ClientInfo info) {
-  if (auto channel = opener_->open(c.fd, info, stop_)) {
-    spdlog::info("{}: client {}{}{} connected ({} active)", name(), info.address, info.identity.empty() ? "" : " ",
-                 info.identity, active_.load());
-    ChannelStream stream(**channel, config_.idle_timeout_s * 1000, stop_);
-    ActivityHandler handler(handler_, c.last_active_ns);
-    const StreamEnd end = serve_mbap_stream(stream, handler, info);
-    channel->reset();  // a TLS channel says goodbye on the socket
-    std::string closed_for;
-    {
-      std::lock_guard lock(connections_mutex_);
-      closed_for = c.closed_for;
-    }
-    if (closed_for.empty())
-      spdlog::info("{}: client {} disconnected: {}", name(), info.address, end_reason(end, stop_));
-    else
-      spdlog::info("{}: client {} disconnected: closed to make room for {}", name(), info.address, closed_for);
-  } else {
-    spdlog::warn("{}: refused {}: {}", name(), info.address, channel.error());
-  }
-  {
-    // Under the lock: make_room never shuts down a descriptor number that
-    // another connection may reuse.
-    std::lock_guard lock(connections_mutex_);
-    ::shutdown(c.fd, SHUT_RDWR);
-    ::close(c.fd);
-    c.fd = -1;
-  }
-  --active_;
-  c.finished = true;
-}
-
 void TcpServer::reap(bool all) {
-  // Joined outside the lock: a connection's thread takes it to close its socket.
-  std::list<Connection> done;
-  {
-    std::lock_guard lock(connections_mutex_);
-    for (auto it = connections_.begin(); it != connections_.end();) {
-      const auto next = std::next(it);
-      if (all || it->finished) done.splice(done.end(), connections_, it);
-      it = next;
-    }
-  }
-  for (Connection& c : done)
-    if (c.thread.joinable()) c.thread.join();
+  std::lock_guard lock(connections_mutex_);
+  std::erase_if(connections_, [all](const ConnectionEntry& c) { return all || c.finished; });
 }
 
-void TcpServer::stop() { stop_ = true; }
+void TcpServer::stop() {
+  stop_ = true;
+  for (auto& loop : loops_) loop->wake();
+}
 
 }  // namespace server

@@ -1,14 +1,13 @@
 #include "tls_channel.hpp"
 
-#include <fcntl.h>
 #include <openssl/x509_vfy.h>
 #include <fmt/format.h>
 #include <sys/socket.h>
 
 #include <cerrno>
 #include <cstring>
+#include <optional>
 
-#include "channel_stream.hpp"
 #include "client_role.hpp"
 #include "tls/certificate.hpp"
 #include "tls/session.hpp"
@@ -83,35 +82,59 @@ std::string handshake_failure(const tls::Session& session) {
   return "TLS handshake failed: " + session.error();
 }
 
-// The first byte of a TLS connection is a handshake record (0x16); anything
-// else is most likely a plain Modbus TCP client on the TLS port.
-std::expected<void, std::string> expect_tls(int fd, Deadline deadline, const std::atomic<bool>& stop) {
-  if (!wait_ready(fd, Status::want_read, deadline, stop))
-    return std::unexpected(fmt::format("no TLS handshake within {} ms of connecting", kHandshakeTimeoutMs));
-  std::uint8_t first = 0;
-  const ssize_t r = ::recv(fd, &first, 1, MSG_PEEK);
-  if (r <= 0) return std::unexpected("closed before the TLS handshake");
-  if (first != 0x16)
-    return std::unexpected(fmt::format("not a TLS handshake (first byte 0x{:02X}): plain Modbus TCP on the TLS port? "
-                                       "Modbus/TCP Security clients begin with a TLS ClientHello",
-                                       first));
-  return {};
-}
+// The TLS handshake of one connection as steps: the first byte checked
+// (a handshake record, 0x16; anything else is most likely a plain Modbus
+// TCP client on the TLS port), the handshake, then the role of the verified
+// certificate.
+class TlsHandshake final : public ChannelHandshake {
+ public:
+  TlsHandshake(int fd, std::shared_ptr<SSL_CTX> ctx, const TlsOpener& opener)
+      : fd_(fd), ctx_(std::move(ctx)), opener_(opener) {}
 
-// A refused client must be able to read the alert that says why: closing the
-// socket with its last handshake messages unread would reset the connection,
-// and a reset can discard the alert before the client reads it. So the
-// module's side is closed first and the rest of what the client sends is
-// read and dropped, briefly.
-void let_the_alert_arrive(int fd, const std::atomic<bool>& stop) {
-  ::shutdown(fd, SHUT_WR);
-  const Deadline until = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
-  std::uint8_t sink[512];
-  while (wait_ready(fd, Status::want_read, until, stop)) {
-    const ssize_t r = ::recv(fd, sink, sizeof sink, MSG_DONTWAIT);
-    if (r == 0 || (r < 0 && errno != EAGAIN && errno != EINTR)) break;
+  OpenStep step(ClientInfo& client) override {
+    if (!session_) {
+      std::uint8_t first = 0;
+      const ssize_t r = ::recv(fd_, &first, 1, MSG_PEEK | MSG_DONTWAIT);
+      if (r < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR))
+        return OpenStep::wait_for(OpenStep::Kind::want_read);
+      if (r <= 0) return refused("closed before the TLS handshake");
+      if (first != 0x16)
+        return refused(fmt::format("not a TLS handshake (first byte 0x{:02X}): plain Modbus TCP on the TLS port? "
+                                   "Modbus/TCP Security clients begin with a TLS ClientHello",
+                                   first));
+      // The session holds its own reference to the context (SSL_new), so a
+      // reload meanwhile does not pull it away.
+      auto session = tls::Session::accept(ctx_.get(), fd_);
+      if (!session) return refused(session.error());
+      session_.emplace(std::move(*session));
+    }
+    const tls::Progress p = session_->handshake();
+    if (p == tls::Progress::want_read) return OpenStep::wait_for(OpenStep::Kind::want_read);
+    if (p == tls::Progress::want_write) return OpenStep::wait_for(OpenStep::Kind::want_write);
+    if (p != tls::Progress::done) return refused(handshake_failure(*session_), true);
+    if (auto admitted = opener_.admit(session_->ssl(), client); !admitted) {
+      session_->close();
+      return refused(admitted.error(), true);
+    }
+    return OpenStep::opened();
   }
-}
+
+  std::unique_ptr<ByteChannel> channel() override {
+    auto channel = std::make_unique<TlsChannel>(fd_, std::move(*session_));
+    session_.reset();
+    return channel;
+  }
+
+ private:
+  static OpenStep refused(std::string reason, bool drain = false) {
+    return OpenStep::refusal(std::move(reason), drain);
+  }
+
+  int fd_;
+  std::shared_ptr<SSL_CTX> ctx_;
+  const TlsOpener& opener_;
+  std::optional<tls::Session> session_;
+};
 
 }  // namespace
 
@@ -140,32 +163,8 @@ std::expected<void, std::string> TlsOpener::reload() {
   return {};
 }
 
-std::expected<std::unique_ptr<ByteChannel>, std::string> TlsOpener::open(int fd, ClientInfo& client,
-                                                                          const std::atomic<bool>& stop) {
-  const Deadline deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(kHandshakeTimeoutMs);
-  if (::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK) != 0)
-    return std::unexpected(std::string("cannot make the socket non-blocking: ") + std::strerror(errno));
-  if (auto r = expect_tls(fd, deadline, stop); !r) return std::unexpected(r.error());
-  // The session holds its own reference to the context (SSL_new), so a
-  // reload meanwhile does not pull it away.
-  auto session = tls::Session::accept(context().get(), fd);
-  if (!session) return std::unexpected(session.error());
-  for (;;) {
-    const tls::Progress p = session->handshake();
-    if (p == tls::Progress::done) break;
-    if (p == tls::Progress::closed || p == tls::Progress::failed) {
-      let_the_alert_arrive(fd, stop);
-      return std::unexpected(handshake_failure(*session));
-    }
-    if (!wait_ready(fd, status_of(p), deadline, stop))
-      return std::unexpected(fmt::format("TLS handshake not finished within {} ms of connecting", kHandshakeTimeoutMs));
-  }
-  if (auto admitted = admit(session->ssl(), client); !admitted) {
-    session->close();
-    let_the_alert_arrive(fd, stop);
-    return std::unexpected(admitted.error());
-  }
-  return std::make_unique<TlsChannel>(fd, std::move(*session));
+std::unique_ptr<ChannelHandshake> TlsOpener::begin(int fd) {
+  return std::make_unique<TlsHandshake>(fd, context(), *this);
 }
 
 std::expected<void, std::string> TlsOpener::admit(SSL* ssl, ClientInfo& client) const {

@@ -1,7 +1,7 @@
 #pragma once
-// Modbus/TCP Security on an accepted connection: the TLS handshake on the
-// connection's own thread (so it never delays another client), bounded by
-// kHandshakeTimeoutMs from the connection; the client's certificate verified
+// Modbus/TCP Security on an accepted connection: the TLS handshake as steps
+// the connection's event loop runs between others' requests (so it never
+// delays another client), bounded by kHandshakeTimeoutMs from the accept; the client's certificate verified
 // against --tls-ca (and --tls-crl); its role (server/client_role.hpp) decides
 // what it may write. A refusal names the client's address, the certificate's
 // subject and why.
@@ -10,7 +10,7 @@
 #include <mutex>
 #include <string>
 
-#include "tcp_server.hpp"
+#include "channel_opener.hpp"
 #include "tls/context.hpp"
 
 namespace server {
@@ -29,8 +29,8 @@ class TlsOpener final : public ChannelOpener {
   static std::expected<std::unique_ptr<TlsOpener>, std::string> create(const TlsConfig& config);
 
   Transport transport() const override { return Transport::tls; }
-  std::expected<std::unique_ptr<ByteChannel>, std::string> open(int fd, ClientInfo& client,
-                                                                 const std::atomic<bool>& stop) override;
+  std::unique_ptr<ChannelHandshake> begin(int fd) override;
+  int handshake_timeout_ms() const override { return kHandshakeTimeoutMs; }
 
   // Reads the certificate, key, CA and CRL files again (homingd on SIGHUP: a
   // new CRL or certificate without stopping the machine). Connections made
@@ -38,10 +38,11 @@ class TlsOpener final : public ChannelOpener {
   // and the error names the file.
   std::expected<void, std::string> reload();
 
- private:
-  TlsOpener(tls::SslCtx ctx, TlsConfig config);
   // The role of the verified peer: client.access and client.identity, or why it gets nothing.
   std::expected<void, std::string> admit(SSL* ssl, ClientInfo& client) const;
+
+ private:
+  TlsOpener(tls::SslCtx ctx, TlsConfig config);
   std::shared_ptr<SSL_CTX> context() const;
 
   const TlsConfig config_;

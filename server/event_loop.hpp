@@ -1,0 +1,90 @@
+#pragma once
+// One event loop of a Modbus/TCP listener (server/tcp_server.hpp): epoll over
+// the non-blocking sockets of the connections it was given, each a
+// TcpConnection state machine stepped when its socket is ready or its
+// deadline passes. A listener runs as many loops as the machine has cores
+// and spreads its connections over them. Nothing in a loop waits: a TLS
+// handshake is a state, and a request that may wait runs on RequestWorkers
+// and its reply comes back through the loop's inbox.
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <vector>
+
+#include "connection_policy.hpp"
+#include "request_handler.hpp"
+#include "request_workers.hpp"
+#include "tcp_connection.hpp"
+
+namespace server {
+
+// What the listener's admission (server/connection_policy.hpp) knows of a
+// connection; shared by the acceptor and the connection's loop.
+struct ConnectionEntry {
+  int fd = -1;  // closed by its loop, under the listener's registry mutex
+  Peer peer;
+  std::string address;
+  std::atomic<std::int64_t> last_active_ns{0};  // steady clock: the last request (or the accept)
+  std::string closed_for;                       // under the registry mutex: closed to make room for whom
+  std::atomic<bool> finished{false};            // closed: the acceptor may forget it
+};
+
+std::int64_t steady_now_ns();
+
+class EventLoop {
+ public:
+  struct Shared {
+    RequestHandler& handler;
+    RequestWorkers& workers;
+    std::mutex& registry_mutex;
+    std::atomic<int>& active;
+    const std::atomic<bool>& stop;
+    std::string_view name;  // "tcp", "tls": for the log
+  };
+  explicit EventLoop(Shared shared);
+  ~EventLoop();
+  EventLoop(const EventLoop&) = delete;
+  EventLoop& operator=(const EventLoop&) = delete;
+
+  // From the acceptor: the loop takes the connection over.
+  void adopt(ConnectionEntry& entry, std::unique_ptr<TcpConnection> connection);
+  // Serves until stop, then closes what it holds.
+  void run();
+  void wake();
+  int connections() const { return held_.load(); }
+
+ private:
+  struct Slot {
+    ConnectionEntry* entry = nullptr;
+    std::unique_ptr<TcpConnection> connection;
+    std::uint32_t events = 0;  // registered with epoll (0: not registered)
+    bool announced = false;    // "connected" logged
+  };
+  struct Answer {
+    std::uint64_t id;
+    Reply reply;
+  };
+  void take_inbox(std::vector<std::uint64_t>& ready);
+  void step(std::uint64_t id, Slot& slot, std::vector<std::uint64_t>& again);
+  void watch(std::uint64_t id, Slot& slot, std::uint32_t events);
+  void send_off(std::uint64_t id, Slot& slot);
+  void close(std::uint64_t id, Slot& slot, bool stopping);
+  int wait_ms(bool again) const;
+
+  Shared shared_;
+  int epoll_fd_ = -1;
+  int wake_fd_ = -1;
+  std::atomic<int> held_{0};
+  std::uint64_t next_id_ = 1;
+  std::unordered_map<std::uint64_t, Slot> slots_;  // the loop's thread only
+
+  std::mutex inbox_mutex_;
+  std::vector<std::pair<ConnectionEntry*, std::unique_ptr<TcpConnection>>> arrivals_;
+  std::vector<Answer> answers_;
+};
+
+}  // namespace server

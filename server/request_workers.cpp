@@ -1,0 +1,44 @@
+#include "request_workers.hpp"
+
+namespace server {
+
+void RequestWorkers::run(std::function<void()> job) {
+  std::lock_guard lock(mutex_);
+  if (stopping_) return;  // the server stops: its connections close unanswered
+  jobs_.push_back(std::move(job));
+  if (jobs_.size() > idle_ && threads_.size() < max_threads_) threads_.emplace_back([this] { work(); });
+  wake_.notify_one();
+}
+
+void RequestWorkers::work() {
+  std::unique_lock lock(mutex_);
+  for (;;) {
+    ++idle_;
+    wake_.wait(lock, [this] { return stopping_ || !jobs_.empty(); });
+    --idle_;
+    if (jobs_.empty()) return;  // stopping, nothing left
+    auto job = std::move(jobs_.front());
+    jobs_.pop_front();
+    lock.unlock();
+    job();
+    lock.lock();
+  }
+}
+
+void RequestWorkers::join() {
+  std::vector<std::thread> threads;
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+    threads.swap(threads_);
+  }
+  wake_.notify_all();
+  for (std::thread& t : threads) t.join();
+}
+
+std::size_t RequestWorkers::threads() const {
+  std::lock_guard lock(mutex_);
+  return threads_.size();
+}
+
+}  // namespace server

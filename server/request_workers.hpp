@@ -1,0 +1,42 @@
+#pragma once
+// The threads that run the requests that may wait (server/tcp_connection.hpp,
+// may_wait: writes wait for their durable commit or for the control loop),
+// so that no event loop ever waits for one. A thread per request in flight,
+// up to the connections the server admits (each has at most one in flight),
+// so a write never queues behind another and writes that arrive together
+// still meet in one group commit; threads stay for the next ones.
+#include <condition_variable>
+#include <cstddef>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace server {
+
+class RequestWorkers {
+ public:
+  explicit RequestWorkers(std::size_t max_threads) : max_threads_(max_threads < 1 ? 1 : max_threads) {}
+  ~RequestWorkers() { join(); }
+  RequestWorkers(const RequestWorkers&) = delete;
+  RequestWorkers& operator=(const RequestWorkers&) = delete;
+
+  void run(std::function<void()> job);
+  // Runs what is queued, then ends the threads.
+  void join();
+  std::size_t threads() const;
+
+ private:
+  void work();
+
+  const std::size_t max_threads_;
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<std::function<void()>> jobs_;
+  std::vector<std::thread> threads_;
+  std::size_t idle_ = 0;
+  bool stopping_ = false;
+};
+
+}  // namespace server
