@@ -28,9 +28,14 @@ command -v linuxcnc >/dev/null || { echo "run_peer: linuxcnc is not installed (b
 # One LinuxCNC per machine (its lock file is /tmp/linuxcnc.lock): the linuxcnc
 # script, finding the lock without a terminal, kills the running instance's
 # processes to start anew. Never do that to someone else's LinuxCNC.
-if [ -e /tmp/linuxcnc.lock ] && pgrep -x 'milltask|rtapi_app|io' >/dev/null; then
-  echo "run_peer: another LinuxCNC is running (/tmp/linuxcnc.lock, $(pgrep -x -l 'milltask|rtapi_app|io' | tr '\n' ' '))" >&2
-  exit 4
+# (One pgrep per name: pgrep matches nothing for a pattern over 15 characters.)
+if [ -e /tmp/linuxcnc.lock ]; then
+  for name in milltask rtapi_app linuxcncsvr; do
+    if pgrep -x "$name" >/dev/null; then
+      echo "run_peer: another LinuxCNC is running (/tmp/linuxcnc.lock, process $name)" >&2
+      exit 4
+    fi
+  done
 fi
 
 cfg="$work/linuxcnc"
