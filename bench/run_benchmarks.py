@@ -709,7 +709,13 @@ def peer(b, results, count):
     argv = ["bash", os.path.join(PEER_DIR, "run_peer.sh"), b.work, starts_file, str(limit)]
     b.note("run_peer.sh", argv)
     t0 = time.monotonic()
-    p = subprocess.run(argv, capture_output=True, text=True, timeout=limit + 60)
+    try:
+        p = subprocess.run(argv, capture_output=True, text=True, timeout=limit + 60)
+    except subprocess.TimeoutExpired as e:
+        # run_peer.sh's own timeout ends LinuxCNC first; this is the last resort.
+        def text(x):
+            return x.decode(errors="replace") if isinstance(x, bytes) else (x or "")
+        p = subprocess.CompletedProcess(argv, -9, text(e.stdout), text(e.stderr) + "\n(killed: no end in time)")
     out["linuxcnc_wall_s"] = time.monotonic() - t0
     joints = {j["joint"]: j for j in cfg["joints"]}
     rows, done, lines = {}, False, p.stdout.splitlines()
