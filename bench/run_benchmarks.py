@@ -738,6 +738,11 @@ def peer(b, results, count):
     results["peer"] = out
 
 
+def um(mm):
+    """A signed error in µm to 3 decimals; rounding's -0.000 shown as +0.000."""
+    return f"{round(mm * 1000, 3) + 0.0:+.3f}"
+
+
 def peer_section(b, pr, only_info=None):
     """The section's lines; only_info: it was measured on its own (--only peer)."""
     L = []
@@ -807,7 +812,7 @@ def peer_section(b, pr, only_info=None):
                     common = [st for st in s["by_start"] if st in lc["by_start"]]
                     if common:
                         ratio = (f"{statistics.fmean(s['by_start'][st][2] for st in common) / statistics.fmean(lc['by_start'][st][2] for st in common):.3f}×")
-                w(f"| {edge_name[mode]} | {latch:g} | {vdt:.3g} | {name} | {s['n']} | {s['mean'] * 1000:+.3f} "
+                w(f"| {edge_name[mode]} | {latch:g} | {vdt:.3g} | {name} | {s['n']} | {um(s['mean'])} "
                   f"| {s['sd'] * 1000:.3f} | {s['max'] * 1000:.3f} | {s['cycle']:.3f} | {ratio} |")
     w("")
     # Why they differ, with this run's own figures beside each reason.
@@ -815,12 +820,12 @@ def peer_section(b, pr, only_info=None):
     w("")
     lc_ranges = []
     for (mode, latch), s in sorted(pr["linuxcnc"].items()):
-        lc_ranges.append(f"{edge_name[mode]} at {latch:g} mm/min: {s['lo'] * 1000:+.3f} to {s['hi'] * 1000:+.3f} µm "
+        lc_ranges.append(f"{edge_name[mode]} at {latch:g} mm/min: {um(s['lo'])} to {um(s['hi'])} µm "
                          f"(v·dt {latch / 60 * dt * 1000:.3g} µm)")
     our_ranges = []
     for (mode, latch, inputs), s in sorted(pr["ours"].items()):
         if inputs == "level":
-            our_ranges.append(f"{edge_name[mode]} at {latch:g} mm/min: {s['lo'] * 1000:+.3f} to {s['hi'] * 1000:+.3f} µm")
+            our_ranges.append(f"{edge_name[mode]} at {latch:g} mm/min: {um(s['lo'])} to {um(s['hi'])} µm")
     w("- **Where the edge is placed.** LinuxCNC's motion controller reads the switch once a servo period and, in "
       "the first period that shows the latch edge, takes that period's position feedback as the edge "
       "(homing.c, `HOME_SET_SWITCH_POSITION`). The carriage has passed the edge by then by 0 to one period's "
