@@ -765,7 +765,9 @@ def peer_section(b, pr, only_info=None):
       f"speeds ({', '.join(f'{x:g}' for x in pr['latches'])} mm/min) and both latch edges. The switch is LinuxCNC's "
       f"`sim_home_switch` model in both: active at and below {cfg['trip_mm']:g} mm, released only "
       f"{cfg['hysteresis_mm']:g} mm above (hysteresis), no noise, no bounce, so every error below is the "
-      "controller's own.")
+      "controller's own. Both sides count time in control periods and positions on the simulated carriage, so "
+      "these figures do not move with this machine's load (a late LinuxCNC servo period delays the run, not the "
+      "homing).")
     w("")
     w("- **LinuxCNC** runs headless (`bench/linuxcnc/run_peer.sh`): `linuxcnc -r bench/linuxcnc/peer.ini`, whose "
       "DISPLAY is `peer_display.py`, a Python program driving the `linuxcnc` and `hal` modules (no GUI, no X); "
