@@ -690,7 +690,7 @@ def peer(b, results, count):
             rows.setdefault(key, []).append((float(kv["start"]), float(kv["error_mm"]), float(kv["cycle_s"])))
     out["ours"] = {k: peer_stats(v) for k, v in rows.items()}
 
-    log(f"homing peer: LinuxCNC, {count} starts (real time, about {count * 2.5:.0f} s)")
+    log(f"homing peer: LinuxCNC, {count} starts (real time, about {count * 2:.0f} s)")
     if not shutil.which("linuxcnc"):
         # run_benchmarks.sh's install step failed (or was bypassed): try once
         # more here, so the section can show what apt said.
@@ -1319,7 +1319,7 @@ def main():
     p.add_argument("--writes", type=int, default=200)
     p.add_argument("--quick", action="store_true", help="1 round, short loads (a smoke run)")
     p.add_argument("--peer-starts", type=int, default=60,
-                   help="start positions of the homing comparison with LinuxCNC (about 2.5 s each)")
+                   help="start positions of the homing comparison with LinuxCNC (about 2 s each)")
     p.add_argument("--only", choices=["tls", "peer"], help="measure only this section and replace it in --out")
     args = p.parse_args()
     if args.quick:

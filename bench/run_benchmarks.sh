@@ -18,7 +18,7 @@
 #   --rounds N (3)  --duration S (2, per load round)  --clients 1,8,64
 #   --out FILE (BENCHMARKS.md)  --quick (one short round of everything: a smoke run)
 #   --only tls|peer (measure only the TLS or the LinuxCNC section and replace it in --out)
-#   --peer-starts N (60: start positions of the LinuxCNC comparison, about 2.5 s each)
+#   --peer-starts N (60: start positions of the LinuxCNC comparison, about 2 s each)
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
