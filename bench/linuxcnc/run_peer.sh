@@ -62,4 +62,14 @@ export PEER_STARTS="$starts"
 unset DISPLAY  # nothing of LinuxCNC's may reach for an X server
 cd "$cfg"
 # timeout's TERM reaches the linuxcnc script, whose trap shuts LinuxCNC down.
-timeout --kill-after=10 "$limit" linuxcnc -r "$cfg/peer.ini" </dev/null
+rc=0
+timeout --kill-after=10 "$limit" linuxcnc -r "$cfg/peer.ini" </dev/null || rc=$?
+# The script returns while rtapi_app and milltask may still be exiting; the
+# benchmark that follows must not share the cores with them. Wait (at most
+# 10 s) until they are gone: LinuxCNC runs one instance per machine, checked
+# above, so these are this run's.
+for _ in $(seq 100); do
+  pgrep -x rtapi_app >/dev/null || pgrep -x milltask >/dev/null || pgrep -x linuxcncsvr >/dev/null || break
+  sleep 0.1
+done
+exit "$rc"
