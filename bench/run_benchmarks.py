@@ -473,19 +473,6 @@ def tls_section(b, t, only_info=None):
     return L
 
 
-def splice_tls_section(out_path, lines):
-    """Replaces the TLS section of an existing BENCHMARKS.md (or puts it before "## Commands")."""
-    with open(out_path) as f:
-        old = f.read().split("\n")
-    if TLS_HEADING in old:
-        start = old.index(TLS_HEADING)
-        end = next((i for i in range(start + 1, len(old)) if old[i].startswith("## ")), len(old))
-    else:
-        start = end = next((i for i, line in enumerate(old) if line == "## Commands"), len(old))
-    with open(out_path, "w") as f:
-        f.write("\n".join(old[:start] + lines + old[end:]))
-
-
 def homing_cycles(port):
     """status.homing_cycles (IR 3-4, u32 high word first) over a raw MBAP read."""
     s = socket.create_connection(("127.0.0.1", port), timeout=5)
@@ -603,6 +590,305 @@ def engine(b, results):
     results["repeatability"] = {"sd": float(m.group(1)), "noise": float(m.group(2)), "ratio": float(m.group(3)),
                                 "cycle": float(c.group(1)), "minimum": float(c.group(2)),
                                 "cycle_ratio": float(c.group(3))}
+
+
+# --- homing beside LinuxCNC --------------------------------------------------------
+
+PEER_DIR = os.path.join(ROOT, "bench", "linuxcnc")
+PEER_HEADING = "## Homing beside LinuxCNC"
+# Start positions: distances from the switch's trip edge, uniform in this range
+# (mm), drawn from a fixed seed so every run homes from the same places.
+PEER_DISTANCE_MM = (5.0, 30.0)
+PEER_SEED = 1
+# homing.c's HOME_DELAY: LinuxCNC waits this long (s) at rest before the
+# initial search and before each move after a stop (the back-off and the
+# latch move); not before the final move (its wait falls through).
+LINUXCNC_HOME_DELAY_S = 0.100
+
+
+def peer_config():
+    """The compared axis as bench/linuxcnc/peer.ini defines it: the one source
+    of the settings both sides home with."""
+    import configparser
+    cp = configparser.ConfigParser(interpolation=None)
+    cp.optionxform = str
+    with open(os.path.join(PEER_DIR, "peer.ini")) as f:
+        cp.read_file(f)
+
+    def num(sec, key, default=None):
+        v = cp[sec].get(key)
+        return float(v) if v is not None else default
+
+    joints = []
+    for j in range(int(cp["KINS"]["JOINTS"])):
+        sec = f"JOINT_{j}"
+        search, latch = num(sec, "HOME_SEARCH_VEL"), num(sec, "HOME_LATCH_VEL")
+        joints.append({"joint": j, "search": search, "latch": latch, "accel": num(sec, "MAX_ACCELERATION"),
+                       "final": num(sec, "HOME_FINAL_VEL", 0.0), "home": num(sec, "HOME", 0.0),
+                       "home_offset": num(sec, "HOME_OFFSET", 0.0),
+                       # homing.c: latch velocity of the search's sign = rise search after a back-off
+                       "mode": "reapproach" if search * latch > 0 else "release",
+                       "latch_mm_min": round(abs(latch) * 60, 6)})
+
+    def common(key):
+        values = {x[key] for x in joints}
+        if len(values) != 1:
+            raise RuntimeError(f"peer.ini: the joints differ in {key} ({sorted(values)}); only the latch may differ")
+        return values.pop()
+
+    seek = abs(common("search"))
+    if common("search") > 0:
+        raise RuntimeError("peer.ini: homing_peer's axis searches toward negative (HOME_SEARCH_VEL < 0)")
+    cfg = {"joints": joints, "period_s": num("EMCMOT", "SERVO_PERIOD") / 1e9,
+           "trip_mm": num("PEER", "SWITCH_TRIP"), "hysteresis_mm": num("PEER", "SWITCH_HYSTERESIS"),
+           "seek_mm_min": seek * 60, "accel": common("accel"), "final_mm_s": common("final"),
+           "pull_off_mm": common("home") - common("home_offset"), "edge_coordinate_mm": common("home_offset")}
+    if abs(cfg["final_mm_s"] - seek) > 1e-9:
+        raise RuntimeError("peer.ini: HOME_FINAL_VEL must be the search speed (our pull-off runs at seek feedrate)")
+    return cfg
+
+
+def peer_stats(rows):
+    """rows: (start, error_mm, cycle_s) -> the section's figures."""
+    err = [r[1] for r in rows]
+    cyc = [r[2] for r in rows]
+    return {"n": len(rows), "mean": statistics.fmean(err) if err else float("nan"),
+            "sd": statistics.stdev(err) if len(err) > 1 else float("nan"),
+            "max": max(abs(e) for e in err) if err else float("nan"),
+            "lo": min(err) if err else float("nan"), "hi": max(err) if err else float("nan"),
+            "cycle": statistics.fmean(cyc) if cyc else float("nan"),
+            "by_start": {r[0]: r for r in rows}}
+
+
+def peer(b, results, count):
+    """The same axis homed by LinuxCNC 2.9 (headless, bench/linuxcnc/) and by
+    our engine on its simulator (homing_peer, level-sampled and timestamped
+    inputs), from the same start positions; error against the true edge and
+    cycle time side by side."""
+    import random
+    cfg = peer_config()
+    rng = random.Random(PEER_SEED)
+    starts = [cfg["trip_mm"] + rng.uniform(*PEER_DISTANCE_MM) for _ in range(count)]
+    starts_file = os.path.join(b.work, "peer_starts.txt")
+    with open(starts_file, "w") as f:
+        f.write("".join(f"{x!r}\n" for x in starts))
+    latches = sorted({j["latch_mm_min"] for j in cfg["joints"]})
+    out = {"cfg": cfg, "count": count, "latches": latches, "ours": {}, "linuxcnc": {}, "linuxcnc_error": None}
+
+    log(f"homing peer: our engine, {count} starts")
+    argv = [b.path("homing_peer"), "--starts", starts_file, "--trip", repr(cfg["trip_mm"]),
+            "--hysteresis", repr(cfg["hysteresis_mm"]), "--seek", f"{cfg['seek_mm_min']:g}",
+            "--latch", ",".join(f"{x:g}" for x in latches), "--accel", f"{cfg['accel']:g}",
+            "--pull-off", repr(cfg["pull_off_mm"]), "--edge-coordinate", repr(cfg["edge_coordinate_mm"]),
+            "--period-us", f"{cfg['period_s'] * 1e6:.0f}"]
+    text = b.run("homing_peer", argv, timeout=300)
+    rows = {}
+    for line in text.splitlines():
+        if line.startswith("RESULT "):
+            kv = dict(x.split("=", 1) for x in line.split()[1:])
+            key = (kv["mode"], float(kv["latch"]), kv["inputs"])
+            rows.setdefault(key, []).append((float(kv["start"]), float(kv["error_mm"]), float(kv["cycle_s"])))
+    out["ours"] = {k: peer_stats(v) for k, v in rows.items()}
+
+    log(f"homing peer: LinuxCNC, {count} starts (real time, about {count * 2:.0f} s)")
+    if not shutil.which("linuxcnc"):
+        # run_benchmarks.sh's install step failed (or was bypassed): try once
+        # more here, so the section can show what apt said.
+        inst = ["bash", os.path.join(ROOT, "bench", "install-linuxcnc.sh")]
+        p = subprocess.run(inst, capture_output=True, text=True, timeout=1800)
+        if not shutil.which("linuxcnc"):
+            tail = "\n".join((p.stdout + "\n" + p.stderr).strip().splitlines()[-30:])
+            out["linuxcnc_error"] = (f"LinuxCNC is not installed: `{' '.join(inst).replace(ROOT + '/', '')}` "
+                                     f"exited {p.returncode}:\n\n```\n{tail}\n```")
+            results["peer"] = out
+            return
+    version = subprocess.run(["dpkg-query", "-W", "-f=${Version}", "linuxcnc-uspace"], capture_output=True,
+                             text=True).stdout.strip()
+    out["linuxcnc_version"] = version or "?"
+    limit = 60 + 10 * count
+    argv = ["bash", os.path.join(PEER_DIR, "run_peer.sh"), b.work, starts_file, str(limit)]
+    b.note("run_peer.sh", argv)
+    t0 = time.monotonic()
+    try:
+        p = subprocess.run(argv, capture_output=True, text=True, timeout=limit + 60)
+    except subprocess.TimeoutExpired as e:
+        # run_peer.sh's own timeout ends LinuxCNC first; this is the last resort.
+        def text(x):
+            return x.decode(errors="replace") if isinstance(x, bytes) else (x or "")
+        p = subprocess.CompletedProcess(argv, -9, text(e.stdout), text(e.stderr) + "\n(killed: no end in time)")
+    out["linuxcnc_wall_s"] = time.monotonic() - t0
+    joints = {j["joint"]: j for j in cfg["joints"]}
+    rows, done, lines = {}, False, p.stdout.splitlines()
+    for line in lines:
+        if line.startswith("PEER RESULT "):
+            kv = dict(x.split("=", 1) for x in line.split()[2:])
+            j = joints[int(kv["j"])]
+            key = (j["mode"], j["latch_mm_min"])
+            rows.setdefault(key, []).append((float(kv["start"]), float(kv["error_mm"]), float(kv["cycle_s"])))
+        elif line.startswith("PEER DONE "):
+            done = True
+        elif line.startswith("Note: Using POSIX"):
+            out["linuxcnc_rt"] = line[len("Note: Using "):].strip()
+    out["linuxcnc"] = {k: peer_stats(v) for k, v in rows.items()}
+    out["linuxcnc_fails"] = [x for x in lines if x.startswith(("PEER FAIL", "PEER ERROR", "PEER MESSAGE"))]
+    if p.returncode != 0 or not done:
+        tail = "\n".join((p.stdout + "\n" + p.stderr).strip().splitlines()[-30:])
+        shown = " ".join(argv).replace(b.work, "$WORK").replace(ROOT + "/", "")
+        out["linuxcnc_error"] = f"`{shown}` exited {p.returncode}:\n\n```\n{tail}\n```"
+    results["peer"] = out
+
+
+def um(mm):
+    """A signed error in µm to 3 decimals; rounding's -0.000 shown as +0.000."""
+    return f"{round(mm * 1000, 3) + 0.0:+.3f}"
+
+
+def peer_section(b, pr, only_info=None):
+    """The section's lines; only_info: it was measured on its own (--only peer)."""
+    L = []
+    w = L.append
+    cfg = pr["cfg"]
+    dt = cfg["period_s"]
+    w(PEER_HEADING)
+    w("")
+    if only_info:
+        i = only_info
+        w(f"Measured on its own on {i['date']} by `bash bench/run_benchmarks.sh --only peer` (commit {i['commit']}, "
+          f"load average {' '.join(i['load'])}); the rest of this file is from the run described at the top.")
+        w("")
+    ver = pr.get("linuxcnc_version", "not installed")
+    w(f"The same simulated axis homed by LinuxCNC (Debian's `linuxcnc-uspace` {ver}, installed by the benchmark's own "
+      "step `bench/install-linuxcnc.sh`) and by our engine, from the same "
+      f"{pr['count']} start positions ({PEER_DISTANCE_MM[0]:g} to {PEER_DISTANCE_MM[1]:g} mm above the switch, "
+      f"seed {PEER_SEED}), at the same period ({dt * 1000:g} ms), seek speed ({cfg['seek_mm_min']:g} mm/min), "
+      f"acceleration ({cfg['accel']:g} mm/s²) and pull-off ({cfg['pull_off_mm']:g} mm at seek speed), with two latch "
+      f"speeds ({', '.join(f'{x:g}' for x in pr['latches'])} mm/min) and both latch edges. The switch is LinuxCNC's "
+      f"`sim_home_switch` model in both: active at and below {cfg['trip_mm']:g} mm, released only "
+      f"{cfg['hysteresis_mm']:g} mm above (hysteresis), no noise, no bounce, so every error below is the "
+      "controller's own. Both sides count time in control periods and positions on the simulated carriage, so "
+      "these figures do not move with this machine's load (a late LinuxCNC servo period delays the run, not the "
+      "homing).")
+    w("")
+    w("- **LinuxCNC** runs headless (`bench/linuxcnc/run_peer.sh`): `linuxcnc -r bench/linuxcnc/peer.ini`, whose "
+      "DISPLAY is `peer_display.py`, a Python program driving the `linuxcnc` and `hal` modules (no GUI, no X); "
+      f"{pr.get('linuxcnc_rt', 'POSIX non-realtime')} servo thread; each joint's motor command looped back as its "
+      "feedback, a `sim_home_switch` on the carriage. Four joints are four copies of the axis, one per latch "
+      "setting, homed together by one home-all; between homings `peer_display.py` unhomes them and places the "
+      "carriages at the next start (a HAL offset between motor and carriage, as a hand moves the carriage of a "
+      "powered-off stepper). Latch edge: `HOME_LATCH_VEL` of the search's sign backs off the switch at search speed "
+      "and latches the trip edge on a slow re-approach; of the opposite sign it latches the release edge slowly "
+      "moving off the switch (homing.c). Cycle time: the servo periods `joint.N.homing` is on, counted in HAL.")
+    w("- **Ours**: `homing_peer`, the engine and the simulator in lock-step, the same axis: `switch_reapproach` "
+      "(trip edge) and `switch_release` (release edge); **level**: the engine is given only the switch's level "
+      "each period, as LinuxCNC's motion controller reads `home-sw-in`; **timestamps**: it is given the edge times "
+      "within the period as well, as the GPIO backend gets them from the kernel's line events. Cycle time: machine "
+      "time from the command to homed.")
+    w("")
+    w("Error: the coordinate the controller gives the carriage once homed, less its true coordinate (its distance "
+      "from the true edge, where the simulated switch really changed, plus the edge's coordinate); positive: the "
+      "controller puts the carriage further positive than it is. Mean, σ (sample standard deviation) and the "
+      "largest |error| over the homings; v·dt is the latch speed times the period.")
+    w("")
+    if pr.get("linuxcnc_error"):
+        w("**LinuxCNC did not run to the end in this run**, so its rows are missing or partial:")
+        w("")
+        w(pr["linuxcnc_error"])
+        w("")
+    w("| latch edge | latch mm/min | v·dt µm | controller | homings | error mean µm | σ µm | max \\|error\\| µm "
+      "| mean cycle s | cycle / LinuxCNC's |")
+    w("|---|---:|---:|---|---:|---:|---:|---:|---:|---:|")
+    edge_name = {"reapproach": "trip (re-approach)", "release": "release"}
+    for mode in ("reapproach", "release"):
+        for latch in pr["latches"]:
+            vdt = latch / 60 * dt * 1000  # µm
+            lc = pr["linuxcnc"].get((mode, latch))
+            rows = [("LinuxCNC 2.9", lc)]
+            rows += [(f"**ours**, {inputs}", pr["ours"].get((mode, latch, inputs))) for inputs in ("level", "timestamps")]
+            for name, s in rows:
+                if not s:
+                    w(f"| {edge_name[mode]} | {latch:g} | {vdt:.3g} | {name} | 0 | – | – | – | – | |")
+                    continue
+                ratio = ""
+                if lc and s is not lc:
+                    # Per start, where both homed from it.
+                    common = [st for st in s["by_start"] if st in lc["by_start"]]
+                    if common:
+                        ratio = (f"{statistics.fmean(s['by_start'][st][2] for st in common) / statistics.fmean(lc['by_start'][st][2] for st in common):.3f}×")
+                w(f"| {edge_name[mode]} | {latch:g} | {vdt:.3g} | {name} | {s['n']} | {um(s['mean'])} "
+                  f"| {s['sd'] * 1000:.3f} | {s['max'] * 1000:.3f} | {s['cycle']:.3f} | {ratio} |")
+    w("")
+    # Why they differ, with this run's own figures beside each reason.
+    w("Why the figures differ:")
+    w("")
+    lc_ranges = []
+    for (mode, latch), s in sorted(pr["linuxcnc"].items()):
+        lc_ranges.append(f"{edge_name[mode]} at {latch:g} mm/min: {um(s['lo'])} to {um(s['hi'])} µm "
+                         f"(v·dt {latch / 60 * dt * 1000:.3g} µm)")
+    our_ranges = []
+    for (mode, latch, inputs), s in sorted(pr["ours"].items()):
+        if inputs == "level":
+            our_ranges.append(f"{edge_name[mode]} at {latch:g} mm/min: {um(s['lo'])} to {um(s['hi'])} µm")
+    w("- **Where the edge is placed.** LinuxCNC's motion controller reads the switch once a servo period and, in "
+      "the first period that shows the latch edge, takes that period's position feedback as the edge "
+      "(homing.c, `HOME_SET_SWITCH_POSITION`). The carriage has passed the edge by then by 0 to one period's "
+      "travel, so its error lies between 0 and v·dt on one side (against the latch move's direction), its mean "
+      "about v·dt/2 and its σ about v·dt/√12. Measured: " + ("; ".join(lc_ranges) or "–") + ". Ours, given the "
+      "level only, sees the change in the same period but places the edge in the middle of it "
+      "(`homing/sensor_inputs.cpp`): the same spread, centred on 0, within ±v·dt/2. Measured: "
+      + ("; ".join(our_ranges) or "–") + ". Given the edge's time, it places the edge at the motor position of "
+      "that instant: the error is floating-point rounding on this simulator; on a real machine it is the "
+      "latency of the kernel's timestamp times the speed.")
+    delays = {"release": 2, "reapproach": 3}
+    lc_less = []
+    for (mode, latch), s in sorted(pr["linuxcnc"].items()):
+        ours = pr["ours"].get((mode, latch, "level"))
+        if ours:
+            common = [st for st in ours["by_start"] if st in s["by_start"]]
+            if common:
+                diff = statistics.fmean(s["by_start"][st][2] - ours["by_start"][st][2] for st in common)
+                lc_less.append(f"{edge_name[mode]} at {latch:g} mm/min: LinuxCNC {diff:+.3f} s per homing, "
+                               f"{delays[mode]} waits = {delays[mode] * LINUXCNC_HOME_DELAY_S:.1f} s")
+    w(f"- **Cycle time.** LinuxCNC stands still for `HOME_DELAY` ({LINUXCNC_HOME_DELAY_S:g} s, a constant in "
+      "homing.c) before its initial search and before each move that follows a stop: 2 waits when it latches the "
+      "release edge (search, latch move), 3 when it latches the trip edge (search, back-off, re-approach); its "
+      "back-off before a re-approach runs at search speed and overshoots the release by the braking distance. "
+      "Ours hands each phase to the next in the following period and backs off at latch feedrate. Mean difference "
+      "per start, LinuxCNC less ours (level): " + ("; ".join(lc_less) or "–") + ".")
+    if pr.get("linuxcnc_fails"):
+        w("")
+        w("LinuxCNC's own messages and failed homings in this run:")
+        w("")
+        w("```")
+        for x in pr["linuxcnc_fails"][:20]:
+            w(x)
+        w("```")
+    if "linuxcnc_wall_s" in pr:
+        w("")
+        w(f"LinuxCNC homes in real time: its part took {pr['linuxcnc_wall_s']:.0f} s of this run; ours "
+          "(`homing_peer`, machine time) a fraction of a second.")
+    if only_info:
+        w("")
+        w("```")
+        for cmd, what in b.commands.items():
+            if what in ("homing_peer", "run_peer.sh"):
+                w(cmd)
+        w("```")
+    w("")
+    return L
+
+
+def splice_section(out_path, heading, lines, before=("## Commands",)):
+    """Replaces the section under `heading` in an existing BENCHMARKS.md, or
+    puts it before the first of the `before` headings found (else at the end)."""
+    with open(out_path) as f:
+        old = f.read().split("\n")
+    if heading in old:
+        start = old.index(heading)
+        end = next((i for i in range(start + 1, len(old)) if old[i].startswith("## ")), len(old))
+    else:
+        start = end = next((old.index(h) for h in before if h in old), len(old))
+    with open(out_path, "w") as f:
+        f.write("\n".join(old[:start] + lines + old[end:]))
 
 
 # --- the report -------------------------------------------------------------------
@@ -909,6 +1195,9 @@ def report(b, results, info, args, started, out_path, causes):
     w("```")
     w("")
 
+    if results.get("peer"):
+        L.extend(peer_section(b, results["peer"]))
+
     # Durable writes.
     dr = results["durable"]
     w("## Durable settings writes")
@@ -1029,13 +1318,19 @@ def main():
     p.add_argument("--idle-seconds", type=float, default=5.0)
     p.add_argument("--writes", type=int, default=200)
     p.add_argument("--quick", action="store_true", help="1 round, short loads (a smoke run)")
-    p.add_argument("--only", choices=["tls"], help="measure only this section and replace it in --out")
+    p.add_argument("--peer-starts", type=int, default=60,
+                   help="start positions of the homing comparison with LinuxCNC (about 2 s each)")
+    p.add_argument("--only", choices=["tls", "peer"], help="measure only this section and replace it in --out")
     args = p.parse_args()
     if args.quick:
         args.rounds, args.duration, args.idle_seconds, args.writes = 1, 0.5, 1.0, 20
+        args.peer_starts = min(args.peer_starts, 4)
     build = os.path.abspath(args.build)
-    for prog in ("homingd", "modbus_load", "bare_modbus_server", "tcp_pingpong", "loop_floor", "sqlite_commit",
-                 "engine_step_bench", "homing_repeatability", "tls_load"):
+    needed = ("homingd", "modbus_load", "bare_modbus_server", "tcp_pingpong", "loop_floor", "sqlite_commit",
+              "engine_step_bench", "homing_repeatability", "tls_load", "homing_peer")
+    if args.only == "peer":
+        needed = ("homing_peer",)
+    for prog in needed:
         if not os.access(os.path.join(build, "bin", prog), os.X_OK):
             sys.exit(f"run_benchmarks: {build}/bin/{prog} is missing: build first "
                      f"(cmake -S . -B {args.build} -G Ninja -DCMAKE_BUILD_TYPE=Release && cmake --build {args.build})")
@@ -1048,10 +1343,17 @@ def main():
     try:
         if args.only == "tls":
             tls(b, results)
-            splice_tls_section(args.out, tls_section(b, results["tls"], only_info=info))
+            splice_section(args.out, TLS_HEADING, tls_section(b, results["tls"], only_info=info))
             log(f"run_benchmarks: replaced the TLS section of {args.out}")
             return
+        if args.only == "peer":
+            peer(b, results, args.peer_starts)
+            splice_section(args.out, PEER_HEADING, peer_section(b, results["peer"], only_info=info),
+                           before=("## Durable settings writes", "## Commands"))
+            log(f"run_benchmarks: replaced the LinuxCNC section of {args.out}")
+            return
         engine(b, results)
+        peer(b, results, args.peer_starts)
         idle(b, results, args.idle_seconds)
         durable(b, results, args.writes)
         throughput(b, [int(c) for c in args.clients.split(",")], results)

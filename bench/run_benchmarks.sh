@@ -7,7 +7,9 @@
 # and memory; homing repeatability and cycle time; durable settings writes
 # beside a bare SQLite commit; RTU turnaround over a socat pty pair; Modbus/TCP
 # Security (TLS) beside plain TCP on one homingd, and the cost of a handshake;
-# the control loop with and without the MQTT edge node, and its bytes per cycle.
+# the control loop with and without the MQTT edge node, and its bytes per cycle;
+# the same axis homed by LinuxCNC 2.9 and by our engine (error against the true
+# edge, cycle time), LinuxCNC installed first by bench/install-linuxcnc.sh.
 #
 #   bash bench/run_benchmarks.sh [BUILD_DIR] [options]
 #
@@ -15,7 +17,8 @@
 # benchmark programs are missing. Options go to bench/run_benchmarks.py:
 #   --rounds N (3)  --duration S (2, per load round)  --clients 1,8,64
 #   --out FILE (BENCHMARKS.md)  --quick (one short round of everything: a smoke run)
-#   --only tls (measure only the TLS section and replace it in --out)
+#   --only tls|peer (measure only the TLS or the LinuxCNC section and replace it in --out)
+#   --peer-starts N (60: start positions of the LinuxCNC comparison, about 2 s each)
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -30,9 +33,12 @@ for tool in /usr/bin/python3 socat cmake; do
   command -v "$tool" >/dev/null || { echo "run_benchmarks: $tool is missing: bash tools/install-deps.sh" >&2; exit 1; }
 done
 
+progs=(homingd modbus_load bare_modbus_server tcp_pingpong loop_floor sqlite_commit engine_step_bench
+       homing_repeatability tls_load homing_peer)
+targets=()
+case " $* " in *" --only peer "*) progs=(homing_peer); targets=(--target homing_peer) ;; esac
 need_build=0
-for prog in homingd modbus_load bare_modbus_server tcp_pingpong loop_floor sqlite_commit engine_step_bench \
-            homing_repeatability tls_load; do
+for prog in "${progs[@]}"; do
   [ -x "$build/bin/$prog" ] || need_build=1
 done
 if [ "$need_build" = 1 ]; then
@@ -40,7 +46,13 @@ if [ "$need_build" = 1 ]; then
   if [ ! -f "$build/CMakeCache.txt" ]; then
     cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
   fi
-  cmake --build "$build" >/dev/null
+  cmake --build "$build" "${targets[@]}" >/dev/null
+fi
+
+# The homing peer's LinuxCNC: the benchmark brings it itself (the test suite
+# does not need it). Without it the run goes on and its section says why.
+if ! bash "$root/bench/install-linuxcnc.sh"; then
+  echo "run_benchmarks: LinuxCNC could not be installed: the homing comparison will say so" >&2
 fi
 
 cd "$root"
