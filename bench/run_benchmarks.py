@@ -19,11 +19,13 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "tests", "support"))
 from homingd_py import free_port  # noqa: E402  (one free-port helper for tests and benchmarks)
+import measured_causes as mc  # noqa: E402  (bench/: the counters read during the runs, the causes made of them)
 PYTHON = "/usr/bin/python3"  # Debian's, with python3-pymodbus
 
 # Module register addresses (hmi_maps/registers.csv): input registers.
@@ -116,6 +118,37 @@ class Bench:
                 "--duration", str(duration or self.duration), *extra]
         return parse_result(self.run(f"modbus_load {mix}", argv, timeout=(duration or self.duration) + 30))
 
+    def load_watched(self, port, clients, mix, pids, duration=None, extra=()):
+        """load(), and the /proc counters of the processes pids over the measured
+        stretch: modbus_load --sync says when its clients begin and when they are
+        done (still connected, so a server's per-connection threads can still
+        be read), then waits for our line before it closes. Returns (result,
+        {pid: counters})."""
+        argv = [self.path("modbus_load"), "--port", str(port), "--clients", str(clients), "--mix", mix,
+                "--duration", str(duration or self.duration), *extra]
+        self.note(f"modbus_load {mix}", argv)
+        p = subprocess.Popen(argv + ["--sync"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        killer = threading.Timer((duration or self.duration) + 30, p.kill)
+        killer.start()
+        try:
+            before = after = None
+            for line in p.stdout:
+                if line.startswith("WINDOW start"):
+                    before = mc.snapshots(pids)
+                elif line.startswith("WINDOW end"):
+                    after = mc.snapshots(pids)
+                    p.stdin.write("\n")
+                    p.stdin.flush()
+                    break
+            out, _ = p.communicate()
+        finally:
+            killer.cancel()
+        if p.returncode != 0 or before is None or after is None:
+            raise RuntimeError(f"{' '.join(argv)} --sync exited {p.returncode} (window seen: {before is not None}, "
+                               f"{after is not None})")
+        return parse_result(out), {pid: mc.stretch(before[pid], after[pid]) if before[pid] and after[pid] else None
+                                   for pid in pids}
+
     def read_diag(self, port):
         """diag.* input registers of homingd over Modbus (32-bit, high word first)."""
         out = {}
@@ -177,7 +210,7 @@ def throughput(b, clients_list, results):
     running; the bare server's rounds also run the bare 1 ms loop."""
     for clients in clients_list:
         rows = {k: [] for k in ("floor", "bare", "homingd", "pymodbus", "loop_floor", "loop_homingd", "ratio_rps",
-                                "ratio_p99", "ratio_loop_p99")}
+                                "ratio_p99", "ratio_loop_p99", "cnt_bare", "cnt_homingd")}
         for r in range(b.rounds):
             log(f"throughput: {clients} clients, round {r + 1}/{b.rounds}")
             # A: the bare libmodbus server, and the bare loop beside it.
@@ -188,7 +221,8 @@ def throughput(b, clients_list, results):
             b.note("loop_floor", floor_argv)
             lf = subprocess.Popen(floor_argv, stdout=subprocess.PIPE, text=True)
             try:
-                bare = b.load(port, clients, "production", extra=["--home"])
+                bare, cnt = b.load_watched(port, clients, "production", [srv.pid], extra=["--home"])
+                rows["cnt_bare"].append(cnt[srv.pid])
                 lf_out, _ = lf.communicate(timeout=30)
             finally:
                 b.stop(srv)
@@ -197,7 +231,8 @@ def throughput(b, clients_list, results):
             port = free_port()
             hd = b.homingd(port)
             try:
-                mine = b.load(port, clients, "production", extra=["--home"])
+                mine, cnt = b.load_watched(port, clients, "production", [hd.pid], extra=["--home"])
+                rows["cnt_homingd"].append(cnt[hd.pid])
                 diag = b.read_diag(port)
             finally:
                 b.stop(hd)
@@ -268,16 +303,17 @@ def mixes(b, clients, results):
 
 def idle(b, results, seconds):
     rows = {"homingd_cpu": [], "floor_cpu": [], "rss": [], "diag_rss": [], "loop_idle": [], "floor_idle": [],
-            "ratio_cpu": [], "sim_write": []}
+            "ratio_cpu": [], "sim_write": [], "cnt_floor": [], "cnt_homingd": [], "cnt_write": []}
     for r in range(b.rounds):
         log(f"idle: round {r + 1}/{b.rounds}")
         floor_argv = [b.path("loop_floor"), "--period-us", "1000", "--duration", str(seconds + 1.5)]
         b.note("loop_floor (idle)", floor_argv)
         lf = subprocess.Popen(floor_argv, stdout=subprocess.PIPE, text=True)
         time.sleep(1)
-        c0 = cpu_seconds(lf.pid)
+        c0, s0 = cpu_seconds(lf.pid), mc.snapshot(lf.pid)
         time.sleep(seconds)
-        c1 = cpu_seconds(lf.pid)
+        c1, s1 = cpu_seconds(lf.pid), mc.snapshot(lf.pid)
+        rows["cnt_floor"].append(mc.stretch(s0, s1) if s0 and s1 else None)
         out, _ = lf.communicate(timeout=30)
         rows["floor_cpu"].append((c1 - c0) / seconds * 100)
         rows["floor_idle"].append(parse_result(out))
@@ -285,9 +321,10 @@ def idle(b, results, seconds):
         hd = b.homingd(port, time_scale=1)
         try:
             time.sleep(1)
-            c0 = cpu_seconds(hd.pid)
+            c0, s0 = cpu_seconds(hd.pid), mc.snapshot(hd.pid)
             time.sleep(seconds)
-            c1 = cpu_seconds(hd.pid)
+            c1, s1 = cpu_seconds(hd.pid), mc.snapshot(hd.pid)
+            rows["cnt_homingd"].append(mc.stretch(s0, s1) if s0 and s1 else None)
             rows["homingd_cpu"].append((c1 - c0) / seconds * 100)
             rows["ratio_cpu"].append(rows["homingd_cpu"][-1] / max(rows["floor_cpu"][-1], 1e-9))
             rows["rss"].append(rss_kib(hd.pid))
@@ -296,15 +333,18 @@ def idle(b, results, seconds):
             rows["loop_idle"].append(d)
             # Then simulator writes to the idle daemon, one every 20 ms: each must wake
             # the quiet loop and be answered within a period, not at its 50 ms slow tick.
-            rows["sim_write"].append(b.load(port, 1, "write10", duration=max(seconds, 2.0),
-                                            extra=["--pause-ms", "20"]))
+            sim_write, cnt = b.load_watched(port, 1, "write10", [hd.pid], duration=max(seconds, 2.0),
+                                            extra=["--pause-ms", "20"])
+            rows["sim_write"].append(sim_write)
+            rows["cnt_write"].append(cnt[hd.pid])
         finally:
             b.stop(hd)
     results["idle"] = rows
 
 
 def durable(b, results, writes):
-    rows = {"bare": [], "homingd": [], "ratio_p99": [], "ratio_p50": [], "eight": [], "eight_ratio": []}
+    rows = {"bare": [], "homingd": [], "ratio_p99": [], "ratio_p50": [], "eight": [], "eight_ratio": [], "cnt_one": [],
+            "cnt_eight": []}
     for r in range(b.rounds):
         log(f"durable writes: round {r + 1}/{b.rounds}")
         db = os.path.join(b.work, f"commit.{r}.db")
@@ -313,9 +353,11 @@ def durable(b, results, writes):
         port = free_port()
         hd = b.homingd(port, time_scale=1)
         try:
-            mine = b.load(port, 1, "durable", duration=60, extra=["--requests", str(writes)])
+            mine, cnt = b.load_watched(port, 1, "durable", [hd.pid], duration=60, extra=["--requests", str(writes)])
+            rows["cnt_one"].append(cnt[hd.pid])
             # Eight clients each writing its own settings: the group commit's throughput.
-            eight = b.load(port, 8, "durable", duration=5)
+            eight, cnt = b.load_watched(port, 8, "durable", [hd.pid], duration=5)
+            rows["cnt_eight"].append(cnt[hd.pid])
         finally:
             b.stop(hd)
         rows["eight"].append(eight)
@@ -586,9 +628,11 @@ def mqtt_section(m, clients=8):
 
 def engine(b, results):
     log("engine: Google Benchmark and homing repeatability")
+    ru0, m0 = mc.children_rusage(), mc.machine_jiffies()
     out = b.run("engine_step_bench", [b.path("engine_step_bench"), "--benchmark_min_time=0.5",
                                       "--benchmark_repetitions=3", "--benchmark_report_aggregates_only=true"],
                 timeout=120)
+    results["engine_rusage"] = mc.children_stretch(ru0, m0)
     bench = {}
     for line in out.splitlines():
         m = re.match(r"(BM_\w+)_median\s+([\d.]+) ns\s+([\d.]+) ns", line)
@@ -650,7 +694,7 @@ def verdict(ok):
     return "met" if ok else "**missed**"
 
 
-def report(b, results, info, args, started, out_path, causes):
+def report(b, results, info, args, started, out_path):
     L = []
     w = L.append
     w("# Benchmarks")
@@ -733,8 +777,7 @@ def report(b, results, info, args, started, out_path, causes):
         w("### Missed targets: by how much and why")
         w("")
         for name, measured, goal, ok, key in missed:
-            cause = causes.get(key) or causes.get(key.split("_")[0]) or "not investigated yet."
-            w(f"- **{name}**: {measured} against {goal}. {cause}")
+            w(f"- **{name}**: {measured} against {goal}. {mc.cause(key, results)}")
         w("")
     else:
         w("Every target was met in this run.")
@@ -787,6 +830,7 @@ def report(b, results, info, args, started, out_path, causes):
         w(f"| {clients} | {med(r['ratio_rps']):.2f}× ({per}) | {med(r['ratio_p99']):.2f}× ({per99}) "
           f"| {vf:.2f}× | {vp:.2f}× |")
     w("")
+    L.extend(mc.throughput_table(tp))
 
     mx = results["mixes"]
     if mx:
@@ -839,6 +883,7 @@ def report(b, results, info, args, started, out_path, causes):
       f"| {fmt(med([x['p99'] for x in idl['loop_idle']]))} | {fmt(med([x['p999'] for x in idl['loop_idle']]))} "
       f"| {fmt(med([x['max'] for x in idl['loop_idle']]))} | {idle_ratio:.2f}× |")
     w("")
+    L.extend(mc.loop_table(tp))
     eng_live = {c: med([x["engine_ns"] for x in tp[c]["loop_homingd"]]) for c in sorted(tp)}
     w("The engine's share of the period:")
     w("")
@@ -867,6 +912,7 @@ def report(b, results, info, args, started, out_path, causes):
     w(f"| **homingd**, idle | {med(idl['homingd_cpu']):.2f} % | {med(idl['ratio_cpu']):.2f}× | {fmt(med(idl['rss']))} KiB VmRSS "
       f"(`diag.rss_kb` {fmt(med(idl['diag_rss']))} KiB) |")
     w("")
+    L.extend(mc.idle_table(idl))
     sw = idl["sim_write"]
     w("Then, on the same idle daemon, one client writes the simulator unit (`modbus_load --mix write10 "
       "--pause-ms 20`: FC16 of 10 simulator registers, written back unchanged, one every 20 ms, so the loop "
@@ -948,6 +994,7 @@ def report(b, results, info, args, started, out_path, causes):
       f"({', '.join(f'{x:.2f}' for x in dr['eight_ratio'])}) | | |")
     w(f"| errors (homingd, 8 clients) | {sum(int(x['errors']) for x in dr['eight'])} | | |")
     w("")
+    L.extend(mc.durable_table(dr))
 
     # RTU.
     rt = results["rtu"]
@@ -995,31 +1042,24 @@ def report(b, results, info, args, started, out_path, causes):
         f.write("\n".join(L))
 
 
-CAUSES_FILE = os.path.join(ROOT, "bench", "known_causes.txt")
-
-
-def load_causes():
-    """bench/known_causes.txt: 'key: explanation' lines written after
-    investigating a missed target; shown only when that target is missed."""
-    causes = {}
-    if os.path.exists(CAUSES_FILE):
-        key = None
-        with open(CAUSES_FILE) as f:
-            for line in f:
-                if line.startswith("#") or not line.strip():
-                    key = None
-                    continue
-                m = re.match(r"^(\w+):\s*(.*)$", line)
-                if m and not line.startswith(" "):
-                    key = m.group(1)
-                    causes[key] = m.group(2).strip()
-                elif key:
-                    causes[key] += " " + line.strip()
-    return causes
+def try_sections(b, results, args):
+    """--try: a section or a few on their own, while developing a measurement."""
+    sections = args.try_sections.split(",")
+    run = {"engine": lambda: engine(b, results), "idle": lambda: idle(b, results, args.idle_seconds),
+           "durable": lambda: durable(b, results, args.writes),
+           "throughput": lambda: throughput(b, [int(c) for c in args.clients.split(",")], results)}
+    for sec in sections:
+        if sec not in run:
+            sys.exit(f"run_benchmarks: --try {sec}: not one of {', '.join(run)}")
+        run[sec]()
+    sys.stdout.write(mc.try_report(results, sections))
 
 
 def main():
     p = argparse.ArgumentParser()
+    p.add_argument("--try", dest="try_sections", metavar="SECTIONS",
+                   help="measure only these sections (comma-separated: engine, idle, durable, throughput) and print "
+                        "their counters and the cause each target would get; BENCHMARKS.md is not touched")
     p.add_argument("--build", default=os.path.join(ROOT, "build"))
     p.add_argument("--out", default=os.path.join(ROOT, "BENCHMARKS.md"))
     p.add_argument("--rounds", type=int, default=3)
@@ -1051,6 +1091,9 @@ def main():
             splice_tls_section(args.out, tls_section(b, results["tls"], only_info=info))
             log(f"run_benchmarks: replaced the TLS section of {args.out}")
             return
+        if args.try_sections:
+            try_sections(b, results, args)
+            return
         engine(b, results)
         idle(b, results, args.idle_seconds)
         durable(b, results, args.writes)
@@ -1059,7 +1102,7 @@ def main():
         rtu(b, results)
         tls(b, results)
         mqtt(b, results)
-        report(b, results, info, args, started, args.out, load_causes())
+        report(b, results, info, args, started, args.out)
     finally:
         shutil.rmtree(work, ignore_errors=True)
     log(f"run_benchmarks: wrote {args.out} in {(time.monotonic() - started) / 60:.1f} minutes")
