@@ -1,7 +1,8 @@
 """Counters read while the benchmarks run, and the cause sentences made of them.
 
 run_benchmarks.py reads, at the edges of each measured stretch (modbus_load
---sync says when its clients begin and when they are done, still connected),
+--sync holds its clients, connected and idle, before they begin and after
+they are done, until these reads are over),
 the kernel's counters of the server under load and of the reference it is
 compared with:
 
@@ -71,7 +72,9 @@ def machine_jiffies():
 
 
 def snapshot(pid):
-    """Every counter of one process at one moment; None if it is gone."""
+    """Every counter of one process at one moment (the middle of the reads,
+    which take a while for many threads); None if it is gone."""
+    t0 = time.monotonic()
     stat = _read(f"/proc/{pid}/stat")
     if stat is None:
         return None
@@ -85,7 +88,7 @@ def snapshot(pid):
         t = _task(pid, tid)
         if t:
             tasks[int(tid)] = t
-    return {"t": time.monotonic(), "pid": pid, "utime": int(f[11]) / CLK_TCK, "stime": int(f[12]) / CLK_TCK,
+    return {"t": (t0 + time.monotonic()) / 2, "pid": pid, "utime": int(f[11]) / CLK_TCK, "stime": int(f[12]) / CLK_TCK,
             "tasks": tasks, "machine": machine_jiffies()}
 
 
@@ -363,7 +366,8 @@ def _evidence(h, r):
 
 def _waiting(h, r):
     return (f"{_n(h['serving_wait_us'])} µs per request waiting for a core against {_n(r['serving_wait_us'])} µs "
-            f"({_times(h['serving_wait_us'], r['serving_wait_us'])}), {_n(h['cs'], 2)} context switches per request against "
+            f"({_times(h['serving_wait_us'], r['serving_wait_us'])}), {_n(h['cs'], 2)} context switches per request "
+            f"against "
             f"{_n(r['cs'], 2)} ({_times(h['cs'], r['cs'])}).")
 
 
@@ -809,7 +813,8 @@ def try_report(results, sections):
     cause each of their targets would get if it were missed."""
     L = []
     if "throughput" in sections:
-        L += ["## throughput: counters", ""] + throughput_table(results["throughput"]) + loop_table(results["throughput"])
+        tp = results["throughput"]
+        L += ["## throughput: counters", ""] + throughput_table(tp) + loop_table(tp)
     if "idle" in sections:
         L += ["## idle: counters", ""] + idle_table(results["idle"])
     if "durable" in sections:

@@ -32,10 +32,13 @@
 // homingd homes on its simulator during the load.
 //
 // --sync: for run_benchmarks.py, which reads the server's /proc counters at the
-// edges of the measured stretch: prints "WINDOW start" when the clients begin,
-// and "WINDOW end" once every client is done but before any closes its
-// connection (a server thread per connection is still there to be read), then
-// waits for a line on stdin before closing.
+// edges of the measured stretch: once the clients are connected it prints
+// "WINDOW ready" and starts them only when a line arrives on stdin; once every
+// client is done, before any closes its connection (a server thread per
+// connection is still there to be read), it prints "WINDOW end" and closes
+// when the next line arrives. Both reads thus happen while the clients are
+// idle: a reader starved of CPU by the load itself is late without cutting
+// the stretch short.
 //
 // Prints one line "RESULT key=value ..." (for scripts) after a readable one,
 // with the load generator's own CPU and context switches over the stretch
@@ -378,6 +381,12 @@ int main(int argc, char** argv) {
   std::thread home_thread;
   if (c.home) home_thread = std::thread([&] { run_home(c, home, go, deadline); });
   std::this_thread::sleep_for(std::chrono::milliseconds(100 + 5 * c.clients));  // connections settle
+  char line[16];
+  if (held) {
+    std::printf("WINDOW ready\n");
+    std::fflush(stdout);
+    [[maybe_unused]] const char* got = std::fgets(line, sizeof line, stdin);  // EOF starts too
+  }
   const std::int64_t start = bench::now_ns();
   deadline = start + static_cast<std::int64_t>(c.duration_s * 1e9);
   const bench::SelfCounters before = bench::SelfCounters::now();
@@ -385,14 +394,11 @@ int main(int argc, char** argv) {
   double elapsed_s = 0;
   std::string counters;
   if (held) {
-    std::printf("WINDOW start\n");
-    std::fflush(stdout);
     hold.wait_for(c.clients);
     elapsed_s = (bench::now_ns() - start) / 1e9;
     counters = bench::SelfCounters::now().since(before);
     std::printf("WINDOW end\n");
     std::fflush(stdout);
-    char line[16];
     [[maybe_unused]] const char* got = std::fgets(line, sizeof line, stdin);  // EOF releases too
     hold.release();
     for (auto& t : threads) t.join();

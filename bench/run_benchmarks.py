@@ -25,7 +25,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "tests", "support"))
 from homingd_py import free_port  # noqa: E402  (one free-port helper for tests and benchmarks)
-import measured_causes as mc  # noqa: E402  (bench/: the counters read during the runs, the causes made of them)
+import measured_causes  # noqa: E402  (bench/: the counters read during the runs, the causes made of them)
 PYTHON = "/usr/bin/python3"  # Debian's, with python3-pymodbus
 
 # Module register addresses (hmi_maps/registers.csv): input registers.
@@ -120,10 +120,10 @@ class Bench:
 
     def load_watched(self, port, clients, mix, pids, duration=None, extra=()):
         """load(), and the /proc counters of the processes pids over the measured
-        stretch: modbus_load --sync says when its clients begin and when they are
-        done (still connected, so a server's per-connection threads can still
-        be read), then waits for our line before it closes. Returns (result,
-        {pid: counters})."""
+        stretch: modbus_load --sync waits for our line before its clients begin,
+        and again once they are done (still connected, so a server's
+        per-connection threads can still be read) before they close. Returns
+        (result, {pid: counters})."""
         argv = [self.path("modbus_load"), "--port", str(port), "--clients", str(clients), "--mix", mix,
                 "--duration", str(duration or self.duration), *extra]
         self.note(f"modbus_load {mix}", argv)
@@ -133,10 +133,12 @@ class Bench:
         try:
             before = after = None
             for line in p.stdout:
-                if line.startswith("WINDOW start"):
-                    before = mc.snapshots(pids)
+                if line.startswith("WINDOW ready"):
+                    before = measured_causes.snapshots(pids)
+                    p.stdin.write("\n")
+                    p.stdin.flush()
                 elif line.startswith("WINDOW end"):
-                    after = mc.snapshots(pids)
+                    after = measured_causes.snapshots(pids)
                     p.stdin.write("\n")
                     p.stdin.flush()
                     break
@@ -146,8 +148,8 @@ class Bench:
         if p.returncode != 0 or before is None or after is None:
             raise RuntimeError(f"{' '.join(argv)} --sync exited {p.returncode} (window seen: {before is not None}, "
                                f"{after is not None})")
-        return parse_result(out), {pid: mc.stretch(before[pid], after[pid]) if before[pid] and after[pid] else None
-                                   for pid in pids}
+        return parse_result(out), {pid: measured_causes.stretch(before[pid], after[pid])
+                                   if before[pid] and after[pid] else None for pid in pids}
 
     def read_diag(self, port):
         """diag.* input registers of homingd over Modbus (32-bit, high word first)."""
@@ -310,10 +312,10 @@ def idle(b, results, seconds):
         b.note("loop_floor (idle)", floor_argv)
         lf = subprocess.Popen(floor_argv, stdout=subprocess.PIPE, text=True)
         time.sleep(1)
-        c0, s0 = cpu_seconds(lf.pid), mc.snapshot(lf.pid)
+        c0, s0 = cpu_seconds(lf.pid), measured_causes.snapshot(lf.pid)
         time.sleep(seconds)
-        c1, s1 = cpu_seconds(lf.pid), mc.snapshot(lf.pid)
-        rows["cnt_floor"].append(mc.stretch(s0, s1) if s0 and s1 else None)
+        c1, s1 = cpu_seconds(lf.pid), measured_causes.snapshot(lf.pid)
+        rows["cnt_floor"].append(measured_causes.stretch(s0, s1) if s0 and s1 else None)
         out, _ = lf.communicate(timeout=30)
         rows["floor_cpu"].append((c1 - c0) / seconds * 100)
         rows["floor_idle"].append(parse_result(out))
@@ -321,10 +323,10 @@ def idle(b, results, seconds):
         hd = b.homingd(port, time_scale=1)
         try:
             time.sleep(1)
-            c0, s0 = cpu_seconds(hd.pid), mc.snapshot(hd.pid)
+            c0, s0 = cpu_seconds(hd.pid), measured_causes.snapshot(hd.pid)
             time.sleep(seconds)
-            c1, s1 = cpu_seconds(hd.pid), mc.snapshot(hd.pid)
-            rows["cnt_homingd"].append(mc.stretch(s0, s1) if s0 and s1 else None)
+            c1, s1 = cpu_seconds(hd.pid), measured_causes.snapshot(hd.pid)
+            rows["cnt_homingd"].append(measured_causes.stretch(s0, s1) if s0 and s1 else None)
             rows["homingd_cpu"].append((c1 - c0) / seconds * 100)
             rows["ratio_cpu"].append(rows["homingd_cpu"][-1] / max(rows["floor_cpu"][-1], 1e-9))
             rows["rss"].append(rss_kib(hd.pid))
@@ -628,11 +630,11 @@ def mqtt_section(m, clients=8):
 
 def engine(b, results):
     log("engine: Google Benchmark and homing repeatability")
-    ru0, m0 = mc.children_rusage(), mc.machine_jiffies()
+    ru0, m0 = measured_causes.children_rusage(), measured_causes.machine_jiffies()
     out = b.run("engine_step_bench", [b.path("engine_step_bench"), "--benchmark_min_time=0.5",
                                       "--benchmark_repetitions=3", "--benchmark_report_aggregates_only=true"],
                 timeout=120)
-    results["engine_rusage"] = mc.children_stretch(ru0, m0)
+    results["engine_rusage"] = measured_causes.children_stretch(ru0, m0)
     bench = {}
     for line in out.splitlines():
         m = re.match(r"(BM_\w+)_median\s+([\d.]+) ns\s+([\d.]+) ns", line)
@@ -777,7 +779,7 @@ def report(b, results, info, args, started, out_path):
         w("### Missed targets: by how much and why")
         w("")
         for name, measured, goal, ok, key in missed:
-            w(f"- **{name}**: {measured} against {goal}. {mc.cause(key, results)}")
+            w(f"- **{name}**: {measured} against {goal}. {measured_causes.cause(key, results)}")
         w("")
     else:
         w("Every target was met in this run.")
@@ -830,7 +832,7 @@ def report(b, results, info, args, started, out_path):
         w(f"| {clients} | {med(r['ratio_rps']):.2f}× ({per}) | {med(r['ratio_p99']):.2f}× ({per99}) "
           f"| {vf:.2f}× | {vp:.2f}× |")
     w("")
-    L.extend(mc.throughput_table(tp))
+    L.extend(measured_causes.throughput_table(tp))
 
     mx = results["mixes"]
     if mx:
@@ -883,7 +885,7 @@ def report(b, results, info, args, started, out_path):
       f"| {fmt(med([x['p99'] for x in idl['loop_idle']]))} | {fmt(med([x['p999'] for x in idl['loop_idle']]))} "
       f"| {fmt(med([x['max'] for x in idl['loop_idle']]))} | {idle_ratio:.2f}× |")
     w("")
-    L.extend(mc.loop_table(tp))
+    L.extend(measured_causes.loop_table(tp))
     eng_live = {c: med([x["engine_ns"] for x in tp[c]["loop_homingd"]]) for c in sorted(tp)}
     w("The engine's share of the period:")
     w("")
@@ -912,7 +914,7 @@ def report(b, results, info, args, started, out_path):
     w(f"| **homingd**, idle | {med(idl['homingd_cpu']):.2f} % | {med(idl['ratio_cpu']):.2f}× | {fmt(med(idl['rss']))} KiB VmRSS "
       f"(`diag.rss_kb` {fmt(med(idl['diag_rss']))} KiB) |")
     w("")
-    L.extend(mc.idle_table(idl))
+    L.extend(measured_causes.idle_table(idl))
     sw = idl["sim_write"]
     w("Then, on the same idle daemon, one client writes the simulator unit (`modbus_load --mix write10 "
       "--pause-ms 20`: FC16 of 10 simulator registers, written back unchanged, one every 20 ms, so the loop "
@@ -994,7 +996,7 @@ def report(b, results, info, args, started, out_path):
       f"({', '.join(f'{x:.2f}' for x in dr['eight_ratio'])}) | | |")
     w(f"| errors (homingd, 8 clients) | {sum(int(x['errors']) for x in dr['eight'])} | | |")
     w("")
-    L.extend(mc.durable_table(dr))
+    L.extend(measured_causes.durable_table(dr))
 
     # RTU.
     rt = results["rtu"]
@@ -1052,7 +1054,7 @@ def try_sections(b, results, args):
         if sec not in run:
             sys.exit(f"run_benchmarks: --try {sec}: not one of {', '.join(run)}")
         run[sec]()
-    sys.stdout.write(mc.try_report(results, sections))
+    sys.stdout.write(measured_causes.try_report(results, sections))
 
 
 def main():
