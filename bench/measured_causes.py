@@ -26,9 +26,11 @@ A missed target's cause is then a sentence generated here from those figures
 by fixed rules (which figure differs most from the reference, whether the
 cores were full); nothing in it is written by hand or carried over from an
 earlier run. Hardware counters (cycles, instructions) would add the work per
-request, but `perf stat` reports them as <not supported> on this VM, so only
-the kernel's scheduler counters are used.
+request; `perf stat` reports them as <not supported> on this VM (the counter
+tables say what perf said in the run), so the kernel's scheduler counters are
+what is used.
 """
+import functools
 import os
 import statistics
 import time
@@ -118,9 +120,15 @@ def stretch(a, b):
                         "ivcs": t1["ivcs"] - t0["ivcs"],
                         "wchans": {a["tasks"].get(tid, {}).get("wchan", ""), t1["wchan"]}})
     user, system = b["utime"] - a["utime"], b["stime"] - a["stime"]
+    # CPU: the threads' schedstat (nanoseconds) is exact; the process's utime +
+    # stime also counts threads that ended in the stretch but comes in clock
+    # ticks (10 ms here, as much as an idle daemon uses in a second), so it
+    # only adds what ended threads used.
     seen_cpu = sum(t["cpu_s"] for t in threads)
-    return {"seconds": secs, "user_s": user, "sys_s": system, "cpu_s": max(user + system, seen_cpu),
-            "threads": threads, "ended": len(set(a["tasks"]) - set(b["tasks"])),
+    ended = set(a["tasks"]) - set(b["tasks"])
+    cpu = seen_cpu + (max(user + system - seen_cpu, 0.0) if ended else 0.0)
+    return {"seconds": secs, "user_s": user, "sys_s": system, "cpu_s": cpu,
+            "threads": threads, "ended": len(ended),
             "busy_cores": busy / total * NCPU,
             "vcs": sum(t["vcs"] for t in threads), "ivcs": sum(t["ivcs"] for t in threads),
             "wait_s": sum(t["wait_s"] for t in threads), "slices": sum(t["slices"] for t in threads)}
@@ -137,6 +145,25 @@ def control_thread(s):
     first = min(others, key=lambda t: t["start_rank"])
     confirmed = any(w.startswith(SLEEPS_OF_A_PERIODIC_LOOP) or "nanosleep" in w for w in first["wchans"])
     return first, confirmed
+
+
+@functools.lru_cache(maxsize=None)
+def hardware_counters():
+    """Whether perf can count cycles and instructions here, as perf itself says
+    (a sentence for BENCHMARKS.md); read once per run."""
+    import shutil
+    import subprocess
+    if not shutil.which("perf"):
+        return "not read: perf is not installed"
+    try:
+        p = subprocess.run(["perf", "stat", "-x,", "-e", "instructions,cycles", "true"], capture_output=True,
+                           text=True, timeout=30)
+    except (OSError, subprocess.TimeoutExpired) as e:
+        return f"not read: perf stat failed ({e})"
+    lines = [x for x in p.stderr.splitlines() if ",instructions," in x or ",cycles," in x]
+    if not lines or any(x.startswith("<not") for x in lines):
+        return "not available on this machine (`perf stat -e instructions,cycles true` reports them <not supported>)"
+    return "available on this machine, but not read by this benchmark yet"
 
 
 def children_rusage():
@@ -389,7 +416,8 @@ def throughput_table(tp):
          "(involuntary in brackets), time per request the server's threads other than homingd's control loop and "
          "main thread (those that serve requests, whatever the design) waited on a run queue for a core, the "
          "server's threads (of them serving), the load generator's CPU per request, and how many of the "
-         f"{NCPU} cores the whole machine kept busy (by other processes, this script included).",
+         f"{NCPU} cores the whole machine kept busy (by other processes, this script included). Hardware counters "
+         f"(cycles, instructions per request): {hardware_counters()}.",
          "",
          "| clients | server | CPU µs/req | kernel | ctx switches/req | run-queue wait µs/req | threads (serving) | "
          "load generator CPU µs/req | cores busy (others) |",
