@@ -1088,13 +1088,13 @@ def main():
     b = Bench(build, work, args.duration, args.rounds)
     results = {"throughput": {}, "mixes": {}}
     try:
+        if args.try_sections:
+            try_sections(b, results, args)
+            return
         if args.only == "tls":
             tls(b, results)
             splice_tls_section(args.out, tls_section(b, results["tls"], only_info=info))
             log(f"run_benchmarks: replaced the TLS section of {args.out}")
-            return
-        if args.try_sections:
-            try_sections(b, results, args)
             return
         engine(b, results)
         idle(b, results, args.idle_seconds)
