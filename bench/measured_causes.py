@@ -28,7 +28,9 @@ cores were full); nothing in it is written by hand or carried over from an
 earlier run. Hardware counters (cycles, instructions) would add the work per
 request; `perf stat` reports them as <not supported> on this VM (the counter
 tables say what perf said in the run), so the kernel's scheduler counters are
-what is used.
+what is used, and a software-clock profile: the first round of each Modbus
+TCP comparison also runs `perf record -e cpu-clock -g` on the server over the
+same stretch, and its samples are counted by the system call they were in.
 """
 import functools
 import os
@@ -166,6 +168,134 @@ def hardware_counters():
     return "available on this machine, but not read by this benchmark yet"
 
 
+# --- a profile: where the CPU goes, by system call ----------------------------------
+
+class Profile:
+    """perf record of one process over a measured stretch (software cpu-clock
+    samples: this VM has no hardware counters), started disabled and enabled
+    through perf's control FIFO, so it covers the stretch and not perf's own
+    start. None of it when perf is missing or refuses."""
+
+    def __init__(self, pid, path):
+        self.path, self.proc = path, None
+        import shutil
+        import subprocess
+        if not shutil.which("perf"):
+            return
+        self.ctl, self.ack = path + ".ctl", path + ".ack"
+        for f in (self.ctl, self.ack):
+            os.mkfifo(f)
+        self.proc = subprocess.Popen(["perf", "record", "-q", "-e", "cpu-clock", "-F", "499", "-g", "-D", "-1",
+                                      "--control", f"fifo:{self.ctl},{self.ack}", "-p", str(pid), "-o", path],
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        # perf opens the FIFOs once attached; until then opening the control
+        # FIFO for writing fails (ENXIO). Never block on a perf that failed.
+        import errno
+        import fcntl
+        end = time.monotonic() + 10
+        self.ctl_fd = None
+        while self.ctl_fd is None and self.proc.poll() is None and time.monotonic() < end:
+            try:
+                self.ctl_fd = os.open(self.ctl, os.O_WRONLY | os.O_NONBLOCK)
+            except OSError as e:
+                if e.errno != errno.ENXIO:
+                    raise
+                time.sleep(0.01)
+        if self.ctl_fd is None:
+            self._give_up()
+            return
+        self.ack_fd = os.open(self.ack, os.O_RDONLY | os.O_NONBLOCK)
+        fcntl.fcntl(self.ack_fd, fcntl.F_SETFL, 0)  # blocking from here: perf holds the writing end
+
+    def _give_up(self):
+        if self.proc.poll() is None:
+            self.proc.kill()
+        self.proc.wait()
+        self.proc = None
+
+    def _command(self, what):
+        os.write(self.ctl_fd, (what + "\n").encode())
+        os.read(self.ack_fd, 16)  # "ack\n" once perf has done it (EOF if perf is gone)
+
+    def enable(self):
+        if self.proc:
+            self._command("enable")
+
+    def disable(self):
+        if self.proc:
+            self._command("disable")
+
+    def finish(self):
+        """Stops perf; returns {"samples": n, "by_call": {name: share}} or None."""
+        if not self.proc:
+            return None
+        import signal
+        import subprocess
+        os.close(self.ctl_fd)
+        os.close(self.ack_fd)
+        self.proc.send_signal(signal.SIGINT)
+        try:
+            self.proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            self._give_up()
+            return None
+        out = subprocess.run(["perf", "script", "-i", self.path, "-F", "tid,ip,sym"], capture_output=True,
+                             text=True, timeout=120).stdout
+        return by_system_call(out)
+
+
+def by_system_call(script):
+    """perf script's samples (a header line, then the call chain leaf first)
+    bucketed by the system call they were in (the __x64_sys_* frame), or
+    "user space", or "kernel outside a system call" (interrupts, softirqs)."""
+    counts, n = {}, 0
+    for block in script.split("\n\n"):
+        lines = [x.split() for x in block.strip().splitlines()[1:]]
+        if not lines:
+            continue
+        n += 1
+        syms = [x[1] if len(x) > 1 else "?" for x in lines]
+        kernel = [x for x in lines if len(x) > 1 and x[0].startswith("ffff")]
+        call = next((sym for sym in syms if sym.startswith(("__x64_sys_", "__ia32_sys_", "__arm64_sys_",
+                                                            "__do_sys_"))), None)
+        if call:
+            name = call.split("sys_", 1)[1]
+        elif kernel and lines[0][0].startswith("ffff"):
+            name = "kernel outside a system call"
+        else:
+            name = "user space"
+        counts[name] = counts.get(name, 0) + 1
+    return {"samples": n, "by_call": {k: v / n for k, v in counts.items()}} if n else None
+
+
+# What a system call's time means for a server here (for the sentence only).
+CALL_MEANING = {"futex": "threads waiting for and waking each other", "poll": "waiting on sockets",
+                "ppoll": "waiting on sockets", "select": "waiting on sockets", "pselect6": "waiting on sockets",
+                "epoll_wait": "waiting on sockets", "recvfrom": "receiving", "read": "reading",
+                "sendto": "sending", "write": "writing", "clock_nanosleep": "a loop's sleep",
+                "user space": "its own code and libraries", "fsync": "the disk's flush",
+                "fdatasync": "the disk's flush"}
+
+
+def profile_sentence(hp, rp, h_cpu_us, r_cpu_us, who="bare libmodbus"):
+    """The largest extra CPU per request by system call, homingd against the reference."""
+    if not hp or not rp:
+        return ""
+    def top(p, k=4):
+        return ", ".join(f"{name} {share * 100:.0f} %" for name, share in
+                         sorted(p["by_call"].items(), key=lambda x: -x[1])[:k])
+    diffs = {name: hp["by_call"].get(name, 0) * h_cpu_us - rp["by_call"].get(name, 0) * r_cpu_us
+             for name in set(hp["by_call"]) | set(rp["by_call"])}
+    name, extra = max(diffs.items(), key=lambda x: x[1])
+    s = (f"Profile of round 1 (perf record, cpu-clock, {hp['samples']} and {rp['samples']} samples), CPU by system "
+         f"call: homingd {top(hp)}; {who} {top(rp)}.")
+    if extra > 0:
+        meaning = CALL_MEANING.get(name)
+        s += (f" The largest extra is {name}{f' ({meaning})' if meaning else ''}: {_n(extra)} µs per request more "
+              f"than {who}.")
+    return s
+
+
 def children_rusage():
     import resource
     return resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -213,9 +343,12 @@ def serving_threads(s):
     return [t for t in s["threads"] if not t["main"] and (ctl is None or t["tid"] != ctl["tid"])]
 
 
-def per_request(server, requests, client=None):
-    """Figures per request of a server stretch (and of its load generator)."""
+def per_request(server, requests, client=None, seconds=None):
+    """Figures per request of a server stretch (and of its load generator);
+    seconds: the load's own length, over which the cores are counted (the
+    counters' stretch also holds the short idle moments of their reading)."""
     n = max(requests, 1)
+    secs = seconds or server.get("seconds")
     cpu = server["cpu_s"]
     serving = serving_threads(server) if "threads" in server else []
     out = {"cpu_us": cpu / n * 1e6, "kernel": kernel_share(server["user_s"], server["sys_s"]),
@@ -223,11 +356,11 @@ def per_request(server, requests, client=None):
            if "threads" in server else server["wait_s"] / n * 1e6,
            "cs": (server["vcs"] + server["ivcs"]) / n, "ivcs": server["ivcs"] / n,
            "wait_us": server["wait_s"] / n * 1e6, "threads": len(server.get("threads", [])) or 1,
-           "user_us": server["user_s"] / n * 1e6, "sys_us": server["sys_s"] / n * 1e6, "cores": cpu / server["seconds"]
-           if "seconds" in server else None, "busy": server.get("busy_cores")}
+           "user_us": server["user_s"] / n * 1e6, "sys_us": server["sys_s"] / n * 1e6,
+           "cores": cpu / secs if secs else None, "busy": server.get("busy_cores")}
     if client:
         out["client_cpu_us"] = client["cpu_s"] / n * 1e6
-        out["client_cores"] = client["cpu_s"] / server["seconds"] if "seconds" in server else None
+        out["client_cores"] = client["cpu_s"] / secs if secs else None
     if out["busy"] is not None and out["cores"] is not None:
         out["others"] = max(out["busy"] - out["cores"] - (out.get("client_cores") or 0), 0.0)
     return out
@@ -309,7 +442,7 @@ def throughput_figures(rows):
         for res, cnt in zip(rows[who], rows.get("cnt_" + who, [])):
             if cnt is None:
                 continue
-            f = per_request(cnt, _requests(res), self_counters(res))
+            f = per_request(cnt, _requests(res), self_counters(res), res.get("seconds"))
             if who == "homingd":
                 ctl, ok = control_thread(cnt)
                 if ctl:
@@ -318,6 +451,9 @@ def throughput_figures(rows):
                     f["control_confirmed"] = 1.0 if ok else 0.0
             per.append(f)
         out[who] = medians(per)
+        if out[who] is not None:
+            out[who]["profile"] = next((c["profile"] for c in rows.get("cnt_" + who, []) if c and c.get("profile")),
+                                       None)
     return out if out.get("bare") and out.get("homingd") else None
 
 
@@ -348,6 +484,7 @@ def throughput_cause(clients, rows, ratio):
             part.append(f"{_n(h['control_cpu_us'])} µs per request is its control loop's ({h['control_cores']:.2f} "
                         "of a core)")
         s.append("; ".join(part) + ".")
+        s.append(profile_sentence(h["profile"], r["profile"], h["cpu_us"], r["cpu_us"]))
     else:
         idle_h, idle_r = max(NCPU - h["busy"], 0), max(NCPU - r["busy"], 0)
         more_others, more_idle = h.get("others", 0) - r.get("others", 0), idle_h - idle_r
@@ -363,7 +500,7 @@ def throughput_cause(clients, rows, ratio):
             s.append(f"The larger loss is the cores: {idle_h:.2f} of {NCPU} stood idle during homingd's rounds "
                      f"({idle_r:.2f} during the bare server's), so the requests waited rather than computed: "
                      + _waiting(h, r))
-    return " ".join(s)
+    return " ".join(x for x in s if x)
 
 
 def p99_cause(clients, rows):
@@ -387,7 +524,9 @@ def p99_cause(clients, rows):
                   "CPU per request": "the work per request itself is larger, and the tail scales with it."}[big[0]])
     if h["threads"] > r["threads"]:
         s.append(f"homingd ran {h['threads']:.0f} threads during the load, the bare server {r['threads']:.0f}.")
-    return " ".join(s)
+    if big and big[0] == "CPU per request":
+        s.append(profile_sentence(h["profile"], r["profile"], h["cpu_us"], r["cpu_us"]))
+    return " ".join(x for x in s if x)
 
 
 def _evidence(h, r):
@@ -435,6 +574,20 @@ def throughput_table(tp):
                      f"| {_n(x.get('client_cpu_us'))} "
                      f"| {x['busy']:.2f} ({x.get('others', 0):.2f}) |")
     L.append("")
+    prof = [(c, throughput_figures(tp[c])) for c in sorted(tp)]
+    prof = [(c, f) for c, f in prof if f and f["homingd"]["profile"] and f["bare"]["profile"]]
+    if prof:
+        L += ["Where the servers' CPU went in round 1 (`perf record -e cpu-clock -g` over the same stretch; each "
+              "sample counted under the system call it was in, else user space or the kernel outside a system call; "
+              "the four largest shares):", "",
+              "| clients | server | samples | CPU by system call |", "|---:|---|---:|---|"]
+        for c, f in prof:
+            for who, label in (("bare", "bare libmodbus"), ("homingd", "**homingd**")):
+                pr = f[who]["profile"]
+                top = ", ".join(f"{name} {share * 100:.0f} %" for name, share in
+                                sorted(pr["by_call"].items(), key=lambda x: -x[1])[:4])
+                L.append(f"| {c} | {label} | {pr['samples']} | {top} |")
+        L.append("")
     return L if any_row else []
 
 
@@ -643,10 +796,11 @@ def durable_figures(dr):
     for cnt1, res1, cnt8, res8, b in zip(dr.get("cnt_one", []), dr["homingd"], dr.get("cnt_eight", []), dr["eight"],
                                          dr["bare"]):
         if cnt1:
-            one.append(per_request(cnt1, _requests(res1), self_counters(res1)) | {"p50": res1["p50_us"],
-                                                                                   "p99": res1["p99_us"]})
+            one.append(per_request(cnt1, _requests(res1), self_counters(res1), res1.get("seconds"))
+                       | {"p50": res1["p50_us"], "p99": res1["p99_us"]})
         if cnt8:
-            eight.append(per_request(cnt8, _requests(res8), self_counters(res8)) | {"rps": res8["rps"]})
+            eight.append(per_request(cnt8, _requests(res8), self_counters(res8), res8.get("seconds"))
+                         | {"rps": res8["rps"]})
         sc = self_counters(b)
         if sc:
             n = max(b["commits"], 1)

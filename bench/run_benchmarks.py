@@ -118,38 +118,51 @@ class Bench:
                 "--duration", str(duration or self.duration), *extra]
         return parse_result(self.run(f"modbus_load {mix}", argv, timeout=(duration or self.duration) + 30))
 
-    def load_watched(self, port, clients, mix, pids, duration=None, extra=()):
+    def load_watched(self, port, clients, mix, pids, duration=None, extra=(), profile=False):
         """load(), and the /proc counters of the processes pids over the measured
         stretch: modbus_load --sync waits for our line before its clients begin,
         and again once they are done (still connected, so a server's
         per-connection threads can still be read) before they close. Returns
-        (result, {pid: counters})."""
+        (result, {pid: counters}); profile: also a perf profile of pids[0] over
+        the stretch, in its counters as "profile"."""
         argv = [self.path("modbus_load"), "--port", str(port), "--clients", str(clients), "--mix", mix,
                 "--duration", str(duration or self.duration), *extra]
         self.note(f"modbus_load {mix}", argv)
         p = subprocess.Popen(argv + ["--sync"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         killer = threading.Timer((duration or self.duration) + 30, p.kill)
         killer.start()
+        prof = None
         try:
             before = after = None
             for line in p.stdout:
                 if line.startswith("WINDOW ready"):
+                    # perf first: its start (a good part of a second) stays outside the counters' stretch.
+                    if profile:
+                        prof = measured_causes.Profile(pids[0], os.path.join(self.work, f"perf.{self.seq}.data"))
+                        self.seq += 1
+                        prof.enable()
                     before = measured_causes.snapshots(pids)
                     p.stdin.write("\n")
                     p.stdin.flush()
                 elif line.startswith("WINDOW end"):
                     after = measured_causes.snapshots(pids)
+                    if prof:
+                        prof.disable()
                     p.stdin.write("\n")
                     p.stdin.flush()
                     break
             out, _ = p.communicate()
         finally:
             killer.cancel()
+            profiled = prof.finish() if prof else None
         if p.returncode != 0 or before is None or after is None:
             raise RuntimeError(f"{' '.join(argv)} --sync exited {p.returncode} (window seen: {before is not None}, "
                                f"{after is not None})")
-        return parse_result(out), {pid: measured_causes.stretch(before[pid], after[pid])
-                                   if before[pid] and after[pid] else None for pid in pids}
+        counters = {pid: measured_causes.stretch(before[pid], after[pid]) if before[pid] and after[pid] else None
+                    for pid in pids}
+        if profile and counters[pids[0]]:
+            counters[pids[0]]["profile"] = profiled
+        return parse_result(out), counters
 
     def read_diag(self, port):
         """diag.* input registers of homingd over Modbus (32-bit, high word first)."""
@@ -223,7 +236,8 @@ def throughput(b, clients_list, results):
             b.note("loop_floor", floor_argv)
             lf = subprocess.Popen(floor_argv, stdout=subprocess.PIPE, text=True)
             try:
-                bare, cnt = b.load_watched(port, clients, "production", [srv.pid], extra=["--home"])
+                # Round 1 also profiles the server (perf): where its CPU goes, for the causes.
+                bare, cnt = b.load_watched(port, clients, "production", [srv.pid], extra=["--home"], profile=r == 0)
                 rows["cnt_bare"].append(cnt[srv.pid])
                 lf_out, _ = lf.communicate(timeout=30)
             finally:
@@ -233,7 +247,7 @@ def throughput(b, clients_list, results):
             port = free_port()
             hd = b.homingd(port)
             try:
-                mine, cnt = b.load_watched(port, clients, "production", [hd.pid], extra=["--home"])
+                mine, cnt = b.load_watched(port, clients, "production", [hd.pid], extra=["--home"], profile=r == 0)
                 rows["cnt_homingd"].append(cnt[hd.pid])
                 diag = b.read_diag(port)
             finally:
