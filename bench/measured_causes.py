@@ -810,6 +810,7 @@ def durable_figures(dr):
     h1, h8, r = medians(one), medians(eight), medians(bare)
     if not h1 or not r:
         return None
+    h1["profile"] = next((c["profile"] for c in dr.get("cnt_one", []) if c and c.get("profile")), None)
     return {"one": h1, "eight": h8, "bare": r}
 
 
@@ -831,18 +832,23 @@ def durable_cause(dr):
     if gap <= 0:
         s.append("A typical write (p50) costs no more than a bare commit here, so the difference is in the tail "
                  "alone: single slow writes, which the means above do not separate.")
-        return " ".join(s)
-    s.append(f"homingd's p50 exceeds the bare commit's by {_n(gap, 0)} µs; beyond the bare commit's, the write "
-             f"costs {_n(cpu_more, 0)} µs more CPU (server and client: one request in flight, so they add up) and "
-             f"{_n(wait_more, 0)} µs more run-queue wait.")
-    if cpu_more + wait_more < 0.5 * gap:
-        s.append("Most of the difference is neither: time asleep (the disk's flush, hand-offs between threads).")
-    elif cpu_more >= wait_more:
-        s.append("The larger share is CPU: the work around the commit (the Modbus round trip, the decision, the "
-                 "audit row), not the disk.")
     else:
-        s.append(f"The larger share is waiting for a core: the machine was {h['busy']:.2f} of {NCPU} cores busy, "
-                 f"{h.get('others', 0):.2f} by other processes.")
+        s.append(f"homingd's p50 exceeds the bare commit's by {_n(gap, 0)} µs; beyond the bare commit's, the write "
+                 f"costs {_n(cpu_more, 0)} µs more CPU (server and client: one request in flight, so they add up) "
+                 f"and {_n(wait_more, 0)} µs more run-queue wait.")
+        if cpu_more + wait_more < 0.5 * gap:
+            s.append("Most of the difference is neither: time asleep (the disk's flush, hand-offs between threads).")
+        elif cpu_more >= wait_more:
+            s.append("The larger share is CPU: the work around the commit (the Modbus round trip, the decision, the "
+                     "audit row), not the disk.")
+        else:
+            s.append(f"The larger share is waiting for a core: the machine was {h['busy']:.2f} of {NCPU} cores "
+                     f"busy, {h.get('others', 0):.2f} by other processes.")
+    pr = h.get("profile")
+    if pr:
+        s.append(f"Profile of round 1 (perf record, cpu-clock, {pr['samples']} samples), homingd's CPU by system "
+                 "call: " + ", ".join(f"{name} {share * 100:.0f} %" for name, share in
+                                      sorted(pr["by_call"].items(), key=lambda x: -x[1])[:5]) + ".")
     return " ".join(s)
 
 

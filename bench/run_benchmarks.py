@@ -369,7 +369,9 @@ def durable(b, results, writes):
         port = free_port()
         hd = b.homingd(port, time_scale=1)
         try:
-            mine, cnt = b.load_watched(port, 1, "durable", [hd.pid], duration=60, extra=["--requests", str(writes)])
+            # Round 1 also profiles homingd (perf): where the CPU of a write goes, for the cause.
+            mine, cnt = b.load_watched(port, 1, "durable", [hd.pid], duration=60, extra=["--requests", str(writes)],
+                                       profile=r == 0)
             rows["cnt_one"].append(cnt[hd.pid])
             # Eight clients each writing its own settings: the group commit's throughput.
             eight, cnt = b.load_watched(port, 8, "durable", [hd.pid], duration=5)
