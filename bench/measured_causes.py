@@ -1,16 +1,16 @@
 """Counters read while the benchmarks run, and the cause sentences made of them.
 
-run_benchmarks.py reads, at the edges of each measured stretch (modbus_load
---sync holds its clients, connected and idle, before they begin and after
-they are done, until these reads are over),
-the kernel's counters of the server under load and of the reference it is
-compared with:
+run_benchmarks.py reads, at the edges of each measured stretch, the kernel's
+counters of the server under load and of the reference it is compared with
+(modbus_load --sync holds its clients, connected and idle, before they begin
+and after they are done, until these reads are over):
 
   /proc/PID/stat            CPU time of the whole process, user and system
                             (threads that ended inside the stretch included)
   /proc/PID/task/TID/stat   a thread's name (comm)
-  .../schedstat             a thread's CPU time, run-queue wait and number of
-                            time slices (wake-ups) in nanoseconds
+  .../schedstat             a thread's CPU time and run-queue wait (ns), and
+                            how often it was put on a CPU (its wake-ups, and
+                            its returns after a preemption)
   .../status                voluntary and involuntary context switches
   .../wchan                 where a sleeping thread waits (to recognise the
                             control loop: it sleeps in clock_nanosleep or ppoll)
@@ -124,7 +124,7 @@ def stretch(a, b):
     user, system = b["utime"] - a["utime"], b["stime"] - a["stime"]
     # CPU: the threads' schedstat (nanoseconds) is exact; the process's utime +
     # stime also counts threads that ended in the stretch but comes in clock
-    # ticks (10 ms here, as much as an idle daemon uses in a second), so it
+    # ticks (1/CLK_TCK: 10 ms here, what an idle daemon uses in a second), so it
     # only adds what ended threads used.
     seen_cpu = sum(t["cpu_s"] for t in threads)
     ended = set(a["tasks"]) - set(b["tasks"])
@@ -214,8 +214,11 @@ class Profile:
         self.proc = None
 
     def _command(self, what):
+        import select
         os.write(self.ctl_fd, (what + "\n").encode())
-        os.read(self.ack_fd, 16)  # "ack\n" once perf has done it (EOF if perf is gone)
+        # "ack\n" once perf has done it (EOF if perf is gone); never wait long for a stuck perf.
+        if select.select([self.ack_fd], [], [], 10)[0]:
+            os.read(self.ack_fd, 16)
 
     def enable(self):
         if self.proc:
@@ -687,7 +690,8 @@ def idle_figures(idl):
         hs.append({"cpu_pct": cnt["cpu_s"] / secs * 100, "wakes": wakes,
                    "cpu_us": cnt["cpu_s"] / max(cnt["slices"], 1) * 1e6, "threads": len(cnt["threads"])})
         ctl, _ = control_thread(cnt)
-        tops.append([(_role(t, ctl), t["slices"] / secs, t["cpu_s"] / secs * 100) for t in cnt["threads"]])
+        comm = next((t["comm"] for t in cnt["threads"] if t["main"]), None)
+        tops.append([(_role(t, ctl, comm), t["slices"] / secs, t["cpu_s"] / secs * 100) for t in cnt["threads"]])
         fsecs = fc["seconds"]
         rs.append({"cpu_pct": fc["cpu_s"] / fsecs * 100, "wakes": fc["slices"] / fsecs,
                    "cpu_us": fc["cpu_s"] / max(fc["slices"], 1) * 1e6})
@@ -704,11 +708,15 @@ def idle_figures(idl):
     return {"homingd": h, "bare": r, "threads": threads}
 
 
-def _role(t, ctl):
+def _role(t, ctl, process_comm):
+    """A thread's name in the tables: its own when the program names it (comm
+    other than the process's), else its role or its place in start order."""
     if t["main"]:
         return "main thread"
     if ctl is not None and t["tid"] == ctl["tid"]:
-        return "control loop"
+        return "control loop" + (f" (\"{t['comm']}\")" if t["comm"] != process_comm else "")
+    if t["comm"] != process_comm:
+        return f"\"{t['comm']}\" (started {_ordinal(t['start_rank'])})"
     return f"thread started {_ordinal(t['start_rank'])}"
 
 
