@@ -185,8 +185,7 @@ class Profile:
         self.ctl, self.ack = path + ".ctl", path + ".ack"
         for f in (self.ctl, self.ack):
             os.mkfifo(f)
-        self.proc = subprocess.Popen(["perf", "record", "-q", "-e", "cpu-clock", "-F", "499", "-g", "-D", "-1",
-                                      "--control", f"fifo:{self.ctl},{self.ack}", "-p", str(pid), "-o", path],
+        self.proc = subprocess.Popen(self.argv(pid, path, f"fifo:{self.ctl},{self.ack}"),
                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         # perf opens the FIFOs once attached; until then opening the control
         # FIFO for writing fails (ENXIO). Never block on a perf that failed.
@@ -206,6 +205,11 @@ class Profile:
             return
         self.ack_fd = os.open(self.ack, os.O_RDONLY | os.O_NONBLOCK)
         fcntl.fcntl(self.ack_fd, fcntl.F_SETFL, 0)  # blocking from here: perf holds the writing end
+
+    @staticmethod
+    def argv(pid, path, control="fifo:CTL,ACK"):
+        return ["perf", "record", "-q", "-e", "cpu-clock", "-F", "499", "-g", "-D", "-1", "--control", control,
+                "-p", str(pid), "-o", path]
 
     def _give_up(self):
         if self.proc.poll() is None:

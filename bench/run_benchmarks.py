@@ -126,9 +126,11 @@ class Bench:
         (result, {pid: counters}); profile: also a perf profile of pids[0] over
         the stretch, in its counters as "profile"."""
         argv = [self.path("modbus_load"), "--port", str(port), "--clients", str(clients), "--mix", mix,
-                "--duration", str(duration or self.duration), *extra]
+                "--duration", str(duration or self.duration), *extra, "--sync"]
         self.note(f"modbus_load {mix}", argv)
-        p = subprocess.Popen(argv + ["--sync"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        if profile:
+            self.note("perf record", measured_causes.Profile.argv("PID", "$WORK/perf.data"))
+        p = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         killer = threading.Timer((duration or self.duration) + 30, p.kill)
         killer.start()
         prof = None
@@ -156,7 +158,7 @@ class Bench:
             killer.cancel()
             profiled = prof.finish() if prof else None
         if p.returncode != 0 or before is None or after is None:
-            raise RuntimeError(f"{' '.join(argv)} --sync exited {p.returncode} (window seen: {before is not None}, "
+            raise RuntimeError(f"{' '.join(argv)} exited {p.returncode} (window seen: {before is not None}, "
                                f"{after is not None})")
         counters = {pid: measured_causes.stretch(before[pid], after[pid]) if before[pid] and after[pid] else None
                     for pid in pids}
