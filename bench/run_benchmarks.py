@@ -130,7 +130,7 @@ class Bench:
         self.note(f"modbus_load {mix}", argv)
         if profile:
             self.note("perf record", measured_causes.Profile.argv("PID", "$WORK/perf.data"))
-        p = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        p = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         killer = threading.Timer((duration or self.duration) + 30, p.kill)
         killer.start()
         prof = None
@@ -153,13 +153,14 @@ class Bench:
                     p.stdin.write("\n")
                     p.stdin.flush()
                     break
-            out, _ = p.communicate()
+            out, err = p.communicate()
         finally:
             killer.cancel()
             profiled = prof.finish() if prof else None
         if p.returncode != 0 or before is None or after is None:
+            hint = " (a modbus_load older than --sync: rebuild the build directory)" if "--sync" in err else ""
             raise RuntimeError(f"{' '.join(argv)} exited {p.returncode} (window seen: {before is not None}, "
-                               f"{after is not None})")
+                               f"{after is not None}){hint}: {err[-1500:]}")
         counters = {pid: measured_causes.stretch(before[pid], after[pid]) if before[pid] and after[pid] else None
                     for pid in pids}
         if profile and counters[pids[0]]:
