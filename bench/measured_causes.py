@@ -136,14 +136,22 @@ def stretch(a, b):
             "wait_s": sum(t["wait_s"] for t in threads), "slices": sum(t["slices"] for t in threads)}
 
 
+CONTROL_THREAD_NAME = "control"  # homingd names its control loop's thread so (pthread_setname_np)
+
+
 def control_thread(s):
-    """homingd's control loop: the first thread it starts (ControlLoop::start is
-    the first thing serve() in server/daemon.cpp does), confirmed when it was
-    seen asleep where a periodic loop sleeps (clock_nanosleep, or ppoll when
-    idle). Returns (thread, confirmed) or (None, False)."""
+    """homingd's control loop: the thread named CONTROL_THREAD_NAME; in a
+    homingd that does not name its threads, the first thread it starts
+    (ControlLoop::start is the first thing serve() in server/daemon.cpp does),
+    confirmed when it was seen asleep where a periodic loop sleeps
+    (clock_nanosleep, or ppoll when idle). Returns (thread, confirmed) or
+    (None, False)."""
     others = [t for t in s["threads"] if not t["main"]]
     if not others:
         return None, False
+    named = [t for t in others if t["comm"] == CONTROL_THREAD_NAME]
+    if named:
+        return named[0], True
     first = min(others, key=lambda t: t["start_rank"])
     confirmed = any(w.startswith(SLEEPS_OF_A_PERIODIC_LOOP) or "nanosleep" in w for w in first["wchans"])
     return first, confirmed
@@ -317,6 +325,27 @@ def children_stretch(ru0, m0):
             "busy": (m1[0] - m0[0]) / max(m1[1] - m0[1], 1) * NCPU}
 
 
+def thread_groups(s):
+    """CPU seconds of a stretch by thread, threads grouped by name (a number at
+    the end of a name is one of several alike: "tcp-loop-0", "tcp-loop-1" make
+    "tcp-loop-N"); threads the program does not name go by role."""
+    import re
+    ctl, _ = control_thread(s)
+    comm = next((t["comm"] for t in s["threads"] if t["main"]), None)
+    out = {}
+    for t in s["threads"]:
+        if t["main"]:
+            g = "main thread"
+        elif ctl is not None and t["tid"] == ctl["tid"]:
+            g = "control loop"
+        elif t["comm"] != comm:
+            g = re.sub(r"\d+$", "N", t["comm"])
+        else:
+            g = "unnamed threads"
+        out[g] = out.get(g, 0.0) + t["cpu_s"]
+    return out
+
+
 def self_counters(result):
     """The counters a reference or the load generator printed on its RESULT line."""
     if "cpu_user_us" not in result:
@@ -411,6 +440,10 @@ def _kern(v):
     return "" if v is None else f" ({v * 100:.0f} % kernel)"
 
 
+def _groups(groups, k=5):
+    return ", ".join(f"{name} {cores:.2f}" for name, cores in sorted(groups.items(), key=lambda x: -x[1])[:k])
+
+
 def _threads(n):
     return f"{n:.0f} thread{'' if round(n) == 1 else 's'}"
 
@@ -444,6 +477,7 @@ def _requests(x):
 def throughput_figures(rows):
     """Per-round figures of homingd and of the bare server (medians over the rounds)."""
     out = {}
+    groups = []
     for who in ("bare", "homingd"):
         per = []
         for res, cnt in zip(rows[who], rows.get("cnt_" + who, [])):
@@ -451,6 +485,8 @@ def throughput_figures(rows):
                 continue
             f = per_request(cnt, _requests(res), self_counters(res), res.get("seconds"))
             if who == "homingd":
+                secs = res.get("seconds") or cnt["seconds"]
+                groups.append({g: c / secs for g, c in thread_groups(cnt).items()})
                 ctl, ok = control_thread(cnt)
                 if ctl:
                     f["control_cores"] = ctl["cpu_s"] / cnt["seconds"]
@@ -461,6 +497,9 @@ def throughput_figures(rows):
         if out[who] is not None:
             out[who]["profile"] = next((c["profile"] for c in rows.get("cnt_" + who, []) if c and c.get("profile")),
                                        None)
+    if out.get("homingd") is not None:
+        keys = {k for g in groups for k in g}
+        out["homingd"]["groups"] = {k: statistics.median(g.get(k, 0.0) for g in groups) for k in keys}
     return out if out.get("bare") and out.get("homingd") else None
 
 
@@ -490,6 +529,8 @@ def throughput_cause(clients, rows, ratio):
         if "control_cpu_us" in h:
             part.append(f"{_n(h['control_cpu_us'])} µs per request is its control loop's ({h['control_cores']:.2f} "
                         "of a core)")
+        if len(h.get("groups", {})) > 2:
+            part.append("its threads' cores: " + _groups(h["groups"]))
         s.append("; ".join(part) + ".")
         s.append(profile_sentence(h["profile"], r["profile"], h["cpu_us"], r["cpu_us"]))
     else:
@@ -581,6 +622,13 @@ def throughput_table(tp):
                      f"| {_n(x.get('client_cpu_us'))} "
                      f"| {x['busy']:.2f} ({x.get('others', 0):.2f}) |")
     L.append("")
+    by = [(c, throughput_figures(tp[c])) for c in sorted(tp)]
+    by = [(c, f["homingd"]["groups"]) for c, f in by if f and f["homingd"].get("groups")]
+    if by and any(len(g) > 3 for _, g in by):  # worth a line only when homingd names its threads
+        L += ["homingd's CPU by thread in the same rounds (cores, medians; threads grouped by the name homingd gives "
+              "them, a final number as N):", ""]
+        L += [f"- {c} client{'s' if c > 1 else ''}: {_groups(g, 8)}" for c, g in by]
+        L.append("")
     prof = [(c, throughput_figures(tp[c])) for c in sorted(tp)]
     prof = [(c, f) for c, f in prof if f and f["homingd"]["profile"] and f["bare"]["profile"]]
     if prof:
