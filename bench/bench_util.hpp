@@ -1,7 +1,9 @@
 #pragma once
 // Small helpers shared by the benchmark programs: a monotonic clock,
 // percentiles of a latency sample, "--key value" argument parsing, and
-// reading a whole reply from a socket.
+// reading a whole reply from a socket, the process's own CPU and scheduler
+// counters over a measured stretch.
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <time.h>
 
@@ -99,6 +101,46 @@ struct LatenessHistogram {
       if (seen >= wanted) return i == kBuckets - 1 ? max_us : static_cast<double>(i);
     }
     return max_us;
+  }
+};
+
+// The process's own CPU and scheduler counters, read before and after the
+// stretch a program measures, so run_benchmarks.py can explain a figure by
+// what the program spent on it (getrusage: every thread of the process;
+// /proc/self/schedstat: run-queue wait and time slices of the calling thread,
+// which is the only one in loop_floor and sqlite_commit).
+struct SelfCounters {
+  double user_us = 0, sys_us = 0;
+  long vcs = 0, ivcs = 0;
+  double rq_wait_us = 0;
+  long slices = 0;
+
+  static SelfCounters now() {
+    SelfCounters c;
+    rusage ru{};
+    getrusage(RUSAGE_SELF, &ru);
+    c.user_us = ru.ru_utime.tv_sec * 1e6 + ru.ru_utime.tv_usec;
+    c.sys_us = ru.ru_stime.tv_sec * 1e6 + ru.ru_stime.tv_usec;
+    c.vcs = ru.ru_nvcsw;
+    c.ivcs = ru.ru_nivcsw;
+    if (std::FILE* f = std::fopen("/proc/thread-self/schedstat", "r")) {
+      unsigned long long run_ns = 0, wait_ns = 0, n = 0;
+      if (std::fscanf(f, "%llu %llu %llu", &run_ns, &wait_ns, &n) == 3) {
+        c.rq_wait_us = wait_ns / 1e3;
+        c.slices = static_cast<long>(n);
+      }
+      std::fclose(f);
+    }
+    return c;
+  }
+  // " cpu_user_us=... cpu_sys_us=... vcs=... ivcs=... rq_wait_us=... slices=..." of (this - before),
+  // appended to a RESULT line.
+  std::string since(const SelfCounters& b) const {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, " cpu_user_us=%.0f cpu_sys_us=%.0f vcs=%ld ivcs=%ld rq_wait_us=%.0f slices=%ld",
+                  user_us - b.user_us, sys_us - b.sys_us, vcs - b.vcs, ivcs - b.ivcs, rq_wait_us - b.rq_wait_us,
+                  slices - b.slices);
+    return buf;
   }
 };
 

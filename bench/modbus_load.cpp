@@ -31,7 +31,18 @@
 // 1) every 5 ms and writes cmd.home_all (coil 0) whenever no cycle runs, so
 // homingd homes on its simulator during the load.
 //
-// Prints one line "RESULT key=value ..." (for scripts) after a readable one.
+// --sync: for run_benchmarks.py, which reads the server's /proc counters at the
+// edges of the measured stretch: once the clients are connected it prints
+// "WINDOW ready" and starts them only when a line arrives on stdin; once every
+// client is done, before any closes its connection (a server thread per
+// connection is still there to be read), it prints "WINDOW end" and closes
+// when the next line arrives. Both reads thus happen while the clients are
+// idle: a reader starved of CPU by the load itself is late without cutting
+// the stretch short.
+//
+// Prints one line "RESULT key=value ..." (for scripts) after a readable one,
+// with the load generator's own CPU and context switches over the stretch
+// (bench::SelfCounters), so the load's cost to the shared cores is known.
 #include <arpa/inet.h>
 #include <modbus/modbus.h>
 #include <netinet/in.h>
@@ -41,6 +52,7 @@
 
 #include <atomic>
 #include <cerrno>
+#include <condition_variable>
 #include <cstring>
 #include <mutex>
 #include <thread>
@@ -160,8 +172,31 @@ int exception_of(int err) {
   return -1;
 }
 
+// --sync: clients that are done wait here, connected, until released.
+struct Hold {
+  std::mutex m;
+  std::condition_variable cv;
+  int arrived = 0;
+  bool released = false;
+  void arrive_and_wait() {
+    std::unique_lock lock(m);
+    ++arrived;
+    cv.notify_all();
+    cv.wait(lock, [this] { return released; });
+  }
+  void wait_for(int n) {
+    std::unique_lock lock(m);
+    cv.wait(lock, [&] { return arrived >= n; });
+  }
+  void release() {
+    std::lock_guard lock(m);
+    released = true;
+    cv.notify_all();
+  }
+};
+
 void run_client(const Config& c, int index, ClientResult& r, const std::atomic<bool>& go,
-                const std::atomic<std::int64_t>& deadline_ns) {
+                const std::atomic<std::int64_t>& deadline_ns, Hold* hold) {
   const int durable_addr = c.durable_addr + 100 * (index % 6);
   const int durable_word = 7 - 2 * ((index / 6) % 3);
   modbus_t* ctx = nullptr;
@@ -258,6 +293,7 @@ void run_client(const Config& c, int index, ClientResult& r, const std::atomic<b
     }
     if (c.pause_ms > 0) std::this_thread::sleep_for(std::chrono::milliseconds(c.pause_ms));
   }
+  if (hold) hold->arrive_and_wait();
   disconnect();
 }
 
@@ -298,7 +334,7 @@ int main(int argc, char** argv) {
                 {{"host", "127.0.0.1"}, {"port", "1502"}, {"clients", "1"}, {"duration", "3"}, {"mix", "mixed"},
                  {"unit", "1"}, {"write-unit", "247"}, {"read-addr", "100"}, {"write-addr", "102"},
                  {"durable-addr", "120"}, {"requests", "0"}, {"raw", "false"}, {"home", "false"}, {"rtu", ""},
-                 {"baud", "19200"}, {"parity", "E"}, {"pause-ms", "0"}});
+                 {"baud", "19200"}, {"parity", "E"}, {"pause-ms", "0"}, {"sync", "false"}});
   Config c;
   c.host = a.str("host");
   c.port = static_cast<int>(a.num("port"));
@@ -337,17 +373,40 @@ int main(int argc, char** argv) {
   std::vector<std::thread> threads;
   std::atomic<bool> go{false};
   std::atomic<std::int64_t> deadline{INT64_MAX};
+  Hold hold;
+  Hold* const held = a.flag("sync") ? &hold : nullptr;
   for (std::size_t i = 0; i < results.size(); ++i)
-    threads.emplace_back([&, i] { run_client(c, static_cast<int>(i), results[i], go, deadline); });
+    threads.emplace_back([&, i] { run_client(c, static_cast<int>(i), results[i], go, deadline, held); });
   HomeResult home;
   std::thread home_thread;
   if (c.home) home_thread = std::thread([&] { run_home(c, home, go, deadline); });
   std::this_thread::sleep_for(std::chrono::milliseconds(100 + 5 * c.clients));  // connections settle
+  char line[16];
+  if (held) {
+    std::printf("WINDOW ready\n");
+    std::fflush(stdout);
+    [[maybe_unused]] const char* got = std::fgets(line, sizeof line, stdin);  // EOF starts too
+  }
   const std::int64_t start = bench::now_ns();
   deadline = start + static_cast<std::int64_t>(c.duration_s * 1e9);
+  const bench::SelfCounters before = bench::SelfCounters::now();
   go = true;
-  for (auto& t : threads) t.join();
-  const double elapsed_s = (bench::now_ns() - start) / 1e9;
+  double elapsed_s = 0;
+  std::string counters;
+  if (held) {
+    hold.wait_for(c.clients);
+    elapsed_s = (bench::now_ns() - start) / 1e9;
+    counters = bench::SelfCounters::now().since(before);
+    std::printf("WINDOW end\n");
+    std::fflush(stdout);
+    [[maybe_unused]] const char* got = std::fgets(line, sizeof line, stdin);  // EOF releases too
+    hold.release();
+    for (auto& t : threads) t.join();
+  } else {
+    for (auto& t : threads) t.join();
+    elapsed_s = (bench::now_ns() - start) / 1e9;
+    counters = bench::SelfCounters::now().since(before);
+  }
   if (home_thread.joinable()) home_thread.join();
 
   std::vector<double> all;
@@ -373,11 +432,12 @@ int main(int argc, char** argv) {
               (unsigned long long)terr);
   std::printf("RESULT mix=%s clients=%d seconds=%.3f requests=%llu rps=%.1f p50_us=%.1f p99_us=%.1f p999_us=%.1f "
               "max_us=%.1f errors=%llu exceptions=%llu exc06=%llu transport_errors=%llu reconnects=%llu "
-              "idle_clients=%llu home_commands=%llu homing_cycles=%ld\n",
+              "idle_clients=%llu home_commands=%llu homing_cycles=%ld%s\n",
               c.mix.c_str(), c.clients, elapsed_s, (unsigned long long)(ok + exc), rps, p50, p99, p999, mx,
               (unsigned long long)errors, (unsigned long long)exc, (unsigned long long)exc06,
               (unsigned long long)terr, (unsigned long long)reconnects, (unsigned long long)never,
               (unsigned long long)home.commands,
-              home.cycles_after >= 0 && home.cycles_before >= 0 ? home.cycles_after - home.cycles_before : -1L);
+              home.cycles_after >= 0 && home.cycles_before >= 0 ? home.cycles_after - home.cycles_before : -1L,
+              counters.c_str());
   return 0;
 }

@@ -19,11 +19,13 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "tests", "support"))
 from homingd_py import free_port  # noqa: E402  (one free-port helper for tests and benchmarks)
+import measured_causes  # noqa: E402  (bench/: the counters read during the runs, the causes made of them)
 PYTHON = "/usr/bin/python3"  # Debian's, with python3-pymodbus
 
 # Module register addresses (hmi_maps/registers.csv): input registers.
@@ -116,6 +118,55 @@ class Bench:
                 "--duration", str(duration or self.duration), *extra]
         return parse_result(self.run(f"modbus_load {mix}", argv, timeout=(duration or self.duration) + 30))
 
+    def load_watched(self, port, clients, mix, pids, duration=None, extra=(), profile=False):
+        """load(), and the /proc counters of the processes pids over the measured
+        stretch: modbus_load --sync waits for our line before its clients begin,
+        and again once they are done (still connected, so a server's
+        per-connection threads can still be read) before they close. Returns
+        (result, {pid: counters}); profile: also a perf profile of pids[0] over
+        the stretch, in its counters as "profile"."""
+        argv = [self.path("modbus_load"), "--port", str(port), "--clients", str(clients), "--mix", mix,
+                "--duration", str(duration or self.duration), *extra, "--sync"]
+        self.note(f"modbus_load {mix}", argv)
+        if profile:
+            self.note("perf record", measured_causes.Profile.argv("PID", "$WORK/perf.data"))
+        p = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        killer = threading.Timer((duration or self.duration) + 30, p.kill)
+        killer.start()
+        prof = None
+        try:
+            before = after = None
+            for line in p.stdout:
+                if line.startswith("WINDOW ready"):
+                    # perf first: its start (a good part of a second) stays outside the counters' stretch.
+                    if profile:
+                        prof = measured_causes.Profile(pids[0], os.path.join(self.work, f"perf.{self.seq}.data"))
+                        self.seq += 1
+                        prof.enable()
+                    before = measured_causes.snapshots(pids)
+                    p.stdin.write("\n")
+                    p.stdin.flush()
+                elif line.startswith("WINDOW end"):
+                    after = measured_causes.snapshots(pids)
+                    if prof:
+                        prof.disable()
+                    p.stdin.write("\n")
+                    p.stdin.flush()
+                    break
+            out, err = p.communicate()
+        finally:
+            killer.cancel()
+            profiled = prof.finish() if prof else None
+        if p.returncode != 0 or before is None or after is None:
+            hint = " (a modbus_load older than --sync: rebuild the build directory)" if "--sync" in err else ""
+            raise RuntimeError(f"{' '.join(argv)} exited {p.returncode} (window seen: {before is not None}, "
+                               f"{after is not None}){hint}: {err[-1500:]}")
+        counters = {pid: measured_causes.stretch(before[pid], after[pid]) if before[pid] and after[pid] else None
+                    for pid in pids}
+        if profile and counters[pids[0]]:
+            counters[pids[0]]["profile"] = profiled
+        return parse_result(out), counters
+
     def read_diag(self, port):
         """diag.* input registers of homingd over Modbus (32-bit, high word first)."""
         out = {}
@@ -177,7 +228,7 @@ def throughput(b, clients_list, results):
     running; the bare server's rounds also run the bare 1 ms loop."""
     for clients in clients_list:
         rows = {k: [] for k in ("floor", "bare", "homingd", "pymodbus", "loop_floor", "loop_homingd", "ratio_rps",
-                                "ratio_p99", "ratio_loop_p99")}
+                                "ratio_p99", "ratio_loop_p99", "cnt_bare", "cnt_homingd")}
         for r in range(b.rounds):
             log(f"throughput: {clients} clients, round {r + 1}/{b.rounds}")
             # A: the bare libmodbus server, and the bare loop beside it.
@@ -188,7 +239,9 @@ def throughput(b, clients_list, results):
             b.note("loop_floor", floor_argv)
             lf = subprocess.Popen(floor_argv, stdout=subprocess.PIPE, text=True)
             try:
-                bare = b.load(port, clients, "production", extra=["--home"])
+                # Round 1 also profiles the server (perf): where its CPU goes, for the causes.
+                bare, cnt = b.load_watched(port, clients, "production", [srv.pid], extra=["--home"], profile=r == 0)
+                rows["cnt_bare"].append(cnt[srv.pid])
                 lf_out, _ = lf.communicate(timeout=30)
             finally:
                 b.stop(srv)
@@ -197,7 +250,8 @@ def throughput(b, clients_list, results):
             port = free_port()
             hd = b.homingd(port)
             try:
-                mine = b.load(port, clients, "production", extra=["--home"])
+                mine, cnt = b.load_watched(port, clients, "production", [hd.pid], extra=["--home"], profile=r == 0)
+                rows["cnt_homingd"].append(cnt[hd.pid])
                 diag = b.read_diag(port)
             finally:
                 b.stop(hd)
@@ -268,16 +322,17 @@ def mixes(b, clients, results):
 
 def idle(b, results, seconds):
     rows = {"homingd_cpu": [], "floor_cpu": [], "rss": [], "diag_rss": [], "loop_idle": [], "floor_idle": [],
-            "ratio_cpu": [], "sim_write": []}
+            "ratio_cpu": [], "sim_write": [], "cnt_floor": [], "cnt_homingd": [], "cnt_write": []}
     for r in range(b.rounds):
         log(f"idle: round {r + 1}/{b.rounds}")
         floor_argv = [b.path("loop_floor"), "--period-us", "1000", "--duration", str(seconds + 1.5)]
         b.note("loop_floor (idle)", floor_argv)
         lf = subprocess.Popen(floor_argv, stdout=subprocess.PIPE, text=True)
         time.sleep(1)
-        c0 = cpu_seconds(lf.pid)
+        c0, s0 = cpu_seconds(lf.pid), measured_causes.snapshot(lf.pid)
         time.sleep(seconds)
-        c1 = cpu_seconds(lf.pid)
+        c1, s1 = cpu_seconds(lf.pid), measured_causes.snapshot(lf.pid)
+        rows["cnt_floor"].append(measured_causes.stretch(s0, s1) if s0 and s1 else None)
         out, _ = lf.communicate(timeout=30)
         rows["floor_cpu"].append((c1 - c0) / seconds * 100)
         rows["floor_idle"].append(parse_result(out))
@@ -285,9 +340,10 @@ def idle(b, results, seconds):
         hd = b.homingd(port, time_scale=1)
         try:
             time.sleep(1)
-            c0 = cpu_seconds(hd.pid)
+            c0, s0 = cpu_seconds(hd.pid), measured_causes.snapshot(hd.pid)
             time.sleep(seconds)
-            c1 = cpu_seconds(hd.pid)
+            c1, s1 = cpu_seconds(hd.pid), measured_causes.snapshot(hd.pid)
+            rows["cnt_homingd"].append(measured_causes.stretch(s0, s1) if s0 and s1 else None)
             rows["homingd_cpu"].append((c1 - c0) / seconds * 100)
             rows["ratio_cpu"].append(rows["homingd_cpu"][-1] / max(rows["floor_cpu"][-1], 1e-9))
             rows["rss"].append(rss_kib(hd.pid))
@@ -296,15 +352,18 @@ def idle(b, results, seconds):
             rows["loop_idle"].append(d)
             # Then simulator writes to the idle daemon, one every 20 ms: each must wake
             # the quiet loop and be answered within a period, not at its 50 ms slow tick.
-            rows["sim_write"].append(b.load(port, 1, "write10", duration=max(seconds, 2.0),
-                                            extra=["--pause-ms", "20"]))
+            sim_write, cnt = b.load_watched(port, 1, "write10", [hd.pid], duration=max(seconds, 2.0),
+                                            extra=["--pause-ms", "20"])
+            rows["sim_write"].append(sim_write)
+            rows["cnt_write"].append(cnt[hd.pid])
         finally:
             b.stop(hd)
     results["idle"] = rows
 
 
 def durable(b, results, writes):
-    rows = {"bare": [], "homingd": [], "ratio_p99": [], "ratio_p50": [], "eight": [], "eight_ratio": []}
+    rows = {"bare": [], "homingd": [], "ratio_p99": [], "ratio_p50": [], "eight": [], "eight_ratio": [], "cnt_one": [],
+            "cnt_eight": []}
     for r in range(b.rounds):
         log(f"durable writes: round {r + 1}/{b.rounds}")
         db = os.path.join(b.work, f"commit.{r}.db")
@@ -313,9 +372,13 @@ def durable(b, results, writes):
         port = free_port()
         hd = b.homingd(port, time_scale=1)
         try:
-            mine = b.load(port, 1, "durable", duration=60, extra=["--requests", str(writes)])
+            # Round 1 also profiles homingd (perf): where the CPU of a write goes, for the cause.
+            mine, cnt = b.load_watched(port, 1, "durable", [hd.pid], duration=60, extra=["--requests", str(writes)],
+                                       profile=r == 0)
+            rows["cnt_one"].append(cnt[hd.pid])
             # Eight clients each writing its own settings: the group commit's throughput.
-            eight = b.load(port, 8, "durable", duration=5)
+            eight, cnt = b.load_watched(port, 8, "durable", [hd.pid], duration=5)
+            rows["cnt_eight"].append(cnt[hd.pid])
         finally:
             b.stop(hd)
         rows["eight"].append(eight)
@@ -573,9 +636,11 @@ def mqtt_section(m, clients=8):
 
 def engine(b, results):
     log("engine: Google Benchmark and homing repeatability")
+    ru0, m0 = measured_causes.children_rusage(), measured_causes.machine_jiffies()
     out = b.run("engine_step_bench", [b.path("engine_step_bench"), "--benchmark_min_time=0.5",
                                       "--benchmark_repetitions=3", "--benchmark_report_aggregates_only=true"],
                 timeout=120)
+    results["engine_rusage"] = measured_causes.children_stretch(ru0, m0)
     bench = {}
     for line in out.splitlines():
         m = re.match(r"(BM_\w+)_median\s+([\d.]+) ns\s+([\d.]+) ns", line)
@@ -936,7 +1001,7 @@ def verdict(ok):
     return "met" if ok else "**missed**"
 
 
-def report(b, results, info, args, started, out_path, causes):
+def report(b, results, info, args, started, out_path):
     L = []
     w = L.append
     w("# Benchmarks")
@@ -1019,8 +1084,7 @@ def report(b, results, info, args, started, out_path, causes):
         w("### Missed targets: by how much and why")
         w("")
         for name, measured, goal, ok, key in missed:
-            cause = causes.get(key) or causes.get(key.split("_")[0]) or "not investigated yet."
-            w(f"- **{name}**: {measured} against {goal}. {cause}")
+            w(f"- **{name}**: {measured} against {goal}. {measured_causes.cause(key, results)}")
         w("")
     else:
         w("Every target was met in this run.")
@@ -1073,6 +1137,7 @@ def report(b, results, info, args, started, out_path, causes):
         w(f"| {clients} | {med(r['ratio_rps']):.2f}× ({per}) | {med(r['ratio_p99']):.2f}× ({per99}) "
           f"| {vf:.2f}× | {vp:.2f}× |")
     w("")
+    L.extend(measured_causes.throughput_table(tp))
 
     mx = results["mixes"]
     if mx:
@@ -1125,6 +1190,7 @@ def report(b, results, info, args, started, out_path, causes):
       f"| {fmt(med([x['p99'] for x in idl['loop_idle']]))} | {fmt(med([x['p999'] for x in idl['loop_idle']]))} "
       f"| {fmt(med([x['max'] for x in idl['loop_idle']]))} | {idle_ratio:.2f}× |")
     w("")
+    L.extend(measured_causes.loop_table(tp))
     eng_live = {c: med([x["engine_ns"] for x in tp[c]["loop_homingd"]]) for c in sorted(tp)}
     w("The engine's share of the period:")
     w("")
@@ -1153,6 +1219,7 @@ def report(b, results, info, args, started, out_path, causes):
     w(f"| **homingd**, idle | {med(idl['homingd_cpu']):.2f} % | {med(idl['ratio_cpu']):.2f}× | {fmt(med(idl['rss']))} KiB VmRSS "
       f"(`diag.rss_kb` {fmt(med(idl['diag_rss']))} KiB) |")
     w("")
+    L.extend(measured_causes.idle_table(idl))
     sw = idl["sim_write"]
     w("Then, on the same idle daemon, one client writes the simulator unit (`modbus_load --mix write10 "
       "--pause-ms 20`: FC16 of 10 simulator registers, written back unchanged, one every 20 ms, so the loop "
@@ -1237,6 +1304,7 @@ def report(b, results, info, args, started, out_path, causes):
       f"({', '.join(f'{x:.2f}' for x in dr['eight_ratio'])}) | | |")
     w(f"| errors (homingd, 8 clients) | {sum(int(x['errors']) for x in dr['eight'])} | | |")
     w("")
+    L.extend(measured_causes.durable_table(dr))
 
     # RTU.
     rt = results["rtu"]
@@ -1284,31 +1352,24 @@ def report(b, results, info, args, started, out_path, causes):
         f.write("\n".join(L))
 
 
-CAUSES_FILE = os.path.join(ROOT, "bench", "known_causes.txt")
-
-
-def load_causes():
-    """bench/known_causes.txt: 'key: explanation' lines written after
-    investigating a missed target; shown only when that target is missed."""
-    causes = {}
-    if os.path.exists(CAUSES_FILE):
-        key = None
-        with open(CAUSES_FILE) as f:
-            for line in f:
-                if line.startswith("#") or not line.strip():
-                    key = None
-                    continue
-                m = re.match(r"^(\w+):\s*(.*)$", line)
-                if m and not line.startswith(" "):
-                    key = m.group(1)
-                    causes[key] = m.group(2).strip()
-                elif key:
-                    causes[key] += " " + line.strip()
-    return causes
+def try_sections(b, results, args):
+    """--try: a section or a few on their own, while developing a measurement."""
+    sections = args.try_sections.split(",")
+    run = {"engine": lambda: engine(b, results), "idle": lambda: idle(b, results, args.idle_seconds),
+           "durable": lambda: durable(b, results, args.writes),
+           "throughput": lambda: throughput(b, [int(c) for c in args.clients.split(",")], results)}
+    for sec in sections:
+        if sec not in run:
+            sys.exit(f"run_benchmarks: --try {sec}: not one of {', '.join(run)}")
+        run[sec]()
+    sys.stdout.write(measured_causes.try_report(results, sections))
 
 
 def main():
     p = argparse.ArgumentParser()
+    p.add_argument("--try", dest="try_sections", metavar="SECTIONS",
+                   help="measure only these sections (comma-separated: engine, idle, durable, throughput) and print "
+                        "their counters and the cause each target would get; BENCHMARKS.md is not touched")
     p.add_argument("--build", default=os.path.join(ROOT, "build"))
     p.add_argument("--out", default=os.path.join(ROOT, "BENCHMARKS.md"))
     p.add_argument("--rounds", type=int, default=3)
@@ -1341,6 +1402,9 @@ def main():
     b = Bench(build, work, args.duration, args.rounds)
     results = {"throughput": {}, "mixes": {}}
     try:
+        if args.try_sections:
+            try_sections(b, results, args)
+            return
         if args.only == "tls":
             tls(b, results)
             splice_section(args.out, TLS_HEADING, tls_section(b, results["tls"], only_info=info))
@@ -1361,7 +1425,7 @@ def main():
         rtu(b, results)
         tls(b, results)
         mqtt(b, results)
-        report(b, results, info, args, started, args.out, load_causes())
+        report(b, results, info, args, started, args.out)
     finally:
         shutil.rmtree(work, ignore_errors=True)
     log(f"run_benchmarks: wrote {args.out} in {(time.monotonic() - started) / 60:.1f} minutes")
