@@ -1,4 +1,5 @@
 #include "control_loop.hpp"
+#include "thread_name.hpp"
 
 #include <pthread.h>
 #include <sched.h>
@@ -42,7 +43,10 @@ ControlLoop::~ControlLoop() { stop(); }
 void ControlLoop::start(int rt_priority) {
   if (running_.exchange(true)) return;
   stop_requested_ = false;
-  thread_ = std::thread([this] { thread_main(); });
+  thread_ = std::thread([this] {
+    name_this_thread("control");
+    thread_main();
+  });
   if (rt_priority > 0) {
     sched_param param{};
     param.sched_priority = rt_priority;

@@ -1,4 +1,5 @@
 #include "daemon.hpp"
+#include "thread_name.hpp"
 
 #include <pthread.h>
 #include <signal.h>
@@ -213,9 +214,18 @@ void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, Modbu
   monitor.start();
   if (mqtt) mqtt->start();  // Sparkplug B edge node: its own threads, never in the loop's way
   std::thread tcp_thread, tls_thread, rtu_thread;
-  if (t.tcp) tcp_thread = std::thread([&] { t.tcp->run(); });
-  if (t.tls) tls_thread = std::thread([&] { t.tls->run(); });
-  if (t.rtu) rtu_thread = std::thread([&] { t.rtu->run(); });
+  if (t.tcp) tcp_thread = std::thread([&] {
+    name_this_thread("tcp-accept");
+    t.tcp->run();
+  });
+  if (t.tls) tls_thread = std::thread([&] {
+    name_this_thread("tls-accept");
+    t.tls->run();
+  });
+  if (t.rtu) rtu_thread = std::thread([&] {
+    name_this_thread("rtu");
+    t.rtu->run();
+  });
   SystemdNotifier systemd([&loop] { return loop.snapshot().periods; });  // Type=notify, WatchdogSec=
   systemd.ready("listening on " + announce(opt, t, loop.has_sim()));
 

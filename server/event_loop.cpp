@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 
 namespace server {
@@ -18,7 +19,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr std::uint64_t kWakeId = 0;  // epoll data of the loop's eventfd
-constexpr int kMaxWaitMs = 200;       // the stop flag is seen within this
 
 // Notes when its connection last sent a request (the least recently active
 // connection is the one that gives way when the server is full) and hands
@@ -179,11 +179,11 @@ void EventLoop::close(std::uint64_t id, Slot& slot, bool stopping) {
 
 int EventLoop::wait_ms(bool again) const {
   if (again) return 0;
-  const auto now = Clock::now();
-  auto until = now + std::chrono::milliseconds(kMaxWaitMs);
+  std::optional<Clock::time_point> until;
   for (const auto& [id, slot] : slots_)
-    if (const auto d = slot.connection->deadline()) until = std::min(until, *d);
-  const auto ms = std::chrono::ceil<std::chrono::milliseconds>(until - now).count();
+    if (const auto d = slot.connection->deadline()) until = until ? std::min(*until, *d) : *d;
+  if (!until) return -1;  // nothing due: a socket, an arrival, an answer or stop() wakes the loop
+  const auto ms = std::chrono::ceil<std::chrono::milliseconds>(*until - Clock::now()).count();
   return static_cast<int>(std::max<std::int64_t>(0, ms));
 }
 

@@ -1,4 +1,5 @@
 #include "monitor.hpp"
+#include "thread_name.hpp"
 
 #include <spdlog/spdlog.h>
 
@@ -116,6 +117,7 @@ void Monitor::start() {
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) judge_health(a, settings);
   refresh_summary();
   thread_ = std::thread([this] {
+    name_this_thread("monitor");
     while (!stop_) {
       poll(unix_ms());
       // While the loop idles nothing changes between its periods: the next

@@ -1,4 +1,5 @@
 #include "mqtt_node.hpp"
+#include "thread_name.hpp"
 
 #include <mosquitto.h>
 #include <sys/stat.h>
@@ -138,8 +139,14 @@ void MqttNode::set_will() {
 void MqttNode::start() {
   set_will();
   started_ = true;
-  network_ = std::thread([this] { network_loop(); });
-  publisher_ = std::thread([this] { publish_loop(); });
+  network_ = std::thread([this] {
+    name_this_thread("mqtt-net");
+    network_loop();
+  });
+  publisher_ = std::thread([this] {
+    name_this_thread("mqtt-publish");
+    publish_loop();
+  });
   spdlog::info("mqtt: Sparkplug B edge node {} on {}://{}:{}{}", topic("NBIRTH"), config_.tls ? "mqtts" : "mqtt",
                config_.host, config_.port, config_.user.empty() ? "" : " as user " + config_.user);
 }

@@ -1,12 +1,17 @@
 #include "request_workers.hpp"
 
+#include "thread_name.hpp"
+
 namespace server {
 
 void RequestWorkers::run(std::function<void()> job) {
   std::lock_guard lock(mutex_);
   if (stopping_) return;  // the server stops: its connections close unanswered
   jobs_.push_back(std::move(job));
-  if (jobs_.size() > idle_ && threads_.size() < max_threads_) threads_.emplace_back([this] { work(); });
+  if (jobs_.size() > idle_ && threads_.size() < max_threads_) threads_.emplace_back([this] {
+      name_this_thread(name_);
+      work();
+    });
   wake_.notify_one();
 }
 

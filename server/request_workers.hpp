@@ -10,6 +10,7 @@
 #include <deque>
 #include <functional>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -17,7 +18,9 @@ namespace server {
 
 class RequestWorkers {
  public:
-  explicit RequestWorkers(std::size_t max_threads) : max_threads_(max_threads < 1 ? 1 : max_threads) {}
+  // name: the threads' name ("tcp-write").
+  RequestWorkers(std::size_t max_threads, std::string name)
+      : max_threads_(max_threads < 1 ? 1 : max_threads), name_(std::move(name)) {}
   ~RequestWorkers() { join(); }
   RequestWorkers(const RequestWorkers&) = delete;
   RequestWorkers& operator=(const RequestWorkers&) = delete;
@@ -31,6 +34,7 @@ class RequestWorkers {
   void work();
 
   const std::size_t max_threads_;
+  const std::string name_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   std::deque<std::function<void()>> jobs_;

@@ -1,4 +1,5 @@
 #include "systemd_notify.hpp"
+#include "thread_name.hpp"
 
 #include <spdlog/spdlog.h>
 #include <systemd/sd-daemon.h>
@@ -27,7 +28,10 @@ void SystemdNotifier::ready(const std::string& status) {
                  std::strerror(-rc));
   if (watchdog_usec_ > 0 && !feeder_.joinable()) {
     spdlog::info("systemd: watchdog every {} ms, fed while the control loop runs", watchdog_usec_ / 2000);
-    feeder_ = std::thread([this] { feed_while_running(); });
+    feeder_ = std::thread([this] {
+      name_this_thread("sd-watchdog");
+      feed_while_running();
+    });
   }
 }
 

@@ -1,4 +1,5 @@
 #include "tcp_server.hpp"
+#include "thread_name.hpp"
 
 #include <arpa/inet.h>
 #include <modbus/modbus.h>
@@ -67,7 +68,7 @@ TcpServer::TcpServer(ListenConfig config, RequestHandler& handler, std::unique_p
       refusals_("connections", std::chrono::seconds(config_.refusal_log_interval_s),
                 [](spdlog::level::level_enum level, const std::string& line) { spdlog::log(level, "{}", line); }),
       // One request in flight per connection at most: never more threads than that.
-      workers_(static_cast<std::size_t>(std::max(1, config_.max_clients))) {
+      workers_(static_cast<std::size_t>(std::max(1, config_.max_clients)), std::string(name()) + "-write") {
   const int loops = loop_count(config_.event_loops);
   for (int i = 0; i < loops; ++i)
     loops_.push_back(std::make_unique<EventLoop>(
@@ -98,7 +99,11 @@ std::expected<void, std::string> TcpServer::listen() {
 
 void TcpServer::run() {
   std::vector<std::thread> threads;
-  for (auto& loop : loops_) threads.emplace_back([&loop] { loop->run(); });
+  for (std::size_t i = 0; i < loops_.size(); ++i)
+    threads.emplace_back([this, i] {
+      name_this_thread(fmt::format("{}-loop-{}", name(), i));
+      loops_[i]->run();
+    });
   while (!stop_) {
     pollfd p{listen_fd_, POLLIN, 0};
     const int rc = ::poll(&p, 1, 200);
