@@ -28,7 +28,7 @@ struct ModbusService::WriteTicket {
 
 std::optional<Reply> ModbusService::write_module(std::uint8_t fc, registers::Table table, std::uint16_t start,
                                                  std::span<const std::uint16_t> values, const ClientInfo& client) {
-  WriteTicket t{table, start, values, client};
+  WriteTicket t{table, start, values, client, std::nullopt, {}, false};
   {
     std::unique_lock lock(batch_mutex_);
     batch_queue_.push_back(&t);

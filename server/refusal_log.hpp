@@ -33,6 +33,8 @@ class RefusalLog {
   void flush(Clock::time_point now);
   // Writes every count not yet written, the interval passed or not (on the way out).
   void flush_all(Clock::time_point now);
+  // Clients whose counts or whose quiet interval flush() still has to see.
+  bool holds_clients() const { return !active_.empty(); }
 
  private:
   struct Counted {

@@ -7,6 +7,7 @@
 #include <netinet/tcp.h>
 #include <poll.h>
 #include <spdlog/spdlog.h>
+#include <sys/eventfd.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -14,6 +15,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <stdexcept>
 #include <vector>
 
 #include "tcp_connection.hpp"
@@ -69,6 +71,8 @@ TcpServer::TcpServer(ListenConfig config, RequestHandler& handler, std::unique_p
                 [](spdlog::level::level_enum level, const std::string& line) { spdlog::log(level, "{}", line); }),
       // One request in flight per connection at most: never more threads than that.
       workers_(static_cast<std::size_t>(std::max(1, config_.max_clients)), std::string(name()) + "-write") {
+  wake_fd_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+  if (wake_fd_ < 0) throw std::runtime_error(std::string("tcp server: eventfd: ") + std::strerror(errno));
   const int loops = loop_count(config_.event_loops);
   for (int i = 0; i < loops; ++i)
     loops_.push_back(std::make_unique<EventLoop>(
@@ -80,6 +84,7 @@ TcpServer::~TcpServer() {
   workers_.join();  // before the loops go: a request running posts its answer to its loop
   reap(true);
   if (listen_fd_ >= 0) ::close(listen_fd_);
+  ::close(wake_fd_);
 }
 
 std::string_view TcpServer::name() const { return transport_name(opener_->transport()); }
@@ -105,14 +110,21 @@ void TcpServer::run() {
       loops_[i]->run();
     });
   while (!stop_) {
-    pollfd p{listen_fd_, POLLIN, 0};
-    const int rc = ::poll(&p, 1, 200);
+    bool counting = false;
+    {
+      std::lock_guard lock(connections_mutex_);
+      counting = refusals_.holds_clients();
+    }
+    // Idle, this thread sleeps until a client connects or stop(); while
+    // refusals are counted it looks every 200 ms to write their summary.
+    pollfd p[2] = {{listen_fd_, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
+    const int rc = ::poll(p, 2, counting ? 200 : -1);
     reap(false);
     {
       std::lock_guard lock(connections_mutex_);
       refusals_.flush(std::chrono::steady_clock::now());
     }
-    if (rc <= 0) continue;
+    if (rc <= 0 || !(p[0].revents & POLLIN)) continue;
     sockaddr_in peer{};
     socklen_t len = sizeof(peer);
     const int fd = ::accept4(listen_fd_, reinterpret_cast<sockaddr*>(&peer), &len, SOCK_CLOEXEC | SOCK_NONBLOCK);
@@ -202,6 +214,8 @@ void TcpServer::reap(bool all) {
 
 void TcpServer::stop() {
   stop_ = true;
+  const std::uint64_t one = 1;
+  (void)!::write(wake_fd_, &one, sizeof one);  // the acceptor's poll
   for (auto& loop : loops_) loop->wake();
 }
 

@@ -71,6 +71,7 @@ class TcpServer {
   RequestHandler& handler_;
   std::unique_ptr<ChannelOpener> opener_;
   int listen_fd_ = -1;
+  int wake_fd_ = -1;  // stop() wakes the acceptor
   std::atomic<bool> stop_{false};
   std::atomic<int> active_{0};
   std::atomic<std::uint64_t> refused_{0};
