@@ -124,21 +124,12 @@ int main(int argc, char** argv) {
 
         step(Commands{});
         for (double start : starts) {
-          simulator.place(0, start);
-          step(Commands{});
-          Commands home;
-          home.home_all = true;
-          const double t0 = simulator.time_s();
-          step(home);
-          while (engine.status().homing && simulator.time_s() - t0 < 120) step(Commands{});
-          const double t = simulator.time_s() - t0;
-          if (engine.status().state != MachineState::homed) {
+          const bench::HomeRun run = bench::home_from(engine, simulator, step, start);
+          const double t = run.cycle_s;
+          if (!run.homed) {
             ++failed;
             std::printf("FAIL mode=%s latch=%.6g inputs=%s start=%.17g state=%s\n", mode_text, latch, inputs_text,
-                        start, std::string(name_of(engine.status().state)).c_str());
-            Commands reset;
-            reset.reset_alarm = true;
-            step(reset);
+                        start, std::string(name_of(run.state)).c_str());
             continue;
           }
           const double rest = simulator.actual_position_mm(0);

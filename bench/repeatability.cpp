@@ -136,23 +136,13 @@ int main(int argc, char** argv) {
   step(Commands{});
   for (long i = 0; i < runs; ++i) {
     const double start = start_mm(rng);
-    simulator.place(0, start);
-    step(Commands{});
-    Commands home;
-    home.home_all = true;
-    const double t0 = simulator.time_s();
-    step(home);
-    while (engine.status().homing && simulator.time_s() - t0 < 120) step(Commands{});
-    const double t = simulator.time_s() - t0;
-    if (engine.status().state != MachineState::homed) {
+    const bench::HomeRun run = bench::home_from(engine, simulator, step, start);
+    if (!run.homed) {
       ++failed;
-      Commands reset;
-      reset.reset_alarm = true;
-      step(reset);
       continue;
     }
     rest.push_back(simulator.actual_position_mm(0));
-    cycle.push_back(t);
+    cycle.push_back(run.cycle_s);
     // The trigger edge is the cam's end (noise aside) at 0.
     minimum.push_back(minimum_cycle_s(s, start - c.sensor_max_mm, c.hysteresis_mm));
   }

@@ -31,6 +31,11 @@ class ActivityHandler final : public RequestHandler {
     last_active_ns_.store(steady_now_ns());
     return inner_.handle(unit, pdu, client);
   }
+  std::optional<Reply> handle_now(std::uint8_t unit, std::span<const std::uint8_t> pdu,
+                                  const ClientInfo& client) override {
+    last_active_ns_.store(steady_now_ns());
+    return inner_.handle_now(unit, pdu, client);
+  }
   void disconnected(const ClientInfo& client) override { inner_.disconnected(client); }
   void bus_event(Transport transport, BusEvent event) override { inner_.bus_event(transport, event); }
 

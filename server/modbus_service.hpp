@@ -15,6 +15,7 @@
 #include <string>
 #include <optional>
 #include <span>
+#include <thread>
 
 #include "control_loop.hpp"
 #include "device_identification.hpp"
@@ -58,6 +59,13 @@ class ModbusService final : public RequestHandler {
   ModbusService& operator=(const ModbusService&) = delete;
 
   Reply handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) override;
+  // Commands and host values (the heartbeat, move targets...) to the module
+  // unit, while no batch of writes is being decided or committed: they have
+  // nothing to make durable, so they are answered at once on the caller's
+  // thread. Settings, edit sessions, the simulator unit, or a batch under
+  // way: nullopt.
+  std::optional<Reply> handle_now(std::uint8_t unit, std::span<const std::uint8_t> pdu,
+                                  const ClientInfo& client) override;
   void disconnected(const ClientInfo& client) override;
   void bus_event(Transport transport, BusEvent event) override { diagnostics_.bus_event(transport, event); }
   LineCounters line_counters(Transport transport) const { return diagnostics_.counters(transport); }
@@ -114,6 +122,10 @@ class ModbusService final : public RequestHandler {
   std::condition_variable batch_done_;
   std::vector<WriteTicket*> batch_queue_;  // under batch_mutex_
   bool batch_leader_ = false;              // under batch_mutex_: a thread decides and commits a batch
+  // Under batch_mutex_: the thread handle_now() reserved the lead for (its
+  // request alone makes the next batch).
+  std::optional<std::thread::id> reserved_for_;
+  bool needs_nothing_durable(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) const;
   // Under mutex_: the effects of an accepted plan (server/write_plan.hpp) and of a refused wrong code.
   void apply_effect(registers::Effect effect);
   void count_wrong_unlock_code(std::uint32_t code, const ClientInfo& client);

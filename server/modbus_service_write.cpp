@@ -10,6 +10,7 @@
 #include <algorithm>
 
 #include "modbus_service.hpp"
+#include "registers/lookup.hpp"
 #include "write_log.hpp"
 
 namespace server {
@@ -31,16 +32,21 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, registers::Tab
   WriteTicket t{table, start, values, client, std::nullopt, {}, false};
   {
     std::unique_lock lock(batch_mutex_);
-    batch_queue_.push_back(&t);
+    // Reserved by handle_now(): this request alone, at once, so that
+    // nothing queued meanwhile is committed on its (event loop's) thread.
+    const bool reserved = reserved_for_ == std::this_thread::get_id();
+    if (reserved) reserved_for_.reset();
+    if (!reserved) batch_queue_.push_back(&t);
     while (!t.done) {
-      if (batch_leader_) {
+      if (batch_leader_ && !reserved) {
         batch_done_.wait(lock);
         continue;
       }
       // Lead: decide and commit every write queued so far, this one among them.
       batch_leader_ = true;
       std::vector<WriteTicket*> batch;
-      batch.swap(batch_queue_);
+      if (reserved) batch.push_back(&t);
+      else batch.swap(batch_queue_);
       lock.unlock();
       process_batch(batch);
       lock.lock();
@@ -53,6 +59,46 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, registers::Tab
   if (t.refusal) return refuse(fc, *t.refusal, client);
   run_commands(t.commands, client);
   return std::nullopt;
+}
+
+std::optional<Reply> ModbusService::handle_now(std::uint8_t unit, std::span<const std::uint8_t> pdu,
+                                               const ClientInfo& client) {
+  if (!needs_nothing_durable(unit, pdu, client)) return std::nullopt;
+  {
+    std::lock_guard lock(batch_mutex_);
+    if (batch_leader_ || !batch_queue_.empty()) return std::nullopt;  // it would wait for that batch
+    batch_leader_ = true;  // held for this request: no batch starts before it
+    reserved_for_ = std::this_thread::get_id();
+  }
+  Reply reply = handle(unit, pdu, client);
+  {
+    // A request refused before the write path (a bad address...) leaves the reservation.
+    std::lock_guard lock(batch_mutex_);
+    if (reserved_for_ == std::this_thread::get_id()) {
+      reserved_for_.reset();
+      batch_leader_ = false;
+    }
+  }
+  batch_done_.notify_all();
+  return reply;
+}
+
+// A plain write (FC 05, 06, 15, 16) to the module unit whose registers are
+// none of them a setting nor the edit session's command: its plan stores
+// nothing, so it never waits for a commit.
+bool ModbusService::needs_nothing_durable(std::uint8_t unit, std::span<const std::uint8_t> pdu,
+                                          const ClientInfo& client) const {
+  if (pdu.empty()) return false;
+  const bool module = unit == config_.unit_id || (over_network(client.transport) && (unit == 0 || unit == 0xFF));
+  if (!module) return false;
+  const auto request = decode_request(pdu);
+  if (!request) return false;
+  const auto* w = std::get_if<WriteRequest>(&request->body);
+  if (!w) return false;
+  for (const registers::Register& r :
+       registers::registers_overlapping(registers::Unit::module, w->table, w->start, w->values.size()))
+    if (r.persisted || r.key == registers::Key::edit_command) return false;
+  return true;
 }
 
 // The plans that change settings wait for the commit; every other plan

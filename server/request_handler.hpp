@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -69,6 +70,12 @@ class RequestHandler {
  public:
   virtual ~RequestHandler() = default;
   virtual Reply handle(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) = 0;
+  // The same request answered only if that needs no waiting (an event loop
+  // asks before it hands a write to a worker thread); nullopt: nothing was
+  // done, call handle() where waiting is allowed.
+  virtual std::optional<Reply> handle_now(std::uint8_t, std::span<const std::uint8_t>, const ClientInfo&) {
+    return std::nullopt;
+  }
   virtual void disconnected(const ClientInfo& client) = 0;
   virtual void bus_event(Transport, BusEvent) {}
 };

@@ -163,13 +163,15 @@ TcpConnection::Wait TcpConnection::serve(SteadyTime now, RequestHandler& handler
         if (frames == kFramesPerTurn) return Wait::again;
         ++frames;
         const std::uint8_t function = step.pdu.empty() ? 0 : step.pdu[0];
-        if (may_wait(function)) {
+        std::optional<Reply> now_reply;
+        if (may_wait(function)) now_reply = handler.handle_now(step.header.unit, step.pdu, client_);
+        if (may_wait(function) && !now_reply) {
           off_loop_ = Request{step.header.transaction_id, step.header.unit, {step.pdu.begin(), step.pdu.end()}};
           framer_.pop();
           phase_ = Phase::off_loop;
           return Wait::off_loop;
         }
-        const Reply reply = handler.handle(step.header.unit, step.pdu, client_);
+        const Reply reply = now_reply ? std::move(*now_reply) : handler.handle(step.header.unit, step.pdu, client_);
         const MbapHeader h = step.header;
         framer_.pop();
         queue_reply(h.transaction_id, h.unit, reply, now);

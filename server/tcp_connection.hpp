@@ -12,8 +12,10 @@
 //
 // Requests are served one at a time, in order. A request that may wait
 // (a write: a durable commit, a simulator edit answered once visible) is
-// handed back to the loop to run off it; the connection reads nothing more
-// until its reply is in.
+// answered at once if the handler can do so without waiting
+// (RequestHandler::handle_now: a command or the heartbeat while no settings
+// commit is under way), else handed back to the loop to run off it; the
+// connection reads nothing more until its reply is in.
 #include <chrono>
 #include <cstdint>
 #include <memory>

@@ -401,3 +401,42 @@ TEST_CASE("the history records an axis's correction only when its cycle succeede
   CHECK_FALSE(r.correction_mm);
   CHECK(r.excluded == persistence::Excluded::cycle_failed);
 }
+
+TEST_CASE("a command or the heartbeat is answered at once on the caller's thread, a settings write or the simulator "
+          "unit never is") {
+  Module m(false);
+  const auto pdu = [](std::uint8_t fc, std::uint16_t a, std::uint16_t v) {
+    return std::vector<std::uint8_t>{fc, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a),
+                                     static_cast<std::uint8_t>(v >> 8), static_cast<std::uint8_t>(v)};
+  };
+  const auto heartbeat = pdu(6, Module::address("host.heartbeat"), 42);
+  const auto answered = m.service->handle_now(1, heartbeat, m.client);
+  REQUIRE(answered);
+  CHECK(answered->pdu == heartbeat);  // FC 06 echoed: applied
+  CHECK(m.read_u16("host.heartbeat") == 42);
+  const auto reset = pdu(5, Module::address("cmd.reset_alarm"), 0xFF00);
+  CHECK(m.service->handle_now(1, reset, m.client).has_value());
+
+  // Nothing done for these: the caller hands them to a thread that may wait.
+  const auto seek = Module::address("axis.x.seek_feedrate");
+  const auto seek_900 = pdu(6, seek, 900);
+  const auto before = m.read_u16("axis.x.seek_feedrate");
+  REQUIRE(before != 900);
+  CHECK_FALSE(m.service->handle_now(1, seek_900, m.client).has_value());
+  CHECK(m.read_u16("axis.x.seek_feedrate") == before);
+  CHECK_FALSE(m.service->handle_now(1, pdu(6, Module::address("edit.command"), 1), m.client).has_value());
+  const auto edit_state = Module::address("edit.state");
+  CHECK(m.request({4, static_cast<std::uint8_t>(edit_state >> 8), static_cast<std::uint8_t>(edit_state), 0, 1}) ==
+        std::vector<std::uint8_t>{4, 2, 0, 0});  // no session begun
+  CHECK_FALSE(m.service->handle_now(247, pdu(6, 0, 0), m.client).has_value());
+  const std::vector<std::uint8_t> read{3, 0, 0, 0, 1};
+  CHECK_FALSE(m.service->handle_now(1, read, m.client).has_value());  // a read: not this path
+
+  // A write refused before the write path (an address nobody has) releases what
+  // handle_now held: the next settings write is still served.
+  const auto nowhere = m.service->handle_now(1, pdu(6, 0xFFF0, 1), m.client);
+  REQUIRE(nowhere);
+  CHECK(nowhere->pdu.at(0) == (6 | 0x80));
+  CHECK(m.write_u16("axis.x.seek_feedrate", 900) == seek_900);
+  CHECK(m.read_u16("axis.x.seek_feedrate") == 900);
+}

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -78,9 +79,12 @@ class Counter final : public server::RequestHandler {
 };
 
 std::vector<std::uint8_t> frame(std::uint16_t tid, std::vector<std::uint8_t> pdu) {
-  std::vector<std::uint8_t> f{static_cast<std::uint8_t>(tid >> 8), static_cast<std::uint8_t>(tid), 0, 0, 0,
-                              static_cast<std::uint8_t>(pdu.size() + 1), 1};
-  f.insert(f.end(), pdu.begin(), pdu.end());
+  std::vector<std::uint8_t> f(7 + pdu.size(), 0);
+  f[0] = static_cast<std::uint8_t>(tid >> 8);
+  f[1] = static_cast<std::uint8_t>(tid);
+  f[5] = static_cast<std::uint8_t>(pdu.size() + 1);
+  f[6] = 1;
+  std::copy(pdu.begin(), pdu.end(), f.begin() + 7);
   return f;
 }
 const std::vector<std::uint8_t> kRead{0x03, 0x00, 0x00, 0x00, 0x01};
@@ -126,6 +130,33 @@ TEST_CASE("a read is answered on the loop, a write goes off it, and nothing afte
   REQUIRE(f.connection.advance(f.t0 + 10s, f.handler) == Wait::read);
   CHECK(replies(f.wire) == std::vector<int>{1, 2, 3});  // in order, the write's in its place
   CHECK(f.handler.functions == std::vector<std::uint8_t>{0x03, 0x03});
+}
+
+TEST_CASE("a write the handler can answer without waiting is answered on the loop, in its place") {
+  // The handler answers FC 06 at once (a heartbeat while no commit runs), not FC 16.
+  class AtOnce final : public server::RequestHandler {
+   public:
+    server::Reply handle(std::uint8_t, std::span<const std::uint8_t> pdu, const server::ClientInfo&) override {
+      return server::Reply{true, {pdu[0]}};
+    }
+    std::optional<server::Reply> handle_now(std::uint8_t u, std::span<const std::uint8_t> pdu,
+                                            const server::ClientInfo& c) override {
+      if (pdu[0] != 0x06) return std::nullopt;
+      ++now;
+      return handle(u, pdu, c);
+    }
+    void disconnected(const server::ClientInfo&) override {}
+    int now = 0;
+  } handler;
+  Fixture f;
+  auto bytes = frame(1, kWrite);
+  const auto multiple = frame(2, {0x10, 0x00, 0x10, 0x00, 0x01, 0x02, 0x00, 0x05});
+  bytes.insert(bytes.end(), multiple.begin(), multiple.end());
+  f.wire.incoming.push_back(bytes);
+  REQUIRE(f.connection.advance(f.t0, handler) == Wait::off_loop);
+  CHECK(handler.now == 1);
+  CHECK(replies(f.wire) == std::vector<int>{1});  // the FC 06 answered on the loop
+  CHECK(f.connection.request().transaction_id == 2);  // the FC 16 goes off it
 }
 
 TEST_CASE("a frame split across reads is served once whole") {
