@@ -8,7 +8,11 @@
 // Either way the figure is kept (refcheck_error) and the axis goes back
 // where it started. Every step is bounded in distance: no further than
 // refcheck_tolerance plus max_stop_distance past the expected edge (the room
-// a seek may take past a trigger), max_backoff off the switch.
+// a seek may take past a trigger), max_backoff off the switch. A home cam
+// lies in mid-travel, so a homed axis may rest on its far side (a final move
+// or a jog across it): the check first goes back across the cam to the rest
+// point its stored position gives, as far as that position says.
+#include <algorithm>
 #include <cmath>
 
 #include "phase_runner.hpp"
@@ -21,6 +25,7 @@ void PhaseRunner::reference_check() {
   auto& c = run.phase_data<phase_data::RefCheck>();
   if (entry()) refcheck_begin(c);
   switch (c.step) {
+    case Step::cross_cam: return refcheck_cross_cam(c);
     case Step::leave_sensor: return refcheck_leave_sensor(c);
     case Step::approach: return refcheck_approach(c);
     case Step::back_off: return refcheck_back_off(c);
@@ -34,14 +39,39 @@ void PhaseRunner::refcheck_begin(phase_data::RefCheck& c) {
   c.start_mm = run.motor.position_mm;
   c.expected_mm = s.home_position_mm - away_from_reference() * rest_offset_mm() - run.offset_mm;
   c.started_on_sensor = active();
-  if (c.started_on_sensor) return refcheck_step(c, Step::leave_sensor, c.start_mm + away_from_reference() * s.max_backoff_mm);
+  if (c.started_on_sensor) {
+    // On a home cam the reference edge may lie the cam's width away (a move
+    // left the axis on it): as far as the stored position puts the edge.
+    const double away = away_from_reference();
+    double target = c.start_mm + away * s.max_backoff_mm;
+    if (row().runs(Phase::cam_latch)) target = away * std::max(away * target, away * (c.expected_mm + away * s.max_backoff_mm));
+    return refcheck_step(c, Step::leave_sensor, target);
+  }
   // Past the edge by the tolerance, the room a seek takes past a trigger,
   // and the travel while the debounce time accepts the edge.
   const double past = s.refcheck_tolerance_mm + s.max_stop_distance_mm + latch_v * s.debounce_ms / 1000.0;
   const double target = c.expected_mm - away_from_reference() * past;
-  // Already that far past the edge, and off the switch: it is not where it was stored.
-  if ((target - c.start_mm) * -away_from_reference() <= 0) return refcheck_judge(c, c.start_mm, false);
+  // Already that far past the edge, and off the switch. A home switch runs
+  // on to the end of the travel: it is not where it was stored. A home cam
+  // lies in mid-travel: it stands on the cam's far side, where a move took
+  // it (campaign seed 187000328: a final move across the cam, refused with
+  // the cam's width as its mismatch); back across the cam to the rest point.
+  if ((target - c.start_mm) * -away_from_reference() <= 0) {
+    if (!row().runs(Phase::cam_latch)) return refcheck_judge(c, c.start_mm, false);
+    return refcheck_step(c, Step::cross_cam, c.expected_mm + away_from_reference() * rest_offset_mm());
+  }
   refcheck_step(c, Step::approach, target);
+}
+
+// The way the move that left it there came, at seek feedrate, the cam's
+// edges crossed on the way taken for nothing; then the check as from a
+// cycle's rest point (on the cam there: off it first).
+void PhaseRunner::refcheck_cross_cam(phase_data::RefCheck& c) {
+  move_to(run.target_mm, seek_v);
+  if (!arrived()) return;
+  if (active()) return refcheck_step(c, Step::leave_sensor, run.motor.position_mm + away_from_reference() * s.max_backoff_mm);
+  const double past = s.refcheck_tolerance_mm + s.max_stop_distance_mm + latch_v * s.debounce_ms / 1000.0;
+  refcheck_step(c, Step::approach, c.expected_mm - away_from_reference() * past);
 }
 
 void PhaseRunner::refcheck_step(phase_data::RefCheck& c, phase_data::RefCheck::Step step, double target_mm) {

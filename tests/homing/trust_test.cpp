@@ -245,3 +245,49 @@ SCENARIO("an abort during the reference check stops it with the aborted alarm", 
   CHECK(r.axis(X).alarm.phase == Phase::reference_check);
   CHECK_FALSE(r.axis(X).homed);
 }
+
+SCENARIO("a home cam axis left on the cam's far side is checked across the cam and accepted where it stands",
+         "[trust][home_cam]") {
+  // Campaign seed 187000328: a home cam lies in mid-travel, so a homed axis
+  // may rest beyond it (a final move or a jog across it); the check took
+  // that for a carriage moved past its edge and refused it with the cam's width.
+  CleanStop c;
+  AxisSettings& s = c.before.settings.axes[X];
+  s.mode = HomingMode::home_cam;
+  s.cam_edge = CamEdge::behind;  // the top of the cam, left upward, is the reference
+  s.limits_fitted = true;
+  s.limit_overtravel_mm = 10;
+  s.max_backoff_mm = 30;
+  s.soft_limit_min_mm = -1000;
+  sim::AxisConfig& m = c.before.machine.axes[X];
+  m.actual_position_mm = 50;
+  m.sensor_min_mm = 10;
+  m.sensor_max_mm = 20;
+  m.limit_min_mm = -100;
+  m.limit_max_mm = 100;
+  m.hard_stop_min_mm = -110;
+  m.hard_stop_max_mm = 110;
+  const bool on_cam = GENERATE(false, true);
+  CAPTURE(on_cam);
+  REQUIRE(c.before.home_all());
+  // Across the cam (to carriage -4), or onto it, 6 mm from the reference edge.
+  c.before.move(X, c.before.axis(X).position_mm - (on_cam ? 7 : 25));
+  c.before.run_until([&] { return !c.before.any_moving() && c.before.axis(X).phase == Phase::idle; }, 30);
+  REQUIRE(c.before.sim().sensor_active(X) == on_cam);
+  c.stops = shut_down(c.before);
+  c.offset_mm = c.before.axis(X).position_mm - c.before.actual(X);
+  REQUIRE(c.stops[X].clean);
+
+  Rig r = restart(c.before, c.stops);
+  const double start = r.actual(X);
+  REQUIRE(r.axis(X).trust == Trust::last_stop_clean);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);
+  CHECK(r.axis(X).homed);
+  CHECK(r.axis(X).trust == Trust::reference_checked);
+  CHECK(std::abs(r.axis(X).refcheck_error_mm) <= s.refcheck_tolerance_mm);
+  CHECK_FALSE(r.status().alarm);
+  CHECK(r.axis(X).position_mm - r.actual(X) == Approx(c.offset_mm).margin(s.refcheck_tolerance_mm));
+  // Off the cam it goes back where it stood; from on it, it ends where a cycle ends.
+  if (!on_cam) CHECK(r.actual(X) == Approx(start).margin(1e-9));
+  else CHECK(r.axis(X).position_mm == Approx(s.home_position_mm).margin(s.refcheck_tolerance_mm));
+}
