@@ -117,6 +117,11 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // 185003649: a wire break read as the master's trigger squares the pair on
   // an edge that is not there: its skew need not show. 186002100: a lost
   // link read in the period a last crawl ends finds nothing left to stop.
+  // 187000328 (engine): after a restart, the reference check of a home cam
+  // axis left on its cam's far side by a final move refused it with the
+  // cam's width (named scenario in trust_test.cpp). 187000060 (engine): a
+  // measurement left a hard-stop axis pull_off off the far stop, and the
+  // home cycle's pre-move ran into it (named scenario in measure_test.cpp).
   const std::uint64_t seeds[] = {1,        7,        3,        8,        490,      715,      2,       173,
                                  959,      1242,     2054,     84,       4,        103,      1069,    412,
                                  627,      3972,     8001884,  31342370, 9,        5000422,  5001903, 9001798,
@@ -125,7 +130,8 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
                                  4420842,  4431542,  6617474,  2818140234, 5512019, 2652,   33,
                                  90,       336,      984,      3293,     3639,     5510656,  5512163, 7004079, 162,
                                  7201525,  7201552,  7314363,  7316777,  457,      363,      9533,    1281,
-                                 20005266, 21050675, 21086452, 184458299, 21090731, 21040289, 185003649, 186002100};
+                                 20005266, 21050675, 21086452, 184458299, 21090731, 21040289, 185003649, 186002100,
+                                 187000328, 187000060};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);

@@ -61,6 +61,9 @@ void Watch::begin_window(const CyclePlan& p, bool is_refused) {
   }
   plan.unsequenced &= static_cast<AxisMask>(~kept);
   refused = is_refused;
+  measured = 0;
+  extra_path.fill(0);
+  outside_soft_limits &= static_cast<AxisMask>(~(p.covered | p.unsequenced));
   flipped = 0;
   tampered = 0;
   path.fill(0);
@@ -170,6 +173,8 @@ void Watch::square_unsure(std::size_t a) {
     if (m_.plan[s].role == Role::slave && (s == a || static_cast<std::size_t>(m_.plan[s].partner) == a))
       square_uncertain_[s] = true;
 }
+
+void Watch::restarted() { pair_unhomed(kAllAxes); }
 
 void Watch::settings_changed() {
   for (std::size_t a = 0; a < kAxisCount; ++a) eff_[a] = effective(r_.settings, a);
@@ -355,7 +360,9 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
     }
     const double pos = x + truth[a].offset;
     const double tol = truth[a].tol + 1e-6;
-    if (e.soft_limits_enable && !in_window && (pos < e.soft_limit_min_mm - tol || pos > e.soft_limit_max_mm + tol)) {
+    const bool outside = pos < e.soft_limit_min_mm - tol || pos > e.soft_limit_max_mm + tol;
+    if (!outside) outside_soft_limits &= static_cast<AxisMask>(~bit);
+    if (e.soft_limits_enable && !in_window && outside && !(outside_soft_limits & bit)) {
       std::ostringstream o;
       o << fmt_axis(a, r_, x) << "; machine position (truth) " << pos << " outside [" << e.soft_limit_min_mm << ", "
         << e.soft_limit_max_mm << "]";
