@@ -40,11 +40,12 @@ void PhaseRunner::refcheck_begin(phase_data::RefCheck& c) {
   c.expected_mm = s.home_position_mm - away_from_reference() * rest_offset_mm() - run.offset_mm;
   c.started_on_sensor = active();
   if (c.started_on_sensor) {
-    // On a home cam the reference edge may lie the cam's width away (a move
-    // left the axis on it): as far as the stored position puts the edge.
+    // A final move or a jog may have left the axis deeper on its switch (or
+    // its home cam) than max_backoff (campaign seed 187105905: 2 mm on it,
+    // max_backoff 2.8, moved 3.9 mm further): it backs off as far as its
+    // stored position puts the edge, and max_backoff beyond.
     const double away = away_from_reference();
-    double target = c.start_mm + away * s.max_backoff_mm;
-    if (row().runs(Phase::cam_latch)) target = away * std::max(away * target, away * (c.expected_mm + away * s.max_backoff_mm));
+    const double target = away * std::max(away * c.start_mm + s.max_backoff_mm, away * c.expected_mm + s.max_backoff_mm);
     return refcheck_step(c, Step::leave_sensor, target);
   }
   // Past the edge by the tolerance, the room a seek takes past a trigger,

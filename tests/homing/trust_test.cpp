@@ -291,3 +291,30 @@ SCENARIO("a home cam axis left on the cam's far side is checked across the cam a
   if (!on_cam) CHECK(r.actual(X) == Approx(start).margin(1e-9));
   else CHECK(r.axis(X).position_mm == Approx(s.home_position_mm).margin(s.refcheck_tolerance_mm));
 }
+
+SCENARIO("an axis left deeper on its switch than max_backoff is checked off it and accepted where it stands",
+         "[trust]") {
+  // Campaign seed 187105905: a final move left the axis on its switch; the
+  // check backed off no further than max_backoff from where it stood, never
+  // met the release edge and refused an axis that had not moved.
+  CleanStop c;
+  c.before.settings.axes[X].soft_limit_min_mm = -100;
+  c.before.machine.axes[X].hard_stop_min_mm = -50;  // room on the switch
+  home_and_stop(c);
+  // 15 mm onto the switch (its edge 1 mm below the home position), past max_backoff (10 mm).
+  c.before.move(X, -16);
+  c.before.run_until([&] { return !c.before.any_moving(); }, 30);
+  c.before.step();
+  REQUIRE(c.before.actual(X) == Approx(-14.95).margin(1e-6));
+  REQUIRE(c.before.sim().sensor_active(X));
+  c.stops = shut_down(c.before);
+  REQUIRE(c.stops[X].clean);
+  Rig r = restart(c.before, c.stops);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);
+  CHECK(r.axis(X).homed);
+  CHECK(r.axis(X).trust == Trust::reference_checked);
+  CHECK(std::abs(r.axis(X).refcheck_error_mm) <= r.settings.axes[X].refcheck_tolerance_mm);
+  // Homed where a cycle ends: pull_off off the edge, with the coordinate the cycle gave it.
+  CHECK(r.axis(X).position_mm == Approx(0).margin(0.01));
+  CHECK(r.axis(X).position_mm - r.actual(X) == Approx(c.offset_mm).margin(r.settings.axes[X].refcheck_tolerance_mm));
+}
