@@ -122,6 +122,11 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // cam's width (named scenario in trust_test.cpp). 187000060 (engine): a
   // measurement left a hard-stop axis pull_off off the far stop, and the
   // home cycle's pre-move ran into it (named scenario in measure_test.cpp).
+  // 187105905 (engine): a check of an axis a final move left deeper on its
+  // switch than max_backoff never met the edge (named scenario in
+  // trust_test.cpp). 187100911, 187107016: the restart's model, a simulator
+  // whose inputs still showed the carriages where they stood before the hand
+  // moved them.
   const std::uint64_t seeds[] = {1,        7,        3,        8,        490,      715,      2,       173,
                                  959,      1242,     2054,     84,       4,        103,      1069,    412,
                                  627,      3972,     8001884,  31342370, 9,        5000422,  5001903, 9001798,
@@ -131,7 +136,7 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
                                  90,       336,      984,      3293,     3639,     5510656,  5512163, 7004079, 162,
                                  7201525,  7201552,  7314363,  7316777,  457,      363,      9533,    1281,
                                  20005266, 21050675, 21086452, 184458299, 21090731, 21040289, 185003649, 186002100,
-                                 187000328, 187000060};
+                                 187000328, 187000060, 187105905, 187100911, 187107016};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);
