@@ -8,7 +8,8 @@
 // Either way the figure is kept (refcheck_error) and the axis goes back
 // where it started. Every step is bounded in distance: no further than
 // refcheck_tolerance plus max_stop_distance past the expected edge (the room
-// a seek may take past a trigger), max_backoff off the switch. A home cam
+// a seek may take past a trigger; a release method's approach max_backoff
+// more, for its trigger lies the hysteresis beyond), max_backoff off the switch. A home cam
 // lies in mid-travel, so a homed axis may rest on its far side (a final move
 // or a jog across it): the check first goes back across the cam to the rest
 // point its stored position gives, as far as that position says.
@@ -20,6 +21,22 @@
 namespace homing {
 
 using Step = phase_data::RefCheck::Step;
+
+namespace {
+
+// How far past the expected edge an approach looks for its trigger: the
+// tolerance, the room a seek takes past a trigger, the travel while the
+// debounce time accepts the edge; for a release method also the switch's
+// hysteresis, by which its trigger lies beyond the release edge it checks:
+// less than max_backoff, or no cycle could have released it (campaign seeds
+// 187201697, 187209246: hysteresis 0.14 mm beyond a bound of 0.12 mm, an
+// unmoved axis refused).
+double approach_past_mm(const AxisSettings& s, double latch_v, RefcheckEdge edge) {
+  return s.refcheck_tolerance_mm + s.max_stop_distance_mm + latch_v * s.debounce_ms / 1000.0 +
+         (edge == RefcheckEdge::release ? s.max_backoff_mm : 0.0);
+}
+
+}  // namespace
 
 void PhaseRunner::reference_check() {
   auto& c = run.phase_data<phase_data::RefCheck>();
@@ -52,6 +69,7 @@ void PhaseRunner::refcheck_begin(phase_data::RefCheck& c) {
   // and the travel while the debounce time accepts the edge.
   const double past = s.refcheck_tolerance_mm + s.max_stop_distance_mm + latch_v * s.debounce_ms / 1000.0;
   const double target = c.expected_mm - away_from_reference() * past;
+  const double approach = c.expected_mm - away_from_reference() * approach_past_mm(s, latch_v, refcheck_edge(row()));
   // Already that far past the edge, and off the switch. A home switch runs
   // on to the end of the travel: it is not where it was stored. A home cam
   // lies in mid-travel: it stands on the cam's far side, where a move took
@@ -61,7 +79,7 @@ void PhaseRunner::refcheck_begin(phase_data::RefCheck& c) {
     if (!row().runs(Phase::cam_latch)) return refcheck_judge(c, c.start_mm, false);
     return refcheck_step(c, Step::cross_cam, c.expected_mm + away_from_reference() * rest_offset_mm());
   }
-  refcheck_step(c, Step::approach, target);
+  refcheck_step(c, Step::approach, approach);
 }
 
 // The way the move that left it there came, at seek feedrate, the cam's
@@ -71,8 +89,7 @@ void PhaseRunner::refcheck_cross_cam(phase_data::RefCheck& c) {
   move_to(run.target_mm, seek_v);
   if (!arrived()) return;
   if (active()) return refcheck_step(c, Step::leave_sensor, run.motor.position_mm + away_from_reference() * s.max_backoff_mm);
-  const double past = s.refcheck_tolerance_mm + s.max_stop_distance_mm + latch_v * s.debounce_ms / 1000.0;
-  refcheck_step(c, Step::approach, c.expected_mm - away_from_reference() * past);
+  refcheck_step(c, Step::approach, c.expected_mm - away_from_reference() * approach_past_mm(s, latch_v, refcheck_edge(row())));
 }
 
 void PhaseRunner::refcheck_step(phase_data::RefCheck& c, phase_data::RefCheck::Step step, double target_mm) {
@@ -86,8 +103,8 @@ void PhaseRunner::refcheck_step(phase_data::RefCheck& c, phase_data::RefCheck::S
 void PhaseRunner::refcheck_leave_sensor(phase_data::RefCheck& c) {
   if (edge_to(false)) {
     if (refcheck_edge(row()) == RefcheckEdge::release) return refcheck_judge(c, edge_mm(), true);
-    const double past = s.refcheck_tolerance_mm + s.max_stop_distance_mm + latch_v * s.debounce_ms / 1000.0;
-    return refcheck_step(c, Step::approach, c.expected_mm - away_from_reference() * past);
+    return refcheck_step(c, Step::approach,
+                         c.expected_mm - away_from_reference() * approach_past_mm(s, latch_v, RefcheckEdge::trigger));
   }
   move_to(run.target_mm, latch_v);
   if (arrived()) refcheck_judge(c, run.motor.position_mm, false);

@@ -318,3 +318,23 @@ SCENARIO("an axis left deeper on its switch than max_backoff is checked off it a
   CHECK(r.axis(X).position_mm == Approx(0).margin(0.01));
   CHECK(r.axis(X).position_mm - r.actual(X) == Approx(c.offset_mm).margin(r.settings.axes[X].refcheck_tolerance_mm));
 }
+
+SCENARIO("a release method whose switch's hysteresis exceeds the check's search past the edge is accepted where it stopped",
+         "[trust]") {
+  // Campaign seeds 187201697, 187209246: the approach looked for the trigger
+  // no further than tolerance + max_stop_distance past the release edge it
+  // checks, but the trigger lies the switch's hysteresis beyond it: an
+  // unmoved axis was refused with the search's end as its figure.
+  CleanStop c;
+  c.before.settings.axes[X].max_stop_distance_mm = 0.45;  // the seek needs 0.4
+  c.before.machine.axes[X].hysteresis_mm = 0.6;           // beyond 0.1 + 0.45
+  home_and_stop(c);
+  REQUIRE(c.stops[X].clean);
+  Rig r = restart(c.before, c.stops);
+  const double start = r.actual(X);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);
+  CHECK(r.axis(X).trust == Trust::reference_checked);
+  CHECK(std::abs(r.axis(X).refcheck_error_mm) <= r.settings.axes[X].refcheck_tolerance_mm);
+  CHECK(r.actual(X) == Approx(start).margin(1e-9));
+  CHECK(r.axis(X).position_mm - r.actual(X) == Approx(c.offset_mm).margin(0.01));
+}
