@@ -140,8 +140,13 @@ void PhaseRunner::refcheck_judge(phase_data::RefCheck& c, double edge_mm, bool f
     run.trigger_position_mm = edge_mm + run.offset_mm;
     run.home_correction_mm = -error;
     // Homed resting on its switch, a shared limit would trip at once: end
-    // where a cycle ends, pull-off away from the edge.
-    if (c.started_on_sensor) back_mm = edge_mm + away_from_reference() * rest_offset_mm();
+    // where a cycle ends, pull-off away from the edge. So too a shared limit
+    // that started nearer its edge than that: back there, the switch's
+    // hysteresis may hold it active after the approach triggered it
+    // (campaign seed 187208768: a trigger method jogged off its tripped
+    // sensor just until it released).
+    const bool near = (c.start_mm - edge_mm) * away_from_reference() < rest_offset_mm();
+    if (c.started_on_sensor || (s.shared_limit && near)) back_mm = edge_mm + away_from_reference() * rest_offset_mm();
   } else {
     run.restored.reset();
   }

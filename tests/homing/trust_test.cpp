@@ -338,3 +338,33 @@ SCENARIO("a release method whose switch's hysteresis exceeds the check's search 
   CHECK(r.actual(X) == Approx(start).margin(1e-9));
   CHECK(r.axis(X).position_mm - r.actual(X) == Approx(c.offset_mm).margin(0.01));
 }
+
+SCENARIO("a shared-limit axis checked from nearer its switch than its rest point ends pull-off away, not tripped",
+         "[trust]") {
+  // Campaign seed 187208768: a trigger method went back to where it started,
+  // inside the switch's hysteresis, with its sensor still active: homed on
+  // its shared limit, it tripped hard_limit at once.
+  CleanStop c;
+  AxisSettings& s = c.before.settings.axes[X];
+  s.mode = HomingMode::switch_reapproach;
+  s.shared_limit = true;
+  s.soft_limit_min_mm = -2;
+  c.before.machine.axes[X].hysteresis_mm = 0.2;
+  home_and_stop(c);
+  // 0.1 mm from the trigger edge (at carriage 0), off the switch coming from above.
+  c.before.move(X, c.before.axis(X).position_mm - (c.before.actual(X) - 0.1));
+  c.before.run_until([&] { return !c.before.any_moving(); }, 30);
+  c.before.step();
+  REQUIRE(c.before.actual(X) == Approx(0.1).margin(1e-6));
+  REQUIRE_FALSE(c.before.sim().sensor_active(X));
+  REQUIRE_FALSE(c.before.status().alarm);
+  c.stops = shut_down(c.before);
+  REQUIRE(c.stops[X].clean);
+  Rig r = restart(c.before, c.stops);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);
+  r.run_for(0.1);
+  CHECK_FALSE(r.status().alarm);
+  CHECK(r.axis(X).trust == Trust::reference_checked);
+  CHECK_FALSE(r.sim().sensor_active(X));
+  CHECK(r.axis(X).position_mm == Approx(s.home_position_mm).margin(0.01));  // where a cycle ends
+}
