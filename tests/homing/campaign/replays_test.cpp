@@ -126,7 +126,12 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // switch than max_backoff never met the edge (named scenario in
   // trust_test.cpp). 187100911, 187107016: the restart's model, a simulator
   // whose inputs still showed the carriages where they stood before the hand
-  // moved them.
+  // moved them. 187201697 (engine): a release method's switch hysteresis
+  // beyond the check's search. 187208768 (engine): a shared limit checked
+  // from inside its hysteresis went back onto it. 187202370, 187208638,
+  // 187207833: the service acts' model (a measurement stopped by its alarm
+  // near the far end, max_seek_travel raised past a short cam, a check that
+  // homes an axis the hand left beyond its soft limits).
   const std::uint64_t seeds[] = {1,        7,        3,        8,        490,      715,      2,       173,
                                  959,      1242,     2054,     84,       4,        103,      1069,    412,
                                  627,      3972,     8001884,  31342370, 9,        5000422,  5001903, 9001798,
@@ -136,7 +141,8 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
                                  90,       336,      984,      3293,     3639,     5510656,  5512163, 7004079, 162,
                                  7201525,  7201552,  7314363,  7316777,  457,      363,      9533,    1281,
                                  20005266, 21050675, 21086452, 184458299, 21090731, 21040289, 185003649, 186002100,
-                                 187000328, 187000060, 187105905, 187100911, 187107016};
+                                 187000328, 187000060, 187105905, 187100911, 187107016,
+                                 187201697, 187208768, 187202370, 187208638, 187207833};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);

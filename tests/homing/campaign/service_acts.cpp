@@ -173,7 +173,9 @@ void Run::measure_axis(std::size_t a) {
   const double to_end = std::abs(*far_end(s, c) - r_.actual(a));
   const double wanted = std::ceil(to_end + s.pull_off_mm + s.max_backoff_mm +
                                   std::abs(s.final_position_mm - s.home_position_mm) + measure_lag_mm(a) + 10);
-  if (by_limit && wanted > s.max_seek_travel_mm && measure_acts_.chance(0.7)) {
+  // (Not past a cam shorter than the seek's stop: the seek would run on to
+  // the limit switch beyond it, where max_seek_travel stopped it before.)
+  if (by_limit && wanted > s.max_seek_travel_mm && measure_acts_.chance(0.7) && !m_.plan[a].short_cam) {
     const double old = s.max_seek_travel_mm;
     r_.settings.axes[a].max_seek_travel_mm = wanted;
     if (first_fault(r_.settings)) {
@@ -198,6 +200,16 @@ void Run::measure_axis(std::size_t a) {
   if (!clean) {
     // Explained by the cycle's verdict: a cause of the homing, or the end beyond max_seek_travel.
     if (w_->axis_alarms[a] & alarm_bit(AlarmCode::travel_end_not_found)) mark("measurement: no end within max_seek_travel", seen::alarmed);
+    // Stopped on its way to the far end, where no cycle of this machine
+    // starts (a pre-move away from home would run into that end, seed
+    // 187202370): the technician resets, puts it back by hand and unhomes it.
+    if (r_.status().alarm) recover();
+    if (ok() && !r_.status().alarm && std::abs(r_.actual(a) - m_.sim.axes[a].actual_position_mm) > 0) {
+      put_back(axis_bit(a));
+      say("unhome " + x + ", moved by hand");
+      r_.pending.unhome_axes |= axis_bit(a);
+      step();
+    }
     return;
   }
   if (!mr.began) {
@@ -563,8 +575,13 @@ void Run::refcheck(AxisMask mask, const std::array<Truth, kAxisCount>& truth, co
       if (on_sensor[a] && known && std::abs(r_.actual(a) - truth[a].rest) > truth[a].tol + slack)
         w_->fail("an accepted reference check that started on its switch did not end pull-off away from the edge",
                  o.str() + ", rest point " + fig(truth[a].rest));
-      if (!on_sensor[a] && std::abs(r_.actual(a) - x0[a]) > 1e-6)
+      // A shared limit that started nearer its edge than its rest point ends
+      // at the rest point too (docs): the hysteresis may hold its switch there.
+      const bool at_rest = known && std::abs(r_.actual(a) - truth[a].rest) <= truth[a].tol + slack;
+      if (!on_sensor[a] && std::abs(r_.actual(a) - x0[a]) > 1e-6 && !(s.shared_limit && at_rest))
         w_->fail("a reference check did not go back where it started", o.str());
+      // Homed where the hand left it, it may stand beyond its soft limits.
+      w_->outside_soft_limits |= axis_bit(a);
     } else {
       if (as.trust != Trust::unknown) w_->fail("a refused reference check left its axis trusted", x + ": " + std::string(name_of(as.trust)));
       if (std::abs(r_.actual(a) - x0[a]) > 1e-6) w_->fail("a reference check did not go back where it started", o.str());
