@@ -131,7 +131,9 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // from inside its hysteresis went back onto it. 187202370, 187208638,
   // 187207833: the service acts' model (a measurement stopped by its alarm
   // near the far end, max_seek_travel raised past a short cam, a check that
-  // homes an axis the hand left beyond its soft limits).
+  // homes an axis the hand left beyond its soft limits). 187204642, 187207148:
+  // the restart's model (a hand's move within a pre-move of the far stop; a
+  // pair an alarm left racked, which the new engine takes for square).
   const std::uint64_t seeds[] = {1,        7,        3,        8,        490,      715,      2,       173,
                                  959,      1242,     2054,     84,       4,        103,      1069,    412,
                                  627,      3972,     8001884,  31342370, 9,        5000422,  5001903, 9001798,
@@ -142,7 +144,8 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
                                  7201525,  7201552,  7314363,  7316777,  457,      363,      9533,    1281,
                                  20005266, 21050675, 21086452, 184458299, 21090731, 21040289, 185003649, 186002100,
                                  187000328, 187000060, 187105905, 187100911, 187107016,
-                                 187201697, 187208768, 187202370, 187208638, 187207833};
+                                 187201697, 187208768, 187202370, 187208638, 187207833, 187204642,
+                                 187207148};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);

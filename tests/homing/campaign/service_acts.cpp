@@ -376,14 +376,16 @@ void Run::restart_with_checks() {
   r_.engine = Engine{};
   r_.pending = Commands{};
   r_.held = Commands{};
-  // Carriages moved by hand while the daemon was off: within the tolerance
-  // or well beyond it, never onto a limit switch or a stop, nor across a cam.
+  // Carriages moved by hand while the daemon was off, on axes a check may
+  // home: within the tolerance or well beyond it, never onto a limit switch
+  // or a stop, nor within a pre-move of one (no cycle of the machine starts
+  // there: seed 187204642), nor across a cam.
   std::array<double, kAxisCount> moved{};
   AxisMask by_hand = 0;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const AxisSettings& s = r_.settings.axes[a];
     const sim::AxisConfig& c = r_.sim().axis_config(a);
-    if (m_.plan[a].role != Role::plain || partner_index(r_.settings, a) >= 0 || s.mode == HomingMode::disabled ||
+    if (m_.plan[a].role != Role::plain || partner_index(r_.settings, a) >= 0 || !offers_check(s.mode) ||
         !restarts_.chance(0.3))
       continue;
     const double tol = s.refcheck_tolerance_mm;
@@ -392,8 +394,9 @@ void Run::restart_with_checks() {
     d *= restarts_.sign();
     if (c.sensor_max_mm > c.sensor_min_mm) d = std::clamp(d, -0.4 * (c.sensor_max_mm - c.sensor_min_mm), 0.4 * (c.sensor_max_mm - c.sensor_min_mm));
     const double x = r_.actual(a) + d;
-    const double lo = std::max(c.hard_stop_min_mm, s.limits_fitted ? c.limit_min_mm : -1e300) + 0.5;
-    const double hi = std::min(c.hard_stop_max_mm, s.limits_fitted ? c.limit_max_mm : 1e300) - 0.5;
+    const double margin = 0.5 + (s.pre_move_mode != PreMove::none ? s.pre_move_distance_mm : 0);
+    const double lo = std::max(c.hard_stop_min_mm, s.limits_fitted ? c.limit_min_mm : -1e300) + margin;
+    const double hi = std::min(c.hard_stop_max_mm, s.limits_fitted ? c.limit_max_mm : 1e300) - margin;
     if (x < lo || x > hi || !r_.sim().place(a, x)) continue;
     moved[a] = d;
     by_hand |= axis_bit(a);
@@ -412,7 +415,11 @@ void Run::restart_with_checks() {
     say(o.str());
     w_->carriages_placed();
   }
-  w_->restarted();
+  // (Racked pairs: seed 187207148, a gantry an alarm left racked, then the restart.)
+  AxisMask homed_mask = 0;
+  for (std::size_t a = 0; a < kAxisCount; ++a)
+    if (homed[a]) homed_mask |= axis_bit(a);
+  w_->restarted(homed_mask);
   r_.restore = stops;
   step();
   // Every axis unhomed; those with a clean stop trust it and show the stored position.

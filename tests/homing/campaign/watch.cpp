@@ -174,7 +174,14 @@ void Watch::square_unsure(std::size_t a) {
       square_uncertain_[s] = true;
 }
 
-void Watch::restarted() { pair_unhomed(kAllAxes); }
+void Watch::restarted(AxisMask homed) {
+  pair_unhomed(kAllAxes);
+  for (std::size_t s = 0; s < kAxisCount; ++s) {
+    if (m_.plan[s].role != Role::slave) continue;
+    const AxisMask pair = static_cast<AxisMask>(axis_bit(s) | axis_bit(static_cast<std::size_t>(m_.plan[s].partner)));
+    if ((homed & pair) != pair) square_unsure(s);
+  }
+}
 
 void Watch::settings_changed() {
   for (std::size_t a = 0; a < kAxisCount; ++a) eff_[a] = effective(r_.settings, a);

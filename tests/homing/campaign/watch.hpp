@@ -61,8 +61,10 @@ class Watch {
   void assign_unsequenced();             // a home-all ended: unsequenced axes now hold their home position
   void carriages_placed();               // put back by hand: gantries locked where they stand now
   void pair_slipped(std::size_t a);
-  // A new engine (the daemon restarted): it knows no pair's square, as at power-up.
-  void restarted();
+  // A new engine (the daemon restarted): it takes each pair as square where
+  // it stands, as at power-up; a pair not homed before may stand racked (an
+  // alarm left it so), which the module can no longer see (homed: bit per axis).
+  void restarted(AxisMask homed);
   void settings_changed();               // written between cycles: what each axis moves with now      // a drive fault on a locked side: the pair may rack up to its limit
 
   void fail(const std::string& what, const std::string& detail = "");
