@@ -71,6 +71,7 @@ struct DriveHoming {
 // The reference check (refcheck_phases.cpp), one phase in steps.
 struct RefCheck {
   enum class Step : std::uint8_t {
+    cross_cam,     // a home cam's far side: back across the cam to the frame's rest point, at seek feedrate
     leave_sensor,  // started on the switch: off it at latch feedrate to its release edge
     approach,      // toward the switch at latch feedrate to its trigger edge
     back_off,      // release methods: off the switch again, to the release edge

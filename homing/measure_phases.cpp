@@ -6,7 +6,9 @@
 // just off it, still homed. A hard stop is pushed into at reduced current,
 // as hard-stop homing pushes, until the stall input comes; the motor may
 // lose steps against the stop, so the axis is no longer homed from the
-// start of that push, and it ends pull_off away from the stop.
+// start of that push, and it ends pull_off away from the stop (and the
+// pre-move's distance, when a pre-move always runs, so that the home cycle
+// that must follow does not pre-move into the stop).
 #include "phase_runner.hpp"
 
 namespace homing {
@@ -68,8 +70,12 @@ void PhaseRunner::measure_brake(phase_data::Measure& m) {
   }
   measure_record(m);
   if (travel_end(s) == TravelEnd::hard_stop) {
+    // Unhomed there, it is homed again next: a pre-move that always runs
+    // goes away from home first, toward this stop, at seek feedrate and full
+    // current. It ends far enough off for that (campaign seed 187000060).
+    const double pre_move = s.pre_move_mode == PreMove::always ? s.pre_move_distance_mm : 0.0;
     m.step = MeasureStep::settle;
-    run.target_mm = run.motor.position_mm - m.toward * s.pull_off_mm;
+    run.target_mm = run.motor.position_mm - m.toward * (s.pull_off_mm + pre_move);
     return;
   }
   m.step = MeasureStep::leave;

@@ -144,6 +144,7 @@ struct PhaseRunner {
   void reference_check();
   void refcheck_begin(phase_data::RefCheck& c);
   void refcheck_step(phase_data::RefCheck& c, phase_data::RefCheck::Step step, double target_mm);
+  void refcheck_cross_cam(phase_data::RefCheck& c);
   void refcheck_leave_sensor(phase_data::RefCheck& c);
   void refcheck_approach(phase_data::RefCheck& c);
   void refcheck_back_off(phase_data::RefCheck& c);

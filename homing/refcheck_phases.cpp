@@ -8,7 +8,12 @@
 // Either way the figure is kept (refcheck_error) and the axis goes back
 // where it started. Every step is bounded in distance: no further than
 // refcheck_tolerance plus max_stop_distance past the expected edge (the room
-// a seek may take past a trigger), max_backoff off the switch.
+// a seek may take past a trigger; a release method's approach max_backoff
+// more, for its trigger lies the hysteresis beyond), max_backoff off the switch. A home cam
+// lies in mid-travel, so a homed axis may rest on its far side (a final move
+// or a jog across it): the check first goes back across the cam to the rest
+// point its stored position gives, as far as that position says.
+#include <algorithm>
 #include <cmath>
 
 #include "phase_runner.hpp"
@@ -17,10 +22,27 @@ namespace homing {
 
 using Step = phase_data::RefCheck::Step;
 
+namespace {
+
+// How far past the expected edge an approach looks for its trigger: the
+// tolerance, the room a seek takes past a trigger, the travel while the
+// debounce time accepts the edge; for a release method also the switch's
+// hysteresis, by which its trigger lies beyond the release edge it checks:
+// less than max_backoff, or no cycle could have released it (campaign seeds
+// 187201697, 187209246: hysteresis 0.14 mm beyond a bound of 0.12 mm, an
+// unmoved axis refused).
+double approach_past_mm(const AxisSettings& s, double latch_v, RefcheckEdge edge) {
+  return s.refcheck_tolerance_mm + s.max_stop_distance_mm + latch_v * s.debounce_ms / 1000.0 +
+         (edge == RefcheckEdge::release ? s.max_backoff_mm : 0.0);
+}
+
+}  // namespace
+
 void PhaseRunner::reference_check() {
   auto& c = run.phase_data<phase_data::RefCheck>();
   if (entry()) refcheck_begin(c);
   switch (c.step) {
+    case Step::cross_cam: return refcheck_cross_cam(c);
     case Step::leave_sensor: return refcheck_leave_sensor(c);
     case Step::approach: return refcheck_approach(c);
     case Step::back_off: return refcheck_back_off(c);
@@ -34,14 +56,40 @@ void PhaseRunner::refcheck_begin(phase_data::RefCheck& c) {
   c.start_mm = run.motor.position_mm;
   c.expected_mm = s.home_position_mm - away_from_reference() * rest_offset_mm() - run.offset_mm;
   c.started_on_sensor = active();
-  if (c.started_on_sensor) return refcheck_step(c, Step::leave_sensor, c.start_mm + away_from_reference() * s.max_backoff_mm);
+  if (c.started_on_sensor) {
+    // A final move or a jog may have left the axis deeper on its switch (or
+    // its home cam) than max_backoff (campaign seed 187105905: 2 mm on it,
+    // max_backoff 2.8, moved 3.9 mm further): it backs off as far as its
+    // stored position puts the edge, and max_backoff beyond.
+    const double away = away_from_reference();
+    const double target = away * std::max(away * c.start_mm + s.max_backoff_mm, away * c.expected_mm + s.max_backoff_mm);
+    return refcheck_step(c, Step::leave_sensor, target);
+  }
   // Past the edge by the tolerance, the room a seek takes past a trigger,
   // and the travel while the debounce time accepts the edge.
   const double past = s.refcheck_tolerance_mm + s.max_stop_distance_mm + latch_v * s.debounce_ms / 1000.0;
   const double target = c.expected_mm - away_from_reference() * past;
-  // Already that far past the edge, and off the switch: it is not where it was stored.
-  if ((target - c.start_mm) * -away_from_reference() <= 0) return refcheck_judge(c, c.start_mm, false);
-  refcheck_step(c, Step::approach, target);
+  const double approach = c.expected_mm - away_from_reference() * approach_past_mm(s, latch_v, refcheck_edge(row()));
+  // Already that far past the edge, and off the switch. A home switch runs
+  // on to the end of the travel: it is not where it was stored. A home cam
+  // lies in mid-travel: it stands on the cam's far side, where a move took
+  // it (campaign seed 187000328: a final move across the cam, refused with
+  // the cam's width as its mismatch); back across the cam to the rest point.
+  if ((target - c.start_mm) * -away_from_reference() <= 0) {
+    if (!row().runs(Phase::cam_latch)) return refcheck_judge(c, c.start_mm, false);
+    return refcheck_step(c, Step::cross_cam, c.expected_mm + away_from_reference() * rest_offset_mm());
+  }
+  refcheck_step(c, Step::approach, approach);
+}
+
+// The way the move that left it there came, at seek feedrate, the cam's
+// edges crossed on the way taken for nothing; then the check as from a
+// cycle's rest point (on the cam there: off it first).
+void PhaseRunner::refcheck_cross_cam(phase_data::RefCheck& c) {
+  move_to(run.target_mm, seek_v);
+  if (!arrived()) return;
+  if (active()) return refcheck_step(c, Step::leave_sensor, run.motor.position_mm + away_from_reference() * s.max_backoff_mm);
+  refcheck_step(c, Step::approach, c.expected_mm - away_from_reference() * approach_past_mm(s, latch_v, refcheck_edge(row())));
 }
 
 void PhaseRunner::refcheck_step(phase_data::RefCheck& c, phase_data::RefCheck::Step step, double target_mm) {
@@ -55,8 +103,8 @@ void PhaseRunner::refcheck_step(phase_data::RefCheck& c, phase_data::RefCheck::S
 void PhaseRunner::refcheck_leave_sensor(phase_data::RefCheck& c) {
   if (edge_to(false)) {
     if (refcheck_edge(row()) == RefcheckEdge::release) return refcheck_judge(c, edge_mm(), true);
-    const double past = s.refcheck_tolerance_mm + s.max_stop_distance_mm + latch_v * s.debounce_ms / 1000.0;
-    return refcheck_step(c, Step::approach, c.expected_mm - away_from_reference() * past);
+    return refcheck_step(c, Step::approach,
+                         c.expected_mm - away_from_reference() * approach_past_mm(s, latch_v, RefcheckEdge::trigger));
   }
   move_to(run.target_mm, latch_v);
   if (arrived()) refcheck_judge(c, run.motor.position_mm, false);
@@ -92,8 +140,13 @@ void PhaseRunner::refcheck_judge(phase_data::RefCheck& c, double edge_mm, bool f
     run.trigger_position_mm = edge_mm + run.offset_mm;
     run.home_correction_mm = -error;
     // Homed resting on its switch, a shared limit would trip at once: end
-    // where a cycle ends, pull-off away from the edge.
-    if (c.started_on_sensor) back_mm = edge_mm + away_from_reference() * rest_offset_mm();
+    // where a cycle ends, pull-off away from the edge. So too a shared limit
+    // that started nearer its edge than that: back there, the switch's
+    // hysteresis may hold it active after the approach triggered it
+    // (campaign seed 187208768: a trigger method jogged off its tripped
+    // sensor just until it released).
+    const bool near = (c.start_mm - edge_mm) * away_from_reference() < rest_offset_mm();
+    if (c.started_on_sensor || (s.shared_limit && near)) back_mm = edge_mm + away_from_reference() * rest_offset_mm();
   } else {
     run.restored.reset();
   }

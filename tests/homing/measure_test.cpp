@@ -233,3 +233,23 @@ SCENARIO("a far limit switch that stays active after the measurement backs off m
   CHECK(describe_alarm(X, x.alarm, r.settings).find("far limit switch the measurement found still active") !=
         std::string::npos);
 }
+
+SCENARIO("measurement of a hard-stop axis with a pre-move: it ends far enough off the far stop for the home cycle's pre-move",
+         "[measure]") {
+  // Campaign seed 187000060: the measurement left the axis pull_off (1 mm)
+  // off the far stop, and the home cycle the docs then ask for pre-moved
+  // 3 mm away from home, into that stop at seek feedrate and full current.
+  Rig r = hard_stop_axis();
+  AxisSettings& s = r.settings.axes[X];
+  s.pre_move_mode = PreMove::always;
+  s.pre_move_distance_mm = 3;
+  s.max_seek_travel_mm = 300;  // the seek from the far end: 150 mm to the home stop,
+  s.stall_timeout_ms = 200'000;  // at latch feedrate (1 mm/s)
+  REQUIRE(measure(r, axis_bit(X)) == CommandResult::accepted);
+  REQUIRE_FALSE(r.status().alarm);
+  CHECK(r.actual(X) == Approx(145 - 1 - 3).margin(0.01));  // pull_off and the pre-move below the stop
+  r.clear_trace();
+  CHECK(r.home_all(250));
+  CHECK(r.trace[X].max_actual < 145);  // the pre-move stopped short of the far stop
+  CHECK(r.axis(X).homed);
+}

@@ -245,3 +245,126 @@ SCENARIO("an abort during the reference check stops it with the aborted alarm", 
   CHECK(r.axis(X).alarm.phase == Phase::reference_check);
   CHECK_FALSE(r.axis(X).homed);
 }
+
+SCENARIO("a home cam axis left on the cam's far side is checked across the cam and accepted where it stands",
+         "[trust][home_cam]") {
+  // Campaign seed 187000328: a home cam lies in mid-travel, so a homed axis
+  // may rest beyond it (a final move or a jog across it); the check took
+  // that for a carriage moved past its edge and refused it with the cam's width.
+  CleanStop c;
+  AxisSettings& s = c.before.settings.axes[X];
+  s.mode = HomingMode::home_cam;
+  s.cam_edge = CamEdge::behind;  // the top of the cam, left upward, is the reference
+  s.limits_fitted = true;
+  s.limit_overtravel_mm = 10;
+  s.max_backoff_mm = 30;
+  s.soft_limit_min_mm = -1000;
+  sim::AxisConfig& m = c.before.machine.axes[X];
+  m.actual_position_mm = 50;
+  m.sensor_min_mm = 10;
+  m.sensor_max_mm = 20;
+  m.limit_min_mm = -100;
+  m.limit_max_mm = 100;
+  m.hard_stop_min_mm = -110;
+  m.hard_stop_max_mm = 110;
+  const bool on_cam = GENERATE(false, true);
+  CAPTURE(on_cam);
+  REQUIRE(c.before.home_all());
+  // Across the cam (to carriage -4), or onto it, 6 mm from the reference edge.
+  c.before.move(X, c.before.axis(X).position_mm - (on_cam ? 7 : 25));
+  c.before.run_until([&] { return !c.before.any_moving() && c.before.axis(X).phase == Phase::idle; }, 30);
+  REQUIRE(c.before.sim().sensor_active(X) == on_cam);
+  c.stops = shut_down(c.before);
+  c.offset_mm = c.before.axis(X).position_mm - c.before.actual(X);
+  REQUIRE(c.stops[X].clean);
+
+  Rig r = restart(c.before, c.stops);
+  const double start = r.actual(X);
+  REQUIRE(r.axis(X).trust == Trust::last_stop_clean);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);
+  CHECK(r.axis(X).homed);
+  CHECK(r.axis(X).trust == Trust::reference_checked);
+  CHECK(std::abs(r.axis(X).refcheck_error_mm) <= s.refcheck_tolerance_mm);
+  CHECK_FALSE(r.status().alarm);
+  CHECK(r.axis(X).position_mm - r.actual(X) == Approx(c.offset_mm).margin(s.refcheck_tolerance_mm));
+  // Off the cam it goes back where it stood; from on it, it ends where a cycle ends.
+  if (!on_cam) CHECK(r.actual(X) == Approx(start).margin(1e-9));
+  else CHECK(r.axis(X).position_mm == Approx(s.home_position_mm).margin(s.refcheck_tolerance_mm));
+}
+
+SCENARIO("an axis left deeper on its switch than max_backoff is checked off it and accepted where it stands",
+         "[trust]") {
+  // Campaign seed 187105905: a final move left the axis on its switch; the
+  // check backed off no further than max_backoff from where it stood, never
+  // met the release edge and refused an axis that had not moved.
+  CleanStop c;
+  c.before.settings.axes[X].soft_limit_min_mm = -100;
+  c.before.machine.axes[X].hard_stop_min_mm = -50;  // room on the switch
+  home_and_stop(c);
+  // 15 mm onto the switch (its edge 1 mm below the home position), past max_backoff (10 mm).
+  c.before.move(X, -16);
+  c.before.run_until([&] { return !c.before.any_moving(); }, 30);
+  c.before.step();
+  REQUIRE(c.before.actual(X) == Approx(-14.95).margin(1e-6));
+  REQUIRE(c.before.sim().sensor_active(X));
+  c.stops = shut_down(c.before);
+  REQUIRE(c.stops[X].clean);
+  Rig r = restart(c.before, c.stops);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);
+  CHECK(r.axis(X).homed);
+  CHECK(r.axis(X).trust == Trust::reference_checked);
+  CHECK(std::abs(r.axis(X).refcheck_error_mm) <= r.settings.axes[X].refcheck_tolerance_mm);
+  // Homed where a cycle ends: pull_off off the edge, with the coordinate the cycle gave it.
+  CHECK(r.axis(X).position_mm == Approx(0).margin(0.01));
+  CHECK(r.axis(X).position_mm - r.actual(X) == Approx(c.offset_mm).margin(r.settings.axes[X].refcheck_tolerance_mm));
+}
+
+SCENARIO("a release method whose switch's hysteresis exceeds the check's search past the edge is accepted where it stopped",
+         "[trust]") {
+  // Campaign seeds 187201697, 187209246: the approach looked for the trigger
+  // no further than tolerance + max_stop_distance past the release edge it
+  // checks, but the trigger lies the switch's hysteresis beyond it: an
+  // unmoved axis was refused with the search's end as its figure.
+  CleanStop c;
+  c.before.settings.axes[X].max_stop_distance_mm = 0.45;  // the seek needs 0.4
+  c.before.machine.axes[X].hysteresis_mm = 0.6;           // beyond 0.1 + 0.45
+  home_and_stop(c);
+  REQUIRE(c.stops[X].clean);
+  Rig r = restart(c.before, c.stops);
+  const double start = r.actual(X);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);
+  CHECK(r.axis(X).trust == Trust::reference_checked);
+  CHECK(std::abs(r.axis(X).refcheck_error_mm) <= r.settings.axes[X].refcheck_tolerance_mm);
+  CHECK(r.actual(X) == Approx(start).margin(1e-9));
+  CHECK(r.axis(X).position_mm - r.actual(X) == Approx(c.offset_mm).margin(0.01));
+}
+
+SCENARIO("a shared-limit axis checked from nearer its switch than its rest point ends pull-off away, not tripped",
+         "[trust]") {
+  // Campaign seed 187208768: a trigger method went back to where it started,
+  // inside the switch's hysteresis, with its sensor still active: homed on
+  // its shared limit, it tripped hard_limit at once.
+  CleanStop c;
+  AxisSettings& s = c.before.settings.axes[X];
+  s.mode = HomingMode::switch_reapproach;
+  s.shared_limit = true;
+  s.soft_limit_min_mm = -2;
+  c.before.machine.axes[X].hysteresis_mm = 0.2;
+  home_and_stop(c);
+  // 0.1 mm from the trigger edge (at carriage 0), off the switch coming from above.
+  c.before.move(X, c.before.axis(X).position_mm - (c.before.actual(X) - 0.1));
+  c.before.run_until([&] { return !c.before.any_moving(); }, 30);
+  c.before.step();
+  REQUIRE(c.before.actual(X) == Approx(0.1).margin(1e-6));
+  REQUIRE_FALSE(c.before.sim().sensor_active(X));
+  REQUIRE_FALSE(c.before.status().alarm);
+  c.stops = shut_down(c.before);
+  REQUIRE(c.stops[X].clean);
+  Rig r = restart(c.before, c.stops);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);
+  r.run_for(0.1);
+  CHECK_FALSE(r.status().alarm);
+  CHECK(r.axis(X).trust == Trust::reference_checked);
+  CHECK_FALSE(r.sim().sensor_active(X));
+  CHECK(r.axis(X).position_mm == Approx(s.home_position_mm).margin(0.01));  // where a cycle ends
+}

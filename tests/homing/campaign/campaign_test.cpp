@@ -14,8 +14,10 @@
 // home done) at random moments or aimed at a phase,
 // aborts, resets, re-homes, jogs and moves (before homing too, and cut short
 // by aborts, e-stops, drive faults and communication losses), settings written
-// between cycles, a hard-limit trip, a start button held at power-up, and
-// control periods up to 20 ms late. Every period (watch.cpp) and at the end
+// between cycles, a hard-limit trip, a start button held at power-up,
+// commissioning measurements (accepted and refused) and daemon restarts
+// followed by reference checks, some carriages moved by hand meanwhile
+// (service_acts.cpp), and control periods up to 20 ms late. Every period (watch.cpp) and at the end
 // of every cycle (verdict.cpp) it checks against the simulator's truth:
 //   - no gantry racks beyond its max misalignment (1 um for the arithmetic,
 //     plus exactly what periods later than the guard looks ahead can add:
@@ -45,6 +47,12 @@
 //     and pull-off, a slave with its own pull-off and compensation; absolute:
 //     the encoder; manual and unsequenced: the home position where it stood);
 //   - a reset after a hard-limit trip is taken and only a jog away moves;
+//   - a measurement reports the travel to where the simulated machine has its
+//     far limit switch or hard stop (long by at most its detection lag) and
+//     ends where the docs say; one the docs refuse gives their result and
+//     moves nothing; after a restart a reference check homes a carriage that
+//     stood within its tolerance at its true coordinate, refuses one moved
+//     further with the mismatch, and a check the docs refuse moves nothing;
 //   - no carriage passes a limit switch by more than its stopping distance, a
 //     jog or move into one raises limit_switch, and a home cam's search
 //     reverses exactly when it meets the limit switch ahead (watch.cpp).

@@ -7,6 +7,8 @@
 //   11 limit switches on plain switch axes              12 hard-stop axes by following error
 //   13 what goes wrong with home_cam axes               14 limit switches within reach
 //   15 the run's acts at limit switches                 16 home_cam axes (home_cam_gen.cpp)
+//   17 refcheck tolerances, far stops in reach          18 the run's measurements (service_acts.cpp)
+//   19 the run's daemon restarts and reference checks  30 the failure policy
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>

@@ -102,6 +102,8 @@ struct Gen {
   // Limit switches within reach (limits_reach_gen.cpp), from their own dice.
   void limits_in_reach();
   void limit_in_reach(std::size_t a, Dice& lr);
+  // refcheck_tolerance, and hard stops within a measurement's reach (machine_gen.cpp), from their own dice.
+  void travel_ends();
   Machine build();
 };
 

@@ -102,6 +102,7 @@ struct AxisPlan {
   CamStart cam_start = CamStart::none;  // home_cam: where its first cycle starts
   bool cam_missing = false;    // home_cam: its cam lies beyond the limit switches
   bool cam_at_limit = false;   // home_cam: the limit switch on its reference side lies within its latch or pull-off
+  bool far_stop_near = false;  // hard_stop by stall input: its far stop within a measurement's reach
   int reach_side = 0;          // +1/-1: the limit switch at that end lies within its jogs, moves or final move
 };
 

@@ -524,6 +524,59 @@ void Gen::following_error() {
   }
 }
 
+// Reference checks and commissioning measurements (service_acts.cpp), with
+// their own dice (stream 17) so that every other draw stays as it was:
+// every axis's refcheck_tolerance (half the time the register's default
+// 0.1 mm, else 0.02 to 1 mm: well above the edge's noise and the period's
+// error, so a carriage left where it stopped is always accepted); and on
+// some plain hard-stop axes that tell their stop by the drive's stall input,
+// the far stop pulled in from 500 mm to just beyond everything a run of this
+// machine reaches (the soft limit on that side drawn within 5 to 25 mm of
+// the home position for it), mostly with a max_seek_travel that reaches it
+// and now and then one that does not (the measurement's
+// travel_end_not_found), so that a measurement travels seconds, not minutes,
+// at latch feedrate.
+void Gen::travel_ends() {
+  Dice te(m.seed, 17);
+  AxisMask sequenced = 0;
+  for (const AxisMask st : m.settings.global.sequence_steps) sequenced |= st;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    AxisSettings& s = m.settings.axes[a];
+    s.refcheck_tolerance_mm = te.chance(0.5) ? 0.1 : te.u(0.02, 1.0);
+    const AxisPlan& p = m.plan[a];
+    const bool eligible = s.mode == HomingMode::hard_stop && s.stall_detect == StallDetect::stall_input &&
+                          p.role == Role::plain && p.start_fault == sim::Fault::none && !p.encoder_invalid &&
+                          (sequenced & axis_bit(a)) && !(m.invalid != Invalid::none && m.invalid_axis == a);
+    if (!eligible || !te.chance(0.5)) continue;
+    sim::AxisConfig& c = m.sim.axes[a];
+    const double dir = dir_of(s);
+    // In the frame: the home stop at 0, distances away from it.
+    const double home_stop = dir < 0 ? c.hard_stop_min_mm : c.hard_stop_max_mm;
+    const double start_f = (c.actual_position_mm - home_stop) * -dir;
+    const double extent = te.u(5, 25);
+    if (dir < 0) s.soft_limit_max_mm = s.home_position_mm + extent;
+    else s.soft_limit_min_mm = s.home_position_mm - extent;
+    s.final_position_mm = s.home_position_mm - dir * te.u(0, 0.9 * extent);
+    const double jog_v = mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min);
+    const double jog_margin = stop_distance_mm(jog_v, s.acceleration_mm_per_s2) + jog_v * m.max_dt_s + 0.5;
+    const double pre = s.pre_move_mode == PreMove::always ? s.pre_move_distance_mm : 0;
+    // A jog and a move before homing (3 mm beyond the start), jogs and moves
+    // up to the soft limit, the final move within it.
+    const double reach_f = std::max(start_f + pre + 3, s.pull_off_mm + extent + jog_margin);
+    const double far_f = reach_f + te.u(1, 15);
+    if (dir < 0) c.hard_stop_max_mm = home_stop + far_f;
+    else c.hard_stop_min_mm = home_stop - far_f;
+    // From the rest point the measurement meets the stop within far_f; the
+    // motor runs on until the stall is read, then brakes.
+    const double latch_v = mm_per_min_to_mm_per_s(s.latch_feedrate_mm_per_min);
+    const double run_on = latch_v * ((c.stall_detect_ms + c.stall_spread_ms) / 1000 + 2 * m.max_dt_s) +
+                          stop_distance_mm(latch_v, s.acceleration_mm_per_s2);
+    if (te.chance(0.85)) s.max_seek_travel_mm = std::max(s.max_seek_travel_mm, far_f + run_on + te.u(1, 10));
+    s.stall_timeout_ms = (s.max_seek_travel_mm / latch_v * 1.2 + 1) * 1000;
+    m.plan[a].far_stop_near = true;
+  }
+}
+
 // The failure policy (global.failure_policy), with its own dice so that
 // every other draw stays as it was: each of the three as often.
 void Gen::failure_policy() {
@@ -552,6 +605,7 @@ Machine Gen::build() {
   following_error();
   home_cams();
   limits_in_reach();
+  travel_ends();
   failure_policy();
   unsequenced_soft_limits();
   m.start_held_at_powerup = d.chance(0.15);

@@ -117,6 +117,26 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // 185003649: a wire break read as the master's trigger squares the pair on
   // an edge that is not there: its skew need not show. 186002100: a lost
   // link read in the period a last crawl ends finds nothing left to stop.
+  // 187000328 (engine): after a restart, the reference check of a home cam
+  // axis left on its cam's far side by a final move refused it with the
+  // cam's width (named scenario in trust_test.cpp). 187000060 (engine): a
+  // measurement left a hard-stop axis pull_off off the far stop, and the
+  // home cycle's pre-move ran into it (named scenario in measure_test.cpp).
+  // 187105905 (engine): a check of an axis a final move left deeper on its
+  // switch than max_backoff never met the edge (named scenario in
+  // trust_test.cpp). 187100911, 187107016: the restart's model, a simulator
+  // whose inputs still showed the carriages where they stood before the hand
+  // moved them. 187201697 (engine): a release method's switch hysteresis
+  // beyond the check's search. 187208768 (engine): a shared limit checked
+  // from inside its hysteresis went back onto it. 187202370, 187208638,
+  // 187207833: the service acts' model (a measurement stopped by its alarm
+  // near the far end, max_seek_travel raised past a short cam, a check that
+  // homes an axis the hand left beyond its soft limits). 187204642, 187207148:
+  // the restart's model (a hand's move within a pre-move of the far stop; a
+  // pair an alarm left racked, which the new engine takes for square).
+  // 187300765, 187303014, 187301162: the restart's model again (an axis
+  // whose steps were lost before the restart searched into its limit switch;
+  // a shared limit whose truth was lost ended at its rest point).
   const std::uint64_t seeds[] = {1,        7,        3,        8,        490,      715,      2,       173,
                                  959,      1242,     2054,     84,       4,        103,      1069,    412,
                                  627,      3972,     8001884,  31342370, 9,        5000422,  5001903, 9001798,
@@ -125,7 +145,10 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
                                  4420842,  4431542,  6617474,  2818140234, 5512019, 2652,   33,
                                  90,       336,      984,      3293,     3639,     5510656,  5512163, 7004079, 162,
                                  7201525,  7201552,  7314363,  7316777,  457,      363,      9533,    1281,
-                                 20005266, 21050675, 21086452, 184458299, 21090731, 21040289, 185003649, 186002100};
+                                 20005266, 21050675, 21086452, 184458299, 21090731, 21040289, 185003649, 186002100,
+                                 187000328, 187000060, 187105905, 187100911, 187107016,
+                                 187201697, 187208768, 187202370, 187208638, 187207833, 187204642,
+                                 187207148, 187300765, 187303014, 187301162};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);

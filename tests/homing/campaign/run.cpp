@@ -6,7 +6,13 @@
 namespace campaign {
 
 Run::Run(std::uint64_t seed)
-    : m_(generate(seed)), d_(seed, 2), periods_(seed, 3), indexer_events_(seed, 8), limit_acts_(seed, 15) {
+    : m_(generate(seed)),
+      d_(seed, 2),
+      periods_(seed, 3),
+      indexer_events_(seed, 8),
+      limit_acts_(seed, 15),
+      measure_acts_(seed, 18),
+      restarts_(seed, 19) {
   r_.settings = m_.settings;
   r_.machine = m_.sim;
   const double max_dt = m_.max_dt_s;
@@ -253,7 +259,7 @@ void Run::apply(const Event& e, Causes& causes, const CyclePlan& plan) {
 }
 
 // One homing cycle, to its end and the machine at rest, then its verdict.
-bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_button) {
+bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_button, AxisMask measure) {
   const CyclePlan plan = plan_cycle(r_.settings, all, mask);
   const bool refused = first_fault(r_.settings).has_value();
   std::array<std::optional<double>, kAxisCount> rack{};
@@ -266,18 +272,32 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
     if (r_.sim().sensor_active(a)) cam_on_start_ |= axis_bit(a);
   w_->begin_window(plan, refused);
   w_->clear_alarms_seen();
+  // A measurement travels on from the rest point: to the far end within
+  // max_seek_travel, off a limit switch within max_backoff, or pull-off off a stop.
+  double measure_s = 0;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (!(measure & axis_bit(a))) continue;
+    const AxisSettings& s = r_.settings.axes[a];
+    const double latch_v = mm_per_min_to_mm_per_s(s.latch_feedrate_mm_per_min);
+    w_->measured |= axis_bit(a);
+    w_->extra_path[a] = s.max_seek_travel_mm + s.max_backoff_mm + s.pull_off_mm + 1;
+    measure_s = 1.2 * (s.max_seek_travel_mm + s.max_backoff_mm + s.pull_off_mm) / latch_v + 5;
+  }
   {
     std::ostringstream o;
     o << (all ? "home all" : "home axes ");
     for (std::size_t a = 0; a < kAxisCount; ++a)
       if (!all && (mask & axis_bit(a))) o << kAxisUpper[a];
     o << (by_button ? " by the start button" : " by command") << (refused ? " (the check refuses it)" : "");
+    if (measure) o << ", a measurement of its travel";
     say(o.str());
   }
   int button_periods = 0;
   if (by_button) {
     r_.sim().set_start_button(true);
     button_periods = d_.integer(1, 30);
+  } else if (measure) {
+    r_.pending.measure_axes = measure;
   } else if (all) {
     r_.pending.home_all = true;
   } else {
@@ -294,7 +314,7 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
     if (res != CommandResult::accepted)
       w_->fail("a home command was not accepted", std::string(command_result_name(res)));
   }
-  const double limit = time_bound(r_, m_, plan);
+  const double limit = time_bound(r_, m_, plan) + measure_s;
   AxisMask final_seen = 0;
   std::vector<bool> done(events.size(), false);
   std::vector<int> in_phase(events.size(), 0);
@@ -322,6 +342,7 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
     const bool home_again = r_.pending.home_all;
     step();
     final_move_into_limit(causes, final_seen);
+    measure_period(causes);
     // An input the simulator changed is read by the engine in the next
     // period: the phase it then runs is the one its alarm may carry too.
     for (std::size_t i = applied_from; i < causes.list.size(); ++i)
@@ -630,6 +651,11 @@ void Run::follow_ups() {
     }
     limit_switch_trip();
     if (!ok()) break;
+    measurement();
+    if (!ok()) break;
+    restart_with_checks();
+    if (!ok()) break;
+    if (r_.status().alarm) continue;
     switch (d_.integer(0, 5)) {
       case 5: change_settings(); break;
       case 0: exercise_motion(); break;

@@ -36,14 +36,17 @@ inline constexpr std::uint32_t motion_before_homing = 1u << 10;
 inline constexpr std::uint32_t event_in_jog_or_move = 1u << 11;
 inline constexpr std::uint32_t settings_changed = 1u << 12;
 inline constexpr std::uint32_t limit_switch_recovered = 1u << 13;
-inline constexpr int kCount = 14;
+inline constexpr std::uint32_t measured = 1u << 14;
+inline constexpr std::uint32_t refchecked = 1u << 15;
+inline constexpr int kCount = 16;
 inline const char* name(int i) {
   static const char* names[] = {"homed",           "homed a software-slaved gantry", "homed a commutator gantry",
                                 "event in a cycle", "jogged and moved",             "recovered from a hard-limit trip",
                                 "lost steps corrected", "cycle started by the button", "homed again",
                                 "homed after an alarm", "jogged or moved before homing",
                                 "event in a jog or move", "settings written between cycles",
-                                "recovered from a limit switch trip"};
+                                "recovered from a limit switch trip", "measured an axis's travel",
+                                "homed by a reference check after a restart"};
   return names[i];
 }
 }  // namespace act
@@ -77,7 +80,8 @@ class Run {
   void settle(double max_s = 10);
   void say(const std::string& what);
   void power_up();
-  bool cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_button);
+  // measure: the axis a measurement (cmd.measure) homes and measures instead of homing `mask`.
+  bool cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_button, AxisMask measure = 0);
   void apply(const Event& e, Causes& causes, const CyclePlan& plan);
   void motion_before_homing();
   std::optional<Event> motion_event(std::size_t a);
@@ -92,6 +96,19 @@ class Run {
   void jog_off_limit_switch(std::size_t a, int away);
   bool on_limit_switch(std::size_t a);  // limits fitted, not faulted, one of them active
   void lost_steps();
+  // service_acts.cpp: the commissioning measurement, and a daemon restart with reference checks.
+  void measurement();
+  CommandResult measure_expected(AxisMask mask);
+  double measure_lag_mm(std::size_t a);
+  void measure_refused(AxisMask mask, bool home_all_only);
+  void measure_axis(std::size_t a);
+  void measure_period(Causes& causes);  // each period of a measurement's cycle
+  void restart_with_checks();
+  CommandResult refcheck_expected(AxisMask mask, const std::array<bool, kAxisCount>& offered);
+  double refcheck_slack_mm(std::size_t a);
+  void refcheck_refused(AxisMask mask, const std::array<bool, kAxisCount>& offered);
+  void refcheck(AxisMask mask, const std::array<Truth, kAxisCount>& truth, const std::array<bool, kAxisCount>& homed,
+                const std::array<double, kAxisCount>& moved);
   void change_settings();
   void limit_sensor_faults(Causes& causes);  // indexer_faults too
   void indexer_faults(Causes& causes);
@@ -117,6 +134,19 @@ class Run {
   Dice periods_;
   Dice indexer_events_;  // locking-indexer faults in later cycles (their own dice: others draw as before)
   Dice limit_acts_;      // acts at limit switches (their own dice)
+  Dice measure_acts_;    // measurements (their own dice)
+  Dice restarts_;        // daemon restarts and reference checks (their own dice)
+  // A measurement's cycle under way: its axis, its far end (carriage
+  // coordinates), and until its travel begins the carriage and the truth.
+  struct MeasureRun {
+    std::size_t axis = 0;
+    double end = 0;
+    bool began = false;
+    double x_last = 0;
+    bool offset_valid = false;
+    double offset = 0, tol = 0;
+  };
+  std::optional<MeasureRun> measuring_;
   std::unique_ptr<Watch> w_;
   std::ostringstream log_;
   bool comm_lost_ = false;

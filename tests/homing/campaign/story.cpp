@@ -126,6 +126,10 @@ std::string story(const Machine& m) {
         << " (encoder resolution " << m.sim.axes[a].encoder_resolution_mm << ", noise "
         << m.sim.axes[a].encoder_noise_mm << ")";
     if (p.encoder_invalid) o << "; ENCODER INVALID";
+    // What the service acts (service_acts.cpp) find here: the far end a
+    // measurement travels to, and how near a reference check must find its edge.
+    if (p.far_stop_near) o << "; far stop pulled in within a measurement's reach";
+    o << "; refcheck tolerance " << s.refcheck_tolerance_mm;
     o << "\n";
   }
   if (m.invalid != Invalid::none)

@@ -608,7 +608,7 @@ void verdict(Watch& w, rig::Rig& r, const Machine& m, const Causes& causes, std:
   // The way back of return_to_start is at most the way out.
   const double ways = r.settings.global.failure_policy == FailurePolicy::return_to_start ? 2 : 1;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
-    const double bound = ways * path_bound(r, m, a, w.window_start_x[a]);
+    const double bound = ways * path_bound(r, m, a, w.window_start_x[a]) + w.extra_path[a];
     if (w.path[a] > bound) {
       std::ostringstream o;
       o << kAxisUpper[a] << " travelled " << w.path[a] << ", bound " << bound;
@@ -627,6 +627,8 @@ void verdict(Watch& w, rig::Rig& r, const Machine& m, const Causes& causes, std:
     if (!((plan.covered | plan.unsequenced) & bit)) continue;
     const AxisSettings e = effective(r.settings, a);
     if (e.mode == HomingMode::disabled && master_index(r.settings, a) < 0) continue;
+    // A measurement that pushed into a hard stop lost its steps there: unhomed (service_acts.cpp judges it).
+    if (!st.axes[a].homed && (w.measured & bit) && e.mode == HomingMode::hard_stop) continue;
     if (!st.axes[a].homed) {
       w.fail("a cycle ended without an alarm and an axis of it not homed", std::string(1, kAxisUpper[a]));
       continue;
@@ -641,7 +643,7 @@ void verdict(Watch& w, rig::Rig& r, const Machine& m, const Causes& causes, std:
              o.str());
     }
     const Truth& t = w.truth[a];
-    if (!t.valid) continue;
+    if (!t.valid || (w.measured & bit)) continue;  // a measured axis ends at its far end
     const double x = r.actual(a);
     const bool final_move = (plan.covered & bit) && final_move_wanted(e);
     if (final_move) {

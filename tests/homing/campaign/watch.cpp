@@ -61,6 +61,9 @@ void Watch::begin_window(const CyclePlan& p, bool is_refused) {
   }
   plan.unsequenced &= static_cast<AxisMask>(~kept);
   refused = is_refused;
+  measured = 0;
+  extra_path.fill(0);
+  outside_soft_limits &= static_cast<AxisMask>(~(p.covered | p.unsequenced));
   flipped = 0;
   tampered = 0;
   path.fill(0);
@@ -169,6 +172,15 @@ void Watch::square_unsure(std::size_t a) {
   for (std::size_t s = 0; s < kAxisCount; ++s)
     if (m_.plan[s].role == Role::slave && (s == a || static_cast<std::size_t>(m_.plan[s].partner) == a))
       square_uncertain_[s] = true;
+}
+
+void Watch::restarted(AxisMask homed) {
+  pair_unhomed(kAllAxes);
+  for (std::size_t s = 0; s < kAxisCount; ++s) {
+    if (m_.plan[s].role != Role::slave) continue;
+    const AxisMask pair = static_cast<AxisMask>(axis_bit(s) | axis_bit(static_cast<std::size_t>(m_.plan[s].partner)));
+    if ((homed & pair) != pair) square_unsure(s);
+  }
 }
 
 void Watch::settings_changed() {
@@ -355,7 +367,9 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
     }
     const double pos = x + truth[a].offset;
     const double tol = truth[a].tol + 1e-6;
-    if (e.soft_limits_enable && !in_window && (pos < e.soft_limit_min_mm - tol || pos > e.soft_limit_max_mm + tol)) {
+    const bool outside = pos < e.soft_limit_min_mm - tol || pos > e.soft_limit_max_mm + tol;
+    if (!outside) outside_soft_limits &= static_cast<AxisMask>(~bit);
+    if (e.soft_limits_enable && !in_window && outside && !(outside_soft_limits & bit)) {
       std::ostringstream o;
       o << fmt_axis(a, r_, x) << "; machine position (truth) " << pos << " outside [" << e.soft_limit_min_mm << ", "
         << e.soft_limit_max_mm << "]";

@@ -61,6 +61,10 @@ class Watch {
   void assign_unsequenced();             // a home-all ended: unsequenced axes now hold their home position
   void carriages_placed();               // put back by hand: gantries locked where they stand now
   void pair_slipped(std::size_t a);
+  // A new engine (the daemon restarted): it takes each pair as square where
+  // it stands, as at power-up; a pair not homed before may stand racked (an
+  // alarm left it so), which the module can no longer see (homed: bit per axis).
+  void restarted(AxisMask homed);
   void settings_changed();               // written between cycles: what each axis moves with now      // a drive fault on a locked side: the pair may rack up to its limit
 
   void fail(const std::string& what, const std::string& detail = "");
@@ -84,6 +88,13 @@ class Watch {
   std::array<double, kAxisCount> window_start_x{};
   CyclePlan plan{};
   bool refused = false;
+  // A measurement in this window (cmd.measure): its axis ends at the far end
+  // of its travel, not at its rest point, and travels that much further.
+  AxisMask measured = 0;
+  // Left beyond its soft limits by a measurement: not held to them until it
+  // is back inside or homed again.
+  AxisMask outside_soft_limits = 0;
+  std::array<double, kAxisCount> extra_path{};
   std::uint64_t trace_axes = 0;  // HOMING_CAMPAIGN_TRACE: phase changes on stdout
   // home_cam: the axes whose search reversed at a limit switch in this window,
   // those whose cam lay behind the carriage (or beyond the switch ahead) as
