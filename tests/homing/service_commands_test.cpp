@@ -23,7 +23,7 @@ SCENARIO("unhoming an axis forgets its reference without moving anything", "[ser
   Rig r;
   r.add_axis(Y, 2);
   REQUIRE(r.home_all());
-  const std::uint16_t before = r.status().command_count;
+  const auto before = r.status().command_count;
   const double x_at = r.actual(X);
   unhome(r, axis_bit(X));
   CHECK(r.status().last_command_result == CommandResult::accepted);
