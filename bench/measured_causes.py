@@ -1061,7 +1061,7 @@ def cause(key, results):
 # --- trying sections on their own (run_benchmarks.py --try) -------------------------
 
 TRY_KEYS = {"throughput": lambda r: [f"{k}_{c}" for c in sorted(r["throughput"]) for k in ("throughput", "p99", "loop")]
-            + (["errors_64"] if 64 in r["throughput"] else []),
+            + [f"errors_{c}" for c in sorted(r["throughput"]) if c >= 64],
             "idle": lambda r: ["idle_cpu", "idle_write"], "durable": lambda r: ["durable", "durable_8"],
             "engine": lambda r: ["engine", "spread", "cycle"]}
 

@@ -110,7 +110,7 @@ class Bench:
             if os.path.exists(db + suffix):
                 os.remove(db + suffix)
         argv = [self.path("homingd"), "--tcp", f"127.0.0.1:{port}", "--db", db, "--time-scale", str(time_scale),
-                "--period-us", "1000", "--max-clients", "128", "--log-level", "warn", *extra]
+                "--period-us", "1000", "--max-clients", "300", "--log-level", "warn", *extra]
         return self.start("homingd", argv)
 
     def load(self, port, clients, mix, duration=None, extra=()):
@@ -1037,17 +1037,19 @@ def report(b, results, info, args, started, out_path):
     for clients in sorted(tp):
         r = tp[clients]
         ratio = med(r["ratio_rps"])
-        goal = 0.95 if clients == 1 else 1.0
+        # Issue 25's goal, at every client count: at least 1.2× bare libmodbus's
+        # throughput and at most 1.0× its p99 (this table held 0.95/1.0× and 1.2×
+        # until the 256-client rounds joined; the goal is the one the module is held to).
         target(f"throughput vs bare libmodbus, {clients} client{'s' if clients > 1 else ''}", f"{ratio:.2f}×",
-               f"≥ {goal:.2f}×", ratio >= goal, f"throughput_{clients}")
+               "≥ 1.20×", ratio >= 1.2, f"throughput_{clients}")
     for clients in sorted(tp):
         r = tp[clients]
         ratio = med(r["ratio_p99"])
         target(f"latency p99 vs bare libmodbus, {clients} client{'s' if clients > 1 else ''}", f"{ratio:.2f}×",
-               "≤ 1.20×", ratio <= 1.2, f"p99_{clients}")
-    if 64 in tp:
-        errs = sum(int(x["errors"]) for x in tp[64]["homingd"])
-        target("errors at 64 clients (homingd, all rounds)", str(errs), "0", errs == 0, "errors_64")
+               "≤ 1.00×", ratio <= 1.0, f"p99_{clients}")
+    for clients in sorted(c for c in tp if c >= 64):
+        errs = sum(int(x["errors"]) for x in tp[clients]["homingd"])
+        target(f"errors at {clients} clients (homingd, all rounds)", str(errs), "0", errs == 0, f"errors_{clients}")
     for clients in sorted(tp):
         ratio = med(tp[clients]["ratio_loop_p99"])
         target(f"control-loop lateness p99 vs bare loop, {clients} client{'s' if clients > 1 else ''}",
@@ -1341,7 +1343,7 @@ def report(b, results, info, args, started, out_path):
     w("## Commands")
     w("")
     w("Run from the repository root by `bench/run_benchmarks.sh`; `$WORK` is a scratch directory it creates "
-      "in the build directory, PORT a free loopback port, N the client count (1, 8, 64), S the seconds of a "
+      "in the build directory, PORT a free loopback port, N the client count (1, 8, 64, 256), S the seconds of a "
       "round.")
     w("")
     w("```")
@@ -1375,7 +1377,7 @@ def main():
     p.add_argument("--out", default=os.path.join(ROOT, "BENCHMARKS.md"))
     p.add_argument("--rounds", type=int, default=3)
     p.add_argument("--duration", type=float, default=2.0, help="seconds per load round")
-    p.add_argument("--clients", default="1,8,64")
+    p.add_argument("--clients", default="1,8,64,256")
     p.add_argument("--mix-clients", type=int, default=8)
     p.add_argument("--idle-seconds", type=float, default=5.0)
     p.add_argument("--writes", type=int, default=200)
