@@ -104,10 +104,10 @@ void ControlLoop::release_jogs(std::uint64_t owner) {
   waiter_->wake();
 }
 
-void ControlLoop::set_settings(const homing::Settings& settings) {
+void ControlLoop::set_settings(homing::Settings settings) {
   {
     std::lock_guard lock(mailbox_mutex_);
-    new_settings_ = settings;
+    new_settings_ = std::move(settings);
     settings_pending_ = true;
   }
   waiter_->wake();

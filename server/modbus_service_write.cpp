@@ -162,17 +162,25 @@ void ModbusService::process_batch(const std::vector<WriteTicket*>& batch) {
     if (auto committed = store_->commit_batch(entries); !committed) failed = committed.error();
   }
 
-  std::lock_guard lock(mutex_);
-  for (Durable& d : durable) {
-    if (failed) {
-      if (edits_.state(d.owner) == EditState::open) edits_.touch(d.owner, now());
-      d.ticket->refusal = registers::Refusal::because(registers::RefusalReason::storage_failed, d.plan.about,
-                                                      "settings not stored: " + failed->message + "; " +
-                                                          d.plan.changes);
-      continue;
+  std::optional<homing::Settings> for_the_loop;
+  {
+    std::lock_guard lock(mutex_);
+    for (Durable& d : durable) {
+      if (failed) {
+        if (edits_.state(d.owner) == EditState::open) edits_.touch(d.owner, now());
+        d.ticket->refusal = registers::Refusal::because(registers::RefusalReason::storage_failed, d.plan.about,
+                                                        "settings not stored: " + failed->message + "; " +
+                                                            d.plan.changes);
+        continue;
+      }
+      carry_out(*d.ticket, d.plan, d.owner, edits_.staged_count(d.owner));
     }
-    carry_out(*d.ticket, d.plan, d.owner, edits_.staged_count(d.owner));
+    if (!failed) for_the_loop = settings_;
   }
+  // Handed over outside mutex_: the wake-up makes the control loop publish,
+  // and what it wakes would otherwise wait for this thread to let go of
+  // mutex_. Nothing else changes settings meanwhile: this thread still leads.
+  if (for_the_loop) loop_.set_settings(std::move(*for_the_loop));
 }
 
 // Under mutex_: the effects of a plan, in this order: the edit session, the
@@ -198,8 +206,7 @@ void ModbusService::carry_out(WriteTicket& t, WritePlan& plan, const std::string
   }
   if (plan.unlock_code) unlock(*plan.unlock_code, client);
   if (plan.accepted.changes_persisted()) {
-    settings_ = plan.accepted.settings;
-    loop_.set_settings(settings_);
+    settings_ = plan.accepted.settings;  // the control loop gets them once the batch is carried out
     for (const registers::Effect e : plan.effects) apply_effect(e);
     spdlog::info("settings changed by {} {}: {}", client.transport, client.address, plan.changes);
   }

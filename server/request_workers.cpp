@@ -5,13 +5,17 @@
 namespace server {
 
 void RequestWorkers::run(std::function<void()> job) {
-  std::lock_guard lock(mutex_);
-  if (stopping_) return;  // the server stops: its connections close unanswered
-  jobs_.push_back(std::move(job));
-  if (jobs_.size() > idle_ && threads_.size() < max_threads_) threads_.emplace_back([this] {
-      name_this_thread(name_);
-      work();
-    });
+  {
+    std::lock_guard lock(mutex_);
+    if (stopping_) return;  // the server stops: its connections close unanswered
+    jobs_.push_back(std::move(job));
+    if (jobs_.size() > idle_ && threads_.size() < max_threads_) threads_.emplace_back([this] {
+        name_this_thread(name_);
+        work();
+      });
+  }
+  // After the unlock: a thread woken under the lock would at once wait for it
+  // again (two more context switches on the write's path).
   wake_.notify_one();
 }
 
