@@ -118,8 +118,10 @@ class ModbusService final : public RequestHandler {
   struct WriteTicket;
   void process_batch(const std::vector<WriteTicket*>& batch);
   void carry_out(WriteTicket& t, WritePlan& plan, const std::string& owner, std::size_t staged);
+  // Under batch_mutex_: the lead goes to the first write queued, woken alone
+  // (the others sleep on until their own batch is done), or to nobody.
+  void pass_lead();
   std::mutex batch_mutex_;
-  std::condition_variable batch_done_;
   std::vector<WriteTicket*> batch_queue_;  // under batch_mutex_
   bool batch_leader_ = false;              // under batch_mutex_: a thread decides and commits a batch
   // Under batch_mutex_: the thread handle_now() reserved the lead for (its
