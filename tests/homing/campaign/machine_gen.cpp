@@ -559,7 +559,15 @@ void Gen::travel_ends() {
     s.final_position_mm = s.home_position_mm - dir * te.u(0, 0.9 * extent);
     const double jog_v = mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min);
     const double jog_margin = stop_distance_mm(jog_v, s.acceleration_mm_per_s2) + jog_v * m.max_dt_s + 0.5;
-    const double pre = s.pre_move_mode == PreMove::always ? s.pre_move_distance_mm : 0;
+    // A pre-move "always" runs at the start of every cycle, homed or not: a
+    // cycle stopped by an alarm after it leaves the carriage that much nearer
+    // the far stop, and the next one pre-moves again from there (seed
+    // 188007005: a second pre-move of 4.8 mm met a stop 20 mm out). A run
+    // starts at most kCyclesPerRun cycles: the first, then up to four
+    // follow-up acts of at most two each (a measurement's, then a cycle of
+    // the act drawn; or a recovery's).
+    constexpr int kCyclesPerRun = 9;
+    const double pre = s.pre_move_mode == PreMove::always ? kCyclesPerRun * s.pre_move_distance_mm : 0;
     // A jog and a move before homing (3 mm beyond the start), jogs and moves
     // up to the soft limit, the final move within it.
     const double reach_f = std::max(start_f + pre + 3, s.pull_off_mm + extent + jog_margin);
