@@ -115,16 +115,31 @@ void EventLoop::send_off(std::uint64_t id, Slot& slot) {
   // Not watched meanwhile: the connection reads nothing until its reply is
   // in, and a hang-up would wake the loop for nothing until then.
   watch(id, slot, 0);
-  shared_.workers.run([this, id, request = slot.connection->request(), client = slot.connection->client(),
+  // A write of the module unit goes to the service's settings writer, which
+  // answers it through this loop; any other request that may wait runs on a
+  // worker thread of its own.
+  const auto& request = slot.connection->request();
+  slot.entry->last_active_ns.store(steady_now_ns());
+  shared_.workers.begin_elsewhere();
+  if (shared_.handler.handle_later(request.unit, request.pdu, slot.connection->client(), [this, id](Reply reply) {
+        post_answer(id, std::move(reply));
+        shared_.workers.end_elsewhere();  // the last use of this loop: the listener may go once none is left
+      }))
+    return;
+  shared_.workers.end_elsewhere();
+  shared_.workers.run([this, id, request, client = slot.connection->client(),
                        &last_active = slot.entry->last_active_ns] {
     last_active.store(steady_now_ns());
-    Reply reply = shared_.handler.handle(request.unit, request.pdu, client);
-    {
-      std::lock_guard lock(inbox_mutex_);
-      answers_.push_back({id, std::move(reply)});
-    }
-    wake();
+    post_answer(id, shared_.handler.handle(request.unit, request.pdu, client));
   });
+}
+
+void EventLoop::post_answer(std::uint64_t id, Reply reply) {
+  {
+    std::lock_guard lock(inbox_mutex_);
+    answers_.push_back({id, std::move(reply)});
+  }
+  wake();
 }
 
 void EventLoop::step(std::uint64_t id, Slot& slot, std::vector<std::uint64_t>& again) {

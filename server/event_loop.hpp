@@ -4,7 +4,8 @@
 // TcpConnection state machine stepped when its socket is ready or its
 // deadline passes. A listener runs as many loops as the machine has cores
 // and spreads its connections over them. Nothing in a loop waits: a TLS
-// handshake is a state, and a request that may wait runs on RequestWorkers
+// handshake is a state, and a request that may wait goes to the service's
+// settings writer (a write of the module unit) or runs on RequestWorkers,
 // and its reply comes back through the loop's inbox.
 #include <atomic>
 #include <cstdint>
@@ -72,6 +73,7 @@ class EventLoop {
   void step(std::uint64_t id, Slot& slot, std::vector<std::uint64_t>& again);
   void watch(std::uint64_t id, Slot& slot, std::uint32_t events);
   void send_off(std::uint64_t id, Slot& slot);
+  void post_answer(std::uint64_t id, Reply reply);  // from another thread
   void close(std::uint64_t id, Slot& slot, bool stopping);
   int wait_ms(bool again) const;
 

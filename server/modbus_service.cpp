@@ -57,6 +57,12 @@ Reply ModbusService::refuse(std::uint8_t fc, const registers::Refusal& r, const 
 }
 
 ModbusService::~ModbusService() {
+  {
+    std::lock_guard lock(batch_mutex_);
+    writer_stops_ = true;
+  }
+  writer_wake_.notify_one();
+  if (writer_.joinable()) writer_.join();
   std::lock_guard lock(log_mutex_);
   refusal_log_.flush_all(now());
 }
@@ -170,10 +176,7 @@ Reply ModbusService::apply(Target target, const Request& request, const ClientIn
   if (const auto* r = std::get_if<ReadRequest>(&request.body)) return read(target, fc, *r, client);
   if (const auto* w = std::get_if<WriteRequest>(&request.body)) {
     if (auto refused = write(target, fc, *w, client)) return *refused;
-    if (request.function == FunctionCode::write_single_coil)
-      return echo_reply(fc, w->start, w->values[0] ? 0xFF00 : 0x0000);
-    if (request.function == FunctionCode::write_single_register) return echo_reply(fc, w->start, w->values[0]);
-    return quantity_reply(fc, w->start, static_cast<std::uint16_t>(w->values.size()));
+    return accepted_write_reply(request.function, *w);
   }
   if (const auto* rw = std::get_if<ReadWriteRequest>(&request.body)) {
     // The read range must be valid too before anything is written.
@@ -187,6 +190,13 @@ Reply ModbusService::apply(Target target, const Request& request, const ClientIn
   if (std::holds_alternative<ReportServerIdRequest>(request.body))
     return report_server_id(config_.unit_id, config_.identity);
   return device_identification(std::get<DeviceIdRequest>(request.body), config_.identity);
+}
+
+Reply ModbusService::accepted_write_reply(FunctionCode function, const WriteRequest& w) {
+  const auto fc = static_cast<std::uint8_t>(function);
+  if (function == FunctionCode::write_single_coil) return echo_reply(fc, w.start, w.values[0] ? 0xFF00 : 0x0000);
+  if (function == FunctionCode::write_single_register) return echo_reply(fc, w.start, w.values[0]);
+  return quantity_reply(fc, w.start, static_cast<std::uint16_t>(w.values.size()));
 }
 
 registers::StatusExtras ModbusService::extras_now() {

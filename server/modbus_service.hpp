@@ -66,6 +66,12 @@ class ModbusService final : public RequestHandler {
   // way: nullopt.
   std::optional<Reply> handle_now(std::uint8_t unit, std::span<const std::uint8_t> pdu,
                                   const ClientInfo& client) override;
+  // Writes (FC 05, 06, 15, 16) to the module unit over TCP or TLS, taken by
+  // the settings writer (modbus_service_writer.cpp): one thread that leads
+  // every batch of them, so a settings write needs no thread of its own.
+  // The simulator unit, FC 23, RTU and reads: false.
+  bool handle_later(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client,
+                    std::function<void(Reply)> done) override;
   void disconnected(const ClientInfo& client) override;
   void bus_event(Transport transport, BusEvent event) override { diagnostics_.bus_event(transport, event); }
   LineCounters line_counters(Transport transport) const { return diagnostics_.counters(transport); }
@@ -99,6 +105,8 @@ class ModbusService final : public RequestHandler {
   Reply route(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client);
   Reply dispatch(Target target, std::span<const std::uint8_t> pdu, const ClientInfo& client);
   Reply apply(Target target, const Request& request, const ClientInfo& client);
+  // The answer to an accepted FC 05, 06, 15 or 16: the echo or the quantity.
+  static Reply accepted_write_reply(FunctionCode function, const WriteRequest& w);
   Reply read(Target target, std::uint8_t fc, const ReadRequest& request, const ClientInfo& client);
   registers::StatusExtras extras_now();  // under mutex_
   // Validates and applies a write; nullopt when accepted.
@@ -116,7 +124,14 @@ class ModbusService final : public RequestHandler {
   // The write path (modbus_service_write.cpp): a batch of writes decided in
   // turn and committed together.
   struct WriteTicket;
+  struct LaterWrite;
   void process_batch(const std::vector<WriteTicket*>& batch);
+  // Under batch_mutex_ (held on entry and on return): decides and commits
+  // the writes queued (or the reserved one alone), wakes the threads of
+  // those that wait, passes the lead on, and answers those taken later.
+  void lead(std::unique_lock<std::mutex>& lock, WriteTicket* reserved);
+  void answer_later(LaterWrite& w);
+  void run_writer();
   void carry_out(WriteTicket& t, WritePlan& plan, const std::string& owner, std::size_t staged);
   // Under batch_mutex_: the lead goes to the first write queued, woken alone
   // (the others sleep on until their own batch is done), or to nobody.
@@ -127,6 +142,12 @@ class ModbusService final : public RequestHandler {
   // Under batch_mutex_: the thread handle_now() reserved the lead for (its
   // request alone makes the next batch).
   std::optional<std::thread::id> reserved_for_;
+  // The settings writer: started with the first write taken later; leads
+  // when the first write queued is one of those (under batch_mutex_).
+  std::thread writer_;
+  std::condition_variable writer_wake_;
+  bool writer_leads_ = false;
+  bool writer_stops_ = false;
   bool needs_nothing_durable(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) const;
   // Under mutex_: the effects of an accepted plan (server/write_plan.hpp) and of a refused wrong code.
   void apply_effect(registers::Effect effect);

@@ -1,7 +1,8 @@
 // ModbusService: the write path of the module unit. Each write is decided
 // whole first (server/write_plan.hpp), then carried out. Writes that arrive
 // together are decided one after the other by whichever of their threads
-// leads, and the settings they change are committed together in one SQLite
+// leads (the settings writer for those taken later, modbus_service_writer.cpp),
+// and the settings they change are committed together in one SQLite
 // transaction (group commit: one fsync for all of them); each is answered
 // only once the commit that holds it is durable, and none is applied before.
 #include <fmt/format.h>
@@ -12,29 +13,13 @@
 #include "modbus_service.hpp"
 #include "registers/lookup.hpp"
 #include "write_log.hpp"
+#include "write_ticket.hpp"
 
 namespace server {
 
-// One write of the module unit on its way through a batch.
-struct ModbusService::WriteTicket {
-  registers::Table table;
-  std::uint16_t start = 0;
-  std::span<const std::uint16_t> values;
-  const ClientInfo& client;
-  // Decided by the batch's leader, answered by the request's own thread.
-  std::optional<registers::Refusal> refusal;
-  std::vector<registers::CommandRequest> commands;
-  bool done = false;  // under batch_mutex_, as lead
-  bool lead = false;  // this request's thread decides and commits the next batch
-  // Its own, so that a batch's end wakes exactly the threads it answers
-  // (one wake-up shared by all had every waiting thread wake, take the lock
-  // in turn and sleep again: some nine futex calls per write at 8 writers).
-  std::condition_variable wake;
-};
-
 std::optional<Reply> ModbusService::write_module(std::uint8_t fc, registers::Table table, std::uint16_t start,
                                                  std::span<const std::uint16_t> values, const ClientInfo& client) {
-  WriteTicket t{table, start, values, client, std::nullopt, {}, false, false, {}};
+  WriteTicket t{table, start, values, client, std::nullopt, {}, false, false, {}, nullptr};
   {
     std::unique_lock lock(batch_mutex_);
     // Reserved by handle_now(): this request alone, at once, so that
@@ -48,22 +33,7 @@ std::optional<Reply> ModbusService::write_module(std::uint8_t fc, registers::Tab
       if (!batch_leader_) batch_leader_ = t.lead = true;
       t.wake.wait(lock, [&t] { return t.done || t.lead; });
     }
-    if (!t.done) {
-      // Lead: decide and commit every write queued so far, this one among them.
-      std::vector<WriteTicket*> batch;
-      if (reserved) batch.push_back(&t);
-      else batch.swap(batch_queue_);
-      lock.unlock();
-      process_batch(batch);
-      lock.lock();
-      // Under the lock: a ticket lives on its thread's stack, gone once that
-      // thread sees done and returns.
-      for (WriteTicket* w : batch) {
-        w->done = true;
-        if (w != &t) w->wake.notify_one();
-      }
-      pass_lead();
-    }
+    if (!t.done) lead(lock, reserved ? &t : nullptr);
   }
   // Answered on this thread: refuse() records the refusal for this request.
   if (t.refusal) return refuse(fc, *t.refusal, client);
@@ -92,11 +62,39 @@ std::optional<Reply> ModbusService::handle_now(std::uint8_t unit, std::span<cons
   return reply;
 }
 
+void ModbusService::lead(std::unique_lock<std::mutex>& lock, WriteTicket* reserved) {
+  // Every write queued so far, or the reserved one alone.
+  std::vector<WriteTicket*> batch;
+  if (reserved) batch.push_back(reserved);
+  else batch.swap(batch_queue_);
+  lock.unlock();
+  process_batch(batch);
+  lock.lock();
+  // Under the lock: a waiting ticket lives on its thread's stack, gone once
+  // that thread sees done and returns.
+  std::vector<WriteTicket*> later;
+  for (WriteTicket* w : batch) {
+    w->done = true;
+    if (w->later) later.push_back(w);
+    else w->wake.notify_one();
+  }
+  pass_lead();
+  lock.unlock();
+  for (WriteTicket* w : later) answer_later(*w->later);
+  lock.lock();
+}
+
 void ModbusService::pass_lead() {
   batch_leader_ = !batch_queue_.empty();
   if (!batch_leader_) return;
-  batch_queue_.front()->lead = true;
-  batch_queue_.front()->wake.notify_one();
+  WriteTicket& next = *batch_queue_.front();
+  if (next.later) {
+    writer_leads_ = true;
+    writer_wake_.notify_one();
+    return;
+  }
+  next.lead = true;
+  next.wake.notify_one();
 }
 
 // A plain write (FC 05, 06, 15, 16) to the module unit whose registers are

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -75,6 +76,15 @@ class RequestHandler {
   // done, call handle() where waiting is allowed.
   virtual std::optional<Reply> handle_now(std::uint8_t, std::span<const std::uint8_t>, const ClientInfo&) {
     return std::nullopt;
+  }
+  // The same request taken by the handler's own writer and answered later,
+  // through done(reply) on the writer's thread, once decided (and committed
+  // when it changes a setting): an event loop hands a write over without a
+  // thread waiting for it. false: not taken, nothing was done; call handle()
+  // where waiting is allowed. done is called exactly once for a taken request.
+  virtual bool handle_later(std::uint8_t, std::span<const std::uint8_t>, const ClientInfo&,
+                            std::function<void(Reply)>) {
+    return false;
   }
   virtual void disconnected(const ClientInfo& client) = 0;
   virtual void bus_event(Transport, BusEvent) {}

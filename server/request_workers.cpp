@@ -34,12 +34,23 @@ void RequestWorkers::work() {
   }
 }
 
+void RequestWorkers::begin_elsewhere() {
+  std::lock_guard lock(mutex_);
+  ++elsewhere_;
+}
+
+void RequestWorkers::end_elsewhere() {
+  std::lock_guard lock(mutex_);
+  if (--elsewhere_ == 0) elsewhere_done_.notify_all();
+}
+
 void RequestWorkers::join() {
   std::vector<std::thread> threads;
   {
-    std::lock_guard lock(mutex_);
+    std::unique_lock lock(mutex_);
     stopping_ = true;
     threads.swap(threads_);
+    elsewhere_done_.wait(lock, [this] { return elsewhere_ == 0; });
   }
   wake_.notify_all();
   for (std::thread& t : threads) t.join();

@@ -26,7 +26,13 @@ class RequestWorkers {
   RequestWorkers& operator=(const RequestWorkers&) = delete;
 
   void run(std::function<void()> job);
-  // Runs what is queued, then ends the threads.
+  // A request answered on a thread of another (RequestHandler::handle_later,
+  // the settings writer): counted from before it is handed over until its
+  // answer is posted to its loop, so that join() waits for it as well.
+  void begin_elsewhere();
+  void end_elsewhere();
+  // Runs what is queued, waits for the requests answered elsewhere, then
+  // ends the threads.
   void join();
   std::size_t threads() const;
 
@@ -40,6 +46,8 @@ class RequestWorkers {
   std::deque<std::function<void()>> jobs_;
   std::vector<std::thread> threads_;
   std::size_t idle_ = 0;
+  std::size_t elsewhere_ = 0;
+  std::condition_variable elsewhere_done_;
   bool stopping_ = false;
 };
 

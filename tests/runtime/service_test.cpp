@@ -3,6 +3,10 @@
 #include <catch2/catch.hpp>
 
 #include <array>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
@@ -439,4 +443,77 @@ TEST_CASE("a command or the heartbeat is answered at once on the caller's thread
   CHECK(nowhere->pdu.at(0) == (6 | 0x80));
   CHECK(m.write_u16("axis.x.seek_feedrate", 900) == seek_900);
   CHECK(m.read_u16("axis.x.seek_feedrate") == 900);
+}
+
+TEST_CASE("a write of the module unit over TCP is taken by the settings writer and answered through its callback once "
+          "stored, a refusal too, while the simulator unit, reads, FC 23 and RTU are not taken") {
+  Module m(false);
+  const auto pdu = [](std::uint8_t fc, std::uint16_t a, std::uint16_t v) {
+    return std::vector<std::uint8_t>{fc, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a),
+                                     static_cast<std::uint8_t>(v >> 8), static_cast<std::uint8_t>(v)};
+  };
+  struct Answer {
+    std::mutex mutex;
+    std::condition_variable came;
+    std::optional<server::Reply> reply;
+    std::thread::id on;
+    int calls = 0;
+  };
+  const auto later = [&m](std::uint8_t unit, const std::vector<std::uint8_t>& request, const server::ClientInfo& who,
+                          Answer& a) {
+    return m.service->handle_later(unit, request, who, [&a](server::Reply r) {
+      std::lock_guard lock(a.mutex);
+      a.reply = std::move(r);
+      a.on = std::this_thread::get_id();
+      ++a.calls;
+      a.came.notify_all();
+    });
+  };
+  const auto wait = [](Answer& a) {
+    std::unique_lock lock(a.mutex);
+    return a.came.wait_for(lock, std::chrono::seconds(10), [&a] { return a.reply.has_value(); });
+  };
+
+  const auto seek = Module::address("axis.x.seek_feedrate");
+  const auto seek_900 = pdu(6, seek, 900);
+  REQUIRE(m.read_u16("axis.x.seek_feedrate") != 900);
+  Answer accepted;
+  REQUIRE(later(1, seek_900, m.client, accepted));
+  REQUIRE(wait(accepted));
+  CHECK(accepted.reply->pdu == seek_900);  // FC 06 echoed: accepted
+  CHECK(accepted.on != std::this_thread::get_id());
+  CHECK(m.store->load().at("axis.x.seek_feedrate") == 900);  // on disk before the answer
+  CHECK(m.read_u16("axis.x.seek_feedrate") == 900);
+
+  // Refused by the same rules as handle(): exception 03, the refusal
+  // registers name the register written, nothing stored.
+  Answer refused;
+  REQUIRE(later(1, pdu(6, seek, 0), m.client, refused));
+  REQUIRE(wait(refused));
+  CHECK(refused.reply->pdu == std::vector<std::uint8_t>{6 | 0x80, 3});
+  const auto written = Module::address("status.last_refused_write");
+  CHECK(m.request({4, static_cast<std::uint8_t>(written >> 8), static_cast<std::uint8_t>(written), 0, 1}) ==
+        std::vector<std::uint8_t>{4, 2, static_cast<std::uint8_t>(seek >> 8), static_cast<std::uint8_t>(seek)});
+  CHECK(m.store->load().at("axis.x.seek_feedrate") == 900);
+
+  // A command coil through unit 0xFF (the module addressed by IP): taken, echoed.
+  Answer reset;
+  const auto reset_coil = pdu(5, Module::address("cmd.reset_alarm"), 0xFF00);
+  REQUIRE(later(0xFF, reset_coil, m.client, reset));
+  REQUIRE(wait(reset));
+  CHECK(reset.reply->pdu == reset_coil);
+
+  // Not taken, nothing done, the callback never called: the caller runs
+  // these where waiting is allowed.
+  Answer none;
+  CHECK_FALSE(later(247, pdu(6, 0, 0), m.client, none));  // the simulator unit
+  CHECK_FALSE(later(1, {3, 0, 0, 0, 1}, m.client, none));  // a read
+  const std::vector<std::uint8_t> fc23{23, 0, 0, 0, 1, static_cast<std::uint8_t>(seek >> 8),
+                                       static_cast<std::uint8_t>(seek), 0, 1, 2, 0x03, 0xE8};
+  CHECK_FALSE(later(1, fc23, m.client, none));
+  server::ClientInfo rtu{8, server::Transport::rtu, "/dev/ttyS0"};
+  CHECK_FALSE(later(1, pdu(6, seek, 1000), rtu, none));
+  CHECK(m.read_u16("axis.x.seek_feedrate") == 900);
+  for (Answer* a : {&accepted, &refused, &reset}) CHECK(a->calls == 1);
+  CHECK(none.calls == 0);
 }

@@ -6,6 +6,9 @@
 
 #include <atomic>
 #include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -58,4 +61,51 @@ TEST_CASE("eight clients writing settings at once lose no acknowledged write whe
     CHECK(stored >= acked[i].load());
     CHECK(stored <= sent[i].load());
   }
+}
+
+namespace {
+
+// The names homingd gave its threads (/proc/PID/task/TID/comm).
+std::multiset<std::string> thread_names(pid_t pid) {
+  std::multiset<std::string> names;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/task")) {
+    std::ifstream comm(task.path() / "comm");
+    std::string name;
+    std::getline(comm, name);
+    names.insert(name);
+  }
+  return names;
+}
+
+}  // namespace
+
+TEST_CASE("settings written by eight TCP clients at once are committed by the one settings writer, with no thread "
+          "started per write") {
+  Daemon d;
+  std::vector<std::thread> writers;
+  std::atomic<int> failed{0};
+  std::atomic<int> acked{0};
+  const std::vector<std::string> regs{"axis.x.home_position", "axis.y.home_position", "axis.z.home_position",
+                                      "axis.a.home_position", "axis.b.home_position", "axis.c.home_position",
+                                      "axis.x.pull_off",      "axis.y.pull_off"};
+  for (std::size_t i = 0; i < regs.size(); ++i)
+    writers.emplace_back([&, i] {
+      Client c = Client::tcp(d.port());
+      for (std::int64_t k = 1001; k <= 1100; ++k) {  // bounded: 100 writes each
+        if (c.write(regs[i], k) != 0) {
+          ++failed;
+          return;
+        }
+        ++acked;
+      }
+    });
+  for (std::thread& t : writers) t.join();
+  CHECK(failed == 0);
+  CHECK(acked == 800);
+  const auto names = thread_names(d.pid());
+  CAPTURE(std::vector<std::string>(names.begin(), names.end()));
+  CHECK(names.count("settings-write") == 1);
+  CHECK(names.count("tcp-write") == 0);  // RequestWorkers: only a write that waits for the control loop starts one
+  Client c = Client::tcp(d.port());
+  for (const std::string& r : regs) CHECK(c.read(r) == 1100);
 }
