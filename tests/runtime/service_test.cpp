@@ -31,6 +31,12 @@
 
 namespace {
 
+// An FC 05 or 06 request: function code, address, value.
+std::vector<std::uint8_t> single_write_pdu(std::uint8_t fc, std::uint16_t a, std::uint16_t v) {
+  return {fc, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), static_cast<std::uint8_t>(v >> 8),
+          static_cast<std::uint8_t>(v)};
+}
+
 struct Module {
   test_support::TempDir dir{"runtime-test"};  // removed after the members below are gone
   std::unique_ptr<persistence::SettingsStore> store;
@@ -409,10 +415,7 @@ TEST_CASE("the history records an axis's correction only when its cycle succeede
 TEST_CASE("a command or the heartbeat is answered at once on the caller's thread, a settings write or the simulator "
           "unit never is") {
   Module m(false);
-  const auto pdu = [](std::uint8_t fc, std::uint16_t a, std::uint16_t v) {
-    return std::vector<std::uint8_t>{fc, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a),
-                                     static_cast<std::uint8_t>(v >> 8), static_cast<std::uint8_t>(v)};
-  };
+  const auto pdu = single_write_pdu;
   const auto heartbeat = pdu(6, Module::address("host.heartbeat"), 42);
   const auto answered = m.service->handle_now(1, heartbeat, m.client);
   REQUIRE(answered);
@@ -448,10 +451,7 @@ TEST_CASE("a command or the heartbeat is answered at once on the caller's thread
 TEST_CASE("a write of the module unit over TCP is taken by the settings writer and answered through its callback once "
           "stored, a refusal too, while the simulator unit, reads, FC 23 and RTU are not taken") {
   Module m(false);
-  const auto pdu = [](std::uint8_t fc, std::uint16_t a, std::uint16_t v) {
-    return std::vector<std::uint8_t>{fc, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a),
-                                     static_cast<std::uint8_t>(v >> 8), static_cast<std::uint8_t>(v)};
-  };
+  const auto pdu = single_write_pdu;
   struct Answer {
     std::mutex mutex;
     std::condition_variable came;
