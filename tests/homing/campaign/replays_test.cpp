@@ -139,6 +139,8 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // a shared limit whose truth was lost ended at its rest point).
   // 188007005: the generator's far stop, pulled in beyond one pre-move from
   // the start, not beyond the pre-moves of cycles stopped after theirs.
+  // 189001276: the racking watch's square, moved only when a cycle's end marked
+  // the pair homed, not when both sides were assigned in a cycle that failed later.
   const std::uint64_t seeds[] = {1,        7,        3,        8,        490,      715,      2,       173,
                                  959,      1242,     2054,     84,       4,        103,      1069,    412,
                                  627,      3972,     8001884,  31342370, 9,        5000422,  5001903, 9001798,
@@ -150,7 +152,8 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
                                  20005266, 21050675, 21086452, 184458299, 21090731, 21040289, 185003649, 186002100,
                                  187000328, 187000060, 187105905, 187100911, 187107016,
                                  187201697, 187208768, 187202370, 187208638, 187207833, 187204642,
-                                 187207148, 187300765, 187303014, 187301162, 188007005};
+                                 187207148, 187300765, 187303014, 187301162, 188007005,
+                                 189001276};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);

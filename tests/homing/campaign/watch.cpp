@@ -93,6 +93,7 @@ void Watch::begin_window(const CyclePlan& p, bool is_refused) {
     rack0_[s] = carriage_rel(s) - *square_[s];
     rack0_uncertain_[s] = square_uncertain_[s];
     pair_unhomed_seen_[s] = false;
+    pair_under_way_[s] = false;
   }
   late_allowance_.fill(0);
   slipped_.fill(false);
@@ -490,6 +491,19 @@ void Watch::racking(double engine_dt) {
         square_[s] = rel;  // assigned: square from here
         square_uncertain_[s] = false;
         pair_unhomed_seen_[s] = false;
+      }
+      // Both sides assigned their home in this cycle (the engine's square,
+      // gantry_guard.cpp), though the cycle may still fail before its end
+      // marks them homed: square from here too (seed 189001276 of the
+      // release run: squared and assigned in step 2, stopped by an alarm in
+      // step 3, the next cycle's racking counted from the squared pair).
+      const auto under_way = [](Phase p) { return p != Phase::done && p != Phase::idle; };
+      if (under_way(ss_now.phase) || under_way(ms_now.phase)) {
+        pair_under_way_[s] = true;
+      } else if (pair_under_way_[s] && ss_now.phase == Phase::done && ms_now.phase == Phase::done) {
+        square_[s] = rel;
+        square_uncertain_[s] = false;
+        pair_under_way_[s] = false;
       }
       // After lost steps or a slip (before this window or in it: a side's
       // drive faulted, the other brakes on) the module's square is not the

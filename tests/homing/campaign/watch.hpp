@@ -193,6 +193,9 @@ class Watch {
   std::array<double, kAxisCount> rack0_{};
   std::array<bool, kAxisCount> rack0_uncertain_{};
   std::array<bool, kAxisCount> pair_unhomed_seen_{};
+  // In this window: a side of the pair seen on its way (not done, not idle),
+  // so that both done afterwards is this cycle's assignment.
+  std::array<bool, kAxisCount> pair_under_way_{};
   double carriage_rel(std::size_t slave) const;
   void square_unsure(std::size_t axis);
   std::array<double, kAxisCount> late_allowance_{};
