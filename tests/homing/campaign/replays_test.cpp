@@ -141,6 +141,12 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // the start, not beyond the pre-moves of cycles stopped after theirs.
   // 189001276: the racking watch's square, moved only when a cycle's end marked
   // the pair homed, not when both sides were assigned in a cycle that failed later.
+  // 190010418: a fault injected on an axis whose limit switches were dead took
+  // that fault's place in the simulator while its search ran past them.
+  // 190056107: an unsequenced homed axis that a measurement left beyond its
+  // soft limits keeps its coordinate through home-all, and so stands there still.
+  // 190061984: a software-slaved slave whose own sensor lay beyond its master's
+  // max_seek_travel from where earlier cycles left it, not taken as a cause.
   const std::uint64_t seeds[] = {1,        7,        3,        8,        490,      715,      2,       173,
                                  959,      1242,     2054,     84,       4,        103,      1069,    412,
                                  627,      3972,     8001884,  31342370, 9,        5000422,  5001903, 9001798,
@@ -153,7 +159,7 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
                                  187000328, 187000060, 187105905, 187100911, 187107016,
                                  187201697, 187208768, 187202370, 187208638, 187207833, 187204642,
                                  187207148, 187300765, 187303014, 187301162, 188007005,
-                                 189001276};
+                                 189001276, 190010418, 190056107, 190061984};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);

@@ -63,7 +63,10 @@ void Watch::begin_window(const CyclePlan& p, bool is_refused) {
   refused = is_refused;
   measured = 0;
   extra_path.fill(0);
-  outside_soft_limits &= static_cast<AxisMask>(~(p.covered | p.unsequenced));
+  // Assigned again by this cycle: inside its soft limits from now. Not an
+  // unsequenced axis that keeps its coordinate (seed 190056107 of the release
+  // run: left beyond them by a measurement, it stays there through home-all).
+  outside_soft_limits &= static_cast<AxisMask>(~(plan.covered | plan.unsequenced));
   flipped = 0;
   tampered = 0;
   path.fill(0);
@@ -74,6 +77,7 @@ void Watch::begin_window(const CyclePlan& p, bool is_refused) {
                            (r_.sim().limit_active(a, false) || r_.sim().limit_active(a, true));
   back_.fill(false);
   stop_touched_.fill(false);
+  limits_dead_seen_.fill(false);
   went_back_.fill(false);
   for (std::size_t a = 0; a < kAxisCount; ++a) started_at_stop_[a] = r_.sim().at_hard_stop(a);
   after.fill(After::brake);
@@ -273,7 +277,12 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
   // home cam's search behind which the cam lies runs into it, losing steps
   // until max_seek_travel (docs/limit-switches.md, fault limits_dead).
   if (in_window && r_.sim().at_hard_stop(a)) stop_touched_[a] = true;
-  const bool limits_dead = m_.plan[a].limits && r_.sim().axis_config(a).fault == sim::Fault::limits_dead;
+  // A fault injected in the window replaces limits_dead in the simulator
+  // (one fault per axis): a search the dead switches let past them is still
+  // on its way into the stop when they read again (seed 190010418 of the
+  // release run: a home cam's stuck sensor injected 1 ms before the stop).
+  if (m_.plan[a].limits && r_.sim().axis_config(a).fault == sim::Fault::limits_dead) limits_dead_seen_[a] = true;
+  const bool limits_dead = limits_dead_seen_[a];
   if (r_.sim().at_hard_stop(a) && limits_dead) {
     pushed_to_stop_[a] = false;
   } else if (r_.sim().at_hard_stop(a)) {
@@ -394,7 +403,9 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
 // The switches are where the simulated machine has them (not what the engine
 // believes); a switch a fault keeps from ever tripping is not held to it.
 void Watch::limit_overrun(std::size_t a, double x, double speed) {
-  if (!m_.plan[a].limits || r_.sim().axis_config(a).fault == sim::Fault::limits_dead) {
+  // Nor one that read dead earlier in this window and trips again only
+  // because a fault injected since took limits_dead's place (seed 190010418).
+  if (!m_.plan[a].limits || r_.sim().axis_config(a).fault == sim::Fault::limits_dead || limits_dead_seen_[a]) {
     past_limit_[a] = false;
     return;
   }

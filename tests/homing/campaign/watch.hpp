@@ -181,6 +181,9 @@ class Watch {
   std::array<bool, kAxisCount> steps_off_{};  // seen pushing into its stop or homed by its drive in this window
   std::array<bool, kAxisCount> back_{};       // go_back: at rest where the window found it
   std::array<bool, kAxisCount> stop_touched_{};
+  // The limit switches read dead in this window (fault limits_dead), though
+  // a fault injected later may have taken that fault's place in the simulator.
+  std::array<bool, kAxisCount> limits_dead_seen_{};
   std::array<bool, kAxisCount> started_at_stop_{};  // the window found the carriage at its mechanical stop
   std::array<bool, kAxisCount> went_back_{};  // go_back: moved after it had come to rest
   // Gantry racking.
