@@ -265,6 +265,12 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
       const double x = r.actual(a);
       const bool inside = x >= cfg.sensor_min_mm && x <= cfg.sensor_max_mm;
       const double gap = dir_of(e) > 0 ? cfg.sensor_min_mm - x : x - cfg.sensor_max_mm;
+      // Beyond the switch's far side in the seek's direction (a hand moved it
+      // there: seed 191006514 of the release run), the seek runs away from it.
+      const double past_far = dir_of(e) > 0 ? x - cfg.sensor_max_mm : cfg.sensor_min_mm - x;
+      if (!inside && cfg.sensor_max_mm >= cfg.sensor_min_mm && past_far > 0)
+        c.add(letter(a) + " starting beyond its switch in the seek's direction", {AlarmCode::sensor_not_found},
+              with_partner(r.settings, a));
       if (!inside && gap > 0) {
         const double seek_v = mm_per_min_to_mm_per_s(e.seek_feedrate_mm_per_min);
         const double reach = gap + (e.pre_move_mode == PreMove::always ? e.pre_move_distance_mm : 0.0);
