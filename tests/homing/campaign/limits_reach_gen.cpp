@@ -10,6 +10,7 @@
 #include <cmath>
 
 #include "gen.hpp"
+#include "homing/motion.hpp"
 
 namespace campaign {
 namespace gen {
@@ -43,16 +44,22 @@ void Gen::limit_in_reach(std::size_t a, Dice& lr) {
   const double hyst = c.hysteresis_mm + 4 * c.noise_mm;
   const double edge = side > 0 ? c.sensor_max_mm : c.sensor_min_mm;  // the cam's edge on that side
   double reach = 0, rest = 0, unsure = 0.1;
+  // The jog before homing: 3 mm beyond the start, then its braking at jog
+  // feedrate and one late period (seed 192007033 of a release run: 781 mm/s
+  // brakes over 5.8 mm, into a switch pulled in 4.2 mm from the start).
+  const double jog_v = mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min);
+  const double jog = 3 + stop_distance_mm(jog_v, s.acceleration_mm_per_s2) + jog_v * m.max_dt_s;
   if (cam) {
     const double cam_side = s.cam_edge == CamEdge::ahead ? dir : -dir;
     const double ref = cam_side > 0 ? c.sensor_max_mm : c.sensor_min_mm;
     rest = ref + cam_side * (c.hysteresis_mm + s.pull_off_mm);
-    reach = std::max({along(c.actual_position_mm), along(edge) + hyst + overshoot(s) + s.pull_off_mm, along(rest)}) + 3;
+    reach = std::max({along(c.actual_position_mm) + jog, along(edge) + hyst + overshoot(s) + s.pull_off_mm + 3,
+                      along(rest) + 3});
   } else {
     rest = p.cam_edge_mm - dir * ((mode_reapproaches(s.mode) ? 0.0 : c.hysteresis_mm) + s.pull_off_mm);
     if (s.mode == HomingMode::switch_index) unsure += s.index_pitch_mm;
-    reach = std::max(along(c.actual_position_mm), along(edge)) + s.max_backoff_mm + s.pull_off_mm + s.index_pitch_mm +
-            s.pre_move_distance_mm + hyst + 3;
+    reach = std::max(along(c.actual_position_mm) + jog - 3, along(edge)) + s.max_backoff_mm + s.pull_off_mm +
+            s.index_pitch_mm + s.pre_move_distance_mm + hyst + 3;
   }
   const double at = reach + lr.u(0.5, 10);
   const double now = side > 0 ? c.limit_max_mm : c.limit_min_mm;
