@@ -133,13 +133,16 @@ Reply ModbusService::handle(std::uint8_t unit, std::span<const std::uint8_t> pdu
   return reply;
 }
 
-Reply ModbusService::route(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) {
-  const bool tcp = over_network(client.transport);
-  if (unit == config_.unit_id) return dispatch(Target::module, pdu, client);
+bool ModbusService::module_unit(std::uint8_t unit, bool network) const {
   // The Modbus TCP implementation guide: a device addressed by its IP address
   // answers unit id 0xFF, and 0 is accepted for direct addressing too (many
   // clients and SCADA drivers send one of them by default).
-  if (tcp && (unit == 0xFF || unit == 0)) return dispatch(Target::module, pdu, client);
+  return unit == config_.unit_id || (network && (unit == 0xFF || unit == 0));
+}
+
+Reply ModbusService::route(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client) {
+  const bool tcp = over_network(client.transport);
+  if (module_unit(unit, tcp)) return dispatch(Target::module, pdu, client);
   if (config_.sim_unit_id && unit == *config_.sim_unit_id) return dispatch(Target::simulator, pdu, client);
   if (unit == 0 && !tcp) {
     // An RTU broadcast: a write is applied to the module, nothing is answered.

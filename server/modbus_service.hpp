@@ -103,6 +103,8 @@ class ModbusService final : public RequestHandler {
  private:
   enum class Target { module, simulator };
   Reply route(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client);
+  // The unit ids that address the module: its own, and over TCP or TLS 0xFF and 0.
+  bool module_unit(std::uint8_t unit, bool network) const;
   Reply dispatch(Target target, std::span<const std::uint8_t> pdu, const ClientInfo& client);
   Reply apply(Target target, const Request& request, const ClientInfo& client);
   // The answer to an accepted FC 05, 06, 15 or 16: the echo or the quantity.

@@ -15,9 +15,7 @@ namespace server {
 
 bool ModbusService::handle_later(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client,
                                  std::function<void(Reply)> done) {
-  // The module unit as route() finds it over TCP: its own id, 0xFF or 0.
-  if (pdu.empty() || !over_network(client.transport)) return false;
-  if (unit != config_.unit_id && unit != 0xFF && unit != 0) return false;
+  if (pdu.empty() || !over_network(client.transport) || !module_unit(unit, true)) return false;
   const auto function = static_cast<FunctionCode>(pdu[0]);
   if (function != FunctionCode::write_single_coil && function != FunctionCode::write_single_register &&
       function != FunctionCode::write_multiple_coils && function != FunctionCode::write_multiple_registers)
