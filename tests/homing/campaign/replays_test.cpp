@@ -152,6 +152,11 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // edge, and the next seek runs away from the switch (sensor_not_found).
   // 192007033: a limit switch pulled in beyond the jog before homing, not
   // beyond that jog's braking at its feedrate.
+  // 193011366: a pre-move that started nearer the far stop than its own length
+  // (a measurement's end, then a cycle stopped after its pre-move) meets it:
+  // the placement's, not the engine's. 193061989: an indexer that never locks
+  // injected while its axis unlocks for a final move of zero length: the pin
+  // never comes out, so no lock can time out.
   const std::uint64_t seeds[] = {1,        7,        3,        8,        490,      715,      2,       173,
                                  959,      1242,     2054,     84,       4,        103,      1069,    412,
                                  627,      3972,     8001884,  31342370, 9,        5000422,  5001903, 9001798,
@@ -165,7 +170,7 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
                                  187201697, 187208768, 187202370, 187208638, 187207833, 187204642,
                                  187207148, 187300765, 187303014, 187301162, 188007005,
                                  189001276, 190010418, 190056107, 190061984,
-                                 191006514, 191055091, 192007033};
+                                 191006514, 191055091, 192007033, 193011366, 193061989};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);

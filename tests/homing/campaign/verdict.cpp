@@ -455,8 +455,11 @@ void indexer_cause(Causes& c, const Event& e, const Settings& s, const Status& s
     return;
   }
   // Never locks: a pin that is out, or comes out for the motion still to
-  // come, stays out when the axis next rests.
-  const bool out_now = unlock_output || (locking && !pin_in);
+  // come, stays out when the axis next rests. One still in while unlocking
+  // may never come out: the motion it is unlocked for can go away first (a
+  // final move of zero length, seed 193061989: the engine then locks again
+  // at once, and the pin that never left needs no lock).
+  const bool out_now = (unlock_output || locking) && !pin_in;
   c.add(who, {AlarmCode::lock_not_confirmed}, bit, out_now || (to_move && !locking));
 }
 

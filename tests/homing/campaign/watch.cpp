@@ -297,7 +297,20 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
     const bool back_to_start = st.alarm && after[a] == After::go_back && started_at_stop_[a] &&
                                std::abs(x - window_start_x[a]) <= 1e-6;
     if (back_to_start) pushed_to_stop_[a] = true;
-    if (!(pushing && pushed_to_stop_[a]) && !back_to_start)
+    // A pre-move "always" that starts nearer its far stop than its own length
+    // meets it: the axis is not homed, so nothing tells the engine where that
+    // stop is. A measurement ends pull-off and one pre-move from it, and a
+    // cycle stopped by an alarm after its pre-move leaves the carriage one
+    // pre-move nearer still (seed 193011366: 1.6 mm left, a pre-move of
+    // 4 mm). Started that near, the touch is the placement's.
+    const double far_stop = dir_of(e) > 0 ? r_.sim().axis_config(a).hard_stop_min_mm
+                                          : r_.sim().axis_config(a).hard_stop_max_mm;
+    // It stays excused while it rests or brakes there (an alarm of another
+    // axis may turn the phase to return_to_start as it brakes).
+    if (in_window && as.phase == Phase::pre_move && e.pre_move_mode == PreMove::always &&
+        std::abs(window_start_x[a] - far_stop) < e.pre_move_distance_mm + 0.01)
+      pre_move_met_stop_[a] = true;
+    if (!(pushing && pushed_to_stop_[a]) && !back_to_start && !pre_move_met_stop_[a])
       fail(std::string("a carriage ran into a mechanical stop") +
                (m_.plan[a].differs ? " (a slave whose own inherited fields differ)" : ""),
            fmt_axis(a, r_, x));
@@ -305,6 +318,7 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
       fail("a carriage drove into its mechanical stop at full current (push output off)", fmt_axis(a, r_, x));
   } else {
     pushed_to_stop_[a] = false;
+    pre_move_met_stop_[a] = false;
   }
 
   // A locking indexer holds its axis: the motor never runs while the pin is

@@ -184,6 +184,7 @@ class Watch {
   // The limit switches read dead in this window (fault limits_dead), though
   // a fault injected later may have taken that fault's place in the simulator.
   std::array<bool, kAxisCount> limits_dead_seen_{};
+  std::array<bool, kAxisCount> pre_move_met_stop_{};  // a pre-move started nearer the far stop than its length met it
   std::array<bool, kAxisCount> started_at_stop_{};  // the window found the carriage at its mechanical stop
   std::array<bool, kAxisCount> went_back_{};  // go_back: moved after it had come to rest
   // Gantry racking.
