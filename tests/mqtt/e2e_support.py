@@ -16,7 +16,11 @@ import time
 
 import paho.mqtt.client as paho
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from homingd_py import SANITIZER_MARKS  # noqa: E402  (how each sanitizer's report begins)
+
 failures = []
+started = []  # every homingd start_homingd() started: (process, its log's path)
 spb = None  # the project's sparkplug_b_pb2, once import_sparkplug() ran
 
 
@@ -123,32 +127,53 @@ def alias_names(birth):
 def start_homingd(homingd, modbus_port, db, mqtt_url, node, *extra, log=None, time_scale=20):
     """homingd with Modbus TCP on 127.0.0.1:modbus_port and normal scheduling,
     an edge node `node` of the group plant on mqtt_url; time_scale None: real
-    time. Its output goes to log (an open file), else nowhere."""
+    time. Its output goes to log (an open file), else to db + ".log": either
+    is read for sanitizer reports when the script ends (check_daemon_logs)."""
     args = [homingd, "--tcp", f"127.0.0.1:{modbus_port}", "--db", db, "--rt-priority", "0"]
     if time_scale is not None:
         args += ["--time-scale", str(time_scale)]
     args += ["--mqtt", mqtt_url, "--mqtt-group", "plant", "--mqtt-node", node, *extra]
     if log is None:
-        return subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return subprocess.Popen(args, stdout=log, stderr=subprocess.STDOUT)
+        log = open(db + ".log", "ab")
+    p = subprocess.Popen(args, stdout=log, stderr=subprocess.STDOUT)
+    started.append((p, log.name))
+    return p
 
 
 def stop_daemons(procs):
-    """SIGTERM to every one still running, then each gets 10 s to end before SIGKILL."""
-    for p in procs:
-        if p.poll() is None:
-            p.send_signal(signal.SIGTERM)
+    """SIGTERM to every one still running, then each gets 10 s to end before
+    SIGKILL. One that was running must end as a service manager expects: exit 0
+    (a sanitizer's abort at shutdown, a hang or a crash fails the script)."""
+    stopped = [p for p in procs if p.poll() is None]
+    for p in stopped:
+        p.send_signal(signal.SIGTERM)
     for p in procs:
         try:
             p.wait(10)
         except subprocess.TimeoutExpired:
             p.kill(); p.wait()
+    for p in stopped:
+        check(p.returncode == 0, f"SIGTERM: homingd (pid {p.pid}) exited {p.returncode}")
+
+
+def check_daemon_logs():
+    """No sanitizer report in the output of any homingd this script started,
+    those it killed on purpose (a power cut) included; the log is printed when
+    there is one."""
+    for p, path in started:
+        with open(path, errors="replace") as f:
+            log = f.read()
+        reports = [line for line in log.splitlines() if any(m in line for m in SANITIZER_MARKS)]
+        if not check(not reports, f"no sanitizer report in the output of homingd (pid {p.pid}): {reports[:3]}"):
+            print(f"--- {path} ---\n" + log)
 
 
 def shut_down(daemons, host, broker):
     """What every script does last, whatever happened: its homingd processes
-    stopped (stop_daemons), the host's network loop, the broker."""
+    stopped (stop_daemons) and their logs read (check_daemon_logs), the host's
+    network loop, the broker."""
     stop_daemons(daemons)
+    check_daemon_logs()
     host.loop_stop()
     broker.stop()
 

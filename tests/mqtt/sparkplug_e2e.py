@@ -8,8 +8,8 @@ import os, signal, sys, tempfile
 
 from pymodbus.client import ModbusTcpClient
 
-from e2e_support import (Broker, check, failures, free_port, import_sparkplug, ncmd, sparkplug_host, start_homingd,
-                         wait_until)
+from e2e_support import (Broker, check, check_daemon_logs, failures, free_port, import_sparkplug, ncmd, sparkplug_host,
+                         start_homingd, wait_until)
 
 homingd, pydir = sys.argv[1], sys.argv[2]
 spb = import_sparkplug(pydir)
@@ -91,6 +91,7 @@ try:
 finally:
     if daemon.poll() is None:
         daemon.send_signal(signal.SIGKILL); daemon.wait()
+    check_daemon_logs()
     sub.loop_stop()
     broker.stop()
 sys.exit(1 if failures else 0)
