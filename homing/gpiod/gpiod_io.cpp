@@ -185,6 +185,7 @@ void GpiodIo::apply(const Outputs& outputs) {
     write(a.unlock, o.indexer_unlock);
   }
   write(lamp_, outputs.homing_done_lamp);
+  if (pulse_thread_) pulse_thread_->wake();  // asleep while every generator rested
 }
 
 Inputs GpiodIo::read() {

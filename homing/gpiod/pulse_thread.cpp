@@ -43,7 +43,13 @@ std::string PulseThread::start() {
 
 void PulseThread::stop() {
   stop_ = true;
+  wake();
   if (thread_.joinable()) thread_.join();
+}
+
+void PulseThread::wake() {
+  wakes_.fetch_add(1);
+  wakes_.notify_one();
 }
 
 void PulseThread::run() {
@@ -51,10 +57,22 @@ void PulseThread::run() {
   while (!stop_) {
     timespec ts{static_cast<time_t>(deadline / 1'000'000'000), static_cast<long>(deadline % 1'000'000'000)};
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {}
+    // Read before the ticks: a segment pushed after them changes it, so the
+    // sleep below cannot miss it.
+    const std::uint64_t seen = wakes_.load();
     const std::int64_t now = monotonic_now_ns();
-    for (StepGenerator* g : generators_) g->tick(now);
+    bool all_resting = true;
+    for (StepGenerator* g : generators_) {
+      g->tick(now);
+      all_resting = all_resting && g->resting();
+    }
+    turns_.fetch_add(1);
     deadline += tick_ns_;
     if (now - deadline > tick_ns_) deadline = now + tick_ns_;  // far behind: no burst of ticks
+    if (all_resting && !stop_) {
+      wakes_.wait(seen);
+      deadline = monotonic_now_ns() + tick_ns_;
+    }
   }
 }
 

@@ -22,13 +22,17 @@ void StepGenerator::push(const Segment& segment) {
 // The segment playing at now: the newest one that has started. Older ones
 // are dropped; a segment is extended past its nominal end until the next
 // one starts, which is what the engine does when a period runs late.
-bool StepGenerator::current_segment(std::int64_t now_ns, Segment& out) {
+bool StepGenerator::current_segment(std::int64_t now_ns, Segment& out, bool& more_queued) {
   std::lock_guard lock(mutex_);
   while (count_ >= 2 && ring_[(head_ + 1) % kRing].start_ns <= now_ns) {
     head_ = (head_ + 1) % kRing;
     --count_;
   }
-  if (count_ == 0 || ring_[head_].start_ns > now_ns) return false;
+  more_queued = count_ >= 2;
+  if (count_ == 0 || ring_[head_].start_ns > now_ns) {
+    more_queued = count_ != 0;  // one still to start: not at rest
+    return false;
+  }
   out = ring_[head_];
   return true;
 }
@@ -49,20 +53,32 @@ std::string StepGenerator::failure() const {
 }
 
 void StepGenerator::tick(std::int64_t now_ns) {
-  if (failed_) return;
+  resting_ = false;
+  if (failed_) {
+    resting_ = true;  // it emits nothing more
+    return;
+  }
   if (step_high_) {  // second half of a pulse
     if (write(step_line_, false)) step_high_ = false;
     return;
   }
   Segment seg;
-  if (!current_segment(now_ns, seg)) return;
+  bool more_queued = false;
+  if (!current_segment(now_ns, seg, more_queued)) {
+    resting_ = !more_queued;  // nothing handed over yet
+    return;
+  }
   const double t_s = static_cast<double>(now_ns - seg.start_ns) * 1e-9;
   const double position_mm = position_at(seg.motor, seg.command, t_s);
   const std::int64_t target = std::llround(position_mm * steps_per_unit_);
   const std::int64_t diff = target - position_steps_.load();
   const std::int64_t lag = std::llabs(diff);
   if (lag > max_lag_steps_.load()) max_lag_steps_ = lag;
-  if (diff == 0) return;
+  if (diff == 0) {
+    // A segment at rest and staying there plays the same position for ever.
+    resting_ = !more_queued && seg.motor.velocity_mm_per_s == 0 && seg.command.target_velocity_mm_per_s == 0;
+    return;
+  }
   const bool positive = diff > 0;
   if (positive != dir_positive_) {
     if (!write(dir_line_, positive)) return;

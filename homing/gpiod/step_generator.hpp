@@ -49,6 +49,10 @@ class StepGenerator {
   void idle();
 
   std::int64_t position_steps() const { return position_steps_.load(); }
+  // After the last tick: nothing left to emit until a new segment comes (the
+  // step line low, the commanded position reached, the motion playing at rest
+  // and none queued behind it), so the pulse thread may sleep until push().
+  bool resting() const { return resting_.load(); }
   // Largest distance, in steps, between commanded and emitted: above a few
   // steps the commanded rate exceeded 1 / (2 tick) or the thread was late.
   std::int64_t max_lag_steps() const { return max_lag_steps_.load(); }
@@ -58,7 +62,7 @@ class StepGenerator {
   double steps_per_unit() const { return steps_per_unit_; }
 
  private:
-  bool current_segment(std::int64_t now_ns, Segment& out);
+  bool current_segment(std::int64_t now_ns, Segment& out, bool& more_queued);
   bool write(LineId line, bool value);
 
   LineApi& lines_;
@@ -81,6 +85,7 @@ class StepGenerator {
   std::atomic<std::int64_t> position_steps_{0};
   std::atomic<std::int64_t> max_lag_steps_{0};
   std::atomic<bool> failed_{false};
+  std::atomic<bool> resting_{true};
 };
 
 }  // namespace homing::gpiod
