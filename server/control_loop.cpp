@@ -202,6 +202,11 @@ Snapshot ControlLoop::snapshot() const {
   return snapshot_;
 }
 
+homing::Status ControlLoop::status() const {
+  std::lock_guard lock(snapshot_mutex_);
+  return snapshot_.status;
+}
+
 LoopStats ControlLoop::stats() const {
   std::lock_guard lock(snapshot_mutex_);
   return stats_;

@@ -148,6 +148,10 @@ class ControlLoop {
   bool edit_sim(const SimEdit& edit, std::chrono::milliseconds timeout);
 
   Snapshot snapshot() const;
+  // Its status alone: what a read of the module's registers needs, a sixth of
+  // the snapshot (which carries the event ring and the simulator's view too),
+  // so that readers copy less and hold the lock the loop publishes under for less.
+  homing::Status status() const;
   // While the loop idles: waits until a period after `after` is published
   // (at its slow tick, or at once when something wakes it) or the timeout.
   // False on the timeout. A watcher that polls the snapshot follows an idle

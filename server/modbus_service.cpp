@@ -215,28 +215,29 @@ registers::StatusExtras ModbusService::extras_now() {
 }
 
 void ModbusService::with_module_view(const std::function<void(const registers::ModuleView&)>& use) {
-  const Snapshot snap = loop_.snapshot();
+  const homing::Status status = loop_.status();
   std::lock_guard lock(mutex_);
   const registers::StatusExtras extras = extras_now();
-  use(registers::ModuleView{settings_, host_, snap.status, extras});
+  use(registers::ModuleView{settings_, host_, status, extras});
 }
 
 Reply ModbusService::read(Target target, std::uint8_t fc, const ReadRequest& r, const ClientInfo& client) {
-  const Snapshot snap = loop_.snapshot();
   const bool bits = r.table == Table::coil || r.table == Table::discrete_input;
   std::vector<std::uint16_t> words(bits ? 0 : r.count);
   std::vector<std::uint8_t> flags(bits ? r.count : 0);
   std::optional<registers::Refusal> refused;
   if (target == Target::module) {
+    const homing::Status status = loop_.status();
     std::lock_guard lock(mutex_);
     registers::StatusExtras extras = extras_now();
     const std::string owner = EditSessions::owner_of(client);
     extras.edit_state = static_cast<std::uint16_t>(edits_.state(owner));
     extras.edit_staged = static_cast<std::uint16_t>(std::min<std::size_t>(edits_.staged_count(owner), 0xFFFF));
-    const registers::ModuleView view{settings_, host_, snap.status, extras};
+    const registers::ModuleView view{settings_, host_, status, extras};
     refused = bits ? registers::read_module_bits(r.table, r.start, flags, view)
                    : registers::read_module_words(r.table, r.start, words, config_.word_order, view);
   } else {
+    const Snapshot snap = loop_.snapshot();
     const auto raw_of = [&](const registers::Register& reg) { return sim_raw(reg, snap); };
     refused = bits ? registers::read_bits(registers::Unit::simulator, r.table, r.start, flags, raw_of)
                    : registers::read_words(registers::Unit::simulator, r.table, r.start, words, config_.word_order,

@@ -132,7 +132,7 @@ void ModbusService::process_batch(const std::vector<WriteTicket*>& batch) {
     homing::Settings planned = settings_;  // with the settings of the durable plans decided so far
     registers::HostRegisters planned_host = host_;
     for (WriteTicket* t : batch) {
-      const homing::Status status = loop_.snapshot().status;  // one machine snapshot per request
+      const homing::Status status = loop_.status();  // one machine snapshot per request
       const std::string owner = EditSessions::owner_of(t->client);
       const std::vector<registers::RawWrite> staged = edits_.staged(owner);
       const WriteState state{.settings = planned,
