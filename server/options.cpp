@@ -332,6 +332,12 @@ std::expected<ParseOutcome, std::string> OptionParser::parse(int argc, char** ar
   t.reset();
   CLI::App& app = t.app;
   ParseOutcome out;
+  // The path as given: as<std::string>() would validate it again, and throw
+  // once more for a file that does not exist (an abort, not an answer).
+  const auto config_given = [&app] {
+    const CLI::Option* cfg = app.get_option("--config");
+    return cfg->results().empty() ? std::string() : cfg->results().front();
+  };
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -343,11 +349,11 @@ std::expected<ParseOutcome, std::string> OptionParser::parse(int argc, char** ar
     out.exit_code = app.exit(e);
     return out;
   } catch (const ConfigFileError& e) {
-    return std::unexpected("--config " + app.get_option("--config")->as<std::string>() + ": " + e.what());
+    return std::unexpected("--config " + config_given() + ": " + e.what());
   } catch (const CLI::ParseError& e) {
     std::string what = e.what();
-    if (auto cfg = app.get_option("--config"); cfg && cfg->count() > 0)
-      what += " (config file " + cfg->as<std::string>() + ")";
+    if (const std::string cfg = config_given(); !cfg.empty() && what.find(cfg) == std::string::npos)
+      what += " (config file " + cfg + ")";
     return std::unexpected(what);
   }
   out.options = t.o;

@@ -96,3 +96,14 @@ TEST_CASE("a wrong value in the config file is refused naming the option and wha
   REQUIRE_FALSE(parsed);
   CHECK_THAT(parsed.error(), Catch::Contains("--parity") && Catch::Contains("N,E,O"));
 }
+
+TEST_CASE("a config file that does not exist is refused naming it, not an abort") {
+  std::vector<std::string> args{"homingd", "--config", "/nonexistent/homingd.toml"};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const auto parsed = server::parse_options(static_cast<int>(args.size()), argv.data());
+  REQUIRE_FALSE(parsed);
+  CHECK_THAT(parsed.error(), Catch::Contains("--config") && Catch::Contains("/nonexistent/homingd.toml") &&
+                                 Catch::Contains("does not exist"));
+}
