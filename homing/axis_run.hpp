@@ -76,6 +76,7 @@ struct RefCheck {
     approach,      // toward the switch at latch feedrate to its trigger edge
     back_off,      // release methods: off the switch again, to the release edge
     go_back,       // judged: back to where the check started (or off the switch)
+    release,       // accepted, a shared limit back there still held active: off it until it releases
   };
   Step step = Step::approach;
   double start_mm = 0;     // motor position where the check started
@@ -83,6 +84,7 @@ struct RefCheck {
   double trigger_mm = 0;   // motor position of the trigger edge found, in back_off
   bool started_on_sensor = false;
   bool accepted = false;   // in go_back: the edge lay within refcheck_tolerance
+  bool released = false;   // a shared limit held active at the end was led off it once
   double offset_mm = 0;    // in go_back, accepted: the axis's offset that puts the edge found where expected
 };
 // The commissioning measurement (measure_phases.cpp), one phase in steps.

@@ -150,6 +150,7 @@ struct PhaseRunner {
   void refcheck_back_off(phase_data::RefCheck& c);
   void refcheck_judge(phase_data::RefCheck& c, double edge_mm, bool found);
   void refcheck_go_back(phase_data::RefCheck& c);
+  void refcheck_release(phase_data::RefCheck& c);
   // The commissioning measurement (measure_phases.cpp): one phase in steps.
   void homed_at_rest();  // done, or on to measure_travel when the cycle measures this axis
   void measure_travel();

@@ -47,6 +47,7 @@ void PhaseRunner::reference_check() {
     case Step::approach: return refcheck_approach(c);
     case Step::back_off: return refcheck_back_off(c);
     case Step::go_back: return refcheck_go_back(c);
+    case Step::release: return refcheck_release(c);
   }
 }
 
@@ -158,6 +159,12 @@ void PhaseRunner::refcheck_judge(phase_data::RefCheck& c, double edge_mm, bool f
 void PhaseRunner::refcheck_go_back(phase_data::RefCheck& c) {
   move_to(run.target_mm, seek_v);
   if (!arrived()) return;
+  // A shared limit the approach triggered may still be held active there by
+  // the switch's hysteresis (it grew since the cycle, or the cycle's noise
+  // let it release nearer): homed on it, it would trip hard_limit at once
+  // (campaign seed 194072538). Off it at latch feedrate first.
+  if (c.accepted && !c.released && s.shared_limit && !commutator_slave() && active())
+    return refcheck_step(c, Step::release, run.motor.position_mm + away_from_reference() * s.max_backoff_mm);
   if (c.accepted) {
     run.offset_mm = c.offset_mm;
     run.home = home_frame(settings.axes[axis]);
@@ -166,6 +173,18 @@ void PhaseRunner::refcheck_go_back(phase_data::RefCheck& c) {
     run.reach(Reached::assigned);
   }
   enter(Phase::done);
+}
+
+// Released: pull-off beyond that release edge, where a cycle would have
+// come to rest had the switch released there. Not within max_backoff: the
+// switch holds on (not_released, as a cycle's back-off says it).
+void PhaseRunner::refcheck_release(phase_data::RefCheck& c) {
+  if (edge_to(false)) {
+    c.released = true;
+    return refcheck_step(c, Step::go_back, edge_mm() + away_from_reference() * rest_offset_mm());
+  }
+  move_to(run.target_mm, latch_v);
+  if (arrived()) fail(AlarmCode::not_released, s.max_backoff_mm);
 }
 
 }  // namespace homing

@@ -368,3 +368,33 @@ SCENARIO("a shared-limit axis checked from nearer its switch than its rest point
   CHECK_FALSE(r.sim().sensor_active(X));
   CHECK(r.axis(X).position_mm == Approx(s.home_position_mm).margin(0.01));  // where a cycle ends
 }
+
+SCENARIO("a shared-limit axis whose switch's hysteresis grew holds it active back where it started: led off it, homed, not tripped",
+         "[trust]") {
+  // Campaign seed 194072538: the approach triggered the shared limit, the
+  // check went back to where the axis had rested, inside the switch's
+  // hysteresis band, and homed it there with its sensor still active: it
+  // tripped hard_limit at once.
+  CleanStop c;
+  AxisSettings& s = c.before.settings.axes[X];
+  s.mode = HomingMode::switch_reapproach;
+  s.shared_limit = true;
+  s.soft_limit_min_mm = -2;
+  c.before.machine.axes[X].hysteresis_mm = 0.02;  // released within the pull-off at the cycle
+  home_and_stop(c);
+  REQUIRE(c.stops[X].clean);
+  REQUIRE_FALSE(c.before.sim().sensor_active(X));
+  const double rest = c.before.actual(X);
+  // Worn while the machine was off: the band now reaches past the rest point.
+  c.before.machine.axes[X].hysteresis_mm = 1.5 * (rest - 0.0) + 0.1;
+  Rig r = restart(c.before, c.stops);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);
+  r.run_for(0.1);
+  CHECK_FALSE(r.status().alarm);
+  CHECK(r.axis(X).homed);
+  CHECK(r.axis(X).trust == Trust::reference_checked);
+  CHECK_FALSE(r.sim().sensor_active(X));
+  // Pull-off beyond where it released, with the coordinate the cycle gave that place.
+  CHECK(r.actual(X) > rest);
+  CHECK(r.axis(X).position_mm - r.actual(X) == Approx(c.offset_mm).margin(s.refcheck_tolerance_mm));
+}

@@ -157,6 +157,11 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // the placement's, not the engine's. 193061989: an indexer that never locks
   // injected while its axis unlocks for a final move of zero length: the pin
   // never comes out, so no lock can time out.
+  // 194020875: the same pre-move into the far stop leaves the stall input
+  // active as the push begins (stall_at_start). 194064769: an indexer stuck
+  // locked, injected while its axis unlocks for a final move of zero length.
+  // 194072538 (engine): a shared limit back where its check started, inside
+  // its switch's hysteresis, tripped hard_limit (named scenario in trust_test.cpp).
   const std::uint64_t seeds[] = {1,        7,        3,        8,        490,      715,      2,       173,
                                  959,      1242,     2054,     84,       4,        103,      1069,    412,
                                  627,      3972,     8001884,  31342370, 9,        5000422,  5001903, 9001798,
@@ -170,7 +175,8 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
                                  187201697, 187208768, 187202370, 187208638, 187207833, 187204642,
                                  187207148, 187300765, 187303014, 187301162, 188007005,
                                  189001276, 190010418, 190056107, 190061984,
-                                 191006514, 191055091, 192007033, 193011366, 193061989};
+                                 191006514, 191055091, 192007033, 193011366, 193061989,
+                                 194020875, 194064769, 194072538};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);

@@ -550,7 +550,11 @@ void Run::refcheck(AxisMask mask, const std::array<Truth, kAxisCount>& truth, co
   for (std::size_t a = 0; a < kAxisCount; ++a)
     if (w_->axis_alarms[a] && !(excused & axis_bit(a))) unexplained = true;
   if (unexplained) {
-    w_->fail("an alarm during a reference check of a machine in order", alarm_list(w_->alarms_seen));
+    std::string where;
+    for (std::size_t a = 0; a < kAxisCount; ++a)
+      if (w_->axis_alarms[a]) where += std::string(" ") + kAxisUpper[a] + ": " + alarm_list(w_->axis_alarms[a]) + " (" + describe_alarm(a, w_->first_alarm[a], r_.settings) + ")";
+    if (w_->global_alarms) where += " global: " + alarm_list(w_->global_alarms);
+    w_->fail("an alarm during a reference check of a machine in order", alarm_list(w_->alarms_seen) + ";" + where);
     return;
   }
   if (excused) {

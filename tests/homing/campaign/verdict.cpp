@@ -155,6 +155,19 @@ void pre_move_cause(Causes& c, rig::Rig& r, const AxisSettings& e, std::size_t a
     c.add(letter(a) + "'s pre-move past its limit switch", {AlarmCode::limit_in_homing}, axis_bit(a), past > 0.01 && always);
 }
 
+// A pre-move "always" that starts nearer the far stop than its own length
+// presses into that stop (the watch excuses the touch: watch.cpp); a drive
+// whose stall input reports it may still report it as the push toward the
+// home stop begins (seed 194020875: a measurement's end, a cycle stopped
+// after its pre-move, then the next pre-move 2.98 mm with 1.84 mm left).
+void pre_move_into_stop_cause(Causes& c, rig::Rig& r, const AxisSettings& e, std::size_t a) {
+  if (e.pre_move_mode != PreMove::always) return;
+  const auto& cfg = r.sim().axis_config(a);
+  const double far_stop = dir_of(e) > 0 ? cfg.hard_stop_min_mm : cfg.hard_stop_max_mm;
+  if (std::abs(r.actual(a) - far_stop) < e.pre_move_distance_mm + 0.01)
+    c.add(letter(a) + "'s pre-move into its far stop", {AlarmCode::stall_at_start}, axis_bit(a));
+}
+
 // How far a gantry's squaring goes beyond what its guard allows, as a skew
 // of a pair that started square would: the correction `needed` (carriages,
 // from where the cycle finds them) may take a pair found `rack` out of square
@@ -346,6 +359,7 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
     if (mover && e.limits_fitted && f == sim::Fault::none && p.role == Role::plain && mode_uses_switch(e.mode) &&
         e.mode != HomingMode::home_cam)
       pre_move_cause(c, r, e, a);
+    if (mover) pre_move_into_stop_cause(c, r, e, a);
     // Both limit switches stuck active: the axis may not move at all.
     if (f == sim::Fault::limits_stuck)
       c.add(letter(a) + "'s limit switches stuck active", {AlarmCode::both_limits_active}, bit,
@@ -445,8 +459,10 @@ void indexer_cause(Causes& c, const Event& e, const Settings& s, const Status& s
       // still runs; an axis coming to rest in that period locks instead.
       if (motor_running) c.add(who, {AlarmCode::lock_engaged}, bit, true);
       else c.add(who, {AlarmCode::lock_engaged, AlarmCode::unlock_not_confirmed}, bit, false);
-    } else if (unlock_output) {  // still in while unlocking: it never comes out
-      c.add(who, {AlarmCode::unlock_not_confirmed}, bit, true);
+    } else if (unlock_output) {  // still in while unlocking: it never comes out, unless the
+      // motion it unlocks for goes away first (a final move of zero length,
+      // seed 194064769: the engine locks again at once, the pin never left)
+      c.add(who, {AlarmCode::unlock_not_confirmed}, bit, false);
     } else if (!pin_in) {        // locking, pin still out: in at once, unless a motion comes first
       c.add(who, {AlarmCode::unlock_not_confirmed, AlarmCode::lock_engaged}, bit, false);
     } else {                     // locked: the next unlock times out
