@@ -489,9 +489,17 @@ void Watch::racking(double engine_dt) {
   for (std::size_t s = 0; s < kAxisCount; ++s) {
     if (m_.plan[s].role != Role::slave) continue;
     const std::size_t mi = static_cast<std::size_t>(m_.plan[s].partner);
-    if (in_window)
-      late_allowance_[s] += late_s * (std::abs(r_.status().axes[s].velocity_mm_per_s) +
-                                      std::abs(r_.status().axes[mi].velocity_mm_per_s));
+    // Each side as fast as it was at the period's start or as its command
+    // takes it within the period: a side starting from rest accelerates on
+    // for the whole late period (seed 194066258: a commutator slave entering
+    // back_off at rest, 4.2 mm/s within 3.5 ms, in a period of 18 ms after
+    // one of 0.9 ms; its command runs on its master's output channel).
+    const auto fastest = [&](std::size_t x) {
+      const AxisOutputs& o = r_.engine.outputs().axes[x];
+      return std::max({std::abs(r_.status().axes[x].velocity_mm_per_s), std::abs(o.motor.velocity_mm_per_s),
+                       std::abs(o.motion.target_velocity_mm_per_s)});
+    };
+    if (in_window) late_allowance_[s] += late_s * (fastest(s) + fastest(mi));
     const double rel = r_.actual(s) - r_.actual(mi);
     const double signed_dev = rel - rel_ref_[s];
     double dev = std::abs(signed_dev);
