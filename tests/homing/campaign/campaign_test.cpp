@@ -113,6 +113,12 @@ TEST_CASE(kName, "[campaign]") {
   std::array<std::uint64_t, campaign::act::kCount> acts{};
   campaign::Coverage coverage;
   for (std::uint64_t i = 0; i < runs; ++i) {
+    // A long survey says how far it got, so that one cut short still tells
+    // which seeds it ran.
+    if (survey && i > 0 && i % 5000 == 0)
+      std::printf("\nsurvey: %llu runs done (seeds %llu to %llu), %llu failed\n", static_cast<unsigned long long>(i),
+                  static_cast<unsigned long long>(first), static_cast<unsigned long long>(first + i - 1),
+                  static_cast<unsigned long long>(failures));
     const campaign::Outcome o = campaign::run_seed(first + i);
     periods += o.periods;
     coverage.add(o.coverage);
@@ -139,6 +145,8 @@ TEST_CASE(kName, "[campaign]") {
     }
     if (fresh) std::printf("\n=== new failure class, seed %llu ===\n%s", static_cast<unsigned long long>(o.seed),
                            campaign::report(o, kName).c_str());
+    else if (survey) std::printf("\n=== failure (class seen before), seed %llu: %s\n", static_cast<unsigned long long>(o.seed),
+                                 o.failure.what.c_str());
   }
   if (survey) {
     std::printf("\n%llu runs, %llu failed, %llu homed at least once, %llu refused (%llu of them generated valid), %llu periods (%llu per run that passed)\n",
