@@ -51,6 +51,17 @@ void home_and_stop(CleanStop& c) {
   c.offset_mm = c.before.axis(X).position_mm - c.before.actual(X);
 }
 
+// X homes by re-approaching a home switch that doubles as its limit, whose
+// hysteresis is this (soft limits from -2 mm).
+AxisSettings& shared_limit_reapproach(CleanStop& c, double hysteresis_mm) {
+  AxisSettings& s = c.before.settings.axes[X];
+  s.mode = HomingMode::switch_reapproach;
+  s.shared_limit = true;
+  s.soft_limit_min_mm = -2;
+  c.before.machine.axes[X].hysteresis_mm = hysteresis_mm;
+  return s;
+}
+
 }  // namespace
 
 SCENARIO("a restart after a clean stop offers a reference check, which homes the carriage left where it was without a full cycle",
@@ -345,11 +356,7 @@ SCENARIO("a shared-limit axis checked from nearer its switch than its rest point
   // inside the switch's hysteresis, with its sensor still active: homed on
   // its shared limit, it tripped hard_limit at once.
   CleanStop c;
-  AxisSettings& s = c.before.settings.axes[X];
-  s.mode = HomingMode::switch_reapproach;
-  s.shared_limit = true;
-  s.soft_limit_min_mm = -2;
-  c.before.machine.axes[X].hysteresis_mm = 0.2;
+  const AxisSettings& s = shared_limit_reapproach(c, 0.2);
   home_and_stop(c);
   // 0.1 mm from the trigger edge (at carriage 0), off the switch coming from above.
   c.before.move(X, c.before.axis(X).position_mm - (c.before.actual(X) - 0.1));
@@ -376,11 +383,7 @@ SCENARIO("a shared-limit axis whose switch's hysteresis grew holds it active bac
   // hysteresis band, and homed it there with its sensor still active: it
   // tripped hard_limit at once.
   CleanStop c;
-  AxisSettings& s = c.before.settings.axes[X];
-  s.mode = HomingMode::switch_reapproach;
-  s.shared_limit = true;
-  s.soft_limit_min_mm = -2;
-  c.before.machine.axes[X].hysteresis_mm = 0.02;  // released within the pull-off at the cycle
+  const AxisSettings& s = shared_limit_reapproach(c, 0.02);  // released within the pull-off at the cycle
   home_and_stop(c);
   REQUIRE(c.stops[X].clean);
   REQUIRE_FALSE(c.before.sim().sensor_active(X));
