@@ -28,6 +28,7 @@ def check(cond, what):
     print(("ok   " if cond else "FAIL ") + what)
     if not cond:
         failures.append(what)
+    return cond
 
 
 def free_port():
@@ -157,14 +158,22 @@ def stop_daemons(procs):
 
 
 def check_daemon_logs():
-    """No sanitizer report in the output of any homingd this script started,
-    those it killed on purpose (a power cut) included; the log is printed when
-    there is one."""
+    """Every homingd this script started that has ended ended as told: exit 0
+    (SIGTERM) or killed by SIGKILL on purpose (a power cut), never a crash or
+    an exit of its own; and no sanitizer report in any of their outputs. A log
+    with a report is printed."""
+    for p, _ in started:
+        code = p.poll()
+        if code is not None:
+            check(code in (0, -signal.SIGKILL), f"homingd (pid {p.pid}) ended with {code}: neither exit 0 after SIGTERM nor a SIGKILL on purpose")
+    pids = {}
     for p, path in started:
+        pids.setdefault(path, []).append(str(p.pid))  # a restarted daemon may write the same log
+    for path, of in pids.items():
         with open(path, errors="replace") as f:
             log = f.read()
         reports = [line for line in log.splitlines() if any(m in line for m in SANITIZER_MARKS)]
-        if not check(not reports, f"no sanitizer report in the output of homingd (pid {p.pid}): {reports[:3]}"):
+        if not check(not reports, f"no sanitizer report in the output of homingd (pid {', '.join(of)}): {reports[:3]}"):
             print(f"--- {path} ---\n" + log)
 
 
