@@ -86,6 +86,11 @@ void Watch::policy_period(const Status& st) {
   event_pending_ = false;
   // The first axis to latch stays the one reported until a reset.
   if (st.alarm && !first_axes_) first_axes_ = alarmed;
+  // A reset clears every alarm but those latched in its own period, which
+  // stay (alarm_path.cpp): when the first ones went that way, the first is
+  // among those kept, all latched in that one period (seed 195049782: B's
+  // shared limit tripped, then A's with the operator's reset).
+  if (st.alarm && !(first_axes_ & alarmed)) first_axes_ = alarmed;
   if (st.alarm && first_axes_) {
     const int f = st.first_alarm_axis;
     if (f < 0 || f >= static_cast<int>(kAxisCount) || !(first_axes_ & axis_bit(static_cast<std::size_t>(f))))
