@@ -4,6 +4,7 @@
 // axes a cycle covers, in which step, and which may move.
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <optional>
 
@@ -109,6 +110,14 @@ inline HomingMode squaring_mode(const Settings& s, std::size_t a) {
 using homing::final_move_wanted;
 
 inline double dir_of(const AxisSettings& e) { return e.direction == Direction::positive ? 1.0 : -1.0; }
+
+// A pre-move "always" from x reaches the mechanical stop on its side (the
+// far one, away from home): the axis is not homed, so nothing tells the
+// engine where that stop is (seeds 193011366, 194020875).
+inline bool pre_move_meets_far_stop(const AxisSettings& e, double x, double stop_min_mm, double stop_max_mm) {
+  const double far_stop = dir_of(e) > 0 ? stop_min_mm : stop_max_mm;
+  return e.pre_move_mode == PreMove::always && std::abs(x - far_stop) < e.pre_move_distance_mm + 0.01;
+}
 
 // Fields a slave takes from its master: its own values there must be ignored.
 inline bool inherited_field(AxisField f) {

@@ -161,10 +161,8 @@ void pre_move_cause(Causes& c, rig::Rig& r, const AxisSettings& e, std::size_t a
 // home stop begins (seed 194020875: a measurement's end, a cycle stopped
 // after its pre-move, then the next pre-move 2.98 mm with 1.84 mm left).
 void pre_move_into_stop_cause(Causes& c, rig::Rig& r, const AxisSettings& e, std::size_t a) {
-  if (e.pre_move_mode != PreMove::always) return;
   const auto& cfg = r.sim().axis_config(a);
-  const double far_stop = dir_of(e) > 0 ? cfg.hard_stop_min_mm : cfg.hard_stop_max_mm;
-  if (std::abs(r.actual(a) - far_stop) < e.pre_move_distance_mm + 0.01)
+  if (pre_move_meets_far_stop(e, r.actual(a), cfg.hard_stop_min_mm, cfg.hard_stop_max_mm))
     c.add(letter(a) + "'s pre-move into its far stop", {AlarmCode::stall_at_start}, axis_bit(a));
 }
 

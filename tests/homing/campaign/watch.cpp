@@ -303,12 +303,11 @@ void Watch::axis_period(std::size_t a, double engine_dt) {
     // cycle stopped by an alarm after its pre-move leaves the carriage one
     // pre-move nearer still (seed 193011366: 1.6 mm left, a pre-move of
     // 4 mm). Started that near, the touch is the placement's.
-    const double far_stop = dir_of(e) > 0 ? r_.sim().axis_config(a).hard_stop_min_mm
-                                          : r_.sim().axis_config(a).hard_stop_max_mm;
     // It stays excused while it rests or brakes there (an alarm of another
     // axis may turn the phase to return_to_start as it brakes).
-    if (in_window && as.phase == Phase::pre_move && e.pre_move_mode == PreMove::always &&
-        std::abs(window_start_x[a] - far_stop) < e.pre_move_distance_mm + 0.01)
+    const auto& stops = r_.sim().axis_config(a);
+    if (in_window && as.phase == Phase::pre_move &&
+        pre_move_meets_far_stop(e, window_start_x[a], stops.hard_stop_min_mm, stops.hard_stop_max_mm))
       pre_move_met_stop_[a] = true;
     if (!(pushing && pushed_to_stop_[a]) && !back_to_start && !pre_move_met_stop_[a])
       fail(std::string("a carriage ran into a mechanical stop") +
