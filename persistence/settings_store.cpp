@@ -48,6 +48,12 @@ void SettingsStore::close() {
   }
   impl_->update_stmt.reset();  // statements of this connection go before it
   impl_->audit_stmt.reset();
+  {
+    // Before the writer's: the last connection to close checkpoints the WAL and removes it.
+    std::lock_guard house_lock(impl_->house_mu);
+    impl_->house.reset();
+    impl_->house_closed = true;
+  }
   impl_->db.close();
 }
 
@@ -104,17 +110,23 @@ Result<std::vector<std::vector<Change>>> SettingsStore::Impl::commit_locked(cons
   if (!db) return fail(ErrorKind::internal, fmt::format("{}: commit on a closed settings store", path));
   if (opt.read_only)
     return fail(ErrorKind::read_only, fmt::format("{}: opened read-only; settings cannot be written", path));
-  auto working = values;
+  // The values this batch has written so far, over the committed ones (a
+  // later write of the batch compares with an earlier one's value): a few
+  // entries, where a copy of every value would cost each write a map.
+  std::vector<std::pair<std::map<std::string, std::int64_t>::iterator, std::int64_t>> written;
   std::vector<std::vector<Change>> changes(entries.size());
   bool any = false;
   for (std::size_t i = 0; i < entries.size(); ++i) {
     for (const auto& w : *entries[i].writes) {
-      auto it = working.find(w.name);
-      if (it == working.end())
+      auto it = values.find(w.name);
+      if (it == values.end())
         return fail(ErrorKind::invalid, fmt::format("{}: unknown register '{}'; nothing written", path, w.name));
-      if (it->second != w.value) {
-        changes[i].push_back({w.name, it->second, w.value});
-        it->second = w.value;
+      auto pending = std::find_if(written.begin(), written.end(), [&](const auto& p) { return p.first == it; });
+      const std::int64_t current = pending == written.end() ? it->second : pending->second;
+      if (current != w.value) {
+        changes[i].push_back({w.name, current, w.value});
+        if (pending == written.end()) written.emplace_back(it, w.value);
+        else pending->second = w.value;
         any = true;
       }
     }
@@ -140,7 +152,7 @@ Result<std::vector<std::vector<Change>>> SettingsStore::Impl::commit_locked(cons
     }
   }
   if (auto s = txn->commit("committing a settings write"); !s) return std::unexpected(s.error());
-  values = std::move(working);
+  for (const auto& [it, value] : written) it->second = value;
   backup_dirty = true;
   return changes;
 }

@@ -281,9 +281,11 @@ class SettingsStore {
   Status record_sim_carriages(const std::array<double, kHistoryAxes>& actual_mm);
 
   // Backups: `<db>.bak` (newest) and `<db>.bak.1`.
-  Status backup_if_due();  // writes a pending backup if the interval passed
+  Status backup_if_due();  // writes a pending backup if the interval passed (the write path goes on meanwhile)
   Status backup_now();
   bool backup_pending() const;
+  // Checkpoints the WAL beside the writer (the monitor calls it now and then).
+  Status checkpoint();
 
   // Full integrity check of the open database.
   Status check_integrity() const;

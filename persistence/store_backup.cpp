@@ -56,12 +56,14 @@ Status copy_pages(sql::Db& src, const std::string& tmp, const char* vfs) {
 }
 }  // namespace
 
-Status SettingsStore::Impl::backup_locked() {
+// Copies `src` into <db>.bak.tmp, verifies and syncs it, rotates the
+// previous backup to .bak.1 and renames the new one in place.
+Status SettingsStore::Impl::backup_from(sql::Db& src) {
   const std::string bak = bak_path(path, 0);
   const std::string tmp = bak + ".tmp";
   remove_quiet(tmp);
   remove_quiet(tmp + "-journal");
-  if (auto s = copy_pages(db, tmp, vfs()); !s) {
+  if (auto s = copy_pages(src, tmp, vfs()); !s) {
     remove_quiet(tmp);
     s.error().message = fmt::format("backup {} not written: {}", bak, s.error().message);
     return s;
@@ -85,28 +87,91 @@ Status SettingsStore::Impl::backup_locked() {
     remove_quiet(tmp);
     return s;
   }
-  backup_dirty = false;
-  backed_up_once = true;
-  last_backup = std::chrono::steady_clock::now();
   log->debug("settings database {}: backup {} written", path, bak);
   return {};
 }
 
+Status SettingsStore::Impl::backup_locked() {
+  std::lock_guard house_lock(house_mu);
+  if (auto s = backup_from(db); !s) return s;
+  backup_dirty = false;
+  backed_up_once = true;
+  last_backup = std::chrono::steady_clock::now();
+  return {};
+}
+
+bool SettingsStore::Impl::backup_due_locked() const {
+  if (!backup_dirty || !db || opt.read_only) return false;
+  return !backed_up_once || std::chrono::steady_clock::now() - last_backup >= opt.backup_min_interval;
+}
+
 Status SettingsStore::Impl::backup_if_due_locked() {
-  if (!backup_dirty || !db || opt.read_only) return {};
-  if (backed_up_once && std::chrono::steady_clock::now() - last_backup < opt.backup_min_interval) return {};
+  if (!backup_due_locked()) return {};
   return backup_locked();
 }
 
+Result<sql::Db*> SettingsStore::Impl::house_db() {
+  if (house_closed) return fail(ErrorKind::internal, fmt::format("{}: the settings store is closed", path));
+  if (!house) {
+    auto opened = sql::Db::open(path, SQLITE_OPEN_READWRITE, vfs());
+    if (!opened) return std::unexpected(opened.error());
+    // A checkpoint that finds the writer's lock gives up at once (PASSIVE);
+    // this only bounds a read that meets a WAL being restarted.
+    if (auto s = opened->exec("PRAGMA busy_timeout=1000", "setting the housekeeping connection's busy timeout"); !s)
+      return std::unexpected(s.error());
+    // A connection reads the database (and finds its WAL) on its first
+    // statement: before it, a checkpoint through it does nothing.
+    if (auto n = opened->query_int("SELECT count(*) FROM sqlite_master", "reading the schema"); !n)
+      return std::unexpected(n.error());
+    house.emplace(std::move(*opened));
+  }
+  return &*house;
+}
+
+// The monitor's backup: decided under `mu`, copied without it from a read
+// snapshot of the housekeeping connection, so settings writes go on
+// meanwhile; one committed after the snapshot makes the next backup due.
 Status SettingsStore::backup_if_due() {
-  std::lock_guard lock(impl_->mu);
-  return impl_->backup_if_due_locked();
+  auto& m = *impl_;
+  {
+    std::lock_guard lock(m.mu);
+    if (!m.backup_due_locked()) return {};
+    m.backup_dirty = false;
+  }
+  Status written;
+  {
+    std::lock_guard house_lock(m.house_mu);
+    auto src = m.house_db();
+    written = src ? m.backup_from(**src) : Status(std::unexpected(src.error()));
+  }
+  std::lock_guard lock(m.mu);
+  if (!written) {
+    m.backup_dirty = true;
+    return written;
+  }
+  m.backed_up_once = true;
+  m.last_backup = std::chrono::steady_clock::now();
+  return {};
 }
 
 Status SettingsStore::backup_now() {
   std::lock_guard lock(impl_->mu);
   if (!impl_->db) return fail(ErrorKind::internal, "backup of a closed settings store");
   return impl_->backup_locked();
+}
+
+// Copies the WAL's committed pages into the database file (PASSIVE: never
+// waits for the writer or a reader), so that the writer's own automatic
+// checkpoint, which a write would wait for, finds little or nothing left.
+Status SettingsStore::checkpoint() {
+  auto& m = *impl_;
+  if (m.opt.read_only) return {};
+  std::lock_guard house_lock(m.house_mu);
+  auto db = m.house_db();
+  if (!db) return std::unexpected(db.error());
+  int rc = sqlite3_wal_checkpoint_v2((*db)->get(), "main", SQLITE_CHECKPOINT_PASSIVE, nullptr, nullptr);
+  if (rc != SQLITE_OK && rc != SQLITE_BUSY) return std::unexpected((*db)->error(rc, "checkpointing the WAL"));
+  return {};
 }
 
 bool SettingsStore::backup_pending() const {

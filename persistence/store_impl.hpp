@@ -33,11 +33,25 @@ struct SettingsStore::Impl {
   std::optional<sql::Stmt> update_stmt;
   std::optional<sql::Stmt> audit_stmt;
 
+  // The housekeeping connection (store_backup.cpp): the monitor's backups and
+  // checkpoints read the database through it, holding `house_mu` and not
+  // `mu`, so that no settings write waits for them (WAL: a reader and the
+  // checkpointer run beside the writer). Every backup holds `house_mu`; when
+  // both are held, `mu` was taken first.
+  std::optional<sql::Db> house;
+  bool house_closed = false;
+  std::mutex house_mu;
+
   // Require `mu` held.
   Result<std::vector<std::vector<Change>>> commit_locked(const std::vector<BatchEntry>& entries);
   Status prepare_write_statements();
   Status backup_locked();
   Status backup_if_due_locked();
+  bool backup_due_locked() const;
+
+  // Require `house_mu` held.
+  Status backup_from(sql::Db& src);
+  Result<sql::Db*> house_db();
 };
 
 // The meta row that latches "settings lost" until a client acknowledges it.

@@ -126,6 +126,7 @@ void ModbusService::process_batch(const std::vector<WriteTicket*>& batch) {
     std::string owner;
   };
   std::vector<Durable> durable;
+  durable.reserve(batch.size());  // a plan holds the settings: no reallocation moves them
   {
     std::lock_guard lock(mutex_);
     expire_edit_sessions();

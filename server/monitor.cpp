@@ -92,8 +92,9 @@ void Monitor::refresh_diagnostics() {
 }
 
 // Twice a second: diagnostics for the input registers, the refused writes'
-// counts of an interval that has passed, and the settings backup that the
-// store keeps after a batch of changes.
+// counts of an interval that has passed, the settings backup that the store
+// keeps after a batch of changes and the WAL checkpoint (both beside the
+// writer, so no settings write waits for them).
 void Monitor::housekeeping(std::int64_t now_ms) {
   if (now_ms - last_housekeeping_ms_ < 500) return;
   last_housekeeping_ms_ = now_ms;
@@ -103,6 +104,7 @@ void Monitor::housekeeping(std::int64_t now_ms) {
   service_.flush_edit_sessions();
   if (store_) {
     if (auto r = store_->backup_if_due(); !r) spdlog::warn("settings backup not written: {}", r.error().message);
+    if (auto r = store_->checkpoint(); !r) spdlog::warn("settings database not checkpointed: {}", r.error().message);
     // The audit log's bound, kept here rather than on a write's path.
     if (auto r = store_->prune_audit(); !r) spdlog::warn("audit log not pruned: {}", r.error().message);
   }

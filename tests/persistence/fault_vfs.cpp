@@ -3,6 +3,8 @@
 #include <sqlite3.h>
 
 #include <atomic>
+#include <condition_variable>
+#include <string_view>
 #include <cerrno>
 #include <cstring>
 #include <mutex>
@@ -22,7 +24,22 @@ sqlite3_vfs g_vfs{};
 struct File {
   sqlite3_file base;
   sqlite3_file* real;
+  bool backup;  // the temporary file a backup is written to
 };
+
+std::mutex g_gate_mu;
+std::condition_variable g_gate_cv;
+bool g_gate_closed = false;
+bool g_gate_holding = false;
+
+void pass_gate(sqlite3_file* f) {
+  if (!reinterpret_cast<File*>(f)->backup) return;
+  std::unique_lock lock(g_gate_mu);
+  if (!g_gate_closed) return;
+  g_gate_holding = true;
+  g_gate_cv.notify_all();
+  g_gate_cv.wait(lock, [] { return !g_gate_closed; });
+}
 sqlite3_file* R(sqlite3_file* f) { return reinterpret_cast<File*>(f)->real; }
 
 // Returns the error code to inject, or SQLITE_OK.
@@ -45,6 +62,7 @@ int x_close(sqlite3_file* f) {
 }
 int x_read(sqlite3_file* f, void* b, int n, sqlite3_int64 o) { return R(f)->pMethods->xRead(R(f), b, n, o); }
 int x_write(sqlite3_file* f, const void* b, int n, sqlite3_int64 o) {
+  pass_gate(f);
   if (int rc = should_fail(SQLITE_IOERR_WRITE)) return rc;
   return R(f)->pMethods->xWrite(R(f), b, n, o);
 }
@@ -71,6 +89,8 @@ const sqlite3_io_methods kMethods = vfs_passthrough::FileMethods<R>::with(x_clos
 int x_open(sqlite3_vfs*, sqlite3_filename name, sqlite3_file* f, int flags, int* out_flags) {
   auto* file = reinterpret_cast<File*>(f);
   file->real = reinterpret_cast<sqlite3_file*>(file + 1);
+  const std::string_view n = name ? std::string_view(name) : std::string_view();
+  file->backup = n.size() >= 8 && n.substr(n.size() - 8) == ".bak.tmp";
   std::memset(file->real, 0, static_cast<std::size_t>(g_real->szOsFile));
   int rc = g_real->xOpen(g_real, name, file->real, flags, out_flags);
   file->base.pMethods = file->real->pMethods ? &kMethods : nullptr;
@@ -109,5 +129,22 @@ void disarm() {
 }
 
 int faults_hit() { return g_hits.load(); }
+
+BackupGate::BackupGate() {
+  std::lock_guard lock(g_gate_mu);
+  g_gate_closed = true;
+  g_gate_holding = false;
+}
+
+bool BackupGate::held(std::chrono::milliseconds within) {
+  std::unique_lock lock(g_gate_mu);
+  return g_gate_cv.wait_for(lock, within, [] { return g_gate_holding; });
+}
+
+void BackupGate::release() {
+  std::lock_guard lock(g_gate_mu);
+  g_gate_closed = false;
+  g_gate_cv.notify_all();
+}
 
 }  // namespace fault_vfs

@@ -4,6 +4,7 @@
 // permissions (the tests run as root, where chmod does not stop writes).
 //   - disk_full: xWrite/xTruncate return SQLITE_FULL (as the unix VFS does on ENOSPC)
 //   - read_only: xWrite/xTruncate/xSync return SQLITE_IOERR_* with errno EROFS
+#include <chrono>
 #include <string>
 
 namespace fault_vfs {
@@ -17,6 +18,17 @@ void install();  // idempotent
 void arm(Fault fault, int writes_before = 0);
 void disarm();
 int faults_hit();  // writes refused since the last arm()
+
+// Holds every write to a backup file (a name ending in ".bak.tmp") from
+// construction until release(), so a test can act while a backup is half
+// written. held() waits (at most `within`) until one is held.
+class BackupGate {
+ public:
+  BackupGate();
+  ~BackupGate() { release(); }
+  bool held(std::chrono::milliseconds within);
+  void release();
+};
 
 struct Scoped {
   Scoped(Fault f, int writes_before = 0) { arm(f, writes_before); }

@@ -3,6 +3,9 @@
 // not stop writes, and mounting is not available.
 #include <catch2/catch.hpp>
 
+#include <future>
+#include <thread>
+
 #include "fault_vfs.hpp"
 #include "helpers.hpp"
 
@@ -128,6 +131,53 @@ TEST_CASE("with backups off the commit path, a commit waits for no backup and th
   REQUIRE(std::filesystem::exists(db + ".bak"));
   CHECK(test::sql_int(db + ".bak", "SELECT value FROM settings WHERE name='axis.x.mode'") == 4);
   CHECK_FALSE(store.backup_pending());
+}
+
+TEST_CASE("a settings write is committed while the owner's backup is being written, and the next backup holds it",
+          "[persistence][backup]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  OpenReport report;
+  auto o = faulty_options();
+  o.backup_on_commit = false;
+  auto store = test::open_ok(db, report, o);
+  REQUIRE(store.commit({{"axis.x.mode", 4}}, test::kTcp));
+  Status backed_up;
+  {
+    fault_vfs::BackupGate gate;
+    std::thread backup([&] { backed_up = store.backup_if_due(); });
+    REQUIRE(gate.held(std::chrono::seconds(10)));  // the backup is half written
+    auto write = std::async(std::launch::async, [&] { return store.commit({{"axis.x.mode", 5}}, test::kTcp); });
+    // Before the backup was taken off the writer's lock, this write waited until the gate opened.
+    const bool answered = write.wait_for(std::chrono::seconds(10)) == std::future_status::ready;
+    gate.release();
+    backup.join();
+    CHECK(answered);
+    REQUIRE(write.get());
+  }
+  REQUIRE(backed_up);
+  CHECK(test::sql_int(db + ".bak", "SELECT value FROM settings WHERE name='axis.x.mode'") == 4);
+  CHECK(store.backup_pending());  // the write came after the backup's snapshot
+  REQUIRE(store.backup_if_due());
+  CHECK(test::sql_int(db + ".bak", "SELECT value FROM settings WHERE name='axis.x.mode'") == 5);
+  CHECK_FALSE(store.backup_pending());
+}
+
+TEST_CASE("a checkpoint beside the writer leaves every committed setting in the database file",
+          "[persistence][checkpoint]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  OpenReport report;
+  auto store = test::open_ok(db, report);
+  for (int v = 10; v < 40; ++v) REQUIRE(store.commit({{"axis.x.mode", v}}, test::kTcp));
+  REQUIRE(store.checkpoint());
+  // Read straight from the database file, ignoring the WAL: the checkpoint copied it there.
+  const std::string file_alone = dir.file("file-alone.db");
+  std::filesystem::copy_file(db, file_alone);
+  test::sql_exec(file_alone, "PRAGMA journal_mode=DELETE");  // a read-only open of a WAL file needs its -shm
+  CHECK(test::sql_int(file_alone, "SELECT value FROM settings WHERE name='axis.x.mode'") == 39);
+  REQUIRE(store.commit({{"axis.x.mode", 40}}, test::kTcp));
+  CHECK(store.value("axis.x.mode") == 40);
 }
 
 TEST_CASE("backups are deferred while commits come fast, and written by close", "[persistence][backup]") {
