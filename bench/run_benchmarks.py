@@ -1372,6 +1372,11 @@ def try_sections(b, results, args):
         if sec not in run:
             sys.exit(f"run_benchmarks: --try {sec}: not one of {', '.join(run)}")
         run[sec]()
+    if "durable" in sections:
+        dr = results["durable"]
+        print(f"durable: p99 ratio {med(dr['ratio_p99']):.2f}x ({', '.join(f'{x:.2f}' for x in dr['ratio_p99'])}), "
+              f"p50 ratio {med(dr['ratio_p50']):.2f}x, 8 clients {med(dr['eight_ratio']):.2f}x "
+              f"({', '.join(f'{x:.2f}' for x in dr['eight_ratio'])})")
     sys.stdout.write(measured_causes.try_report(results, sections))
 
 

@@ -104,13 +104,13 @@ void ControlLoop::release_jogs(std::uint64_t owner) {
   waiter_->wake();
 }
 
-void ControlLoop::set_settings(homing::Settings settings) {
+void ControlLoop::set_settings(homing::Settings settings, bool wake) {
   {
     std::lock_guard lock(mailbox_mutex_);
     new_settings_ = std::move(settings);
     settings_pending_ = true;
   }
-  waiter_->wake();
+  if (wake) waiter_->wake();
 }
 
 void ControlLoop::restore_last_stops(const homing::LastStops& stops) {

@@ -132,7 +132,10 @@ class ControlLoop {
   void set_jog(std::size_t axis, std::int8_t direction, std::uint64_t owner);
   // Releases every jog held by an owner (its client disconnected).
   void release_jogs(std::uint64_t owner);
-  void set_settings(homing::Settings settings);
+  // Taken in the next period; `wake` false leaves the wake-up to the caller
+  // (wake_for_news()), which may first have answers to send.
+  void set_settings(homing::Settings settings, bool wake = true);
+  void wake_for_news() { waiter_->wake(); }
   // The last stops kept before this start (homing/trust.hpp), given to the
   // engine in the next period: an axis whose last stop was clean takes its
   // stored position and is offered a reference check.

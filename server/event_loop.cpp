@@ -86,6 +86,7 @@ void EventLoop::take_inbox(std::vector<std::uint64_t>& ready) {
     std::lock_guard lock(inbox_mutex_);
     arrivals.swap(arrivals_);
     answers.swap(answers_);
+    answer_wake_sent_ = false;
   }
   const auto now = Clock::now();
   for (auto& [entry, connection] : arrivals) {
@@ -135,11 +136,15 @@ void EventLoop::send_off(std::uint64_t id, Slot& slot) {
 }
 
 void EventLoop::post_answer(std::uint64_t id, Reply reply) {
+  bool wake_now = false;
   {
     std::lock_guard lock(inbox_mutex_);
     answers_.push_back({id, std::move(reply)});
+    wake_now = !answer_wake_sent_;
+    answer_wake_sent_ = true;
   }
-  wake();
+  // A settings batch answers several connections of this loop at once: one write wakes it for all.
+  if (wake_now) wake();
 }
 
 void EventLoop::step(std::uint64_t id, Slot& slot, std::vector<std::uint64_t>& again) {

@@ -87,6 +87,9 @@ class EventLoop {
   std::mutex inbox_mutex_;
   std::vector<std::pair<ConnectionEntry*, std::unique_ptr<TcpConnection>>> arrivals_;
   std::vector<Answer> answers_;
+  // An answer's wake-up is on its way (an eventfd write the loop has not yet
+  // followed with take_inbox): the answers posted meanwhile ride on it.
+  bool answer_wake_sent_ = false;
 };
 
 }  // namespace server

@@ -127,7 +127,8 @@ class ModbusService final : public RequestHandler {
   // turn and committed together.
   struct WriteTicket;
   struct LaterWrite;
-  void process_batch(const std::vector<WriteTicket*>& batch);
+  // True when it handed the control loop new settings without waking it.
+  bool process_batch(const std::vector<WriteTicket*>& batch);
   // Under batch_mutex_ (held on entry and on return): decides and commits
   // the writes queued (or the reserved one alone), wakes the threads of
   // those that wait, passes the lead on, and answers those taken later.

@@ -68,7 +68,7 @@ void ModbusService::lead(std::unique_lock<std::mutex>& lock, WriteTicket* reserv
   if (reserved) batch.push_back(reserved);
   else batch.swap(batch_queue_);
   lock.unlock();
-  process_batch(batch);
+  const bool loop_to_wake = process_batch(batch);
   lock.lock();
   // Under the lock: a waiting ticket lives on its thread's stack, gone once
   // that thread sees done and returns.
@@ -81,6 +81,9 @@ void ModbusService::lead(std::unique_lock<std::mutex>& lock, WriteTicket* reserv
   pass_lead();
   lock.unlock();
   for (WriteTicket* w : later) answer_later(*w->later);
+  // After the answers are on their way: the period the new settings wake
+  // would otherwise take a core from the event loop that sends them.
+  if (loop_to_wake) loop_.wake_for_news();
   lock.lock();
 }
 
@@ -119,7 +122,7 @@ bool ModbusService::needs_nothing_durable(std::uint8_t unit, std::span<const std
 // (commands, the heartbeat, the unlock code, an edit session's begin, stage
 // or discard) is carried out at once: writes that arrive together have no
 // order among them, and none of these has anything to make durable.
-void ModbusService::process_batch(const std::vector<WriteTicket*>& batch) {
+bool ModbusService::process_batch(const std::vector<WriteTicket*>& batch) {
   struct Durable {
     WriteTicket* ticket;
     WritePlan plan;
@@ -165,7 +168,7 @@ void ModbusService::process_batch(const std::vector<WriteTicket*>& batch) {
       planned_host = plan->accepted.host;
     }
   }
-  if (durable.empty()) return;
+  if (durable.empty()) return false;
 
   // One transaction for all of them, outside the lock: reads go on meanwhile
   // (they see the settings in force), and no other write is decided until
@@ -192,10 +195,12 @@ void ModbusService::process_batch(const std::vector<WriteTicket*>& batch) {
     }
     if (!failed) for_the_loop = settings_;
   }
-  // Handed over outside mutex_: the wake-up makes the control loop publish,
-  // and what it wakes would otherwise wait for this thread to let go of
-  // mutex_. Nothing else changes settings meanwhile: this thread still leads.
-  if (for_the_loop) loop_.set_settings(std::move(*for_the_loop));
+  // Handed over outside mutex_ and before the lead passes: a command decided
+  // after this batch finds them in the loop's mailbox. The wake-up that makes
+  // the loop publish them comes from lead(), once the answers are sent off.
+  if (!for_the_loop) return false;
+  loop_.set_settings(std::move(*for_the_loop), false);
+  return true;
 }
 
 // Under mutex_: the effects of a plan, in this order: the edit session, the
