@@ -3,13 +3,17 @@
 // path that sets a motion command (homing phases, jog, move, final move,
 // gantry follow), so whichever set it, the command of an axis that is not
 // confirmed unlocked is replaced by a stop: nothing moves while locked.
+#include <cmath>
+
 #include "engine.hpp"
+#include "settings_check.hpp"
 
 namespace homing {
 namespace {
 
 // The axis is in motion, or something wants it to move: a homing phase
 // (not waiting for its step, not done), a jog, a move, a stop in progress.
+// What keeps an unlocked indexer unlocked.
 bool wants_to_move(const AxisRun& run) {
   if (run.moving() || run.command.target_velocity_mm_per_s != 0) return true;
   switch (run.phase) {
@@ -22,11 +26,31 @@ bool wants_to_move(const AxisRun& run) {
   return run.in_cycle && run.phase != Phase::waiting && run.phase != Phase::done && run.phase != Phase::idle;
 }
 
+// What unlocks a locked one: as wants_to_move(), less the cycle's phases
+// that move nothing, assigning the coordinate and a final move with no
+// length (manual or absolute_final standing at final_position). A cycle that
+// starts with them, or an axis whose sequence step begins in the period
+// another's ends, would otherwise pull the pin for one period for nothing.
+// Mid-cycle they keep an unlocked indexer unlocked (wants_to_move()): the
+// motion before and after them is one.
+bool has_motion_to_do(const AxisRun& run, const AxisSettings& s) {
+  if (!wants_to_move(run)) return false;
+  if (run.moving() || run.command.target_velocity_mm_per_s != 0) return true;
+  switch (run.phase) {
+    case Phase::assign: return false;
+    case Phase::final_move:
+      return final_move_wanted(s) &&
+             std::abs(s.final_position_mm - run.offset_mm - run.motor.position_mm) > kArrivedMm;
+    default: return true;
+  }
+}
+
 // One period of one indexer: what it sees, and what it asks of the engine.
 struct IndexerPeriod {
   Indexer& ix;
   bool unlocked_in;  // the indexer reports its pin out (the period just ended)
-  bool wants;        // the axis moves or is to move
+  bool wants;        // the axis moves or is to move: an unlocked indexer stays unlocked
+  bool needs;        // the axis has motion to do now: a locked (or locking) indexer unlocks
   double now_s;
   double timeout_s;
   AlarmCode alarm = AlarmCode::none;
@@ -45,7 +69,7 @@ struct IndexerPeriod {
 
   // Locked: a motion to come raises the unlock output first.
   void locked() {
-    if (wants) enter(IndexerState::unlocking);
+    if (needs) enter(IndexerState::unlocking);
   }
   // Unlock output on, motion held: on until the pin is reported out.
   void unlocking() {
@@ -65,13 +89,13 @@ struct IndexerPeriod {
   }
   // At rest, unlock output off: locked once the pin is reported in.
   void locking() {
-    if (wants) enter(IndexerState::unlocking);
+    if (needs) enter(IndexerState::unlocking);
     else if (!unlocked_in) enter(IndexerState::locked);
     else if (timed_out()) raise(AlarmCode::lock_not_confirmed, IndexerState::lock_failed);
   }
   // The lock timed out (alarm raised once): locked when the pin is seen in.
   void lock_failed() {
-    if (wants) enter(IndexerState::unlocking);
+    if (needs) enter(IndexerState::unlocking);
     else if (!unlocked_in) enter(IndexerState::locked);
   }
 
@@ -98,8 +122,8 @@ void Engine::run_indexers(const Settings& settings, const Inputs& inputs) {
       run.indexer = Indexer{};
       continue;
     }
-    IndexerPeriod p{run.indexer, inputs.axes[a].indexer_unlocked, wants_to_move(run), time_s_,
-                    s.lock_timeout_ms / 1000.0};
+    IndexerPeriod p{run.indexer, inputs.axes[a].indexer_unlocked, wants_to_move(run), has_motion_to_do(run, s),
+                    time_s_, s.lock_timeout_ms / 1000.0};
     const bool motor_ran = run.moving() || run.period_start.velocity_mm_per_s != 0;
     // A state entered now acts on this period's input at once (a pin already
     // out, or already in): at most a few hand-overs, the first alarm ends it.

@@ -59,6 +59,8 @@ MotionCommand stop_command(double acceleration_mm_per_s2);
 // constant deceleration (<= acceleration) that ends on the target whatever
 // the lengths of the periods that follow: no dead stop on the limit.
 inline constexpr double kBrakingHorizon_s = 0.02;
+// A move within this of its target has arrived (and one this long has nothing to do).
+inline constexpr double kArrivedMm = 1e-9;
 MotionCommand move_to_command(const MotionState& now, double target_mm,
                               double max_velocity_mm_per_s, double acceleration_mm_per_s2,
                               double dt_s);

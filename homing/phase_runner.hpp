@@ -63,7 +63,7 @@ struct PhaseRunner {
   double edge_mm() const { return event().accepted.position_mm; }
   double travelled() const { return std::abs(run.motor.position_mm - run.phase_start_mm); }
   bool at_rest() const { return run.motor.velocity_mm_per_s == 0; }
-  bool arrived() const { return at_rest() && std::abs(run.motor.position_mm - run.target_mm) <= 1e-9; }
+  bool arrived() const { return at_rest() && std::abs(run.motor.position_mm - run.target_mm) <= kArrivedMm; }
   double dt() const { return ctx.dt_s; }
 
   void enter(Phase p) {

@@ -358,3 +358,87 @@ SCENARIO("drive mode on an indexer axis: the home request waits until the axis i
     }
   }
 }
+
+namespace {
+
+// Homes every axis once and counts how often A's unlock output came on, from
+// the cycle's start until A is locked again at rest.
+int unlocks_in_one_home(Rig& r) {
+  int unlocks = 0;
+  bool was_on = r.engine.outputs().axes[A].indexer_unlock;
+  r.on_period = [&](Rig& rig) {
+    const bool on = rig.engine.outputs().axes[A].indexer_unlock;
+    if (on && !was_on) ++unlocks;
+    was_on = on;
+  };
+  r.pending.home_all = true;
+  r.step();
+  r.run_until([&] { return !r.status().homing; }, 60);
+  r.run_until([&] { return r.sim().indexer_locked(A) && r.axis(A).phase == Phase::done; }, 2);
+  r.on_period = nullptr;
+  return unlocks;
+}
+
+}  // namespace
+
+SCENARIO("an indexer axis already at its final position homes without pulsing its unlock output",
+         "[indexer]") {
+  // The axis stands at 20, its final position, so its final move has no
+  // length: a real pin would be pulled and pushed back for nothing. Manual
+  // (where it stands becomes home_position 20) and absolute_final (an
+  // encoder reading carriage + 7, home_position 2), alone in the sequence or
+  // in its second step after X (homed by hand), when its cycle begins in the
+  // period X's ends.
+  for (const HomingMode mode : {HomingMode::manual, HomingMode::absolute_final}) {
+    for (const bool after_x : {false, true}) {
+      DYNAMIC_SECTION(mode_name(mode) << (after_x ? ", in the step after X" : ", alone")) {
+        Rig r = indexer_rig();
+        if (after_x) {
+          r.settings.axes[0].mode = HomingMode::manual;
+          r.settings.global.sequence_steps = {axis_bit(0), axis_bit(A), 0, 0, 0, 0};
+        }
+        AxisSettings& s = r.settings.axes[A];
+        s.mode = mode;
+        s.final_move_enable = true;
+        s.final_position_mm = 20;
+        s.home_position_mm = mode == HomingMode::manual ? 20 : 2;
+        r.machine.axes[A].absolute_offset_mm = 7;
+        r.machine.axes[A].actual_position_mm = 15;
+        r.step();
+        r.run_until([&] { return r.sim().indexer_locked(A); }, 2);
+        CHECK(unlocks_in_one_home(r) == 0);
+        CHECK(unlocks_in_one_home(r) == 0);  // and again
+        CHECK(r.status().state == MachineState::homed);
+        CHECK(r.axis(A).homed);
+        CHECK(r.axis(A).position_mm == Approx(20).margin(1e-9));
+        CHECK(r.sim().indexer_locked(A));
+        CHECK(r.actual(A) == 15);
+      }
+    }
+  }
+}
+
+SCENARIO("an indexer axis with a final move unlocks once per cycle and stays unlocked up to the final move",
+         "[indexer]") {
+  // Between the pull-off and the final move the axis rests while it assigns
+  // its coordinate: the pin stays out (no lock and unlock in between).
+  for (const HomingMode mode : {HomingMode::switch_release, HomingMode::manual, HomingMode::absolute_final}) {
+    DYNAMIC_SECTION(mode_name(mode)) {
+      Rig r = indexer_rig();
+      AxisSettings& s = r.settings.axes[A];
+      s.mode = mode;
+      s.final_move_enable = true;
+      s.final_position_mm = 40;
+      s.home_position_mm = mode == HomingMode::manual ? 20 : 2;
+      r.machine.axes[A].absolute_offset_mm = 7;
+      r.machine.axes[A].actual_position_mm = mode == HomingMode::switch_release ? 100 : 15;
+      r.step();
+      r.run_until([&] { return r.sim().indexer_locked(A); }, 2);
+      CHECK(unlocks_in_one_home(r) == 1);
+      CHECK(r.status().state == MachineState::homed);
+      CHECK_FALSE(r.status().alarm);
+      CHECK(r.axis(A).position_mm == Approx(40).margin(1e-6));
+      CHECK(r.sim().indexer_locked(A));
+    }
+  }
+}

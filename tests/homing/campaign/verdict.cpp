@@ -470,8 +470,9 @@ void indexer_cause(Causes& c, const Event& e, const Settings& s, const Status& s
       if (motor_running) c.add(who, {AlarmCode::lock_engaged}, bit, true);
       else c.add(who, {AlarmCode::lock_engaged, AlarmCode::unlock_not_confirmed}, bit, false);
     } else if (unlock_output) {  // still in while unlocking: it never comes out, unless the
-      // motion it unlocks for goes away first (a final move of zero length,
-      // seed 194064769: the engine locks again at once, the pin never left)
+      // motion it unlocks for goes away first (seed 194064769, a final move of
+      // zero length, before the engine stopped unlocking for one: it locked
+      // again at once, the pin never left)
       c.add(who, {AlarmCode::unlock_not_confirmed}, bit, false);
     } else if (!pin_in) {        // locking, pin still out: in at once, unless a motion comes first
       c.add(who, {AlarmCode::unlock_not_confirmed, AlarmCode::lock_engaged}, bit, false);
@@ -482,9 +483,10 @@ void indexer_cause(Causes& c, const Event& e, const Settings& s, const Status& s
   }
   // Never locks: a pin that is out, or comes out for the motion still to
   // come, stays out when the axis next rests. One still in while unlocking
-  // may never come out: the motion it is unlocked for can go away first (a
-  // final move of zero length, seed 193061989: the engine then locks again
-  // at once, and the pin that never left needs no lock).
+  // may never come out: the motion it is unlocked for can go away first (seed
+  // 193061989, a final move of zero length before the engine stopped
+  // unlocking for one: it locked again at once, and the pin that never left
+  // needed no lock).
   const bool out_now = (unlock_output || locking) && !pin_in;
   c.add(who, {AlarmCode::lock_not_confirmed}, bit, out_now || (to_move && !locking));
 }
