@@ -169,6 +169,9 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // latched in its own period is among those kept. 195009253: a software-
   // slaved pair at 100 mm/s² trails at its pull-off (one side rests after
   // its back-off, the other runs on into its pull-off) and the guard stops it.
+  // 4661283270: a bump left an axis just past its cam's far side, within the
+  // hysteresis, the sensor active: the back-off crosses the whole cam, longer
+  // than max_backoff (not_released).
   const std::uint64_t seeds[] = {1,        7,        3,        8,        490,      715,      2,       173,
                                  959,      1242,     2054,     84,       4,        103,      1069,    412,
                                  627,      3972,     8001884,  31342370, 9,        5000422,  5001903, 9001798,
@@ -183,7 +186,8 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
                                  187207148, 187300765, 187303014, 187301162, 188007005,
                                  189001276, 190010418, 190056107, 190061984,
                                  191006514, 191055091, 192007033, 193011366, 193061989,
-                                 194020875, 194064769, 194066258, 194072538, 195009253, 195049782};
+                                 194020875, 194064769, 194066258, 194072538, 195009253, 195049782,
+                                 4661283270};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);

@@ -251,13 +251,17 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
     if (p.rest_on_sensor) c.add(letter(a) + "'s shared limit resting on its sensor", {AlarmCode::settings_fault, AlarmCode::not_released}, bit);
     // A cycle that starts deeper in the cam than max_backoff can release (a
     // jog or move left it there) backs off straight away and must give up.
+    // So does one that starts just past the cam's far side, within its
+    // hysteresis, the sensor still active: its back-off crosses the whole cam
+    // (seed 4661283270: a bump left the axis 0.014 mm past a 4.1 mm cam).
     if (mover && mode_uses_switch(e.mode) && f == sim::Fault::none) {
       const auto& cfg = r.sim().axis_config(a);
       const double x = r.actual(a);
       // The back-off leaves the cam away from direction; a home cam's latch toward its cam_edge side.
       const double away = e.mode == HomingMode::home_cam && e.cam_edge == CamEdge::ahead ? dir_of(e) : -dir_of(e);
       const double depth = away > 0 ? cfg.sensor_max_mm - x : x - cfg.sensor_min_mm;
-      const bool inside = x >= cfg.sensor_min_mm && x <= cfg.sensor_max_mm;
+      const double held = cfg.hysteresis_mm + 4 * cfg.noise_mm;  // past an edge by less, it may still read active
+      const bool inside = x >= cfg.sensor_min_mm - held && x <= cfg.sensor_max_mm + held;
       if (inside && depth + cfg.hysteresis_mm + 4 * cfg.noise_mm >= e.max_backoff_mm)
         c.add(letter(a) + " starting deeper in its cam than max_backoff releases", {AlarmCode::not_released}, with_partner(r.settings, a));
     }
