@@ -379,33 +379,39 @@ int unlocks_in_one_home(Rig& r) {
   return unlocks;
 }
 
+// A homes with a final move to final_mm (manual: where it stands becomes
+// 20; absolute_final: the encoder reads carriage + 7, home_position 2),
+// its indexer locked before the cycle.
+Rig final_move_rig(HomingMode mode, double final_mm, double carriage_mm, bool after_x = false) {
+  Rig r = indexer_rig();
+  if (after_x) {  // in the second sequence step, after X (homed by hand)
+    r.settings.axes[0].mode = HomingMode::manual;
+    r.settings.global.sequence_steps = {axis_bit(0), axis_bit(A), 0, 0, 0, 0};
+  }
+  AxisSettings& s = r.settings.axes[A];
+  s.mode = mode;
+  s.final_move_enable = true;
+  s.final_position_mm = final_mm;
+  s.home_position_mm = mode == HomingMode::manual ? 20 : 2;
+  r.machine.axes[A].absolute_offset_mm = 7;
+  r.machine.axes[A].actual_position_mm = carriage_mm;
+  r.step();
+  r.run_until([&] { return r.sim().indexer_locked(A); }, 2);
+  return r;
+}
+
 }  // namespace
 
 SCENARIO("an indexer axis already at its final position homes without pulsing its unlock output",
          "[indexer]") {
   // The axis stands at 20, its final position, so its final move has no
-  // length: a real pin would be pulled and pushed back for nothing. Manual
-  // (where it stands becomes home_position 20) and absolute_final (an
-  // encoder reading carriage + 7, home_position 2), alone in the sequence or
-  // in its second step after X (homed by hand), when its cycle begins in the
-  // period X's ends.
+  // length: a real pin would be pulled and pushed back for nothing. Alone in
+  // the sequence, or in its second step, when its cycle begins in the period
+  // X's ends.
   for (const HomingMode mode : {HomingMode::manual, HomingMode::absolute_final}) {
     for (const bool after_x : {false, true}) {
       DYNAMIC_SECTION(mode_name(mode) << (after_x ? ", in the step after X" : ", alone")) {
-        Rig r = indexer_rig();
-        if (after_x) {
-          r.settings.axes[0].mode = HomingMode::manual;
-          r.settings.global.sequence_steps = {axis_bit(0), axis_bit(A), 0, 0, 0, 0};
-        }
-        AxisSettings& s = r.settings.axes[A];
-        s.mode = mode;
-        s.final_move_enable = true;
-        s.final_position_mm = 20;
-        s.home_position_mm = mode == HomingMode::manual ? 20 : 2;
-        r.machine.axes[A].absolute_offset_mm = 7;
-        r.machine.axes[A].actual_position_mm = 15;
-        r.step();
-        r.run_until([&] { return r.sim().indexer_locked(A); }, 2);
+        Rig r = final_move_rig(mode, 20, 15, after_x);
         CHECK(unlocks_in_one_home(r) == 0);
         CHECK(unlocks_in_one_home(r) == 0);  // and again
         CHECK(r.status().state == MachineState::homed);
@@ -424,16 +430,7 @@ SCENARIO("an indexer axis with a final move unlocks once per cycle and stays unl
   // its coordinate: the pin stays out (no lock and unlock in between).
   for (const HomingMode mode : {HomingMode::switch_release, HomingMode::manual, HomingMode::absolute_final}) {
     DYNAMIC_SECTION(mode_name(mode)) {
-      Rig r = indexer_rig();
-      AxisSettings& s = r.settings.axes[A];
-      s.mode = mode;
-      s.final_move_enable = true;
-      s.final_position_mm = 40;
-      s.home_position_mm = mode == HomingMode::manual ? 20 : 2;
-      r.machine.axes[A].absolute_offset_mm = 7;
-      r.machine.axes[A].actual_position_mm = mode == HomingMode::switch_release ? 100 : 15;
-      r.step();
-      r.run_until([&] { return r.sim().indexer_locked(A); }, 2);
+      Rig r = final_move_rig(mode, 40, mode == HomingMode::switch_release ? 100 : 15);
       CHECK(unlocks_in_one_home(r) == 1);
       CHECK(r.status().state == MachineState::homed);
       CHECK_FALSE(r.status().alarm);
