@@ -1372,6 +1372,11 @@ def try_sections(b, results, args):
         if sec not in run:
             sys.exit(f"run_benchmarks: --try {sec}: not one of {', '.join(run)}")
         run[sec]()
+    if "throughput" in sections:
+        for clients, rows in results["throughput"].items():
+            print(f"throughput {clients} clients: rps ratio {med(rows['ratio_rps']):.2f}x "
+                  f"({', '.join(f'{x:.2f}' for x in rows['ratio_rps'])}), p99 ratio {med(rows['ratio_p99']):.2f}x "
+                  f"({', '.join(f'{x:.2f}' for x in rows['ratio_p99'])})")
     if "durable" in sections:
         dr = results["durable"]
         print(f"durable: p99 ratio {med(dr['ratio_p99']):.2f}x ({', '.join(f'{x:.2f}' for x in dr['ratio_p99'])}), "

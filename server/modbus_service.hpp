@@ -145,12 +145,6 @@ class ModbusService final : public RequestHandler {
   // Under batch_mutex_: the thread handle_now() reserved the lead for (its
   // request alone makes the next batch).
   std::optional<std::thread::id> reserved_for_;
-  // Under batch_mutex_: the lead is held by a request handle_now() decides
-  // on its own thread. That holds it for microseconds (nothing durable, no
-  // I/O), so another event loop's handle_now() waits for it on
-  // inline_done_ rather than hand its request to the settings writer.
-  bool inline_lead_ = false;
-  std::condition_variable inline_done_;
   // The settings writer: started with the first write taken later; leads
   // when the first write queued is one of those (under batch_mutex_).
   std::thread writer_;

@@ -45,10 +45,9 @@ std::optional<Reply> ModbusService::handle_now(std::uint8_t unit, std::span<cons
                                                const ClientInfo& client) {
   if (!needs_nothing_durable(unit, pdu, client)) return std::nullopt;
   {
-    std::unique_lock lock(batch_mutex_);
-    inline_done_.wait(lock, [this] { return !inline_lead_; });
+    std::lock_guard lock(batch_mutex_);
     if (batch_leader_ || !batch_queue_.empty()) return std::nullopt;  // it would wait for that batch
-    batch_leader_ = inline_lead_ = true;  // held for this request: no batch starts before it
+    batch_leader_ = true;  // held for this request: no batch starts before it
     reserved_for_ = std::this_thread::get_id();
   }
   Reply reply = handle(unit, pdu, client);
@@ -89,10 +88,6 @@ void ModbusService::lead(std::unique_lock<std::mutex>& lock, WriteTicket* reserv
 }
 
 void ModbusService::pass_lead() {
-  if (inline_lead_) {
-    inline_lead_ = false;
-    inline_done_.notify_all();
-  }
   batch_leader_ = !batch_queue_.empty();
   if (!batch_leader_) return;
   WriteTicket& next = *batch_queue_.front();
