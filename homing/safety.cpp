@@ -37,15 +37,18 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
   check_limit_switches(settings);
 
   comm_lost_ = inputs.communication_lost;
-  if (comm_lost_ && any_motion()) {
-    AxisMask moving = 0;
+  // A cycle at rest between two of its moves would start the next one: the
+  // host that started it is gone, so the loss stops it as it stops motion.
+  if (comm_lost_ && (any_motion() || cycle_active_)) {
+    AxisMask moving = 0, cycle_left = 0;
     for (std::size_t a = 0; a < kAxisCount; ++a) {
       const AxisRun& run = axes_[a];
       const bool homing_phase = run.in_cycle && run.phase != Phase::waiting && run.phase != Phase::done;
       if (homing_phase || run.phase == Phase::jog || run.phase == Phase::move || run.motor.velocity_mm_per_s != 0)
         moving |= axis_bit(a);
+      if (run.in_cycle && run.phase != Phase::done) cycle_left |= axis_bit(a);
     }
-    raise(settings, moving, Alarm{AlarmCode::communication_lost});
+    raise(settings, moving != 0 ? moving : cycle_left, Alarm{AlarmCode::communication_lost});
   }
 
   permit_ = inputs.homing_permit;

@@ -338,6 +338,48 @@ SCENARIO("communication_lost: the watchdog expires during a cycle", "[alarms][st
   check_latched_until_reset(r, 0, AlarmCode::communication_lost);
 }
 
+namespace {
+
+// X homes in step 1, Y in step 2.
+Rig two_step_rig() {
+  Rig r;
+  r.settings.axes[1] = typical_axis();
+  r.settings.global.sequence_steps = {axis_bit(0), axis_bit(1), 0, 0, 0, 0};
+  return r;
+}
+
+}  // namespace
+
+SCENARIO("communication_lost: a cycle at rest between two moves stops too and nothing moves after",
+         "[alarms][stop]") {
+  // Found by the campaign (seed 908624361): the link was lost in the period a
+  // pull-off came to rest, so nothing was moving when the engine read it,
+  // and the cycle went on (its next move would have run one period first).
+  std::uint64_t rest_period = 0;
+  {
+    Rig probe = two_step_rig();
+    probe.pending.home_all = true;
+    probe.step();
+    REQUIRE(probe.run_until([&] { return probe.axis(0).phase == Phase::pull_off; }, 60));
+    REQUIRE(probe.run_until([&] { return probe.axis(0).phase != Phase::pull_off; }, 10));
+    rest_period = probe.periods;
+  }
+  Rig r = two_step_rig();
+  r.pending.home_all = true;
+  r.step();
+  while (r.periods + 1 < rest_period) r.step();
+  REQUIRE(r.axis(0).phase == Phase::pull_off);
+  const double y_at_loss = r.actual(1);
+  r.tweak_inputs = [](Inputs& in) { in.communication_lost = true; };
+  r.step();
+  CHECK(r.axis(0).velocity_mm_per_s == 0);
+  CHECK(r.axis(0).alarm.code == AlarmCode::communication_lost);
+  r.run_for(0.5);
+  CHECK_FALSE(r.status().homing);
+  CHECK(r.status().homing_cycles == 0);
+  CHECK(r.actual(1) == y_at_loss);
+}
+
 SCENARIO("settings_fault: a setting that cannot work", "[alarms]") {
   Rig r;
   r.settings.axes[0].max_stop_distance_mm = 0.2;

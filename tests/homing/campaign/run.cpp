@@ -320,6 +320,7 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
   std::vector<int> in_phase(events.size(), 0);
   while (r_.status().homing && r_.sim().time_s() - t0 < limit && ok()) {
     bool comm_lost_now = false;
+    const bool cycle_clean = !r_.status().alarm;
     const std::size_t applied_from = causes.list.size();
     for (std::size_t i = 0; i < events.size(); ++i) {
       const Event& ev = events[i];
@@ -348,8 +349,9 @@ bool Run::cycle(bool all, AxisMask mask, std::vector<Event> events, bool by_butt
     for (std::size_t i = applied_from; i < causes.list.size(); ++i)
       if (causes.list[i].phase_axis) causes.list[i].phase_seen = r_.axis(*causes.list[i].phase_axis).phase;
     // The last carriage arrived at rest in the very period the link was lost
-    // and the cycle ended: nothing moved after the engine saw it, so nothing to stop.
-    if (comm_lost_now && !r_.status().homing && !r_.any_moving())
+    // and a failed cycle's way back ended: nothing moved after the engine saw
+    // it, so nothing to stop. A cycle free of alarms stops with it anyway.
+    if (comm_lost_now && !cycle_clean && !r_.status().homing && !r_.any_moving())
       for (Cause& c : causes.list)
         if (c.what == "the communication loss") c.must = false;
     if (home_again) {

@@ -433,9 +433,12 @@ void event_cause(Causes& c, const Event& e, const Settings& s, const Status& st,
     case EventKind::wire_break: c.sensor_fault(who, with_partner(s, e.axis), s); break;
     case EventKind::comm_lost:
       // It stops motion: a carriage moving when it came must show it (one
-      // arriving in that very period may end the cycle without it).
+      // arriving in that very period may end a jog or a failed cycle's way
+      // back without it), and so must a cycle free of alarms, even at rest
+      // between two of its moves (seed 908624361).
       c.add("the communication loss", {AlarmCode::communication_lost},
-            static_cast<AxisMask>(running | moving | may_go_back), moving_on != 0);
+            static_cast<AxisMask>(running | moving | may_go_back),
+            moving_on != 0 || (st.homing && !st.alarm && running != 0));
       break;
     case EventKind::permit_off:
       c.add("the permit withdrawn", {AlarmCode::permit_withdrawn}, static_cast<AxisMask>(running | may_go_back),
