@@ -22,8 +22,9 @@ void PhaseRunner::back_off() {
     const Phase next = row().after(Phase::back_off);
     if (next == Phase::reapproach) {
       // A gantry turns back toward its sensors together, or one side would
-      // run toward its sensor while the other still backs off.
-      if (software_pair() && !partner_run().has_reached(Reached::released)) {
+      // run toward its sensor while the other still backs off: each side
+      // brakes at its release, and both start from rest in one period.
+      if (software_pair()) {
         run.command = stop_command(accel);
         return wait_for(Wait::partner_released, Phase::reapproach);
       }
@@ -110,10 +111,12 @@ void PhaseRunner::reference_found(double reference_mm) {
     run.command = stop_command(accel);
     return wait_for(Wait::slave_aligned, Phase::pull_off);
   }
-  // A software gantry pulls off together: the side that found its edge
-  // first holds there, or it would race ahead by a whole pull-off while
-  // the other still backs off at latch feedrate.
-  if (software_pair() && !partner_run().has_reached(Reached::reference)) {
+  // A software gantry pulls off together: each side holds at its edge, and
+  // both start from rest in one period. The side first at its edge would
+  // otherwise race ahead by a whole pull-off while the other still backs
+  // off at latch feedrate, and the side last at its edge would run on into
+  // its pull-off while the first still brakes (campaign seed 195009253).
+  if (software_pair()) {
     run.command = stop_command(accel);
     return wait_for(Wait::partner_at_reference, Phase::pull_off);
   }

@@ -26,8 +26,8 @@ void PhaseRunner::waiting() {
     case Wait::partner_assigned: ready = p.has_reached(Reached::assigned); break;
     case Wait::slave_aligned: ready = p.has_reached(Reached::aligned); break;
     case Wait::slave_locked: ready = p.follow_master; break;
-    case Wait::partner_released: ready = p.has_reached(Reached::released) && at_rest(); break;
-    case Wait::partner_at_reference: ready = p.has_reached(Reached::reference) && at_rest(); break;
+    case Wait::partner_released: ready = p.has_reached(Reached::released) && at_rest() && partner_holds(); break;
+    case Wait::partner_at_reference: ready = p.has_reached(Reached::reference) && at_rest() && partner_holds(); break;
     case Wait::master_at_reference:
       // Commutator slave: moves with the master until the master holds,
       // at rest, on its reference edge.
@@ -44,6 +44,15 @@ void PhaseRunner::waiting() {
     if (is_slave && next == Phase::done) run.follow_master = true;  // now lock
     enter(next);
   }
+}
+
+// Both sides of a software gantry start the next phase from rest, in the
+// same period: the partner waits at rest too (the motors integrate their new
+// commands only in the next period), or has already gone on (a later latch
+// pass finds its release reached in the first).
+bool PhaseRunner::partner_holds() const {
+  const Run& p = partner_run();
+  return p.phase != Phase::waiting || p.motor.velocity_mm_per_s == 0;
 }
 
 void PhaseRunner::align_slave() {

@@ -57,6 +57,7 @@ struct PhaseRunner {
   // The partner's home sensor (software-slaved pairs decide on both sensors).
   bool partner_active() const { return software_pair() && ctx.partner_input && ctx.partner_input->sensor_active; }
   Run& partner_run() const { return *ctx.partner_run; }
+  bool partner_holds() const;
   const SensorEvent& event() const { return ctx.input.event; }
   bool active() const { return ctx.input.sensor_active; }
   bool edge_to(bool to_active) const { return event().edge && event().accepted.to_level == to_active; }

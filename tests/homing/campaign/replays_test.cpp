@@ -167,8 +167,9 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // within it (a commutator slave starting its back-off from rest).
   // 195049782: the first alarm after a reset that kept only the alarms
   // latched in its own period is among those kept. 195009253: a software-
-  // slaved pair at 100 mm/s² trails at its pull-off (one side rests after
-  // its back-off, the other runs on into its pull-off) and the guard stops it.
+  // slaved pair at 100 mm/s² trailed at its pull-off (one side braked at its
+  // edge, the other ran on into its pull-off) and the guard stopped it; both
+  // now start the pull-off from rest together.
   // 4661283270: a bump left an axis just past its cam's far side, within the
   // hysteresis, the sensor active: the back-off crosses the whole cam, longer
   // than max_backoff (not_released). 908624361: the link was lost in the
