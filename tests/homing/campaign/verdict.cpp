@@ -326,18 +326,6 @@ Causes standing_causes(rig::Rig& r, const Machine& m, const CyclePlan& plan, boo
       if (!p.commutator && skew + look_ahead > limit)
         c.add(letter(a) + "'s pair seeking faster than the gantry guard's look-ahead allows", {AlarmCode::misalignment},
               static_cast<AxisMask>(bit | axis_bit(mi)));
-      // Each side of a software-slaved pair leaves its edge on its own: a
-      // side whose back-off ends its phase waits to rest before its
-      // pull-off, while the other runs on from its back-off into its own;
-      // at the pair's acceleration the one trails the other by up to about
-      // the seek feedrate times the time both ramps take (seed 195009253 of
-      // the release run: 100 mm/s², 12 mm/s, stopped at 1.04 mm of a
-      // 1.03 mm limit).
-      const double latch_v = mm_per_min_to_mm_per_s(pe.latch_feedrate_mm_per_min);
-      const double trail = seek_v * (latch_v + seek_v) / pe.acceleration_mm_per_s2;
-      if (!p.commutator && skew + trail > limit)
-        c.add(letter(a) + "'s pair leaving its edges at its slow acceleration", {AlarmCode::misalignment},
-              static_cast<AxisMask>(bit | axis_bit(mi)));
     }
     // A drive that homes itself: what its fault, or an answer after its
     // time limit, must raise when its step comes.
