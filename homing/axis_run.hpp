@@ -24,7 +24,8 @@ enum class Wait : std::uint8_t {
   slave_aligned,
   master_at_reference,
   slave_locked,
-  partner_released,
+  partner_released,      // at the release edge of this latch pass
+  partner_latched,       // at the trigger edge of this latch pass, not the last
   partner_at_reference,
 };
 
@@ -47,6 +48,7 @@ struct Index {
 struct Waiting {
   Wait wait = Wait::none;
   Phase next = Phase::idle;     // where waiting goes once the partner is ready
+  double since_s = 0;           // engine time it began
 };
 struct Jog {
   std::int8_t dir = 0;

@@ -18,6 +18,7 @@ void PhaseRunner::back_off() {
       run.edges.release_seen = true;
       run.edges.release_mm = release_mm;
     }
+    ++run.edges.releases;
     run.reach(Reached::released);
     const Phase next = row().after(Phase::back_off);
     if (next == Phase::reapproach) {
@@ -60,7 +61,14 @@ void PhaseRunner::reapproach() {
 void PhaseRunner::latch_edge_found(double edge_mm) {
   run.latch.add(edge_mm);
   const int passes = latch_passes_of(s.latch_passes);
-  if (run.latch.count < passes) return enter(Phase::back_off);
+  if (run.latch.count < passes) {
+    // A gantry backs off again together, as from its reference edge.
+    if (software_pair()) {
+      run.command = stop_command(accel);
+      return wait_for(Wait::partner_latched, Phase::back_off);
+    }
+    return enter(Phase::back_off);
+  }
   const EdgeStats st = edge_stats(run.latch.edges());
   run.health.latch_passes = run.latch.count;
   run.health.latch_spread_mm = st.spread_mm;

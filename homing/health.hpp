@@ -102,6 +102,7 @@ struct CycleEdges {
   double seek_mm = 0;           // the trigger found by the seek
   bool release_seen = false;
   double release_mm = 0;        // the first release found by the back-off
+  int releases = 0;             // release edges the back-offs met (one per latch pass)
   unsigned long transitions_at_start = 0;  // the input's counts when the cycle began
   unsigned long accepted_at_start = 0;
 };

@@ -22,12 +22,18 @@ void PhaseRunner::waiting() {
   const Run& p = partner_run();
   bool ready = false;
   switch (wait) {
-    case Wait::partner_stopped: ready = p.has_reached(Reached::stopped_on_sensor); break;
+    case Wait::partner_stopped: ready = p.has_reached(Reached::stopped_on_sensor) && hand_over_ready(); break;
     case Wait::partner_assigned: ready = p.has_reached(Reached::assigned); break;
     case Wait::slave_aligned: ready = p.has_reached(Reached::aligned); break;
     case Wait::slave_locked: ready = p.follow_master; break;
-    case Wait::partner_released: ready = p.has_reached(Reached::released) && at_rest() && partner_holds(); break;
-    case Wait::partner_at_reference: ready = p.has_reached(Reached::reference) && at_rest() && partner_holds(); break;
+    // A latch pass waits for the partner's edge of the same pass, not an earlier one.
+    case Wait::partner_released:
+      ready = p.has_reached(Reached::released) && p.edges.releases >= run.edges.releases && hand_over_ready();
+      break;
+    case Wait::partner_latched:
+      ready = p.has_reached(Reached::released) && p.latch.count >= run.latch.count && hand_over_ready();
+      break;
+    case Wait::partner_at_reference: ready = p.has_reached(Reached::reference) && hand_over_ready(); break;
     case Wait::master_at_reference:
       // Commutator slave: moves with the master until the master holds,
       // at rest, on its reference edge.
@@ -47,12 +53,16 @@ void PhaseRunner::waiting() {
 }
 
 // Both sides of a software gantry start the next phase from rest, in the
-// same period: the partner waits at rest too (the motors integrate their new
-// commands only in the next period), or has already gone on (a later latch
-// pass finds its release reached in the first).
-bool PhaseRunner::partner_holds() const {
+// same period: this side has rested here since an earlier period (the side
+// stepped second may arrive and find the first waiting, which looked before
+// it arrived; both then go in the next), and the partner waits at rest too
+// (the motors integrate their new commands only in the next period), or has
+// already gone on in this period.
+bool PhaseRunner::hand_over_ready() const {
   const Run& p = partner_run();
-  return p.phase != Phase::waiting || p.motor.velocity_mm_per_s == 0;
+  const auto* w = run.phase_data_if<phase_data::Waiting>();
+  const bool rested_before = at_rest() && w && w->since_s < ctx.time_s;
+  return rested_before && (p.phase != Phase::waiting || p.motor.velocity_mm_per_s == 0);
 }
 
 void PhaseRunner::align_slave() {

@@ -57,7 +57,7 @@ struct PhaseRunner {
   // The partner's home sensor (software-slaved pairs decide on both sensors).
   bool partner_active() const { return software_pair() && ctx.partner_input && ctx.partner_input->sensor_active; }
   Run& partner_run() const { return *ctx.partner_run; }
-  bool partner_holds() const;
+  bool hand_over_ready() const;
   const SensorEvent& event() const { return ctx.input.event; }
   bool active() const { return ctx.input.sensor_active; }
   bool edge_to(bool to_active) const { return event().edge && event().accepted.to_level == to_active; }
@@ -89,7 +89,7 @@ struct PhaseRunner {
   bool starts_into_limit(double target_mm);
   void wait_for(Wait w, Phase next) {
     enter(Phase::waiting);
-    run.phase_data<phase_data::Waiting>() = {w, next};
+    run.phase_data<phase_data::Waiting>() = {w, next, ctx.time_s};
   }
 
   // -- phases (search_phases, edge_phases, home_phases, pair_phases.cpp) ----

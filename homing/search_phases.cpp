@@ -101,8 +101,9 @@ bool PhaseRunner::stopped_on_sensor() {
 
 void PhaseRunner::after_stop() {
   const Phase next = row().after(Phase::stop);
-  if (partner >= 0 && software_pair() && !partner_run().has_reached(Reached::stopped_on_sensor))
-    return wait_for(Wait::partner_stopped, next);
+  // A software gantry turns back from its sensors together, both from rest
+  // in one period, as at every edge after (pair_phases.cpp).
+  if (partner >= 0 && software_pair()) return wait_for(Wait::partner_stopped, next);
   enter(next);
 }
 
