@@ -37,6 +37,18 @@ std::expected<HostPort, std::string> split_host_port(const std::string& option, 
   return HostPort{text.substr(0, colon), value};
 }
 
+// Where --tcp and --tls listen: an IPv4 address of this computer. libmodbus
+// reads it with inet_addr(), which takes a host name or a mistyped address
+// (192.168.1.300) for 255.255.255.255 and listens where no client reaches.
+std::expected<void, std::string> check_listen_address(const std::string& option, const std::string& host) {
+  in_addr addr{};
+  if (inet_pton(AF_INET, host.c_str(), &addr) != 1 || addr.s_addr == INADDR_BROADCAST)
+    return std::unexpected(option + ": '" + host + "' is not an IPv4 address to listen on: give one of this "
+                           "computer's addresses, 0.0.0.0 for all of them or 127.0.0.1 for this computer only "
+                           "(host names are not accepted)");
+  return {};
+}
+
 // --tls and its files come together: the files alone would serve nothing.
 std::expected<void, std::string> check_tls(const Options& o, const CLI::App& app) {
   if (!o.tls_enabled) {
@@ -365,12 +377,14 @@ std::expected<ParseOutcome, std::string> OptionParser::parse(int argc, char** ar
   if (o.tcp_enabled) {
     auto where = split_host_port("--tcp", t.tcp, std::nullopt);
     if (!where) return std::unexpected(where.error());
+    if (auto ok = check_listen_address("--tcp", where->host); !ok) return std::unexpected(ok.error());
     o.tcp_host = where->host;
     o.tcp_port = where->port;
   }
   if (!t.tls.empty()) {
     auto where = split_host_port("--tls", t.tls, 802);
     if (!where) return std::unexpected(where.error());
+    if (auto ok = check_listen_address("--tls", where->host); !ok) return std::unexpected(ok.error());
     o.tls_enabled = true;
     o.tls_host = where->host;
     o.tls_port = where->port;

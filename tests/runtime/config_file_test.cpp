@@ -97,6 +97,14 @@ TEST_CASE("a wrong value in the config file is refused naming the option and wha
   CHECK_THAT(parsed.error(), Catch::Contains("--parity") && Catch::Contains("N,E,O"));
 }
 
+TEST_CASE("a listening address in the config file that is a host name is refused naming the option") {
+  // libmodbus would listen on 255.255.255.255 for it, where no client reaches.
+  const auto parsed = parse_with("tcp = \"cabinet-7:502\"\n");
+  REQUIRE_FALSE(parsed);
+  CHECK_THAT(parsed.error(), Catch::Contains("--tcp: 'cabinet-7' is not an IPv4 address to listen on"));
+  CHECK(parse_with("tcp = \"0.0.0.0:502\"\n"));
+}
+
 TEST_CASE("a config file that does not exist is refused naming it, not an abort") {
   std::vector<std::string> args{"homingd", "--config", "/nonexistent/homingd.toml"};
   std::vector<char*> argv;

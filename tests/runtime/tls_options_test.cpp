@@ -66,6 +66,10 @@ TEST_CASE("homingd --tls is refused without its certificate, key and CA, with a 
   r = parse(with_files({"--tls", "0.0.0.0", "--tls-default-role", "admin"}));
   REQUIRE_FALSE(r);
   CHECK(r.error().find("tls-default-role") != std::string::npos);
+  // A host name would have libmodbus listen on 255.255.255.255, where no client reaches.
+  r = parse(with_files({"--tls", "cabinet.plant:802"}));
+  REQUIRE_FALSE(r);
+  CHECK(r.error().find("--tls: 'cabinet.plant' is not an IPv4 address to listen on") != std::string::npos);
 }
 
 TEST_CASE("TLS files without --tls are refused rather than silently ignored") {

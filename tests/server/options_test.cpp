@@ -47,6 +47,10 @@ TEST_CASE("homingd exits 2 with one line naming a wrong option") {
       {{"--tcp", "nonsense"}, "--tcp"},
       {{"--tcp", "127.0.0.1:70000"}, "--tcp"},
       {{"--tcp", "127.0.0.1:port"}, "--tcp"},
+      // libmodbus would listen on 255.255.255.255 for these, and say nothing
+      {{"--tcp", "plc-cabinet:1502"}, "--tcp"},
+      {{"--tcp", "192.168.1.300:1502"}, "--tcp"},
+      {{"--tcp", "255.255.255.255:1502"}, "--tcp"},
       {{"--stop-bits", "3"}, "--stop-bits"},
       {{"--time-scale", "-1"}, "--time-scale"},
       {{"--unit", "0"}, "--unit"},
