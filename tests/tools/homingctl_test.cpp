@@ -162,6 +162,21 @@ TEST_CASE("homingctl usage errors exit 2, an unreachable module exits 3, --help 
     CHECK(r.code() == 3);
     CHECK(r.err.find("cannot connect") != std::string::npos);
   }
+  // .invalid never resolves (RFC 6761): the name is what is wrong, not the network.
+  r = ctl_plain({"--tcp", "cabinet-7.invalid:1502", "status"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 3);
+    CHECK(r.err.find("cannot resolve cabinet-7.invalid") != std::string::npos);
+  }
+}
+
+TEST_CASE("homingctl --tcp takes the module's host name as well as its address") {
+  Daemon d;
+  const auto r = ctl_plain({"--tcp", "localhost:" + std::to_string(d.port()), "get", "axis.x.pull_off"});
+  SHOW(r);
+  CHECK(r.code() == 0);
+  CHECK(r.out.find("axis.x.pull_off") != std::string::npos);
 }
 
 TEST_CASE("homingctl home waits for the result, a failing homing exits 1 with the alarm text") {

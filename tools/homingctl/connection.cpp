@@ -1,6 +1,8 @@
 #include "connection.hpp"
 
+#include <arpa/inet.h>
 #include <fmt/format.h>
+#include <netdb.h>
 #include <poll.h>
 #include <unistd.h>
 
@@ -60,6 +62,22 @@ std::pair<std::string, int> split_host_port(const std::string& s) {
   }
 }
 
+// The module's IPv4 address for HOST, a name or an address, as --tls finds
+// it: libmodbus's TCP client reads HOST with inet_addr(), which takes a name
+// for 255.255.255.255 and fails with "Network is unreachable".
+std::string ipv4_of(const std::string& host, const std::string& where) {
+  addrinfo hints{};
+  hints.ai_family = AF_INET;
+  hints.ai_socktype = SOCK_STREAM;
+  addrinfo* found = nullptr;
+  if (const int rc = ::getaddrinfo(host.c_str(), nullptr, &hints, &found); rc != 0)
+    throw LinkError(fmt::format("cannot connect to {}: cannot resolve {}: {}", where, host, ::gai_strerror(rc)));
+  char text[INET_ADDRSTRLEN] = {};
+  ::inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(found->ai_addr)->sin_addr, text, sizeof text);
+  ::freeaddrinfo(found);
+  return text;
+}
+
 std::uint16_t crc16(const std::uint8_t* p, std::size_t n) {
   std::uint16_t crc = 0xFFFF;
   for (std::size_t i = 0; i < n; ++i) {
@@ -80,7 +98,7 @@ Connection::Connection(const ConnectionOptions& options) : options_(options) {
     ctx_ = modbus_new_tcp("127.0.0.1", 802);  // never connects: its socket is the tunnel's
   } else {
     auto [host, port] = split_host_port(options_.tcp);
-    ctx_ = modbus_new_tcp(host.c_str(), port);
+    ctx_ = modbus_new_tcp(ipv4_of(host, describe()).c_str(), port);
   }
   if (!ctx_) throw LinkError(fmt::format("cannot set up {}: {}", describe(), modbus_strerror(errno)));
   const int ms = std::max(1, options_.timeout_ms);
