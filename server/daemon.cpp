@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "control_loop.hpp"
+#include "database_lock.hpp"
 #include "last_stops.hpp"
 #include "homing/gpiod/gpiod_io.hpp"
 #include "homing/gpiod/gpiod_lines.hpp"
@@ -252,6 +253,8 @@ void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, Modbu
 
 int run_daemon(const Options& opt, const Wiring& wiring) {
   const sigset_t signals = take_signals();
+  const auto lock = DatabaseLock::take(opt.db_path);
+  if (!lock) return fail_start(lock.error());
   auto store = open_settings(opt);
   if (!store) return fail_start(store.error());
   auto settings = load_settings(*store, opt, wiring);

@@ -8,6 +8,7 @@
 #include "persistence/settings_file.hpp"
 #include "registers/settings_file_values.hpp"
 #include "registers/validate.hpp"
+#include "database_lock.hpp"
 #include "start_up.hpp"
 
 namespace server {
@@ -42,6 +43,9 @@ int import_settings(persistence::SettingsStore& store, const Options& opt) {
 bool is_settings_file_mode(const Options& opt) { return !opt.export_settings.empty() || !opt.import_settings.empty(); }
 
 int run_settings_file_mode(const Options& opt) {
+  // Not beside a running daemon: an import would change settings under it.
+  const auto lock = DatabaseLock::take(opt.db_path);
+  if (!lock) return fail_start(lock.error());
   auto store = open_settings(opt);
   if (!store) return fail_start(store.error());
   if (!opt.export_settings.empty()) return export_settings(*store, opt);

@@ -93,6 +93,26 @@ TEST_CASE("homingd exits 1 naming the resource at fault when it cannot start") {
     CHECK(r.code() == 1);  // a resource that cannot be used
     CHECK(last_line(r.err).find("--rtu") != std::string::npos);
   }
+  SECTION("another homingd runs on the database") {
+    const RunResult r = run_program({homingd_path(), "--tcp", "127.0.0.1:" + std::to_string(free_port()), "--db",
+                                     first.db()},
+                                    10s);
+    INFO("stderr: " << r.err);
+    REQUIRE(r.exited());
+    CHECK(r.code() == 1);
+    CHECK(last_line(r.err).find("--db " + first.db() + ": another homingd uses this database (pid " +
+                                std::to_string(first.pid()) + ")") != std::string::npos);
+    CHECK(r.out.find("listening") == std::string::npos);
+  }
+  SECTION("a settings import into the database a homingd runs on") {
+    const std::string file = dir.file("settings.toml");
+    test_support::write_text(file, "format_version = 2\n");
+    const RunResult r = run_program({homingd_path(), "--db", first.db(), "--import-settings", file}, 10s);
+    INFO("stderr: " << r.err);
+    REQUIRE(r.exited());
+    CHECK(r.code() == 1);
+    CHECK(last_line(r.err).find("another homingd uses this database") != std::string::npos);
+  }
   // The first daemon is unharmed and still answers.
   Client c = Client::tcp(first.port());
   CHECK(c.read("status.map_version") == registers::kMapVersion);
