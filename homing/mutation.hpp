@@ -14,6 +14,7 @@ enum class Mutant {
   reversed_encoder_unchecked,             // hard-stop homing by following error trusts an encoder counting backwards
   limit_switch_ignored_outside_homing,    // jogs, moves and braking run on past an active limit switch
   home_cam_search_ignores_limit_switch,   // cam_seek seeks on past the limit switch ahead instead of reversing
+  gantry_side_turns_alone,                // a software gantry side arriving second at its edge turns a period early
 };
 
 #ifdef HOMING_MUTATION_TESTING

@@ -1,5 +1,6 @@
 // A gantry homes as a pair: one side waits for the other, and a commutator
 // slave finds its own edge alone on its master's output.
+#include "mutation.hpp"
 #include "phase_runner.hpp"
 
 namespace homing {
@@ -53,16 +54,19 @@ void PhaseRunner::waiting() {
 }
 
 // Both sides of a software gantry start the next phase from rest, in the
-// same period: this side has rested here since an earlier period (the side
-// stepped second may arrive and find the first waiting, which looked before
-// it arrived; both then go in the next), and the partner waits at rest too
-// (the motors integrate their new commands only in the next period), or has
-// already gone on in this period.
+// same period: each has waited at rest since an earlier period, or the
+// partner has already gone on in this period. A side that arrives in this
+// period waits one more: the side stepped before it in this period looked
+// before it arrived, and both then go in the next (the motors integrate
+// their new commands only in the next period anyway).
 bool PhaseRunner::hand_over_ready() const {
+  const auto rested_before = [this](const Run& r, bool self) {
+    const auto* w = r.phase_data_if<phase_data::Waiting>();
+    return r.motor.velocity_mm_per_s == 0 && w &&
+           (w->since_s < ctx.time_s || (self && planted(Mutant::gantry_side_turns_alone)));
+  };
   const Run& p = partner_run();
-  const auto* w = run.phase_data_if<phase_data::Waiting>();
-  const bool rested_before = at_rest() && w && w->since_s < ctx.time_s;
-  return rested_before && (p.phase != Phase::waiting || p.motor.velocity_mm_per_s == 0);
+  return rested_before(run, true) && (p.phase != Phase::waiting || rested_before(p, false));
 }
 
 void PhaseRunner::align_slave() {

@@ -104,6 +104,15 @@ TEST_CASE("mutation check: the campaign fails a home cam search that seeks on pa
   CHECK(o.failure.what == "the home cam search met the limit switch ahead and sought on");
 }
 
+TEST_CASE("mutation check: the campaign fails a software-slaved gantry whose sides turn at their edges a period apart",
+          "[mutant]") {
+  Planted p(homing::Mutant::gantry_side_turns_alone);
+  const campaign::Outcome o = first_failure(500);
+  REQUIRE(o.failed);
+  INFO(o.failure.what << ": " << o.failure.detail);
+  CHECK(o.failure.what == "a software-slaved gantry side turned at its edge without the other");
+}
+
 TEST_CASE("mutation check: the same campaign seeds pass on the product as built", "[mutant]") {
   // The mutants above are caught by the campaign, not by a broken harness:
   // without a planted bug the same seeds run clean.

@@ -488,6 +488,20 @@ void Watch::racking(double engine_dt) {
   for (std::size_t s = 0; s < kAxisCount; ++s) {
     if (m_.plan[s].role != Role::slave) continue;
     const std::size_t mi = static_cast<std::size_t>(m_.plan[s].partner);
+    // A software-slaved pair turns at each edge together (docs/homing-methods.md
+    // "Gantries: topologies"): a side that starts a back-off, a re-approach or
+    // a pull-off finds the other starting it in the same period.
+    if (!m_.plan[s].commutator) {
+      const Phase ps = r_.status().axes[s].phase, pm = r_.status().axes[mi].phase;
+      const auto turns = [](Phase p) { return p == Phase::back_off || p == Phase::reapproach || p == Phase::pull_off; };
+      const bool alone = (pair_phase_prev_[s] != ps && turns(ps) && pm != ps) ||
+                         (pair_phase_prev_[mi] != pm && turns(pm) && ps != pm);
+      if (alone && !r_.status().alarm)
+        fail("a software-slaved gantry side turned at its edge without the other",
+             fmt_axis(s, r_, r_.actual(s)) + "; " + fmt_axis(mi, r_, r_.actual(mi)));
+      pair_phase_prev_[s] = ps;
+      pair_phase_prev_[mi] = pm;
+    }
     // Each side as fast as it was at the period's start or as its command
     // takes it within the period: a side starting from rest accelerates on
     // for the whole late period (seed 194066258: a commutator slave entering

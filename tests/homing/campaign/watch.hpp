@@ -209,6 +209,7 @@ class Watch {
   std::array<bool, kAxisCount> has_release_{}, has_trigger_{};
   std::array<Phase, kAxisCount> traced_{};
   std::array<Phase, kAxisCount> phase_prev_{};
+  std::array<Phase, kAxisCount> pair_phase_prev_{};  // each gantry side's phase before this period (racking)
   // Limit switches: past one since the period it tripped, at that speed.
   std::array<bool, kAxisCount> past_limit_{};
   std::array<double, kAxisCount> trip_speed_{};
