@@ -641,9 +641,11 @@ void Run::recover() {
 void Run::follow_ups() {
   const int acts = d_.integer(1, 4);
   for (int i = 0; i < acts && ok(); ++i) {
-    if (r_.status().alarm || r_.sim().inputs().estop || comm_lost_) {
+    if (r_.status().alarm || r_.sim().inputs().estop || comm_lost_ || !r_.sim().inputs().homing_permit) {
       // A watchdog that expired after the motion ended raises nothing but
-      // still refuses motion: the link comes back first.
+      // still refuses motion: the link comes back first. So does a permit
+      // taken away in the period the cycle ended (seed 7410015997): no
+      // alarm, but homing is refused until it is back.
       recover();
       if (ok() && d_.chance(0.6)) {
         const CyclePlan plan = plan_cycle(r_.settings, true, 0);
