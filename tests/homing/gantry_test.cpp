@@ -4,7 +4,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <memory>
 #include <vector>
 
 #include "accel_watch.hpp"
@@ -395,6 +397,31 @@ bool home_all_watching(Rig& r, double square_mm, double& worst_mm) {
   return homed;
 }
 
+// A software-slaved pair's turns, watched period by period: a side that
+// starts a back-off, re-approach or pull-off while the other does not start
+// it too from rest; the largest rack; the master's back-offs.
+struct TurnWatch {
+  int apart_starts = 0;
+  int master_back_offs = 0;
+  double worst_rack_mm = 0;
+};
+
+std::shared_ptr<TurnWatch> watch_turns(Rig& r, std::size_t master) {
+  auto w = std::make_shared<TurnWatch>();
+  r.on_period = [w, master, before = std::array<Phase, 2>{Phase::idle, Phase::idle}](Rig& rr) mutable {
+    w->worst_rack_mm = std::max(w->worst_rack_mm, std::abs(rack_mm(rr)));
+    for (std::size_t a : {0, 1}) {
+      const Phase now = rr.axis(a).phase;
+      const bool turns = now == Phase::back_off || now == Phase::reapproach || now == Phase::pull_off;
+      if (!turns || now == before[a]) continue;
+      if (a == master && now == Phase::back_off) ++w->master_back_offs;
+      if (rr.axis(1 - a).phase != now || rr.axis(1 - a).velocity_mm_per_s != 0) ++w->apart_starts;
+    }
+    before = {rr.axis(0).phase, rr.axis(1).phase};
+  };
+  return w;
+}
+
 }  // namespace
 
 SCENARIO("a slow software-slaved gantry hands over from one phase to the next with both sides at rest",
@@ -418,27 +445,14 @@ SCENARIO("a slow software-slaved gantry hands over from one phase to the next wi
       }
       r.settings.axes[1].max_misalignment_mm = 1.0;
       r.machine.axes[0].hysteresis_mm = 0.55;
-      // A side that begins its re-approach or pull-off, the other not beginning it too from rest.
-      int apart_starts = 0;
-      double worst_rack = 0;
-      const auto hands_over = [](Phase p) { return p == Phase::pull_off || p == Phase::reapproach; };
-      std::array<Phase, 2> before{Phase::idle, Phase::idle};
-      r.on_period = [&](Rig& rr) {
-        worst_rack = std::max(worst_rack, std::abs(rack_mm(rr)));
-        for (std::size_t a : {0, 1}) {
-          const Phase now = rr.axis(a).phase;
-          const bool starts = hands_over(now) && now != before[a];
-          if (starts && (rr.axis(1 - a).phase != now || rr.axis(1 - a).velocity_mm_per_s != 0)) ++apart_starts;
-        }
-        before = {rr.axis(0).phase, rr.axis(1).phase};
-      };
+      const auto turns = watch_turns(r, 0);
       const bool homed = r.home_all();
       INFO("alarm on X: " << alarm_name(r.axis(0).alarm.code) << ", on Y: " << alarm_name(r.axis(1).alarm.code));
       REQUIRE(homed);
-      CHECK(apart_starts == 0);
+      CHECK(turns->apart_starts == 0);
       CHECK_FALSE(r.status().alarm);
       // No more than the two release edges lie apart.
-      CHECK(worst_rack <= 0.5 + 1e-3);
+      CHECK(turns->worst_rack_mm <= 0.5 + 1e-3);
     }
   }
 }
@@ -474,32 +488,17 @@ SCENARIO("a slow software-slaved gantry with several latch passes turns at every
       }
       r.settings.axes[slave].max_misalignment_mm = 1.0;
       r.machine.axes[master].hysteresis_mm = 0.55;
-      int apart_starts = 0, back_offs = 0;
-      double worst_rack = 0;
-      const auto hands_over = [](Phase p) {
-        return p == Phase::back_off || p == Phase::reapproach || p == Phase::pull_off;
-      };
-      std::array<Phase, 2> before{Phase::idle, Phase::idle};
-      r.on_period = [&](Rig& rr) {
-        worst_rack = std::max(worst_rack, std::abs(rack_mm(rr)));
-        for (std::size_t a : {0, 1}) {
-          const Phase now = rr.axis(a).phase;
-          const bool starts = hands_over(now) && now != before[a];
-          if (starts && a == master && now == Phase::back_off) ++back_offs;
-          if (starts && (rr.axis(1 - a).phase != now || rr.axis(1 - a).velocity_mm_per_s != 0)) ++apart_starts;
-        }
-        before = {rr.axis(0).phase, rr.axis(1).phase};
-      };
+      const auto turns = watch_turns(r, master);
       const bool homed = r.home_all();
       INFO("alarm on X: " << alarm_name(r.axis(0).alarm.code) << ", on Y: " << alarm_name(r.axis(1).alarm.code));
       REQUIRE(homed);
-      CHECK(back_offs == 3);
-      CHECK(apart_starts == 0);
+      CHECK(turns->master_back_offs == 3);
+      CHECK(turns->apart_starts == 0);
       CHECK(r.axis(0).health.latch_passes == 3);
       CHECK(r.axis(1).health.latch_passes == 3);
       // No more than corresponding edges lie apart: the release edges, 0.5 mm
       // (0.8 mm with the slave's sensor 0.3 mm further).
-      CHECK(worst_rack <= (slave_first ? 0.8 : 0.5) + 1e-3);
+      CHECK(turns->worst_rack_mm <= (slave_first ? 0.8 : 0.5) + 1e-3);
     }
   }
 }
