@@ -45,7 +45,11 @@ bool is_settings_file_mode(const Options& opt) { return !opt.export_settings.emp
 int run_settings_file_mode(const Options& opt) {
   // Not beside a running daemon: an import would change settings under it.
   const auto lock = DatabaseLock::take(opt.db_path);
-  if (!lock) return fail_start(lock.error());
+  if (!lock)
+    return fail_start(lock.error() + (opt.export_settings.empty()
+                                          ? "; while it runs, homingctl import FILE changes its settings over Modbus"
+                                          : "; while it runs, homingctl export FILE or homing-settings --db " +
+                                                opt.db_path + " export FILE write the same file"));
   auto store = open_settings(opt);
   if (!store) return fail_start(store.error());
   if (!opt.export_settings.empty()) return export_settings(*store, opt);

@@ -112,6 +112,16 @@ TEST_CASE("homingd exits 1 naming the resource at fault when it cannot start") {
     REQUIRE(r.exited());
     CHECK(r.code() == 1);
     CHECK(last_line(r.err).find("another homingd uses this database") != std::string::npos);
+    CHECK(last_line(r.err).find("homingctl import FILE") != std::string::npos);
+  }
+  SECTION("a settings export from the database a homingd runs on names the readers that may") {
+    const RunResult r =
+        run_program({homingd_path(), "--db", first.db(), "--export-settings", dir.file("out.toml")}, 10s);
+    INFO("stderr: " << r.err);
+    REQUIRE(r.exited());
+    CHECK(r.code() == 1);
+    CHECK(last_line(r.err).find("homing-settings --db " + first.db() + " export FILE") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir.file("out.toml")));
   }
   // The first daemon is unharmed and still answers.
   Client c = Client::tcp(first.port());
