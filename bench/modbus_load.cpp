@@ -43,6 +43,9 @@
 // Prints one line "RESULT key=value ..." (for scripts) after a readable one,
 // with the load generator's own CPU and context switches over the stretch
 // (bench::SelfCounters), so the load's cost to the shared cores is known.
+// Then "PER_CLIENT" (requests per client: min, p10, p50, p90, max; how evenly
+// the server served them) and, for mixes of several requests, "BY_REQUEST"
+// (count, p50 and p99 of each kind).
 #include <arpa/inet.h>
 #include <modbus/modbus.h>
 #include <netinet/in.h>
@@ -77,6 +80,7 @@ struct Config {
 
 struct ClientResult {
   std::vector<double> latency_us;
+  std::vector<Op> latency_op;  // the request each latency belongs to
   std::uint64_t ok = 0, exceptions = 0, exc06 = 0, transport_errors = 0, reconnects = 0;
   bool connected = false;
 };
@@ -282,10 +286,12 @@ void run_client(const Config& c, int index, ClientResult& r, const std::atomic<b
     if (outcome == 0) {
       ++r.ok;
       r.latency_us.push_back((t1 - t0) / 1000.0);
+      r.latency_op.push_back(op);
     } else if (outcome > 0) {
       ++r.exceptions;
       if (outcome == 6) ++r.exc06;
       r.latency_us.push_back((t1 - t0) / 1000.0);
+      r.latency_op.push_back(op);
     } else {
       ++r.transport_errors;
       disconnect();
@@ -295,6 +301,53 @@ void run_client(const Config& c, int index, ClientResult& r, const std::atomic<b
   }
   if (hold) hold->arrive_and_wait();
   disconnect();
+}
+
+const char* op_name(Op op) {
+  switch (op) {
+    case Op::read10: return "read10";
+    case Op::read125: return "read125";
+    case Op::write10: return "write10";
+    case Op::durable: return "durable";
+    case Op::status: return "status";
+    case Op::axis_inputs: return "axis_inputs";
+    case Op::discretes: return "discretes";
+    case Op::coils: return "coils";
+    case Op::heartbeat: return "heartbeat";
+    case Op::axis_settings: return "axis_settings";
+    case Op::command: return "command";
+  }
+  return "?";
+}
+
+// How evenly the clients were served: requests per client. A server that
+// lets some clients go round again while others wait shows a wide spread.
+void print_spread(const std::vector<ClientResult>& results) {
+  if (results.size() < 2) return;
+  std::vector<double> counts;
+  for (const auto& r : results) counts.push_back(static_cast<double>(r.latency_us.size()));
+  std::sort(counts.begin(), counts.end());
+  std::printf("PER_CLIENT requests min %.0f p10 %.0f p50 %.0f p90 %.0f max %.0f\n", counts.front(),
+              counts[counts.size() / 10], counts[counts.size() / 2], counts[counts.size() * 9 / 10], counts.back());
+}
+
+// One line per request kind of the mix, so a tail can be traced to the
+// requests that make it.
+void print_by_request(const Config& c, const std::vector<ClientResult>& results) {
+  std::vector<Op> kinds = c.ops;
+  std::sort(kinds.begin(), kinds.end());
+  kinds.erase(std::unique(kinds.begin(), kinds.end()), kinds.end());
+  if (kinds.size() < 2) return;
+  std::printf("BY_REQUEST");
+  for (const Op k : kinds) {
+    std::vector<double> mine;
+    for (const auto& r : results)
+      for (std::size_t i = 0; i < r.latency_us.size(); ++i)
+        if (r.latency_op[i] == k) mine.push_back(r.latency_us[i]);
+    std::printf(" %s=%zu/p50:%.0f/p99:%.0f", op_name(k), mine.size(), bench::percentile(mine, 0.50),
+                bench::percentile(mine, 0.99));
+  }
+  std::printf("\n");
 }
 
 struct HomeResult {
@@ -439,5 +492,7 @@ int main(int argc, char** argv) {
               (unsigned long long)home.commands,
               home.cycles_after >= 0 && home.cycles_before >= 0 ? home.cycles_after - home.cycles_before : -1L,
               counters.c_str());
+  print_spread(results);
+  print_by_request(c, results);
   return 0;
 }

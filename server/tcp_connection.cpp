@@ -145,12 +145,14 @@ void TcpConnection::answered(const Reply& reply, SteadyTime now) {
 
 TcpConnection::Wait TcpConnection::serve(SteadyTime now, RequestHandler& handler) {
   int frames = 0;
+  bool replied = false;
   for (;;) {
     // The reply goes before the next request is read: one request at a time.
     while (out_sent_ < out_.size()) {
       const ChannelIo io = channel_->write(std::span(out_).subspan(out_sent_));
       if (io.status == Status::done) {
         out_sent_ += io.bytes;
+        replied = true;
         continue;
       }
       if (io.status == Status::closed) return end("closed by the client");
@@ -180,6 +182,11 @@ TcpConnection::Wait TcpConnection::serve(SteadyTime now, RequestHandler& handler
       case MbapFramer::Front::none:
       case MbapFramer::Front::partial: break;
     }
+    // A client that sends its next request the moment it has its reply
+    // would otherwise be served again and again in one turn while the others
+    // wait: once this turn has answered, the loop serves the others first
+    // (the socket stays readable, so the next turn comes).
+    if (replied) return channel_->buffered() ? Wait::again : Wait::read;
     const bool begun = step.front == MbapFramer::Front::partial;
     const ChannelIo io = channel_->read(framer_.space());
     if (io.status == Status::done) {

@@ -134,7 +134,7 @@ Io Session::write(std::span<const std::uint8_t> bytes) {
   return Io{outcome(0), 0};
 }
 
-bool Session::pending() const { return SSL_pending(ssl_.get()) > 0; }
+bool Session::pending() const { return SSL_pending(ssl_.get()) > 0 || SSL_has_pending(ssl_.get()) == 1; }
 
 void Session::close() {
   if (closed_ || !ssl_) return;
