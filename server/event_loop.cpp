@@ -165,7 +165,27 @@ void EventLoop::step(std::uint64_t id, Slot& slot, std::vector<std::uint64_t>& a
       again.push_back(id);
       break;
     case TcpConnection::Wait::off_loop: send_off(id, slot); break;
-    case TcpConnection::Wait::closed: close(id, slot, false); break;
+    case TcpConnection::Wait::closed: close(id, slot, false); return;
+  }
+  note_deadline(slot);
+}
+
+void EventLoop::note_deadline(const Slot& slot) {
+  // A step only moves its connection's deadline; the earliest of all is
+  // looked for again once it has passed (expire_due).
+  if (const auto d = slot.connection->deadline(); d && (!next_due_ || *d < *next_due_)) next_due_ = *d;
+}
+
+void EventLoop::expire_due(Clock::time_point now, std::vector<std::uint64_t>& ready) {
+  if (!next_due_ || now < *next_due_) return;
+  next_due_.reset();
+  for (const auto& [id, slot] : slots_) {
+    const auto d = slot.connection->deadline();
+    if (!d) continue;
+    if (now >= *d)
+      ready.push_back(id);
+    else if (!next_due_ || *d < *next_due_)
+      next_due_ = *d;
   }
 }
 
@@ -204,17 +224,14 @@ void EventLoop::close(std::uint64_t id, Slot& slot, bool stopping) {
 
 int EventLoop::wait_ms(bool again) const {
   if (again) return 0;
-  std::optional<Clock::time_point> until;
-  for (const auto& [id, slot] : slots_)
-    if (const auto d = slot.connection->deadline()) until = until ? std::min(*until, *d) : *d;
-  if (!until) return -1;  // nothing due: a socket, an arrival, an answer or stop() wakes the loop
-  const auto ms = std::chrono::ceil<std::chrono::milliseconds>(*until - Clock::now()).count();
+  if (!next_due_) return -1;  // nothing due: a socket, an arrival, an answer or stop() wakes the loop
+  const auto ms = std::chrono::ceil<std::chrono::milliseconds>(*next_due_ - Clock::now()).count();
   return static_cast<int>(std::max<std::int64_t>(0, ms));
 }
 
 void EventLoop::run() {
   std::array<epoll_event, 64> events{};
-  std::vector<std::uint64_t> ready, again, expired;
+  std::vector<std::uint64_t> ready, again;
   while (!shared_.stop) {
     const int n = ::epoll_wait(epoll_fd_, events.data(), static_cast<int>(events.size()), wait_ms(!again.empty()));
     if (n < 0 && errno != EINTR) {
@@ -232,11 +249,7 @@ void EventLoop::run() {
       ready.push_back(events[i].data.u64);
     }
     take_inbox(ready);
-    const auto now = Clock::now();
-    expired.clear();
-    for (const auto& [id, slot] : slots_)
-      if (const auto d = slot.connection->deadline(); d && now >= *d) expired.push_back(id);
-    ready.insert(ready.end(), expired.begin(), expired.end());
+    expire_due(Clock::now(), ready);
     std::sort(ready.begin(), ready.end());
     ready.erase(std::unique(ready.begin(), ready.end()), ready.end());
     for (const std::uint64_t id : ready) {

@@ -8,9 +8,11 @@
 // settings writer (a write of the module unit) or runs on RequestWorkers,
 // and its reply comes back through the loop's inbox.
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <unordered_map>
@@ -71,6 +73,9 @@ class EventLoop {
   };
   void take_inbox(std::vector<std::uint64_t>& ready);
   void step(std::uint64_t id, Slot& slot, std::vector<std::uint64_t>& again);
+  void note_deadline(const Slot& slot);
+  // Adds to ready the connections whose deadline has passed, once the earliest has.
+  void expire_due(std::chrono::steady_clock::time_point now, std::vector<std::uint64_t>& ready);
   void watch(std::uint64_t id, Slot& slot, std::uint32_t events);
   void send_off(std::uint64_t id, Slot& slot);
   void post_answer(std::uint64_t id, Reply reply);  // from another thread
@@ -83,6 +88,10 @@ class EventLoop {
   std::atomic<int> held_{0};
   std::uint64_t next_id_ = 1;
   std::unordered_map<std::uint64_t, Slot> slots_;  // the loop's thread only
+  // No connection's deadline is earlier (the loop's thread only). It may be
+  // earlier than the true earliest, never later: a step can only postpone
+  // its own connection's deadline or set a new one, which note_deadline takes.
+  std::optional<std::chrono::steady_clock::time_point> next_due_;
 
   std::mutex inbox_mutex_;
   std::vector<std::pair<ConnectionEntry*, std::unique_ptr<TcpConnection>>> arrivals_;
