@@ -13,18 +13,29 @@
 #include "tls/context.hpp"
 
 namespace tls {
-namespace {
 
-// A non-blocking TCP connection to host:port, established within the deadline.
-std::expected<int, std::string> tcp_connect(const std::string& host, int port, Client::Clock::time_point deadline) {
+std::expected<in_addr, std::string> resolve_ipv4(const std::string& host) {
   addrinfo hints{};
   hints.ai_family = AF_INET;
   hints.ai_socktype = SOCK_STREAM;
   addrinfo* found = nullptr;
-  if (const int rc = ::getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &found); rc != 0)
+  if (const int rc = ::getaddrinfo(host.c_str(), nullptr, &hints, &found); rc != 0)
     return std::unexpected("cannot resolve " + host + ": " + ::gai_strerror(rc));
-  const sockaddr_in address = *reinterpret_cast<const sockaddr_in*>(found->ai_addr);
+  const in_addr address = reinterpret_cast<const sockaddr_in*>(found->ai_addr)->sin_addr;
   ::freeaddrinfo(found);
+  return address;
+}
+
+namespace {
+
+// A non-blocking TCP connection to host:port, established within the deadline.
+std::expected<int, std::string> tcp_connect(const std::string& host, int port, Client::Clock::time_point deadline) {
+  const auto ip = resolve_ipv4(host);
+  if (!ip) return std::unexpected(ip.error());
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  address.sin_addr = *ip;
   const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
   if (fd < 0) return std::unexpected(std::string("socket: ") + std::strerror(errno));
   const int one = 1;

@@ -2,7 +2,6 @@
 
 #include <arpa/inet.h>
 #include <fmt/format.h>
-#include <netdb.h>
 #include <poll.h>
 #include <unistd.h>
 
@@ -12,6 +11,7 @@
 #include <cstring>
 
 #include "registers/lookup.hpp"
+#include "tls/client.hpp"
 #include "tls_tunnel.hpp"
 
 namespace homingctl {
@@ -66,15 +66,10 @@ std::pair<std::string, int> split_host_port(const std::string& s) {
 // it: libmodbus's TCP client reads HOST with inet_addr(), which takes a name
 // for 255.255.255.255 and fails with "Network is unreachable".
 std::string ipv4_of(const std::string& host, const std::string& where) {
-  addrinfo hints{};
-  hints.ai_family = AF_INET;
-  hints.ai_socktype = SOCK_STREAM;
-  addrinfo* found = nullptr;
-  if (const int rc = ::getaddrinfo(host.c_str(), nullptr, &hints, &found); rc != 0)
-    throw LinkError(fmt::format("cannot connect to {}: cannot resolve {}: {}", where, host, ::gai_strerror(rc)));
+  const auto ip = tls::resolve_ipv4(host);
+  if (!ip) throw LinkError(fmt::format("cannot connect to {}: {}", where, ip.error()));
   char text[INET_ADDRSTRLEN] = {};
-  ::inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(found->ai_addr)->sin_addr, text, sizeof text);
-  ::freeaddrinfo(found);
+  ::inet_ntop(AF_INET, &*ip, text, sizeof text);
   return text;
 }
 
