@@ -64,6 +64,40 @@ std::expected<std::vector<std::uint8_t>, std::string> TlsModbusClient::transacti
   return reply;
 }
 
+std::expected<std::vector<std::pair<std::uint16_t, std::vector<std::uint8_t>>>, std::string> TlsModbusClient::pipeline(
+    std::uint8_t unit, const std::vector<std::vector<std::uint8_t>>& pdus, bool one_record,
+    std::chrono::milliseconds timeout) {
+  const auto deadline = tls::Client::Clock::now() + timeout;
+  std::vector<std::uint8_t> all;
+  for (const auto& pdu : pdus) {
+    std::vector<std::uint8_t> frame;
+    put16(frame, transaction_id_++);
+    put16(frame, 0);
+    put16(frame, static_cast<std::uint16_t>(pdu.size() + 1));
+    frame.push_back(unit);
+    frame.insert(frame.end(), pdu.begin(), pdu.end());
+    if (one_record) {
+      all.insert(all.end(), frame.begin(), frame.end());
+    } else if (auto sent = client_.write_all(frame, deadline); !sent) {
+      return std::unexpected(sent.error());
+    }
+  }
+  if (one_record)
+    if (auto sent = client_.write_all(all, deadline); !sent) return std::unexpected(sent.error());
+  std::vector<std::pair<std::uint16_t, std::vector<std::uint8_t>>> replies;
+  for (std::size_t i = 0; i < pdus.size(); ++i) {
+    std::uint8_t header[7];
+    if (auto got = client_.read_exact(header, deadline); !got)
+      return std::unexpected("reply " + std::to_string(i + 1) + ": " + got.error());
+    const std::size_t length = (std::size_t{header[4]} << 8) | header[5];
+    if (length < 2) return std::unexpected("a reply that does not frame a request");
+    std::vector<std::uint8_t> reply(length - 1);
+    if (auto got = client_.read_exact(reply, deadline); !got) return std::unexpected(got.error());
+    replies.emplace_back(static_cast<std::uint16_t>((header[0] << 8) | header[1]), std::move(reply));
+  }
+  return replies;
+}
+
 std::int64_t TlsModbusClient::read(std::string_view name) {
   const registers::Register& r = reg(name);
   std::vector<std::uint8_t> pdu{read_function(r.table)};

@@ -36,6 +36,12 @@ class TlsModbusClient {
       std::uint8_t unit, std::span<const std::uint8_t> pdu,
       std::chrono::milliseconds timeout = std::chrono::seconds(3));
 
+  // Every request sent before any reply is read: in one TLS record, or one
+  // record each. The replies' transaction ids and PDUs as they came back.
+  std::expected<std::vector<std::pair<std::uint16_t, std::vector<std::uint8_t>>>, std::string> pipeline(
+      std::uint8_t unit, const std::vector<std::vector<std::uint8_t>>& pdus, bool one_record,
+      std::chrono::milliseconds timeout = std::chrono::seconds(3));
+
   // The raw value of a named register; throws on an exception or a link failure.
   std::int64_t read(std::string_view name);
   // Coils FC 5, holding registers FC 16: 0, the Modbus exception code, or -1

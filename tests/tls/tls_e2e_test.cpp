@@ -346,6 +346,25 @@ TEST_CASE("the write allow-list and the unlock code still apply to an engineer o
   }
 }
 
+TEST_CASE("requests a TLS client sends back to back are all answered in order, in one record or one record each") {
+  // Many more than a connection's share of a turn (16 frames), and in one
+  // record more bytes than a connection takes in at once (2048): the rest are
+  // served in later turns, also those the TLS session has already decrypted,
+  // which the socket no longer shows to the loop.
+  Daemon d(tls_options());
+  auto c = connect_as(d, "engineer");
+  for (const bool one_record : {true, false}) {
+    INFO((one_record ? "one record" : "one record each"));
+    std::vector<std::vector<std::uint8_t>> pdus(200, kReadState);
+    const auto replies = c.pipeline(1, pdus, one_record);
+    REQUIRE(replies);
+    REQUIRE(replies->size() == pdus.size());
+    for (std::size_t i = 1; i < replies->size(); ++i)
+      CHECK((*replies)[i].first == static_cast<std::uint16_t>((*replies)[i - 1].first + 1));
+    for (const auto& [tid, pdu] : *replies) CHECK(pdu.size() == 4);  // FC4, 2 bytes, one register
+  }
+}
+
 TEST_CASE("homingd serves only TLS with --no-tcp --tls") {
   DaemonOptions o = tls_options();
   o.tcp = false;
