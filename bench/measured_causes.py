@@ -572,9 +572,20 @@ def p99_cause(clients, rows):
                   "CPU per request": "the work per request itself is larger, and the tail scales with it."}[big[0]])
     if h["threads"] > r["threads"]:
         s.append(f"homingd ran {h['threads']:.0f} threads during the load, the bare server {r['threads']:.0f}.")
+    spread = {who: _median_of(rows.get(who, []), "client_spread") for who in ("homingd", "bare")}
+    if clients > 1 and spread["homingd"] is not None and spread["bare"] is not None:
+        s.append(f"How evenly the clients were served (requests per client, 10th percentile over 90th, 1 = alike): "
+                 f"homingd {spread['homingd']:.2f}, bare libmodbus {spread['bare']:.2f}" +
+                 (": some clients waited while others went round again." if spread["homingd"] < spread["bare"] - 0.05
+                  else "."))
     if big and big[0] == "CPU per request":
         s.append(profile_sentence(h["profile"], r["profile"], h["cpu_us"], r["cpu_us"]))
     return " ".join(x for x in s if x)
+
+
+def _median_of(results, key):
+    values = [res[key] for res in results if isinstance(res, dict) and isinstance(res.get(key), float)]
+    return statistics.median(values) if values else None
 
 
 def _evidence(h, r):

@@ -44,7 +44,7 @@
 // with the load generator's own CPU and context switches over the stretch
 // (bench::SelfCounters), so the load's cost to the shared cores is known.
 // Then "PER_CLIENT" (requests per client: min, p10, p50, p90, max; how evenly
-// the server served them) and, for mixes of several requests, "BY_REQUEST"
+// the server served them; RESULT's client_spread is p10 / p90) and, for mixes of several requests, "BY_REQUEST"
 // (count, p50 and p99 of each kind).
 #include <arpa/inet.h>
 #include <modbus/modbus.h>
@@ -322,11 +322,24 @@ const char* op_name(Op op) {
 
 // How evenly the clients were served: requests per client. A server that
 // lets some clients go round again while others wait shows a wide spread.
-void print_spread(const std::vector<ClientResult>& results) {
-  if (results.size() < 2) return;
+std::vector<double> requests_per_client(const std::vector<ClientResult>& results) {
   std::vector<double> counts;
   for (const auto& r : results) counts.push_back(static_cast<double>(r.latency_us.size()));
   std::sort(counts.begin(), counts.end());
+  return counts;
+}
+
+// The 10th percentile of requests per client over the 90th: 1 when every
+// client was served alike.
+double client_spread(const std::vector<ClientResult>& results) {
+  const auto counts = requests_per_client(results);
+  if (counts.size() < 2 || counts[counts.size() * 9 / 10] <= 0) return 1.0;
+  return counts[counts.size() / 10] / counts[counts.size() * 9 / 10];
+}
+
+void print_spread(const std::vector<ClientResult>& results) {
+  if (results.size() < 2) return;
+  const auto counts = requests_per_client(results);
   std::printf("PER_CLIENT requests min %.0f p10 %.0f p50 %.0f p90 %.0f max %.0f\n", counts.front(),
               counts[counts.size() / 10], counts[counts.size() / 2], counts[counts.size() * 9 / 10], counts.back());
 }
@@ -485,13 +498,13 @@ int main(int argc, char** argv) {
               (unsigned long long)terr);
   std::printf("RESULT mix=%s clients=%d seconds=%.3f requests=%llu rps=%.1f p50_us=%.1f p99_us=%.1f p999_us=%.1f "
               "max_us=%.1f errors=%llu exceptions=%llu exc06=%llu transport_errors=%llu reconnects=%llu "
-              "idle_clients=%llu home_commands=%llu homing_cycles=%ld%s\n",
+              "idle_clients=%llu home_commands=%llu homing_cycles=%ld client_spread=%.3f%s\n",
               c.mix.c_str(), c.clients, elapsed_s, (unsigned long long)(ok + exc), rps, p50, p99, p999, mx,
               (unsigned long long)errors, (unsigned long long)exc, (unsigned long long)exc06,
               (unsigned long long)terr, (unsigned long long)reconnects, (unsigned long long)never,
               (unsigned long long)home.commands,
               home.cycles_after >= 0 && home.cycles_before >= 0 ? home.cycles_after - home.cycles_before : -1L,
-              counters.c_str());
+              client_spread(results), counters.c_str());
   print_spread(results);
   print_by_request(c, results);
   return 0;
