@@ -28,9 +28,11 @@ cores were full); nothing in it is written by hand or carried over from an
 earlier run. Hardware counters (cycles, instructions) would add the work per
 request; `perf stat` reports them as <not supported> on this VM (the counter
 tables say what perf said in the run), so the kernel's scheduler counters are
-what is used, and a software-clock profile: the first round of each Modbus
-TCP comparison also runs `perf record -e cpu-clock -g` on the server over the
-same stretch, and its samples are counted by the system call they were in.
+what is used, and a software-clock profile: after the first round of each
+Modbus TCP comparison, one more stretch of the same load, untimed, runs under
+`perf record -e cpu-clock -g` on the server (perf slows what it samples, the
+busier process more), and its samples are counted by the system call they
+were in.
 """
 import functools
 import os
@@ -302,7 +304,7 @@ def profile_sentence(hp, rp, h_cpu_us, r_cpu_us, who="bare libmodbus"):
     diffs = {name: hp["by_call"].get(name, 0) * h_cpu_us - rp["by_call"].get(name, 0) * r_cpu_us
              for name in set(hp["by_call"]) | set(rp["by_call"])}
     name, extra = max(diffs.items(), key=lambda x: x[1])
-    s = (f"Profile of round 1 (perf record, cpu-clock, {hp['samples']} and {rp['samples']} samples), CPU by system "
+    s = (f"Profile of one more stretch of round 1's load, untimed (perf record, cpu-clock, {hp['samples']} and {rp['samples']} samples), CPU by system "
          f"call: homingd {top(hp)}; {who} {top(rp)}.")
     if extra > 0:
         meaning = CALL_MEANING.get(name)
@@ -643,7 +645,8 @@ def throughput_table(tp):
     prof = [(c, throughput_figures(tp[c])) for c in sorted(tp)]
     prof = [(c, f) for c, f in prof if f and f["homingd"]["profile"] and f["bare"]["profile"]]
     if prof:
-        L += ["Where the servers' CPU went in round 1 (`perf record -e cpu-clock -g` over the same stretch; each "
+        L += ["Where the servers' CPU went (`perf record -e cpu-clock -g` over one more stretch of round 1's load, "
+              "untimed: perf slows what it samples; each "
               "sample counted under the system call it was in, else user space or the kernel outside a system call; "
               "the four largest shares):", "",
               "| clients | server | samples | CPU by system call |", "|---:|---|---:|---|"]
@@ -917,7 +920,8 @@ def durable_cause(dr):
                      f"busy, {h.get('others', 0):.2f} by other processes.")
     pr = h.get("profile")
     if pr:
-        s.append(f"Profile of round 1 (perf record, cpu-clock, {pr['samples']} samples), homingd's CPU by system "
+        s.append(f"Profile of as many writes again after round 1's, untimed (perf record, cpu-clock, "
+                 f"{pr['samples']} samples), homingd's CPU by system "
                  "call: " + ", ".join(f"{name} {share * 100:.0f} %" for name, share in
                                       sorted(pr["by_call"].items(), key=lambda x: -x[1])[:5]) + ".")
     return " ".join(s)
