@@ -238,8 +238,6 @@ void EventLoop::run() {
       spdlog::error("{}: event loop: epoll_wait: {}", shared_.name, std::strerror(errno));
       break;
     }
-    ready.swap(again);
-    again.clear();
     for (int i = 0; i < n; ++i) {
       if (events[i].data.u64 == kWakeId) {
         std::uint64_t count = 0;
@@ -250,11 +248,15 @@ void EventLoop::run() {
     }
     take_inbox(ready);
     expire_due(Clock::now(), ready);
-    std::sort(ready.begin(), ready.end());
-    ready.erase(std::unique(ready.begin(), ready.end()), ready.end());
+    // In the order they became ready (epoll's), the connections that had a
+    // turn already last: the one that waited longest is served first.
+    ready.insert(ready.end(), again.begin(), again.end());
+    again.clear();
+    ++turn_;
     for (const std::uint64_t id : ready) {
       const auto it = slots_.find(id);
-      if (it == slots_.end()) continue;
+      if (it == slots_.end() || it->second.turn == turn_) continue;  // gone, or listed twice
+      it->second.turn = turn_;
       if (it->second.connection->off_loop()) continue;  // its answer steps it
       step(id, it->second, again);
     }

@@ -66,6 +66,7 @@ class EventLoop {
     std::unique_ptr<TcpConnection> connection;
     std::uint32_t events = 0;  // registered with epoll (0: not registered)
     bool announced = false;    // "connected" logged
+    std::uint64_t turn = 0;    // the last turn of the loop that stepped it
   };
   struct Answer {
     std::uint64_t id;
@@ -87,6 +88,7 @@ class EventLoop {
   int wake_fd_ = -1;
   std::atomic<int> held_{0};
   std::uint64_t next_id_ = 1;
+  std::uint64_t turn_ = 0;  // counts the loop's wake-ups
   std::unordered_map<std::uint64_t, Slot> slots_;  // the loop's thread only
   // No connection's deadline is earlier (the loop's thread only). It may be
   // earlier than the true earliest, never later: a step can only postpone
