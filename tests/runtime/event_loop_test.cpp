@@ -1,0 +1,133 @@
+// One TCP event loop (server/event_loop.hpp) over Unix socket pairs: the
+// connections that became ready are served in the order their requests
+// arrived, not in the order they connected.
+#include <catch2/catch.hpp>
+#include <fcntl.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "server/event_loop.hpp"
+
+using namespace std::chrono_literals;
+
+namespace {
+
+class Plain final : public server::ChannelHandshake {
+ public:
+  explicit Plain(int fd) : fd_(fd) {}
+  server::OpenStep step(server::ClientInfo&) override { return server::OpenStep::opened(); }
+  std::unique_ptr<server::ByteChannel> channel() override { return std::make_unique<server::SocketChannel>(fd_); }
+
+ private:
+  int fd_;
+};
+
+// Notes which connection each request came from; the second request of
+// connection 0 holds the loop until the test lets it go.
+class Recorder final : public server::RequestHandler {
+ public:
+  server::Reply handle(std::uint8_t, std::span<const std::uint8_t> pdu, const server::ClientInfo& client) override {
+    std::unique_lock lock(mutex_);
+    order_.push_back(client.id);
+    changed_.notify_all();
+    if (client.id == 0 && ++zero_seen_ == 2) changed_.wait_for(lock, 5s, [&] { return released_; });
+    return server::Reply{true, {pdu[0], 0}};
+  }
+  void disconnected(const server::ClientInfo&) override {}
+
+  bool wait_for_requests(std::size_t n) {
+    std::unique_lock lock(mutex_);
+    return changed_.wait_for(lock, 5s, [&] { return order_.size() >= n; });
+  }
+  void release() {
+    std::lock_guard lock(mutex_);
+    released_ = true;
+    changed_.notify_all();
+  }
+  std::vector<std::uint64_t> order() {
+    std::lock_guard lock(mutex_);
+    return order_;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::vector<std::uint64_t> order_;
+  bool released_ = false;
+  int zero_seen_ = 0;
+};
+
+void send_read(int fd, std::uint8_t tid) {
+  const std::array<std::uint8_t, 12> frame{0, tid, 0, 0, 0, 6, 1, 0x03, 0, 0, 0, 1};
+  REQUIRE(::send(fd, frame.data(), frame.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(frame.size()));
+}
+
+void take_reply(int fd) {
+  std::array<std::uint8_t, 9> reply{};  // MBAP + function + one byte
+  REQUIRE(::recv(fd, reply.data(), reply.size(), MSG_WAITALL) == static_cast<ssize_t>(reply.size()));
+}
+
+// Runs the loop on its own thread; stops it however the test ends.
+struct Running {
+  server::EventLoop& loop;
+  std::atomic<bool>& stop;
+  std::thread runner{[this] { loop.run(); }};
+  ~Running() {
+    stop = true;
+    loop.wake();
+    runner.join();
+  }
+};
+
+}  // namespace
+
+TEST_CASE("the event loop serves first the connection whose request came first and not the one that connected first") {
+  Recorder handler;
+  server::RequestWorkers workers(2, "test-worker");
+  std::mutex registry;
+  std::atomic<int> active{0};
+  std::atomic<bool> stop{false};
+  server::EventLoop loop({handler, workers, registry, active, stop, "tcp"});
+  constexpr int kConnections = 4;
+  std::array<server::ConnectionEntry, kConnections> entries;  // outlive the loop's run: it closes them
+  std::array<int, kConnections> client_fds{};
+  Running running{loop, stop};
+  for (int i = 0; i < kConnections; ++i) {
+    int pair[2];
+    REQUIRE(::socketpair(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0, pair) == 0);
+    entries[i].fd = pair[0];
+    client_fds[i] = pair[1];
+    ::fcntl(pair[1], F_SETFL, ::fcntl(pair[1], F_GETFL) & ~O_NONBLOCK);  // the test's side waits
+    ++active;
+    loop.adopt(entries[i],
+               std::make_unique<server::TcpConnection>(
+                   pair[0], server::ClientInfo(static_cast<std::uint64_t>(i), server::Transport::tcp, "pair"),
+                   std::make_unique<Plain>(pair[0]), 0, 60'000, std::chrono::steady_clock::now()));
+  }
+  // One request each: every connection is now watched by the loop.
+  for (int i = 0; i < kConnections; ++i) {
+    send_read(client_fds[i], 1);
+    take_reply(client_fds[i]);
+  }
+  REQUIRE(handler.wait_for_requests(kConnections));
+  // Connection 0's next request holds the loop; meanwhile 3, 2 and 1 send theirs, in that order.
+  send_read(client_fds[0], 2);
+  REQUIRE(handler.wait_for_requests(kConnections + 1));
+  for (const int i : {3, 2, 1}) send_read(client_fds[i], 2);
+  handler.release();
+  REQUIRE(handler.wait_for_requests(2 * kConnections));
+  const auto order = handler.order();
+  CHECK(std::vector<std::uint64_t>(order.begin() + kConnections, order.end()) == std::vector<std::uint64_t>{0, 3, 2, 1});
+  for (const int i : {0, 3, 2, 1}) take_reply(client_fds[i]);
+  for (const int fd : client_fds) ::close(fd);
+}
