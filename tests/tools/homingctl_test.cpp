@@ -169,6 +169,14 @@ TEST_CASE("homingctl usage errors exit 2, an unreachable module exits 3, --help 
     CHECK(r.code() == 3);
     CHECK(r.err.find("cannot resolve cabinet-7.invalid") != std::string::npos);
   }
+  // A port that is not one is the user's mistake (it used to wrap round to another port).
+  for (const char* address : {"127.0.0.1:70000", "127.0.0.1:0", "127.0.0.1:15x"}) {
+    r = ctl_plain({"--tcp", address, "status"});
+    SHOW(r);
+    CHECK(r.code() == 2);
+    CHECK(r.err.find(std::string("--tcp ") + address + ": expected HOST or HOST:PORT, PORT from 1 to 65535") !=
+          std::string::npos);
+  }
 }
 
 TEST_CASE("homingctl --tcp takes the module's host name as well as its address") {

@@ -12,6 +12,7 @@
 
 #include "registers/lookup.hpp"
 #include "tls/client.hpp"
+#include "host_port.hpp"
 #include "tls_tunnel.hpp"
 
 namespace homingctl {
@@ -52,16 +53,6 @@ int no_answer_at_unit(const std::string& what, int ex) {
   return ex;
 }
 
-std::pair<std::string, int> split_host_port(const std::string& s) {
-  const auto colon = s.rfind(':');
-  if (colon == std::string::npos) return {s, 502};
-  try {
-    return {s.substr(0, colon), std::stoi(s.substr(colon + 1))};
-  } catch (...) {
-    throw std::invalid_argument(fmt::format("--tcp {}: expected HOST:PORT", s));
-  }
-}
-
 // The module's IPv4 address for HOST, a name or an address, as --tls finds
 // it: libmodbus's TCP client reads HOST with inet_addr(), which takes a name
 // for 255.255.255.255 and fails with "Network is unreachable".
@@ -92,7 +83,7 @@ Connection::Connection(const ConnectionOptions& options) : options_(options) {
         TlsOptions{options_.tls, options_.cert, options_.key, options_.ca, std::max(3000, options_.timeout_ms)});
     ctx_ = modbus_new_tcp("127.0.0.1", 802);  // never connects: its socket is the tunnel's
   } else {
-    auto [host, port] = split_host_port(options_.tcp);
+    auto [host, port] = host_and_port(options_.tcp, 502, "--tcp");
     ctx_ = modbus_new_tcp(ipv4_of(host, describe()).c_str(), port);
   }
   if (!ctx_) throw LinkError(fmt::format("cannot set up {}: {}", describe(), modbus_strerror(errno)));

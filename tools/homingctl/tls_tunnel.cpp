@@ -10,20 +10,11 @@
 #include <cstring>
 
 #include "connection.hpp"
+#include "host_port.hpp"
 #include "tls/context.hpp"
 
 namespace homingctl {
 namespace {
-
-std::pair<std::string, int> host_and_port(const std::string& address) {
-  const auto colon = address.rfind(':');
-  if (colon == std::string::npos) return {address, 802};
-  try {
-    return {address.substr(0, colon), std::stoi(address.substr(colon + 1))};
-  } catch (...) {
-    throw std::invalid_argument(fmt::format("--tls {}: expected HOST or HOST:PORT", address));
-  }
-}
 
 bool write_all(int fd, const std::uint8_t* p, std::size_t n) {
   while (n > 0) {
@@ -45,7 +36,7 @@ TlsTunnel::TlsTunnel(const TlsOptions& options) {
   auto ctx = tls::client_context(tls::ClientFiles{options.cert, options.key, options.ca});
   if (!ctx) throw std::invalid_argument(ctx.error());
   ctx_ = std::move(*ctx);
-  const auto [host, port] = host_and_port(options.address);
+  const auto [host, port] = host_and_port(options.address, 802, "--tls");
   auto client = tls::Client::connect(host, port, ctx_.get(), std::chrono::milliseconds(options.timeout_ms));
   if (!client) throw LinkError(fmt::format("tls {}: {}", options.address, client.error()));
   client_.emplace(std::move(*client));
