@@ -233,6 +233,7 @@ void run_client(const Config& c, int index, ClientResult& r, const std::atomic<b
       modbus_read_registers(ctx, durable_addr, 10, durable_words) != 10)
     std::memset(durable_words, 0, sizeof(durable_words));
   r.latency_us.reserve(1 << 16);
+  r.latency_op.reserve(1 << 16);
   while (!go) std::this_thread::yield();
   std::uint16_t tid = 0;
   std::uint16_t values[125];

@@ -91,8 +91,9 @@ class EventLoop {
   std::uint64_t turn_ = 0;  // counts the loop's wake-ups
   std::unordered_map<std::uint64_t, Slot> slots_;  // the loop's thread only
   // No connection's deadline is earlier (the loop's thread only). It may be
-  // earlier than the true earliest, never later: a step can only postpone
-  // its own connection's deadline or set a new one, which note_deadline takes.
+  // earlier than the true earliest, never later: only a step moves a
+  // connection's deadline (later, or sooner: a reply or a frame begun), and
+  // note_deadline takes the new one.
   std::optional<std::chrono::steady_clock::time_point> next_due_;
 
   std::mutex inbox_mutex_;

@@ -107,7 +107,9 @@ TEST_CASE("the event loop serves first the connection whose request came first a
     REQUIRE(::socketpair(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0, pair) == 0);
     entries[i].fd = pair[0];
     client_fds[i] = pair[1];
-    ::fcntl(pair[1], F_SETFL, ::fcntl(pair[1], F_GETFL) & ~O_NONBLOCK);  // the test's side waits
+    ::fcntl(pair[1], F_SETFL, ::fcntl(pair[1], F_GETFL) & ~O_NONBLOCK);  // the test's side waits, 5 s at most
+    const timeval bound{5, 0};
+    ::setsockopt(pair[1], SOL_SOCKET, SO_RCVTIMEO, &bound, sizeof bound);
     ++active;
     loop.adopt(entries[i],
                std::make_unique<server::TcpConnection>(
