@@ -5,37 +5,10 @@
 #include <CLI/CLI.hpp>
 
 #include "config_file.hpp"
+#include "tls/address.hpp"
 
 namespace server {
 namespace {
-
-struct HostPort {
-  std::string host;
-  int port = 0;
-};
-
-// "HOST:PORT"; for --tls also "HOST" alone, on the default port.
-std::expected<HostPort, std::string> split_host_port(const std::string& option, const std::string& text,
-                                                     std::optional<int> default_port) {
-  const auto colon = text.rfind(':');
-  if (default_port && colon == std::string::npos && !text.empty()) return HostPort{text, *default_port};
-  const std::string usage = default_port ? "HOST or HOST:PORT (for example 0.0.0.0:802)"
-                                         : "HOST:PORT (for example 127.0.0.1:1502)";
-  if (colon == std::string::npos || colon == 0 || colon + 1 >= text.size())
-    return std::unexpected(option + ": expected " + usage + ", got '" + text + "'");
-  const std::string port = text.substr(colon + 1);
-  int value = 0;
-  try {
-    std::size_t used = 0;
-    value = std::stoi(port, &used);
-    if (used != port.size()) throw std::invalid_argument(port);
-  } catch (const std::exception&) {
-    return std::unexpected(option + ": port '" + port + "' is not a number (1..65535)");
-  }
-  if (value < 1 || value > 65535)
-    return std::unexpected(option + ": port " + port + " is outside 1..65535");
-  return HostPort{text.substr(0, colon), value};
-}
 
 // Where --tcp and --tls listen: an IPv4 address of this computer. libmodbus
 // reads it with inet_addr(), which takes a host name or a mistyped address
@@ -81,7 +54,7 @@ std::expected<void, std::string> check_mqtt(const std::string& url, Options& o, 
   const bool tls = url.starts_with("mqtts://");
   if (!tls && !url.starts_with("mqtt://"))
     return std::unexpected("--mqtt " + url + ": expected mqtt://HOST[:PORT] or mqtts://HOST[:PORT], e.g. mqtt://broker.plant:1883");
-  auto where = split_host_port("--mqtt", url.substr(tls ? 8 : 7), tls ? 8883 : 1883);
+  auto where = tls::split_host_port("--mqtt", url.substr(tls ? 8 : 7), tls ? 8883 : 1883);
   if (!where) return std::unexpected(where.error());
   o.mqtt_enabled = true;
   o.mqtt_tls = tls;
@@ -375,14 +348,14 @@ std::expected<ParseOutcome, std::string> OptionParser::parse(int argc, char** ar
     o.config_path = cfg->as<std::string>();
   }
   if (o.tcp_enabled) {
-    auto where = split_host_port("--tcp", t.tcp, std::nullopt);
+    auto where = tls::split_host_port("--tcp", t.tcp, std::nullopt);
     if (!where) return std::unexpected(where.error());
     if (auto ok = check_listen_address("--tcp", where->host); !ok) return std::unexpected(ok.error());
     o.tcp_host = where->host;
     o.tcp_port = where->port;
   }
   if (!t.tls.empty()) {
-    auto where = split_host_port("--tls", t.tls, 802);
+    auto where = tls::split_host_port("--tls", t.tls, 802);
     if (!where) return std::unexpected(where.error());
     if (auto ok = check_listen_address("--tls", where->host); !ok) return std::unexpected(ok.error());
     o.tls_enabled = true;

@@ -1,7 +1,6 @@
 #include "tls/client.hpp"
 
 #include <fcntl.h>
-#include <netdb.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <sys/socket.h>
@@ -10,21 +9,10 @@
 #include <cerrno>
 #include <cstring>
 
+#include "tls/address.hpp"
 #include "tls/context.hpp"
 
 namespace tls {
-
-std::expected<in_addr, std::string> resolve_ipv4(const std::string& host) {
-  addrinfo hints{};
-  hints.ai_family = AF_INET;
-  hints.ai_socktype = SOCK_STREAM;
-  addrinfo* found = nullptr;
-  if (const int rc = ::getaddrinfo(host.c_str(), nullptr, &hints, &found); rc != 0)
-    return std::unexpected("cannot resolve " + host + ": " + ::gai_strerror(rc));
-  const in_addr address = reinterpret_cast<const sockaddr_in*>(found->ai_addr)->sin_addr;
-  ::freeaddrinfo(found);
-  return address;
-}
 
 namespace {
 

@@ -1,8 +1,6 @@
 #pragma once
 // A Modbus/TCP Security client connection with deadlines: the TCP connection,
 // the handshake and the bytes, for homingctl, the tests and the benchmark.
-#include <netinet/in.h>
-
 #include <chrono>
 #include <cstdint>
 #include <expected>
@@ -12,11 +10,6 @@
 #include "tls/session.hpp"
 
 namespace tls {
-
-// host's IPv4 address: a dotted address as it is, a name looked up. The
-// error reads "cannot resolve HOST: why". (libmodbus takes only dotted
-// addresses, so homingctl resolves a name here first.)
-std::expected<in_addr, std::string> resolve_ipv4(const std::string& host);
 
 class Client {
  public:

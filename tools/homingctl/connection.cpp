@@ -11,8 +11,8 @@
 #include <cstring>
 
 #include "registers/lookup.hpp"
-#include "tls/client.hpp"
 #include "host_port.hpp"
+#include "tls/address.hpp"
 #include "tls_tunnel.hpp"
 
 namespace homingctl {
