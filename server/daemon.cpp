@@ -117,6 +117,7 @@ ListenConfig listen_config(const Options& opt, const std::string& host, int port
   config.port = port;
   config.max_clients = opt.max_clients;
   config.idle_timeout_s = opt.idle_timeout_s;
+  config.poll_us = opt.poll_us;
   for (const auto& entry : opt.privileged) config.privileged.push_back(*parse_cidr(entry));
   config.max_per_address = opt.max_clients_per_address;
   config.refusal_log_interval_s = opt.refusal_log_interval_s;

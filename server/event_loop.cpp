@@ -1,6 +1,7 @@
 #include "event_loop.hpp"
 
 #include <spdlog/spdlog.h>
+#include <sched.h>
 #include <sys/epoll.h>
 #include <sys/eventfd.h>
 #include <sys/socket.h>
@@ -50,7 +51,7 @@ std::int64_t steady_now_ns() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
 }
 
-EventLoop::EventLoop(Shared shared) : shared_(shared) {
+EventLoop::EventLoop(Shared shared) : shared_(shared), poll_(shared.poll_longest) {
   epoll_fd_ = ::epoll_create1(EPOLL_CLOEXEC);
   wake_fd_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
   if (epoll_fd_ < 0 || wake_fd_ < 0) throw std::runtime_error(std::string("event loop: ") + std::strerror(errno));
@@ -229,11 +230,31 @@ int EventLoop::wait_ms(bool again) const {
   return static_cast<int>(std::max<std::int64_t>(0, ms));
 }
 
+int EventLoop::wait_for_events(std::span<epoll_event> events, bool again) {
+  const int size = static_cast<int>(events.size());
+  if (again || !worked_) return ::epoll_wait(epoll_fd_, events.data(), size, wait_ms(again));
+  const auto began = Clock::now();
+  int n = 0;
+  if (const auto window = poll_.window(); window.count() > 0) {
+    const auto until = began + window;
+    // Yielding between polls: a thread waiting for this core (the control
+    // loop, another loop, a client on the same machine) goes first.
+    do {
+      n = ::epoll_wait(epoll_fd_, events.data(), size, 0);
+      if (n == 0) ::sched_yield();
+    } while (n == 0 && Clock::now() < until);
+  }
+  const bool caught = n != 0;
+  if (!caught) n = ::epoll_wait(epoll_fd_, events.data(), size, wait_ms(false));
+  poll_.waited(Clock::now() - began, caught);
+  return n;
+}
+
 void EventLoop::run() {
   std::array<epoll_event, 64> events{};
   std::vector<std::uint64_t> ready, again;
   while (!shared_.stop) {
-    const int n = ::epoll_wait(epoll_fd_, events.data(), static_cast<int>(events.size()), wait_ms(!again.empty()));
+    const int n = wait_for_events(events, !again.empty());
     if (n < 0 && errno != EINTR) {
       spdlog::error("{}: event loop: epoll_wait: {}", shared_.name, std::strerror(errno));
       break;
@@ -253,11 +274,13 @@ void EventLoop::run() {
     ready.insert(ready.end(), again.begin(), again.end());
     again.clear();
     ++turn_;
+    worked_ = false;
     for (const std::uint64_t id : ready) {
       const auto it = slots_.find(id);
       if (it == slots_.end() || it->second.turn == turn_) continue;  // gone, or listed twice
       it->second.turn = turn_;
       if (it->second.connection->off_loop()) continue;  // its answer steps it
+      worked_ = true;
       step(id, it->second, again);
     }
     ready.clear();

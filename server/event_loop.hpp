@@ -13,12 +13,16 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <unordered_map>
 #include <vector>
 
+#include <sys/epoll.h>
+
 #include "connection_policy.hpp"
+#include "poll_window.hpp"
 #include "request_handler.hpp"
 #include "request_workers.hpp"
 #include "tcp_connection.hpp"
@@ -47,6 +51,7 @@ class EventLoop {
     std::atomic<int>& active;
     const std::atomic<bool>& stop;
     std::string_view name;  // "tcp", "tls": for the log
+    std::chrono::microseconds poll_longest{0};  // server/poll_window.hpp; 0: never poll
   };
   explicit EventLoop(Shared shared);
   ~EventLoop();
@@ -82,6 +87,8 @@ class EventLoop {
   void post_answer(std::uint64_t id, Reply reply);  // from another thread
   void close(std::uint64_t id, Slot& slot, bool stopping);
   int wait_ms(bool again) const;
+  // Waits for events (polling first after a turn with work); their count.
+  int wait_for_events(std::span<epoll_event> events, bool again);
 
   Shared shared_;
   int epoll_fd_ = -1;
@@ -89,6 +96,8 @@ class EventLoop {
   std::atomic<int> held_{0};
   std::uint64_t next_id_ = 1;
   std::uint64_t turn_ = 0;  // counts the loop's wake-ups
+  PollWindow poll_;
+  bool worked_ = false;  // the last turn stepped a connection
   std::unordered_map<std::uint64_t, Slot> slots_;  // the loop's thread only
   // No connection's deadline is earlier (the loop's thread only). It may be
   // earlier than the true earliest, never later: only a step moves a

@@ -206,6 +206,12 @@ OptionParser::Table::Table() {
   app.add_option("--idle-timeout-s,--idle_timeout_s", o.idle_timeout_s, "Drop a TCP client silent for this long")
       ->check(CLI::Range(1, 86400))
       ->capture_default_str();
+  app.add_option("--poll-us,--poll_us", o.poll_us,
+                 "After serving a request, a TCP/TLS event loop polls for the next one up to this long before it "
+                 "sleeps (learnt from the traffic: back-to-back requests answer sooner, a slow poller costs nothing); "
+                 "0: never poll")
+      ->check(CLI::Range(0, 1000))
+      ->capture_default_str();
   app.add_option("--sim-unit,--sim_unit", o.sim_unit_id, "Unit id of the simulator (sim backend only)")
       ->check(CLI::Range(1, 247))
       ->capture_default_str();

@@ -76,7 +76,8 @@ TcpServer::TcpServer(ListenConfig config, RequestHandler& handler, std::unique_p
   const int loops = loop_count(config_.event_loops);
   for (int i = 0; i < loops; ++i)
     loops_.push_back(std::make_unique<EventLoop>(
-        EventLoop::Shared{handler_, workers_, connections_mutex_, active_, stop_, name()}));
+        EventLoop::Shared{handler_, workers_, connections_mutex_, active_, stop_, name(),
+                          std::chrono::microseconds(config_.poll_us)}));
 }
 
 TcpServer::~TcpServer() {

@@ -1,9 +1,12 @@
 // One TCP event loop (server/event_loop.hpp) over Unix socket pairs: the
 // connections that became ready are served in the order their requests
-// arrived, not in the order they connected.
+// arrived, not in the order they connected, and a loop that polls before it
+// sleeps (server/poll_window.hpp) stops polling when its clients go quiet.
 #include <catch2/catch.hpp>
 #include <fcntl.h>
+#include <pthread.h>
 #include <sys/socket.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <array>
@@ -87,7 +90,31 @@ struct Running {
     loop.wake();
     runner.join();
   }
+  // CPU time the loop's thread has used so far.
+  std::chrono::nanoseconds cpu_time() {
+    clockid_t clock{};
+    REQUIRE(::pthread_getcpuclockid(runner.native_handle(), &clock) == 0);
+    timespec t{};
+    REQUIRE(::clock_gettime(clock, &t) == 0);
+    return std::chrono::seconds(t.tv_sec) + std::chrono::nanoseconds(t.tv_nsec);
+  }
 };
+
+// A socket pair whose one end the loop takes over as connection `id`; the
+// other end, the test's, blocks for 5 s at most.
+int connect_pair(server::EventLoop& loop, server::ConnectionEntry& entry, int id, std::atomic<int>& active) {
+  int pair[2];
+  REQUIRE(::socketpair(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0, pair) == 0);
+  entry.fd = pair[0];
+  ::fcntl(pair[1], F_SETFL, ::fcntl(pair[1], F_GETFL) & ~O_NONBLOCK);
+  const timeval bound{5, 0};
+  ::setsockopt(pair[1], SOL_SOCKET, SO_RCVTIMEO, &bound, sizeof bound);
+  ++active;
+  loop.adopt(entry, std::make_unique<server::TcpConnection>(
+                        pair[0], server::ClientInfo(static_cast<std::uint64_t>(id), server::Transport::tcp, "pair"),
+                        std::make_unique<Plain>(pair[0]), 0, 60'000, std::chrono::steady_clock::now()));
+  return pair[1];
+}
 
 }  // namespace
 
@@ -102,20 +129,7 @@ TEST_CASE("the event loop serves first the connection whose request came first a
   std::array<server::ConnectionEntry, kConnections> entries;  // outlive the loop's run: it closes them
   std::array<int, kConnections> client_fds{};
   Running running{loop, stop};
-  for (int i = 0; i < kConnections; ++i) {
-    int pair[2];
-    REQUIRE(::socketpair(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0, pair) == 0);
-    entries[i].fd = pair[0];
-    client_fds[i] = pair[1];
-    ::fcntl(pair[1], F_SETFL, ::fcntl(pair[1], F_GETFL) & ~O_NONBLOCK);  // the test's side waits, 5 s at most
-    const timeval bound{5, 0};
-    ::setsockopt(pair[1], SOL_SOCKET, SO_RCVTIMEO, &bound, sizeof bound);
-    ++active;
-    loop.adopt(entries[i],
-               std::make_unique<server::TcpConnection>(
-                   pair[0], server::ClientInfo(static_cast<std::uint64_t>(i), server::Transport::tcp, "pair"),
-                   std::make_unique<Plain>(pair[0]), 0, 60'000, std::chrono::steady_clock::now()));
-  }
+  for (int i = 0; i < kConnections; ++i) client_fds[i] = connect_pair(loop, entries[i], i, active);
   // One request each: every connection is now watched by the loop.
   for (int i = 0; i < kConnections; ++i) {
     send_read(client_fds[i], 1);
@@ -132,4 +146,33 @@ TEST_CASE("the event loop serves first the connection whose request came first a
   CHECK(std::vector<std::uint64_t>(order.begin() + kConnections, order.end()) == std::vector<std::uint64_t>{0, 3, 2, 1});
   for (const int i : {0, 3, 2, 1}) take_reply(client_fds[i]);
   for (const int fd : client_fds) ::close(fd);
+}
+
+TEST_CASE("an event loop that polls answers back-to-back requests and sleeps once its client goes quiet") {
+  Recorder handler;
+  server::RequestWorkers workers(2, "test-worker");
+  std::mutex registry;
+  std::atomic<int> active{0};
+  std::atomic<bool> stop{false};
+  server::EventLoop loop({handler, workers, registry, active, stop, "tcp", 200us});
+  server::ConnectionEntry entry;  // outlives the loop's run: it closes it
+  Running running{loop, stop};
+  const int fd = connect_pair(loop, entry, 7, active);
+  // Each request as soon as the last answer is in: the loop learns to poll.
+  constexpr int kRequests = 500;
+  for (int i = 0; i < kRequests; ++i) {
+    send_read(fd, static_cast<std::uint8_t>(i));
+    take_reply(fd);
+  }
+  CHECK(handler.order() == std::vector<std::uint64_t>(kRequests, 7));
+  // Quiet: within a few windows the loop sleeps, and a sleeping thread uses
+  // no CPU. A loop that kept polling would use most of the 300 ms.
+  std::this_thread::sleep_for(50ms);
+  const auto before = running.cpu_time();
+  std::this_thread::sleep_for(300ms);
+  CHECK(running.cpu_time() - before < 30ms);
+  // And it still wakes for the next request.
+  send_read(fd, 1);
+  take_reply(fd);
+  ::close(fd);
 }
