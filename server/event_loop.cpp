@@ -158,6 +158,8 @@ void EventLoop::step(std::uint64_t id, Slot& slot, std::vector<std::uint64_t>& a
     spdlog::info("{}: client {}{}{} connected ({} active)", shared_.name, info.address, info.identity.empty() ? "" : " ",
                  info.identity, shared_.active.load());
   }
+  worked_ = worked_ || w == TcpConnection::Wait::read || w == TcpConnection::Wait::write ||
+            w == TcpConnection::Wait::again;
   switch (w) {
     case TcpConnection::Wait::read: watch(id, slot, EPOLLIN | EPOLLRDHUP); break;
     case TcpConnection::Wait::write: watch(id, slot, EPOLLOUT); break;
@@ -236,16 +238,20 @@ int EventLoop::wait_for_events(std::span<epoll_event> events, bool again) {
   const auto began = Clock::now();
   int n = 0;
   if (const auto window = poll_.window(); window.count() > 0) {
+    polls_.fetch_add(1, std::memory_order_relaxed);
     const auto until = began + window;
-    // Yielding between polls: a thread waiting for this core (the control
-    // loop, another loop, a client on the same machine) goes first.
+    // Yielding between polls lets another thread of normal priority waiting
+    // for this core run (a client on the same computer, the other loop, a
+    // worker, the settings writer); the control loop preempts anyway.
     do {
       n = ::epoll_wait(epoll_fd_, events.data(), size, 0);
       if (n == 0) ::sched_yield();
     } while (n == 0 && Clock::now() < until);
+    if (n < 0) return n;  // errno as epoll_wait left it
   }
-  const bool caught = n != 0;
-  if (!caught) n = ::epoll_wait(epoll_fd_, events.data(), size, wait_ms(false));
+  const bool caught = n > 0;
+  if (caught) polls_caught_.fetch_add(1, std::memory_order_relaxed);
+  else n = ::epoll_wait(epoll_fd_, events.data(), size, wait_ms(false));
   poll_.waited(Clock::now() - began, caught);
   return n;
 }
@@ -280,7 +286,6 @@ void EventLoop::run() {
       if (it == slots_.end() || it->second.turn == turn_) continue;  // gone, or listed twice
       it->second.turn = turn_;
       if (it->second.connection->off_loop()) continue;  // its answer steps it
-      worked_ = true;
       step(id, it->second, again);
     }
     ready.clear();

@@ -64,6 +64,11 @@ class EventLoop {
   void run();
   void wake();
   int connections() const { return held_.load(); }
+  struct PollCounts {
+    std::uint64_t polls = 0;
+    std::uint64_t caught = 0;
+  };
+  PollCounts poll_counts() const { return {polls_.load(), polls_caught_.load()}; }
 
  private:
   struct Slot {
@@ -97,7 +102,12 @@ class EventLoop {
   std::uint64_t next_id_ = 1;
   std::uint64_t turn_ = 0;  // counts the loop's wake-ups
   PollWindow poll_;
-  bool worked_ = false;  // the last turn stepped a connection
+  // The last turn served a connection that stays on the loop. A request sent
+  // off the loop is not reason to poll: its answer waits for a commit or the
+  // control loop, which need the core the polling would take.
+  bool worked_ = false;
+  std::atomic<std::uint64_t> polls_{0};         // waits that began with polling
+  std::atomic<std::uint64_t> polls_caught_{0};  // of them, ended by what the polling caught
   std::unordered_map<std::uint64_t, Slot> slots_;  // the loop's thread only
   // No connection's deadline is earlier (the loop's thread only). It may be
   // earlier than the true earliest, never later: only a step moves a

@@ -207,9 +207,9 @@ OptionParser::Table::Table() {
       ->check(CLI::Range(1, 86400))
       ->capture_default_str();
   app.add_option("--poll-us,--poll_us", o.poll_us,
-                 "After serving a request, a TCP/TLS event loop polls for the next one up to this long before it "
-                 "sleeps (learnt from the traffic: back-to-back requests answer sooner, a slow poller costs nothing); "
-                 "0: never poll")
+                 "After a turn in which it answered a client, a TCP/TLS event loop polls for the next request up to "
+                 "this long before it sleeps (learnt from the traffic, per loop: back-to-back requests answer sooner, "
+                 "slow pollers cost nothing); 0: never poll")
       ->check(CLI::Range(0, 1000))
       ->capture_default_str();
   app.add_option("--sim-unit,--sim_unit", o.sim_unit_id, "Unit id of the simulator (sim backend only)")

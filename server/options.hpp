@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "poll_window.hpp"
 #include "registers/codec.hpp"
 
 namespace server {
@@ -30,7 +31,7 @@ struct Options {
   int max_clients_per_address = 0;  // 0: as many as max_clients
   std::vector<std::string> privileged;  // addresses that never give way: "192.168.1.10", "10.0.0.0/24"
   int idle_timeout_s = 60;
-  int poll_us = 100;  // server/poll_window.hpp
+  int poll_us = kDefaultPollUs;  // server/poll_window.hpp
   int sim_unit_id = 247;
   double time_scale = 1.0;
   std::string log_level = "info";

@@ -16,6 +16,8 @@
 
 namespace server {
 
+inline constexpr int kDefaultPollUs = 100;  // --poll-us
+
 class PollWindow {
  public:
   using Micros = std::chrono::microseconds;

@@ -37,7 +37,7 @@ struct ListenConfig {
   int max_per_address = 0;
   int refusal_log_interval_s = 10;  // refused connections: one line per address and reason per interval
   int event_loops = 0;              // 0: one per core
-  int poll_us = 0;                  // the longest a loop polls before sleeping (server/poll_window.hpp); 0: never
+  int poll_us = kDefaultPollUs;     // the longest a loop polls before sleeping (server/poll_window.hpp); 0: never
 };
 
 class TcpServer {

@@ -154,7 +154,8 @@ TEST_CASE("an event loop that polls answers back-to-back requests and sleeps onc
   std::mutex registry;
   std::atomic<int> active{0};
   std::atomic<bool> stop{false};
-  server::EventLoop loop({handler, workers, registry, active, stop, "tcp", 200us});
+  // The longest window --poll-us allows: a slow (sanitized) build's client still answers within it.
+  server::EventLoop loop({handler, workers, registry, active, stop, "tcp", 1000us});
   server::ConnectionEntry entry;  // outlives the loop's run: it closes it
   Running running{loop, stop};
   const int fd = connect_pair(loop, entry, 7, active);
@@ -165,12 +166,17 @@ TEST_CASE("an event loop that polls answers back-to-back requests and sleeps onc
     take_reply(fd);
   }
   CHECK(handler.order() == std::vector<std::uint64_t>(kRequests, 7));
-  // Quiet: within a few windows the loop sleeps, and a sleeping thread uses
-  // no CPU. A loop that kept polling would use most of the 300 ms.
+  const auto busy = loop.poll_counts();
+  CHECK(busy.caught > kRequests / 4);  // many requests found the loop polling, not asleep (a busy CI machine: not all)
+  // Quiet: after one more window (the wait that follows the last answer)
+  // the loop sleeps: no more polling, and a sleeping thread uses no CPU. A
+  // loop that kept polling would use most of the 300 ms.
   std::this_thread::sleep_for(50ms);
+  const auto quiet = loop.poll_counts();
   const auto before = running.cpu_time();
   std::this_thread::sleep_for(300ms);
   CHECK(running.cpu_time() - before < 30ms);
+  CHECK(loop.poll_counts().polls == quiet.polls);
   // And it still wakes for the next request.
   send_read(fd, 1);
   take_reply(fd);
