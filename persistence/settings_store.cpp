@@ -167,10 +167,7 @@ Status SettingsStore::prune_audit() {
   return prune->run("pruning the audit log");
 }
 
-bool SettingsStore::settings_lost() const {
-  std::lock_guard lock(impl_->mu);
-  return impl_->settings_lost;
-}
+bool SettingsStore::settings_lost() const { return impl_->settings_lost.load(); }
 
 Status SettingsStore::acknowledge_settings_lost(const ChangeSource& source) {
   std::lock_guard lock(impl_->mu);

@@ -4,6 +4,7 @@
 // store_history.cpp, transfer.cpp).
 #include <spdlog/spdlog.h>
 
+#include <atomic>
 #include <chrono>
 #include <mutex>
 #include <optional>
@@ -20,7 +21,9 @@ struct SettingsStore::Impl {
   std::shared_ptr<spdlog::logger> log;
   sql::Db db;
   std::map<std::string, std::int64_t> values;  // committed values of known registers
-  bool settings_lost = false;
+  // Read without mu: a command (reset_alarm) asks on an event loop, which
+  // must not wait for a commit another thread holds mu through.
+  std::atomic<bool> settings_lost{false};
   bool backup_dirty = false;
   bool backed_up_once = false;
   std::chrono::steady_clock::time_point last_backup{};

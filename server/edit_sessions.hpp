@@ -57,6 +57,8 @@ class EditSessions {
   // Open sessions idle longer than `timeout` are discarded and become expired.
   std::vector<Expired> expire(Clock::time_point now, std::chrono::seconds timeout);
   std::size_t open_count() const;
+  // No session open or expired: every owner's state is none.
+  bool empty() const { return sessions_.empty(); }
 
  private:
   struct Session {

@@ -97,7 +97,7 @@ bool ModbusService::may_write(const ClientInfo& client) const {
 }
 
 homing::Settings ModbusService::settings() const {
-  std::lock_guard lock(mutex_);
+  std::shared_lock lock(mutex_);
   return settings_;
 }
 
@@ -202,7 +202,7 @@ Reply ModbusService::accepted_write_reply(FunctionCode function, const WriteRequ
   return quantity_reply(fc, w.start, static_cast<std::uint16_t>(w.values.size()));
 }
 
-registers::StatusExtras ModbusService::extras_now() {
+registers::StatusExtras ModbusService::extras_now() const {
   registers::StatusExtras extras = extras_;
   const std::uint64_t refusal = last_refusal_.load();
   extras.refusal_count = static_cast<std::uint16_t>(refusal & 0xFFFF);
@@ -216,7 +216,7 @@ registers::StatusExtras ModbusService::extras_now() {
 
 void ModbusService::with_module_view(const std::function<void(const registers::ModuleView&)>& use) {
   const homing::Status status = loop_.status();
-  std::lock_guard lock(mutex_);
+  std::shared_lock lock(mutex_);
   const registers::StatusExtras extras = extras_now();
   use(registers::ModuleView{settings_, host_, status, extras});
 }
@@ -228,11 +228,15 @@ Reply ModbusService::read(Target target, std::uint8_t fc, const ReadRequest& r, 
   std::optional<registers::Refusal> refused;
   if (target == Target::module) {
     const homing::Status status = loop_.status();
-    std::lock_guard lock(mutex_);
+    std::shared_lock lock(mutex_);
     registers::StatusExtras extras = extras_now();
-    const std::string owner = EditSessions::owner_of(client);
-    extras.edit_state = static_cast<std::uint16_t>(edits_.state(owner));
-    extras.edit_staged = static_cast<std::uint16_t>(std::min<std::size_t>(edits_.staged_count(owner), 0xFFFF));
+    extras.edit_state = static_cast<std::uint16_t>(EditState::none);
+    extras.edit_staged = 0;
+    if (!edits_.empty()) {  // most reads: no client has a session, so no owner to name
+      const std::string owner = EditSessions::owner_of(client);
+      extras.edit_state = static_cast<std::uint16_t>(edits_.state(owner));
+      extras.edit_staged = static_cast<std::uint16_t>(std::min<std::size_t>(edits_.staged_count(owner), 0xFFFF));
+    }
     const registers::ModuleView view{settings_, host_, status, extras};
     refused = bits ? registers::read_module_bits(r.table, r.start, flags, view)
                    : registers::read_module_words(r.table, r.start, words, config_.word_order, view);

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <functional>
 #include <mutex>
+#include <shared_mutex>
 #include <string>
 #include <optional>
 #include <span>
@@ -110,7 +111,7 @@ class ModbusService final : public RequestHandler {
   // The answer to an accepted FC 05, 06, 15 or 16: the echo or the quantity.
   static Reply accepted_write_reply(FunctionCode function, const WriteRequest& w);
   Reply read(Target target, std::uint8_t fc, const ReadRequest& request, const ClientInfo& client);
-  registers::StatusExtras extras_now();  // under mutex_
+  registers::StatusExtras extras_now() const;  // under mutex_ (shared is enough)
   // Validates and applies a write; nullopt when accepted.
   std::optional<Reply> write(Target target, std::uint8_t fc, const WriteRequest& request, const ClientInfo& client);
   std::optional<Reply> write_module(std::uint8_t fc, registers::Table table, std::uint16_t start,
@@ -164,7 +165,10 @@ class ModbusService final : public RequestHandler {
   ServiceConfig config_;
   ControlLoop& loop_;
   persistence::SettingsStore* store_;
-  mutable std::mutex mutex_;  // settings_, host_, extras_ and the store
+  // settings_, host_, extras_ and the store. Reads take it shared: the event
+  // loops answer reads side by side, and one loop preempted inside a read
+  // never holds up the other.
+  mutable std::shared_mutex mutex_;
   bool may_write(const ClientInfo& client) const;
   homing::Settings settings_;
   bool locked_ = false;

@@ -163,6 +163,30 @@ TEST_CASE("a settings write is committed while the owner's backup is being writt
   CHECK_FALSE(store.backup_pending());
 }
 
+TEST_CASE("the settings-lost flag is answered at once while another thread holds the store for a backup",
+          "[persistence][backup]") {
+  // An event loop asks for it on every cmd.reset_alarm: it must never wait
+  // for whatever the store is doing on another thread.
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  OpenReport report;
+  auto o = faulty_options();
+  o.backup_on_commit = false;
+  auto store = test::open_ok(db, report, o);
+  REQUIRE(store.commit({{"axis.x.mode", 4}}, test::kTcp));
+  Status backed_up;
+  fault_vfs::BackupGate gate;
+  std::thread backup([&] { backed_up = store.backup_now(); });  // holds the store's lock throughout
+  REQUIRE(gate.held(std::chrono::seconds(10)));
+  auto asked = std::async(std::launch::async, [&] { return store.settings_lost(); });
+  const bool answered = asked.wait_for(std::chrono::seconds(10)) == std::future_status::ready;
+  gate.release();
+  backup.join();
+  CHECK(answered);
+  CHECK_FALSE(asked.get());
+  REQUIRE(backed_up);
+}
+
 TEST_CASE("a checkpoint beside the writer leaves every committed setting in the database file",
           "[persistence][checkpoint]") {
   test::TempDir dir;
