@@ -20,6 +20,44 @@ StoreOptions faulty_options() {
   return o;
 }
 
+// A store on the faulty VFS whose owner writes the backups (none on commit),
+// one committed write in it (axis.x.mode = 4) not yet backed up.
+SettingsStore store_with_backup_due(const std::string& db) {
+  OpenReport report;
+  auto o = faulty_options();
+  o.backup_on_commit = false;
+  auto store = test::open_ok(db, report, o);
+  REQUIRE(store.commit({{"axis.x.mode", 4}}, test::kTcp));
+  return store;
+}
+
+template <class Result>
+struct BesideBackup {
+  bool answered = false;  // within 10 s, while the backup was held
+  Result result{};
+  Status backed_up;
+};
+
+// Runs `backup` on a thread until the fault VFS holds it half written, then
+// `ask` beside it; the backup is let go after `ask` answered or 10 s passed.
+template <class Backup, class Ask>
+auto beside_a_held_backup(Backup backup, Ask ask) {
+  BesideBackup<decltype(ask())> out;
+  fault_vfs::BackupGate gate;
+  std::thread backing_up([&] { out.backed_up = backup(); });
+  if (!gate.held(std::chrono::seconds(10))) {
+    gate.release();
+    backing_up.join();
+    FAIL("the backup never reached the fault VFS's gate");
+  }
+  auto asked = std::async(std::launch::async, ask);
+  out.answered = asked.wait_for(std::chrono::seconds(10)) == std::future_status::ready;
+  gate.release();
+  backing_up.join();
+  out.result = asked.get();
+  return out;
+}
+
 void check_fault_keeps_old_value(fault_vfs::Fault fault, ErrorKind expected_kind) {
   test::TempDir dir;
   const auto db = dir.file("settings.db");
@@ -137,25 +175,13 @@ TEST_CASE("a settings write is committed while the owner's backup is being writt
           "[persistence][backup]") {
   test::TempDir dir;
   const auto db = dir.file("settings.db");
-  OpenReport report;
-  auto o = faulty_options();
-  o.backup_on_commit = false;
-  auto store = test::open_ok(db, report, o);
-  REQUIRE(store.commit({{"axis.x.mode", 4}}, test::kTcp));
-  Status backed_up;
-  {
-    fault_vfs::BackupGate gate;
-    std::thread backup([&] { backed_up = store.backup_if_due(); });
-    REQUIRE(gate.held(std::chrono::seconds(10)));  // the backup is half written
-    auto write = std::async(std::launch::async, [&] { return store.commit({{"axis.x.mode", 5}}, test::kTcp); });
-    // Before the backup was taken off the writer's lock, this write waited until the gate opened.
-    const bool answered = write.wait_for(std::chrono::seconds(10)) == std::future_status::ready;
-    gate.release();
-    backup.join();
-    CHECK(answered);
-    REQUIRE(write.get());
-  }
-  REQUIRE(backed_up);
+  auto store = store_with_backup_due(db);
+  // Before the backup was taken off the writer's lock, this write waited until the gate opened.
+  const auto write = beside_a_held_backup([&] { return store.backup_if_due(); },
+                                          [&] { return store.commit({{"axis.x.mode", 5}}, test::kTcp); });
+  CHECK(write.answered);
+  REQUIRE(write.result);
+  REQUIRE(write.backed_up);
   CHECK(test::sql_int(db + ".bak", "SELECT value FROM settings WHERE name='axis.x.mode'") == 4);
   CHECK(store.backup_pending());  // the write came after the backup's snapshot
   REQUIRE(store.backup_if_due());
@@ -169,22 +195,12 @@ TEST_CASE("the settings-lost flag is answered at once while another thread holds
   // for whatever the store is doing on another thread.
   test::TempDir dir;
   const auto db = dir.file("settings.db");
-  OpenReport report;
-  auto o = faulty_options();
-  o.backup_on_commit = false;
-  auto store = test::open_ok(db, report, o);
-  REQUIRE(store.commit({{"axis.x.mode", 4}}, test::kTcp));
-  Status backed_up;
-  fault_vfs::BackupGate gate;
-  std::thread backup([&] { backed_up = store.backup_now(); });  // holds the store's lock throughout
-  REQUIRE(gate.held(std::chrono::seconds(10)));
-  auto asked = std::async(std::launch::async, [&] { return store.settings_lost(); });
-  const bool answered = asked.wait_for(std::chrono::seconds(10)) == std::future_status::ready;
-  gate.release();
-  backup.join();
-  CHECK(answered);
-  CHECK_FALSE(asked.get());
-  REQUIRE(backed_up);
+  auto store = store_with_backup_due(db);
+  const auto asked = beside_a_held_backup([&] { return store.backup_now(); },  // holds the store's lock throughout
+                                          [&] { return store.settings_lost(); });
+  CHECK(asked.answered);
+  CHECK_FALSE(asked.result);
+  REQUIRE(asked.backed_up);
 }
 
 TEST_CASE("a checkpoint beside the writer leaves every committed setting in the database file",
