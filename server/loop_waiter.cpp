@@ -5,6 +5,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
@@ -41,6 +42,15 @@ class PollWaiter final : public LoopWaiter {
   }
 
   bool wait_until(std::int64_t deadline_ns, std::span<const int> fds) override {
+    // waiting_ before pending_, and pending_ before waiting_ in wake(), both
+    // sequentially consistent: either this sees the wake's pending_, or the
+    // wake sees waiting_ and writes the eventfd. No wake is lost.
+    waiting_.store(true);
+    if (pending_.exchange(false)) {
+      waiting_.store(false);
+      drain();
+      return true;
+    }
     polled_.assign(1, pollfd{wake_fd_, POLLIN, 0});
     for (const int fd : fds) polled_.push_back(pollfd{fd, POLLIN, 0});
     bool early = false;
@@ -53,20 +63,32 @@ class PollWaiter final : public LoopWaiter {
       if (n < 0) early = true;
       break;
     }
-    // Drain the wakes: the period about to run takes whatever they announced.
-    std::uint64_t count = 0;
-    while (read(wake_fd_, &count, sizeof count) > 0) {}
+    waiting_.store(false);
+    // The period about to run takes whatever the wakes so far announced.
+    pending_.store(false);
+    drain();
     return early;
   }
 
+  // At the full rate the loop sleeps to deadlines and never waits here: a
+  // command then costs no system call to announce (it is taken next period).
   void wake() override {
+    pending_.store(true);
+    if (!waiting_.load()) return;
     const std::uint64_t one = 1;
     // EAGAIN only when the counter is full: a wake is pending anyway.
     [[maybe_unused]] const ssize_t n = write(wake_fd_, &one, sizeof one);
   }
 
  private:
+  void drain() {
+    std::uint64_t count = 0;
+    while (read(wake_fd_, &count, sizeof count) > 0) {}
+  }
+
   int wake_fd_;
+  std::atomic<bool> waiting_{false};  // in wait_until
+  std::atomic<bool> pending_{false};  // woken since the last wait_until returned
   std::vector<pollfd> polled_;
 };
 

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <atomic>
 #include <thread>
 
 #include "server/loop_waiter.hpp"
@@ -57,4 +58,30 @@ TEST_CASE("a sleep to a deadline is not ended by a wake, and leaves the wake for
   w->sleep_until(deadline);
   CHECK(w->now_ns() >= deadline);
   CHECK(w->wait_until(w->now_ns() + kHourNs, {}));
+}
+
+TEST_CASE("no wake is lost when wakes race the start and the end of quiet waits") {
+  // The waker fires whenever the waiter is about to wait or has just woken:
+  // a lost wake leaves a wait running to its (short, bounded) deadline.
+  auto w = server::make_poll_waiter();
+  constexpr int kRounds = 2000;
+  std::atomic<int> asked{0};
+  std::atomic<bool> done{false};
+  std::thread waker([&] {
+    int given = 0;
+    while (!done.load() && given < kRounds) {
+      if (asked.load() > given) {
+        ++given;
+        w->wake();
+      }
+    }
+  });
+  int ended_by_wake = 0;
+  for (int i = 0; i < kRounds; ++i) {
+    asked.store(i + 1);
+    if (w->wait_until(w->now_ns() + 2'000'000'000LL, {})) ++ended_by_wake;
+  }
+  done.store(true);
+  waker.join();
+  CHECK(ended_by_wake == kRounds);
 }
