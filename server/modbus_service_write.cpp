@@ -101,8 +101,9 @@ void ModbusService::pass_lead() {
 }
 
 // A plain write (FC 05, 06, 15, 16) to the module unit whose registers are
-// none of them a setting nor the edit session's command: its plan stores
-// nothing, so it never waits for a commit.
+// none of them a setting nor the edit session's command, nor the reset that
+// acknowledges lost settings: its plan stores nothing, so it never waits for
+// a commit.
 bool ModbusService::needs_nothing_durable(std::uint8_t unit, std::span<const std::uint8_t> pdu,
                                           const ClientInfo& client) const {
   if (pdu.empty()) return false;
@@ -113,8 +114,11 @@ bool ModbusService::needs_nothing_durable(std::uint8_t unit, std::span<const std
   const auto* w = std::get_if<WriteRequest>(&request->body);
   if (!w) return false;
   for (const registers::Register& r :
-       registers::registers_overlapping(registers::Unit::module, w->table, w->start, w->values.size()))
+       registers::registers_overlapping(registers::Unit::module, w->table, w->start, w->values.size())) {
     if (r.persisted || r.key == registers::Key::edit_command) return false;
+    // The reset that acknowledges lost settings commits that acknowledgement.
+    if (r.key == registers::Key::cmd_reset_alarm && store_ && store_->settings_lost()) return false;
+  }
   return true;
 }
 

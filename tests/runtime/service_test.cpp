@@ -5,12 +5,14 @@
 #include <array>
 #include <chrono>
 #include <condition_variable>
-#include <mutex>
-#include <thread>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <functional>
+#include <future>
 #include <memory>
+#include <mutex>
+#include <thread>
 
 #include <toml++/toml.h>
 
@@ -44,7 +46,10 @@ struct Module {
   std::unique_ptr<server::ModbusService> service;
   server::ClientInfo client{7, server::Transport::tcp, "127.0.0.1:50000"};
 
-  explicit Module(bool faulty_disk, server::ServiceConfig config = {}) {
+  // damaged_database: the settings file is junk and has no backup, so the
+  // module starts on defaults with settings lost.
+  explicit Module(bool faulty_disk, server::ServiceConfig config = {}, bool damaged_database = false) {
+    if (damaged_database) std::ofstream(dir.file("settings.db"), std::ios::binary) << std::string(8192, 'x');
     std::vector<persistence::SettingDefault> defaults;
     for (const auto& [name, value] : registers::persisted_defaults()) defaults.push_back({name, value});
     persistence::StoreOptions options;
@@ -446,6 +451,28 @@ TEST_CASE("a command or the heartbeat is answered at once on the caller's thread
   CHECK(nowhere->pdu.at(0) == (6 | 0x80));
   CHECK(m.write_u16("axis.x.seek_feedrate", 900) == seek_900);
   CHECK(m.read_u16("axis.x.seek_feedrate") == 900);
+}
+
+TEST_CASE("a reset that acknowledges lost settings is not answered on the caller's thread but by the settings writer "
+          "once the acknowledgement is stored") {
+  Module m(false, {}, true);
+  REQUIRE(m.store->settings_lost());
+  const auto reset = single_write_pdu(5, Module::address("cmd.reset_alarm"), 0xFF00);
+  // An event loop asking handle_now gets nothing done: it hands the reset on.
+  CHECK_FALSE(m.service->handle_now(1, reset, m.client).has_value());
+  CHECK(m.store->settings_lost());
+  std::promise<server::Reply> answered;
+  auto reply = answered.get_future();
+  REQUIRE(m.service->handle_later(1, reset, m.client, [&](server::Reply r) { answered.set_value(std::move(r)); }));
+  REQUIRE(reply.wait_for(std::chrono::seconds(10)) == std::future_status::ready);
+  CHECK(reply.get().pdu == reset);
+  CHECK_FALSE(m.store->settings_lost());
+  const auto audit = m.store->recent_changes(1);
+  REQUIRE(audit);
+  REQUIRE_FALSE(audit->empty());
+  CHECK(audit->front().name == "settings_lost");
+  // Acknowledged: the next reset is answered at once again.
+  CHECK(m.service->handle_now(1, reset, m.client).has_value());
 }
 
 TEST_CASE("a write of the module unit over TCP is taken by the settings writer and answered through its callback once "
