@@ -25,7 +25,7 @@ class MbapFramer {
     none,       // no byte of a next frame yet
     partial,    // a frame begun, not whole yet
     frame,      // a whole frame: header() and pdu()
-    malformed,  // not protocol 0, or a length outside 2..254: the stream cannot be resynchronised
+    malformed,  // not protocol 0, or a length outside 2..kLongestMbapLength: the stream cannot be resynchronised
   };
   Front front() const;
   MbapHeader header() const;
@@ -36,7 +36,7 @@ class MbapFramer {
  private:
   std::size_t size() const { return end_ - begin_; }
 
-  // Room for several pipelined requests; the largest frame is 7 + 253 bytes.
+  // Room for several pipelined requests; the largest frame read is 7 + 265 bytes.
   std::array<std::uint8_t, 2048> buf_{};
   std::size_t begin_ = 0, end_ = 0;
 };

@@ -45,6 +45,15 @@ std::optional<std::size_t> rtu_request_length(const std::vector<std::uint8_t>& f
   }
 }
 
+// The largest RTU ADU is 256 bytes. A request for this module whose byte
+// count says more (a write of 124 registers or more) is read whole, so that
+// it is answered with exception 03 (a bad quantity) rather than not at all.
+std::size_t RtuFramer::longest() const {
+  if (buf_.size() >= 2 && (buf_[0] == own_unit_ || buf_[0] == 0))
+    if (const auto n = rtu_request_length(buf_); n && *n > MODBUS_RTU_MAX_ADU_LENGTH) return *n;
+  return MODBUS_RTU_MAX_ADU_LENGTH;
+}
+
 std::optional<RtuFramer::Result> RtuFramer::check_own_frame(std::size_t length) {
   if (buf_.size() < length) return std::nullopt;
   if (crc_matches(buf_)) {
@@ -62,7 +71,7 @@ std::optional<RtuFramer::Result> RtuFramer::check_own_frame(std::size_t length) 
 std::optional<RtuFramer::Result> RtuFramer::push(std::uint8_t byte) {
   if (discarding_) return std::nullopt;
   buf_.push_back(byte);
-  if (buf_.size() > MODBUS_RTU_MAX_ADU_LENGTH) {
+  if (buf_.size() > longest()) {
     buf_.clear();
     discarding_ = true;
     return Result{Event::overrun, {}};

@@ -19,7 +19,7 @@ class RtuFramer {
   enum class Event : std::uint8_t {
     frame,    // a whole frame whose CRC matches (unit id first, CRC last)
     bad_crc,  // a frame that failed its CRC (or was cut short)
-    overrun,  // more bytes than the largest RTU ADU (256) without a frame
+    overrun,  // more bytes than the largest RTU ADU (256, or the byte count of a request for this module) without a frame
   };
   struct Result {
     Event event = Event::frame;
@@ -37,6 +37,7 @@ class RtuFramer {
 
  private:
   std::optional<Result> check_own_frame(std::size_t length);
+  std::size_t longest() const;  // bytes a frame may have so far before it is an overrun
 
   std::uint8_t own_unit_;
   std::vector<std::uint8_t> buf_;

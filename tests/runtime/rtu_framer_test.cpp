@@ -113,3 +113,23 @@ TEST_CASE("rtu framer: more than 256 bytes without a frame is an overrun") {
   REQUIRE_FALSE(r.empty());
   CHECK(r[0].event == RtuFramer::Event::overrun);
 }
+
+TEST_CASE("rtu framer: a write for this module longer than 256 bytes is one frame, so that it can be refused with 03") {
+  // FC 16 of 124 registers with all their data: 257 bytes with the CRC.
+  Bytes body{1, 0x10, 0x00, 0x64, 0x00, 124, 248};
+  body.resize(7 + 248, 0);
+  const Bytes req = with_crc(body);
+  REQUIRE(req.size() == 257);
+  RtuFramer f(1);
+  const auto r = feed(f, req, false);
+  REQUIRE(r.size() == 1);
+  CHECK(r[0].event == RtuFramer::Event::frame);
+  CHECK(r[0].frame == req);
+  // The same bytes for another unit: past 256 bytes an overrun, as before.
+  Bytes other = req;
+  other[0] = 9;
+  RtuFramer g(1);
+  const auto s = feed(g, other);
+  REQUIRE_FALSE(s.empty());
+  CHECK(s[0].event == RtuFramer::Event::overrun);
+}

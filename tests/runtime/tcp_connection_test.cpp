@@ -84,12 +84,15 @@ std::vector<std::uint8_t> frame(std::uint16_t tid, std::vector<std::uint8_t> pdu
   std::vector<std::uint8_t> f(7 + pdu.size(), 0);
   f[0] = static_cast<std::uint8_t>(tid >> 8);
   f[1] = static_cast<std::uint8_t>(tid);
+  f[4] = static_cast<std::uint8_t>((pdu.size() + 1) >> 8);
   f[5] = static_cast<std::uint8_t>(pdu.size() + 1);
   f[6] = 1;
   std::copy(pdu.begin(), pdu.end(), f.begin() + 7);
   return f;
 }
 const std::vector<std::uint8_t> kRead{0x03, 0x00, 0x00, 0x00, 0x01};
+// FC 23 with a byte count of 255: the longest PDU a request can announce.
+constexpr std::size_t kLongestPdu = 10 + 255;
 const std::vector<std::uint8_t> kWrite{0x06, 0x00, 0x10, 0x00, 0x01};
 
 // The transaction ids of the reply frames sent, in order.
@@ -216,6 +219,28 @@ TEST_CASE("a malformed MBAP header closes the connection and is not served") {
   CHECK(f.connection.advance(f.t0, f.handler) == Wait::closed);
   CHECK(f.connection.end_reason() == "malformed MBAP header");
   CHECK(f.handler.functions.empty());
+}
+
+TEST_CASE("a write longer than the standard's largest frame is read whole and handed on, so that it can be refused "
+          "with exception 03, and the stream stays in step") {
+  Fixture f;
+  // FC 16 of 124 registers, all their data: a PDU of 254 bytes (MBAP length 255).
+  std::vector<std::uint8_t> too_many{0x10, 0x00, 0x64, 0x00, 124, 248};
+  too_many.resize(6 + 248, 0);
+  auto bytes = frame(1, too_many);
+  const auto next = frame(2, kRead);
+  bytes.insert(bytes.end(), next.begin(), next.end());
+  f.wire.incoming.push_back(bytes);
+  REQUIRE(f.connection.advance(f.t0, f.handler) == Wait::off_loop);
+  CHECK(f.connection.request().transaction_id == 1);
+  CHECK(f.connection.request().pdu == too_many);
+  // One byte past the longest request any function code can frame: garbage.
+  Fixture g;
+  std::vector<std::uint8_t> garbage{0x17};
+  garbage.resize(kLongestPdu + 1, 0);
+  g.wire.incoming.push_back(frame(1, garbage));
+  CHECK(g.connection.advance(g.t0, g.handler) == Wait::closed);
+  CHECK(g.connection.end_reason() == "malformed MBAP header");
 }
 
 TEST_CASE("a client that pipelines many requests gets its share of a turn, then the loop serves the others") {

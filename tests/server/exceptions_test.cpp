@@ -254,6 +254,30 @@ TEST_CASE("exception 03: quantities beyond the spec's limits, nothing changes") 
   CHECK(holding_snapshot(c) == before);
 }
 
+TEST_CASE("exception 03: a write of more registers or coils than the spec allows, sent whole in a frame longer than "
+          "the standard's, is answered and the connection goes on") {
+  // What pymodbus sends for write_registers(100, [..124 values..]): libmodbus
+  // refuses to build such a frame, another client may not.
+  Daemon d;
+  Client c = Client::tcp(d.port());
+  const auto before = holding_snapshot(c);
+  std::vector<std::uint8_t> registers124 = write_multiple(1, 100, 124, 248, 124, 1);
+  registers124.erase(registers124.begin());  // the unit goes in the MBAP header
+  std::vector<std::uint8_t> coils2000{0x0F, 0x00, 0x00, 0x07, 0xD0, 250};
+  coils2000.resize(6 + 250, 0xFF);
+  const auto& version = reg("status.map_version");
+  const std::vector<std::uint8_t> read_version{0x04, static_cast<std::uint8_t>(version.address >> 8),
+                                               static_cast<std::uint8_t>(version.address), 0, 1};
+  // On one connection, back to back: each refused, and the read after them answered in step.
+  const auto replies = test_support::raw_tcp_pipeline(d.port(), {{1, registers124}, {1, coils2000}, {1, read_version}});
+  REQUIRE(replies.size() == 3);
+  CHECK(replies[0] == std::pair<std::uint16_t, std::vector<std::uint8_t>>{1, {0x90, 0x03}});
+  CHECK(replies[1] == std::pair<std::uint16_t, std::vector<std::uint8_t>>{2, {0x8F, 0x03}});
+  CHECK(replies[2] == std::pair<std::uint16_t, std::vector<std::uint8_t>>{
+                          3, {0x04, 0x02, 0x00, static_cast<std::uint8_t>(registers::kMapVersion)}});
+  CHECK(holding_snapshot(c) == before);
+}
+
 TEST_CASE("exception 03: a value out of range, nothing changes") {
   Daemon d;
   Client c = Client::tcp(d.port());

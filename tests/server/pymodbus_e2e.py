@@ -174,6 +174,10 @@ def run(d, rows, version):
     bad[1] = 1     # direction: fine
     bad[5] = 5000  # debounce_ms: out of range
     check(is_exception(c.write_registers(mode, bad, slave=MODULE), 3), "FC 16 with one bad value -> 03")
+    # pymodbus frames what libmodbus refuses to: 124 registers in one request
+    # (a frame longer than the standard's). Refused with 03, the connection kept.
+    check(is_exception(c.write_registers(mode, [1] * 124, slave=MODULE), 3), "FC 16 of 124 registers -> 03")
+    check(is_exception(c.write_coils(0, [True] * 2000, slave=MODULE), 3), "FC 15 of 2000 coils -> 03")
     check(r.holding_snapshot() == before, "nothing changed after refused writes")
 
     # Configure over Modbus.

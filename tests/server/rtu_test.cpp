@@ -23,7 +23,43 @@ struct RtuRig {
         tcp(Client::tcp(daemon.port())) {}
 };
 
+// The Modbus RTU CRC (polynomial 0xA001, low byte first on the wire), written
+// out here so that the frame does not depend on the code under test.
+std::vector<std::uint8_t> with_crc(std::vector<std::uint8_t> frame) {
+  std::uint16_t crc = 0xFFFF;
+  for (const std::uint8_t b : frame) {
+    crc ^= b;
+    for (int i = 0; i < 8; ++i) crc = (crc & 1) ? static_cast<std::uint16_t>((crc >> 1) ^ 0xA001) : crc >> 1;
+  }
+  frame.push_back(static_cast<std::uint8_t>(crc & 0xFF));
+  frame.push_back(static_cast<std::uint8_t>(crc >> 8));
+  return frame;
+}
+
 }  // namespace
+
+TEST_CASE("RTU: a write of 124 registers, a frame longer than the standard's 256 bytes, is answered with exception 03 "
+          "and changes nothing") {
+  RtuRig rig;
+  Client& rtu = rig.rtu;
+  REQUIRE(rtu.read("status.map_version") == registers::kMapVersion);
+  const auto& pull = reg("axis.x.pull_off");
+  std::vector<std::uint8_t> body{1, 0x10, static_cast<std::uint8_t>(pull.address >> 8),
+                                 static_cast<std::uint8_t>(pull.address & 0xFF), 0, 124, 248};
+  body.resize(7 + 248, 0x01);
+  const auto frame = with_crc(body);
+  REQUIRE(frame.size() == 257);
+  const int fd = modbus_get_socket(rtu.ctx());
+  REQUIRE(::write(fd, frame.data(), frame.size()) == static_cast<ssize_t>(frame.size()));
+  std::uint8_t rsp[MODBUS_RTU_MAX_ADU_LENGTH];
+  const int n = modbus_receive_confirmation(rtu.ctx(), rsp);
+  REQUIRE(n == 5);
+  CHECK(rsp[0] == 1);
+  CHECK(rsp[1] == 0x90);
+  CHECK(rsp[2] == MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+  CHECK(rtu.read("axis.x.pull_off") == pull.default_raw);
+  CHECK(rig.tcp.read("axis.x.pull_off") == pull.default_raw);
+}
 
 TEST_CASE("RTU: configure and home all over a serial line, checked against the simulator over TCP") {
   RtuRig rig;
