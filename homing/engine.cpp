@@ -100,11 +100,39 @@ void Engine::handle_commands(const Settings& settings, const Inputs& inputs) {
   if (c.abort) abort_command(settings);
   if (c.unhome_axes) unhome_command(settings, c.unhome_axes);
   if (c.set_position_axes) set_position_commands(settings, c);
+  if (c.abort) {
+    cancel_starts(inputs);
+    return;
+  }
   home_command(settings, inputs);
   if (c.refcheck_axes) refcheck_command(settings, c.refcheck_axes);
   if (c.measure_axes) measure_command(settings, c.measure_axes);
   jog_commands(settings, c);
   move_commands(settings, c);
+}
+
+// An abort is never outrun by a start that came with it, in one request (a
+// PLC writing its whole command word with FC 15) or from another client in
+// the same period: nothing that moves starts in an abort's period. Each start
+// is counted and answered cancelled_by_abort; a jog pressed then needs a new
+// press, as a jog held at power-up does.
+void Engine::cancel_starts(const Inputs& inputs) {
+  const Commands& c = inputs.commands;
+  const bool start_edge = !first_step_ && inputs.start_button && !prev_start_button_;
+  prev_start_button_ = inputs.start_button;
+  int cancelled = 0;
+  if (c.home_all || start_edge || (c.home_axes & kAllAxes)) ++cancelled;
+  if (c.refcheck_axes & kAllAxes) ++cancelled;
+  if (c.measure_axes & kAllAxes) ++cancelled;
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (c.move_axes & axis_bit(a)) ++cancelled;
+    const std::int8_t req = c.jog[a] > 0 ? 1 : (c.jog[a] < 0 ? -1 : 0);
+    if (req != 0 && req != axes_[a].prev_jog_request && !first_step_) ++cancelled;
+    axes_[a].prev_jog_request = req;
+  }
+  if (cancelled == 0) return;
+  command_count_ += static_cast<std::uint32_t>(cancelled);
+  last_result_ = CommandResult::cancelled_by_abort;
 }
 
 }  // namespace homing

@@ -68,6 +68,7 @@ class Engine {
   void clear_alarms();
   void reset_command();
   void abort_command(const Settings& settings);
+  void cancel_starts(const Inputs& inputs);
 
   // What a failed cycle does next, by global.failure_policy (failure_policy.cpp).
   enum class WindDown : std::uint8_t {

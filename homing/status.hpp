@@ -50,8 +50,9 @@ enum class CommandResult : std::uint8_t {
   refused_no_clean_stop = 19,   // reference check: axis.<a>.trust is not last_stop_clean
   refused_gantry_pair = 20,     // reference check: a gantry pair is squared by a full cycle only
   refused_no_travel_end = 21,   // measurement: the axis homes at no end of travel, or cannot tell the opposite end
+  cancelled_by_abort = 22,      // a start that came with an abort (one request, or one period): abort wins
 };
-inline constexpr std::uint8_t kCommandResultCount = 22;
+inline constexpr std::uint8_t kCommandResultCount = 23;
 inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
     {CommandResult::none, "none", "no command yet"},
     {CommandResult::accepted, "accepted", "the last command started"},
@@ -69,7 +70,8 @@ inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
     {CommandResult::refused_cause_present, "refused_cause_present",
      "the cause (e-stop, drive fault or watchdog) is still present: remove it, then reset"},
     {CommandResult::refused_invalid, "refused_invalid", "the command makes no sense here (axis disabled or bad target)"},
-    {CommandResult::refused_communication_lost, "refused_communication_lost", "the watchdog expired: host.heartbeat stopped changing; reset first"},
+    {CommandResult::refused_communication_lost, "refused_communication_lost",
+     "the watchdog expired: host.heartbeat stopped changing; write it again (and reset the alarm if one latched)"},
     {CommandResult::refused_settings_fault, "refused_settings_fault",
      "the configuration check refused the command: see the axis alarm or homingctl check"},
     {CommandResult::refused_hard_limit, "refused_hard_limit",
@@ -89,8 +91,11 @@ inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
     {CommandResult::refused_no_travel_end, "refused_no_travel_end",
      "measurement refused: the axis does not home at an end of its travel (switch, pushing or hard-stop methods "
      "do), or nothing tells the opposite end (limits_fitted, or hard_stop with stall_detect stall_input)"},
+    {CommandResult::cancelled_by_abort, "cancelled_by_abort",
+     "not started: an abort came with it (in the same request or within the same control period) and abort wins; "
+     "send the start again once the abort is done"},
 };
-static_assert(lists_every_value(kCommandResultInfo, CommandResult::refused_no_travel_end));
+static_assert(lists_every_value(kCommandResultInfo, CommandResult::cancelled_by_abort));
 static_assert(std::size(kCommandResultInfo) == kCommandResultCount);
 constexpr std::span<const EnumInfo<CommandResult>> enum_table(CommandResult) { return kCommandResultInfo; }
 

@@ -521,3 +521,39 @@ SCENARIO("a jog held at power-up does not move until released and pressed again"
   r.run_for(0.3);
   CHECK(r.trace[0].path_mm > 0);
 }
+
+SCENARIO("an abort that comes with starts in the same period starts nothing and says why", "[safety][commands]") {
+  GIVEN("a machine at rest, allowed to jog and move before homing") {
+    Rig r;
+    r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+    r.step();
+    const auto count_before = r.status().command_count;
+    WHEN("home-all, a move, a jog press and a reference check arrive with an abort") {
+      r.pending.home_all = true;
+      r.pending.abort = true;
+      r.pending.move_axes = axis_bit(0);
+      r.pending.move_target_mm[0] = 50;
+      r.pending.refcheck_axes = axis_bit(2);
+      r.held.jog[1] = 1;
+      r.step();
+      THEN("nothing moves, then or later while the jog stays held, and each start is answered cancelled_by_abort") {
+        CHECK_FALSE(r.status().homing);
+        CHECK(r.status().last_command_result == CommandResult::cancelled_by_abort);
+        CHECK(r.status().command_count == count_before + 5);  // the abort and four starts
+        for (int i = 0; i < 200; ++i) {
+          r.step();
+          for (std::size_t a = 0; a < kAxisCount; ++a) REQUIRE(r.axis(a).velocity_mm_per_s == 0);
+        }
+        CHECK_FALSE(r.status().homing);
+        AND_THEN("a new press or a new home-all after the abort works as usual") {
+          r.held.jog[1] = 0;
+          r.step();
+          r.pending.home_all = true;
+          r.step();
+          CHECK(r.status().homing);
+          CHECK(r.status().last_command_result == CommandResult::accepted);
+        }
+      }
+    }
+  }
+}
