@@ -128,7 +128,7 @@ void Engine::abort_command(const Settings& settings) {
 // abort stops it).
 void Engine::reset_command() {
   ++command_count_;
-  if (estop_ || any_drive_fault() || comm_lost_) {
+  if (estop_ || any_drive_fault() || heartbeat_stale_) {
     last_result_ = CommandResult::refused_cause_present;
   } else if (wind_down_ != WindDown::none) {
     last_result_ = CommandResult::refused_busy;

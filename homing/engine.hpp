@@ -171,6 +171,7 @@ class Engine {
   bool estop_ = false;
   bool prev_start_button_ = false;
   bool comm_lost_ = false;
+  bool heartbeat_stale_ = false;  // shown as the communication_lost interlock, moving or not
   bool permit_ = false;
   std::uint32_t homing_cycles_ = 0;
   std::uint32_t heartbeat_ = 0;

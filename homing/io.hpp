@@ -86,7 +86,10 @@ struct Inputs {
   bool estop = false;
   bool start_button = false;
   bool homing_permit = false;
-  bool communication_lost = false;  // set by the runtime when the watchdog expires
+  // The host watchdog (global.watchdog_ms): host.heartbeat has not changed
+  // within it (stale), and so motion started over Modbus must stop (lost).
+  bool heartbeat_stale = false;
+  bool communication_lost = false;
   bool settings_lost = false;       // set by the runtime when settings had to be reset
   Commands commands{};
   // Where each axis came to rest before this start, as the runtime kept it

@@ -62,7 +62,7 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
   if (any_drive_fault()) il |= interlock::drive_fault;
   if (alarm) il |= interlock::alarm_latched;
   if (global_alarm_ == AlarmCode::settings_lost) il |= interlock::settings_lost;
-  if (comm_lost_) il |= interlock::communication_lost;
+  if (heartbeat_stale_) il |= interlock::communication_lost;
   if (settings.global.permit_required && !permit_) il |= interlock::permit_missing;
   if (limited) il |= interlock::not_homed;
   if (cycle_active_) il |= interlock::homing_active;

@@ -37,6 +37,7 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
   check_limit_switches(settings);
 
   comm_lost_ = inputs.communication_lost;
+  heartbeat_stale_ = inputs.heartbeat_stale || inputs.communication_lost;
   // A cycle at rest between two of its moves would start the next one: the
   // host that started it is gone, so the loss stops it as it stops motion.
   if (comm_lost_ && (any_motion() || cycle_active_)) {

@@ -248,9 +248,9 @@ bool ControlLoop::take_mailbox(Mailbox& out) {
   return true;
 }
 
-bool ControlLoop::watchdog_expired() const {
+bool ControlLoop::heartbeat_stale() const {
   const std::uint32_t ms = settings_.global.watchdog_ms;
-  if (ms == 0 || !modbus_motion_) return false;
+  if (ms == 0) return false;
   return watchdog_clock_() - heartbeat_changed_ns_.load() > std::int64_t{ms} * 1'000'000;
 }
 
@@ -322,7 +322,10 @@ void ControlLoop::step_engine(double dt, const Mailbox& mail) {
   inputs.homing_permit = inputs.homing_permit || loop_permit_;
   inputs.settings_lost = mail.settings_lost;
   inputs.restore = mail.restore;
-  inputs.communication_lost = watchdog_expired_ = watchdog_expired();
+  // Stale, moving or not, is what the interlock shows and what a reset is
+  // refused for; lost is what stops motion started over Modbus.
+  inputs.heartbeat_stale = heartbeat_stale_ = heartbeat_stale();
+  inputs.communication_lost = heartbeat_stale_ && modbus_motion_;
   const std::int64_t t0 = monotonic_ns();
   const homing::StepResult r = engine_.step(settings_, inputs, dt);
   const std::int64_t t1 = monotonic_ns();
@@ -410,7 +413,7 @@ std::int64_t ControlLoop::quiet_deadline_ns() const {
   // The watchdog: communication_lost shows in the period its deadline passes
   // (once shown, nothing is left to wait for until a heartbeat or a command).
   const std::uint32_t ms = settings_.global.watchdog_ms;
-  if (ms != 0 && modbus_motion_ && !watchdog_expired_) {
+  if (ms != 0 && !heartbeat_stale_) {
     const std::int64_t left_ns = heartbeat_changed_ns_.load() + std::int64_t{ms} * 1'000'000 + 1 - watchdog_clock_();
     until = std::min(until, waiter_->now_ns() + std::max<std::int64_t>(left_ns, 0));
   }

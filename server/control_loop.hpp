@@ -211,7 +211,8 @@ class ControlLoop {
   // When the next quiet wait must end at the latest (loop clock).
   std::int64_t quiet_deadline_ns() const;
   void record_lateness(std::int64_t late_ns);
-  bool watchdog_expired() const;
+  // global.watchdog_ms is on and host.heartbeat has not changed within it.
+  bool heartbeat_stale() const;
   void record_trace(const homing::Status& status);
   // A simulated machine is wired as settings_ say (external commutators).
   void simulator_follows_settings();
@@ -246,7 +247,7 @@ class ControlLoop {
   std::array<std::int8_t, homing::kAxisCount> loop_jog_{};
   bool loop_permit_ = false;
   bool modbus_motion_ = false;
-  bool watchdog_expired_ = false;  // in the last engine step
+  bool heartbeat_stale_ = false;  // in the last engine step
 
   std::atomic<std::uint16_t> heartbeat_value_{0};
   const Clock watchdog_clock_;

@@ -299,6 +299,29 @@ TEST_CASE("the watchdog ends a quiet wait at its deadline, and communication_los
   CHECK(l.waiter->last().deadline_ns - l.waiter->last().from_ns == kTickNs);
 }
 
+TEST_CASE("with nothing moving a stale heartbeat shows communication_lost at the watchdog's deadline, refuses a reset, "
+          "and clears once the heartbeat changes, without a reset") {
+  homing::Settings settings = registers::default_settings();
+  settings.global.watchdog_ms = 120;
+  Loop l = Loop::simulated(settings);
+  const std::int64_t t0 = l.waiter->now;  // the heartbeat's last change: the start
+  l.turn();
+  CHECK((l.snap().status.interlocks & homing::interlock::communication_lost) == 0);
+  // Quiet, yet the loop wakes at the watchdog's deadline to show it.
+  for (int i = 0; i < 5 && l.waiter->now <= t0 + 120 * kMs; ++i) l.turn();
+  l.turn();
+  CHECK((l.snap().status.interlocks & homing::interlock::communication_lost) != 0);
+  CHECK(l.snap().status.axes[0].alarm.code == homing::AlarmCode::none);  // nothing moved: no alarm
+  homing::Commands reset;
+  reset.reset_alarm = true;
+  l.loop->submit(reset, true);
+  l.turn();
+  CHECK(l.snap().status.last_command_result == homing::CommandResult::refused_cause_present);
+  l.loop->heartbeat_written(1);
+  l.turn();
+  CHECK((l.snap().status.interlocks & homing::interlock::communication_lost) == 0);
+}
+
 TEST_CASE("a simulator write to a running quiet loop wakes it: the write is not left for the slow tick") {
   // The real thread and waiter. Whether the write was taken by a woken
   // period or at a tick is counted by the loop itself (woken_periods), so

@@ -298,7 +298,16 @@ TEST_CASE("an expired watchdog stops a homing cycle with communication lost on t
   // With the heartbeat kept alive, the same cycle completes. The host's beat
   // comes every 40 ms or so; on a loaded shared machine a Modbus round trip
   // can stall far longer, so this half gives the watchdog a margin.
+  // While the heartbeat stays stale the interlock shows it, and a reset is
+  // refused: its cause is still present.
+  CHECK((c.read("status.interlocks") & homing::interlock::communication_lost) != 0);
+  const auto judged = c.read("status.command_count");
+  REQUIRE(c.write("cmd.reset_alarm", 1) == 0);
+  REQUIRE(wait_until([&] { return c.read("status.command_count") > judged; }, 2s));
+  CHECK(c.read("status.last_command_result") == static_cast<int>(homing::CommandResult::refused_cause_present));
+  CHECK(c.read("status.alarm") == 1);
   c.set("global.watchdog_ms", 1000);
+  c.set("host.heartbeat", beat++);
   REQUIRE(c.write("cmd.reset_alarm", 1) == 0);
   REQUIRE(wait_until([&] { return c.read("status.alarm") == 0; }, 2s));
   c.set("host.heartbeat", beat++);
