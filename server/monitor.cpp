@@ -191,16 +191,7 @@ void Monitor::poll(std::int64_t now_ms) {
   // cycle and alarm this snapshot holds, which may be older than it (this
   // thread late on a busy machine); the plant gets them in the order they happened.
   housekeeping(now_ms);
-  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-    const auto& now = st.axes[a].alarm;
-    if (now.code != last_.axes[a].alarm.code && now) {
-      spdlog::error("alarm {} ({}): {}", static_cast<int>(now.code), homing::alarm_name(now.code),
-                    homing::describe_alarm(a, now, settings));
-    }
-  }
-  if (st.global_alarm != last_.global_alarm && st.global_alarm != homing::AlarmCode::none)
-    spdlog::error("alarm {}: {}", homing::alarm_name(st.global_alarm),
-                  homing::describe_global_alarm(st.global_alarm, settings));
+  log_alarms(snap.events, settings);
   if (st.alarm != last_.alarm && !st.alarm) spdlog::info("alarms reset");
   if (st.last_command_result != last_.last_command_result || st.heartbeat == 0)
     spdlog::info("command result: {}", homing::command_result_name(st.last_command_result));
@@ -218,18 +209,22 @@ void Monitor::poll(std::int64_t now_ms) {
     // The loop saw every period of the cycle: its axes come from the cycle's
     // end event too, so a cycle shorter than a few of this thread's looks
     // (a busy machine, 50 ms at --time-scale 10) still records all its axes.
+    // Its result too: an alarm reset a moment after the cycle ended (a PLC
+    // that resets at once) is gone from this snapshot, not from the event.
+    const StatusEvent* ended = nullptr;
     for (std::uint64_t seq = snap.events.written(); seq > cycle_events_taken_; --seq) {
       const StatusEvent* e = snap.events.find(seq);
       if (!e) break;
       if (e->kind != StatusEventKind::cycle_ended) continue;
       run_axes_ |= e->axes;
+      ended = e;
       break;
     }
     cycle_events_taken_ = snap.events.written();
     // A reference check is no homing cycle: it measured nothing of the switch
     // to keep in the history, only whether the axis is where it was kept.
     if (last_.reference_check) report_refcheck(st, settings);
-    else record_run(st, settings, now_ms);
+    else record_run(st, ended, settings, now_ms);
     report_measurements(st, settings);
   }
   for (std::size_t a = 0; a < homing::kAxisCount; ++a)
@@ -239,17 +234,23 @@ void Monitor::poll(std::int64_t now_ms) {
   last_ = st;
 }
 
-void Monitor::record_run(const homing::Status& st, const homing::Settings& settings, std::int64_t now_ms) {
+void Monitor::record_run(const homing::Status& st, const StatusEvent* ended, const homing::Settings& settings,
+                         std::int64_t now_ms) {
   persistence::HomingRun run;
   run.start_ms = run_start_ms_;
   run.end_ms = now_ms;
   run.axes = run_axes_;
   run.result = 0;
-  if (const int a = homing::reported_alarm_axis(st); a >= 0) {
-    run.result = static_cast<int>(st.axes[static_cast<std::size_t>(a)].alarm.code);
-    run.alarm_axis = a;
+  if (ended) {
+    run.result = static_cast<int>(ended->code);
+    if (ended->axis >= 0) run.alarm_axis = ended->axis;
+  } else {  // the ring moved on past it (this thread very late): the snapshot is all there is
+    if (const int a = homing::reported_alarm_axis(st); a >= 0) {
+      run.result = static_cast<int>(st.axes[static_cast<std::size_t>(a)].alarm.code);
+      run.alarm_axis = a;
+    }
+    if (run.result == 0 && st.global_alarm != homing::AlarmCode::none) run.result = static_cast<int>(st.global_alarm);
   }
-  if (run.result == 0 && st.global_alarm != homing::AlarmCode::none) run.result = static_cast<int>(st.global_alarm);
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     if (!(run_axes_ & homing::axis_bit(a))) continue;
     run.axis[a] = axis_record(run.result == 0, st.axes[a], now_ms - run_start_ms_);
@@ -265,6 +266,28 @@ void Monitor::record_run(const homing::Status& st, const homing::Settings& setti
   for (std::size_t a = 0; a < homing::kAxisCount; ++a)
     if (run.axis[a].health) judge_health(a, settings);
   refresh_summary();
+}
+
+// Every alarm the loop saw raised since the last look, from its events: one
+// raised and reset between two looks of this thread is logged all the same.
+void Monitor::log_alarms(const StatusEvents& events, const homing::Settings& settings) {
+  const std::uint64_t written = events.written();
+  std::uint64_t missed = 0;
+  for (std::uint64_t seq = alarm_events_taken_ + 1; seq <= written; ++seq) {
+    const StatusEvent* e = events.find(seq);
+    if (!e) {
+      ++missed;
+      continue;
+    }
+    if (e->kind != StatusEventKind::alarm_raised) continue;
+    if (e->axis >= 0)
+      spdlog::error("alarm {} ({}): {}", static_cast<int>(e->code), homing::alarm_name(e->code),
+                    homing::describe_alarm(static_cast<std::size_t>(e->axis), e->alarm, settings));
+    else
+      spdlog::error("alarm {}: {}", homing::alarm_name(e->code), homing::describe_global_alarm(e->code, settings));
+  }
+  if (missed > 0) spdlog::warn("{} status events passed before the monitor saw them; their alarms are not in the log", missed);
+  alarm_events_taken_ = written;
 }
 
 // Each axis checked: accepted and homed, or refused with the figure (an

@@ -36,7 +36,10 @@ class Monitor {
   void judge_health(std::size_t axis, const homing::Settings& settings);
   void refresh_diagnostics();
   void housekeeping(std::int64_t now_ms);
-  void record_run(const homing::Status& st, const homing::Settings& settings, std::int64_t now_ms);
+  // ended: the loop's event for the cycle's end (its result), if the ring still holds it.
+  void record_run(const homing::Status& st, const StatusEvent* ended, const homing::Settings& settings,
+                  std::int64_t now_ms);
+  void log_alarms(const StatusEvents& events, const homing::Settings& settings);
   void report_refcheck(const homing::Status& st, const homing::Settings& settings);
   void report_measurements(const homing::Status& st, const homing::Settings& settings);
   void keep_sim_carriages(const Snapshot& snap, std::int64_t now_ms);
@@ -51,6 +54,7 @@ class Monitor {
   bool first_ = true;
   std::int64_t run_start_ms_ = 0;
   homing::AxisMask run_axes_ = 0;
+  std::uint64_t alarm_events_taken_ = 0;  // the last event whose alarm was logged
   std::uint64_t cycle_events_taken_ = 0;  // the last cycle_ended event whose axes joined run_axes_
   std::array<homing::Measurement, homing::kAxisCount> measured_at_start_{};  // figures as the cycle started
   PlantEvents* events_ = nullptr;

@@ -14,6 +14,8 @@
 #include <mutex>
 #include <thread>
 
+#include <spdlog/sinks/ringbuffer_sink.h>
+#include <spdlog/spdlog.h>
 #include <toml++/toml.h>
 
 #include "fault_vfs.hpp"
@@ -395,6 +397,40 @@ TEST_CASE("the plant's events stay in the order they happened when a setting is 
   using K = persistence::EventKind;
   CHECK(kinds == std::vector<K>{K::cycle_started, K::cycle_ended, K::setting_changed});
   for (std::size_t i = 1; i < kept->size(); ++i) CHECK((*kept)[i - 1].time_ms <= (*kept)[i].time_ms);
+}
+
+TEST_CASE("a cycle that ended in an alarm reset before the monitor looked is recorded and logged with that alarm") {
+  Module m(false);
+  auto log = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(500);
+  spdlog::default_logger()->sinks().push_back(log);
+  struct Unhook {
+    std::shared_ptr<spdlog::sinks::ringbuffer_sink_mt> sink;
+    ~Unhook() { std::erase(spdlog::default_logger()->sinks(), sink); }
+  } unhook{log};
+  server::Monitor monitor(*m.loop, *m.service, m.store.get());
+  std::int64_t now_ms = 0;
+  const auto watch = [&] { monitor.poll(now_ms += 10); };
+  watch();
+  m.coil("cmd.home_all");
+  REQUIRE(m.run_until([&] { return m.status().homing; }, 100, watch));
+  watch();
+  // Aborted, and reset at once (a PLC with an auto-reset), while the monitor does not look.
+  m.coil("cmd.abort");
+  REQUIRE(m.run_until([&] { return !m.status().homing; }, 100));
+  REQUIRE(m.status().alarm);
+  REQUIRE(m.run_until([&] { return m.status().axes[2].velocity_mm_per_s == 0; }, 10'000));
+  m.coil("cmd.reset_alarm");
+  REQUIRE(m.run_until([&] { return !m.status().alarm; }, 100));
+  watch();
+  const auto runs = m.store->recent_runs(10);
+  REQUIRE(runs);
+  REQUIRE(runs->size() == 1);
+  CHECK(runs->front().result == static_cast<int>(homing::AlarmCode::aborted));
+  std::string text;
+  for (const std::string& line : log->last_formatted()) text += line;
+  CHECK_THAT(text, Catch::Contains("alarm 10 (aborted)"));
+  CHECK_THAT(text, Catch::Contains("homing ended with alarm aborted"));
+  CHECK_THAT(text, !Catch::Contains("homing done in"));
 }
 
 TEST_CASE("the history records an axis's correction only when its cycle succeeded and it started homed") {
