@@ -3,6 +3,7 @@
 // winds the cycle down: failure_policy.cpp). Abort and reset are the
 // commands that act on it.
 #include <algorithm>
+#include <bit>
 
 #include "engine.hpp"
 
@@ -113,10 +114,18 @@ void Engine::abort_command(const Settings& settings) {
   ++command_count_;
   const bool winding_down = wind_down_ != WindDown::none;
   if (cycle_active_ && !winding_down) {
-    AxisMask homing = 0;
+    AxisMask homing = 0, moving = 0;
     for (std::size_t a = 0; a < kAxisCount; ++a)
-      if (axes_[a].in_cycle && axes_[a].phase != Phase::done) homing |= axis_bit(a);
+      if (axes_[a].in_cycle && axes_[a].phase != Phase::done) {
+        homing |= axis_bit(a);
+        if (axes_[a].phase != Phase::waiting) moving |= axis_bit(a);
+      }
+    const bool first = first_alarm_axis_ < 0;
     raise(settings, homing, Alarm{AlarmCode::aborted});
+    // The axis shown as the machine's first (status.alarm_axis) is one the
+    // abort stopped, not one waiting for its step of the sequence.
+    if (first && moving)
+      first_alarm_axis_ = static_cast<int>(std::countr_zero(static_cast<unsigned>(moving)));
   }
   const bool goes_back = !winding_down && wind_down_ == WindDown::returning;
   if (!goes_back) stop_all(settings);
