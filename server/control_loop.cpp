@@ -95,13 +95,18 @@ void ControlLoop::set_jog(std::size_t axis, std::int8_t direction, std::uint64_t
   waiter_->wake();
 }
 
-void ControlLoop::release_jogs(std::uint64_t owner) {
+homing::AxisMask ControlLoop::release_jogs(std::uint64_t owner) {
+  homing::AxisMask released = 0;
   {
     std::lock_guard lock(mailbox_mutex_);
     for (std::size_t a = 0; a < homing::kAxisCount; ++a)
-      if (jog_dir_[a] != 0 && jog_owner_[a] == owner) jog_dir_[a] = 0;
+      if (jog_dir_[a] != 0 && jog_owner_[a] == owner) {
+        jog_dir_[a] = 0;
+        released |= homing::axis_bit(a);
+      }
   }
   waiter_->wake();
+  return released;
 }
 
 void ControlLoop::set_settings(homing::Settings settings, bool wake) {

@@ -131,7 +131,8 @@ class ControlLoop {
   // A jog held by an owner (a client connection); 0 releases.
   void set_jog(std::size_t axis, std::int8_t direction, std::uint64_t owner);
   // Releases every jog held by an owner (its client disconnected).
-  void release_jogs(std::uint64_t owner);
+  // The axes whose jog that owner held.
+  homing::AxisMask release_jogs(std::uint64_t owner);
   // Taken in the next period; `wake` false leaves the wake-up to the caller
   // (wake_for_news()), which may first have answers to send.
   void set_settings(homing::Settings settings, bool wake = true);

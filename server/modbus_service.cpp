@@ -110,9 +110,12 @@ void ModbusService::set_extras(const registers::StatusExtras& extras) {
 
 void ModbusService::disconnected(const ClientInfo& client) {
   // A jog moves only while its client is there to stop it.
-  loop_.release_jogs(client.id);
-  // An edit session ends with its connection, as a transaction does.
+  const homing::AxisMask released = loop_.release_jogs(client.id);
   std::lock_guard lock(mutex_);
+  // Their coils read back what is held now: nothing.
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+    if (released & homing::axis_bit(a)) host_.jog_plus[a] = host_.jog_minus[a] = false;
+  // An edit session ends with its connection, as a transaction does.
   const std::string owner = EditSessions::owner_of(client);
   if (edits_.state(owner) == EditState::open)
     spdlog::info("edit session of {} discarded: the connection closed before its commit ({} staged settings not "

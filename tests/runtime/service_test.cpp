@@ -399,6 +399,19 @@ TEST_CASE("the plant's events stay in the order they happened when a setting is 
   for (std::size_t i = 1; i < kept->size(); ++i) CHECK((*kept)[i - 1].time_ms <= (*kept)[i].time_ms);
 }
 
+TEST_CASE("a jog coil reads back 0 once its client's disconnect released the jog") {
+  Module m(false);
+  const auto coil = Module::address("cmd.jog_plus.y");
+  const std::vector<std::uint8_t> read{1, static_cast<std::uint8_t>(coil >> 8), static_cast<std::uint8_t>(coil), 0, 1};
+  REQUIRE(m.coil("cmd.jog_plus.y").size() == 5);
+  CHECK(m.request(read) == std::vector<std::uint8_t>{1, 1, 1});
+  // Another client's disconnect leaves it held.
+  m.service->disconnected(server::ClientInfo{8, server::Transport::tcp, "127.0.0.1:50001"});
+  CHECK(m.request(read) == std::vector<std::uint8_t>{1, 1, 1});
+  m.service->disconnected(m.client);
+  CHECK(m.request(read) == std::vector<std::uint8_t>{1, 1, 0});
+}
+
 TEST_CASE("a cycle that ended in an alarm reset before the monitor looked is recorded and logged with that alarm") {
   Module m(false);
   auto log = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(500);
