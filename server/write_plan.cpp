@@ -110,7 +110,7 @@ std::expected<WritePlan, PlannedRefusal> plan_staging(std::span<const registers:
   };
   for (const registers::RawWrite& w : writes)
     if (!w.reg->persisted && !carried_along(w))
-      return refused(Refusal::because(RefusalReason::edit_mixed, start,
+      return refused(Refusal::because(RefusalReason::edit_mixed, w.reg->address,
                                       fmt::format("{} is no setting: in an edit session settings are staged alone, "
                                                   "write it in its own request; nothing was written",
                                                   w.reg->name())));

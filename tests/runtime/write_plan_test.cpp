@@ -268,6 +268,11 @@ TEST_CASE("plan_write: in a session, settings are staged alone, not while locked
   World w;
   w.edit_state = server::EditState::open;
   CHECK(reason_of(w.plan(Table::holding_register, kHomeAxes, {1, 5})) == RefusalReason::edit_mixed);
+  // The register named is the one that is no setting, not the first written.
+  const auto skew = registers::find_register("axis.x.max_skew_change")->address;
+  const auto mixed = w.plan(Table::holding_register, skew, {0, 100, 0, 7});
+  REQUIRE(reason_of(mixed) == RefusalReason::edit_mixed);
+  CHECK(mixed.error().refusal.address == registers::find_register("axis.x.target")->address);
   // A heartbeat alone is no setting: applied at once, session or not.
   const auto hb = w.plan(Table::holding_register, 20, {9});
   REQUIRE(hb.has_value());
