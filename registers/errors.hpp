@@ -63,6 +63,8 @@ enum class RefusalReason : std::uint8_t {
   edit_session_expired, // a settings write or a commit after the edit session timed out
   edit_mixed,           // in an edit session, one request with settings and other registers
   edit_sessions_full,   // edit.command = begin while the most edit sessions are open
+  edit_broadcast,       // edit.command in an RTU broadcast: no answer could say how it went
+  malformed_write,      // a write request outside the standard: quantity, byte count or coil value
 };
 // Each reason with the exception it is answered with, its name and its text.
 struct RefusalReasonInfo {
@@ -115,8 +117,14 @@ inline constexpr RefusalReasonInfo kRefusalReasonInfo[] = {
      "in an edit session settings are staged alone: write commands, the heartbeat and targets in their own requests"},
     {RefusalReason::edit_sessions_full, ExceptionCode::server_device_busy, "edit_sessions_full",
      "the most edit sessions (32) are open: try again once another client commits, discards or times out"},
+    {RefusalReason::edit_broadcast, ExceptionCode::illegal_data_value, "edit_broadcast",
+     "an RTU broadcast (unit 0) cannot begin, commit or discard an edit session, since nothing answers it: address "
+     "the module's unit id; settings written by broadcast apply at once"},
+    {RefusalReason::malformed_write, ExceptionCode::illegal_data_value, "malformed_write",
+     "the write request breaks the standard: a quantity outside 1-123 registers (1-121 for FC 23) or 1-1968 coils, a "
+     "byte count that does not match it, or a coil value other than FF00 or 0000; nothing was written"},
 };
-static_assert(homing::lists_every_value(kRefusalReasonInfo, RefusalReason::edit_sessions_full));
+static_assert(homing::lists_every_value(kRefusalReasonInfo, RefusalReason::malformed_write));
 constexpr std::span<const RefusalReasonInfo> enum_table(RefusalReason) { return kRefusalReasonInfo; }
 
 inline constexpr std::uint16_t kRuleReasonBase = 100;

@@ -159,6 +159,47 @@ Reply ModbusService::route(std::uint8_t unit, std::span<const std::uint8_t> pdu,
   return Reply{};
 }
 
+namespace {
+
+// What is wrong with a write request the decoder refused with 03, for the
+// refusal registers and the log; nothing for another function or exception.
+std::optional<registers::Refusal> malformed_write(std::span<const std::uint8_t> pdu, ExceptionCode code) {
+  if (code != ExceptionCode::illegal_data_value || pdu.empty()) return std::nullopt;
+  const auto fc = static_cast<FunctionCode>(pdu[0]);
+  const auto word = [&](std::size_t at) -> std::uint16_t {
+    return pdu.size() >= at + 2 ? static_cast<std::uint16_t>((pdu[at] << 8) | pdu[at + 1]) : 0;
+  };
+  std::string what;
+  std::uint16_t start = word(1);
+  std::uint16_t quantity = 0;
+  switch (fc) {
+    case FunctionCode::write_single_coil:
+      what = fmt::format("coil value {:04X}, which is neither FF00 (on) nor 0000 (off)", word(3));
+      quantity = 1;
+      break;
+    case FunctionCode::write_single_register: what = "a request of the wrong length"; quantity = 1; break;
+    case FunctionCode::write_multiple_coils:
+    case FunctionCode::write_multiple_registers:
+      quantity = word(3);
+      what = fmt::format("quantity {} with byte count {} in a request of {} bytes", quantity,
+                         pdu.size() > 5 ? pdu[5] : 0, pdu.size());
+      break;
+    case FunctionCode::read_write_registers:
+      start = word(5);
+      quantity = word(7);
+      what = fmt::format("read quantity {}, write quantity {} with byte count {}", word(3), quantity,
+                         pdu.size() > 9 ? pdu[9] : 0);
+      break;
+    default: return std::nullopt;
+  }
+  const auto reason = quantity == 0 && fc != FunctionCode::write_single_coil ? registers::RefusalReason::empty
+                                                                              : registers::RefusalReason::malformed_write;
+  return registers::Refusal::because(reason, start,
+                                     fmt::format("function {}: {}; nothing was written", static_cast<int>(fc), what));
+}
+
+}  // namespace
+
 Reply ModbusService::dispatch(Target target, std::span<const std::uint8_t> pdu, const ClientInfo& client) {
   const std::uint8_t fc = pdu[0];
   // The traces, the line diagnostics and the identity are the module's: the
@@ -172,6 +213,9 @@ Reply ModbusService::dispatch(Target target, std::span<const std::uint8_t> pdu, 
   if (!request) {
     if (request.error() == ExceptionCode::illegal_function)
       spdlog::debug("{} {}: function code {} not supported: exception 01", client.transport, client.address, fc);
+    // A write refused for its form is a refused write like any other:
+    // counted, published and logged (per client and reason, not per request).
+    if (const auto refusal = malformed_write(pdu, request.error())) return refuse(fc, *refusal, client);
     return fail(fc, request.error());
   }
   return apply(target, *request, client);

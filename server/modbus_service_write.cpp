@@ -152,9 +152,10 @@ bool ModbusService::process_batch(const std::vector<WriteTicket*>& batch) {
                              .unlock_guard = unlock_guard_,
                              .now = now(),
                              .machine_check = &config_.machine_check,
-                             .edit_state = edits_.state(owner),
+                             .edit_state = t->client.broadcast ? EditState::none : edits_.state(owner),
                              .edit_staged = staged,
-                             .edit_sessions_full = edits_.open_count() >= EditSessions::kMaxSessions};
+                             .edit_sessions_full = edits_.open_count() >= EditSessions::kMaxSessions,
+                             .broadcast = t->client.broadcast};
       auto plan = plan_write(t->table, t->start, t->values, t->client, state);
       if (!plan) {
         if (plan.error().wrong_unlock_code) count_wrong_unlock_code(*plan.error().wrong_unlock_code, t->client);

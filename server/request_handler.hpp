@@ -58,6 +58,7 @@ struct ClientInfo {
   std::string address;                  // "127.0.0.1:40122" or "unit 5"
   Access access = Access::settings;
   std::string identity;                 // TLS: "CN=hmi-3,O=Plant (role operator)"; else empty
+  bool broadcast = false;               // an RTU broadcast (unit 0): applied, never answered, never in an edit session
 };
 
 // What a transport saw on its line, for the diagnostics counters (FC 08).

@@ -31,7 +31,8 @@ std::expected<void, std::string> RtuServer::open() {
 }
 
 void RtuServer::run() {
-  const ClientInfo broadcast_info{0, Transport::rtu, "broadcast"};
+  ClientInfo broadcast_info{0, Transport::rtu, "broadcast"};
+  broadcast_info.broadcast = true;
   const ClientInfo unit_info{0, Transport::rtu, "unit " + std::to_string(config_.unit_id)};
   const int fd = modbus_get_socket(ctx_);
   RtuFramer framer(static_cast<std::uint8_t>(config_.unit_id));

@@ -148,7 +148,13 @@ std::expected<WritePlan, PlannedRefusal> plan_write(registers::Table table, std:
       registers::decode_write(registers::Unit::module, table, start, values, state.order, registers::kinds_of(state.settings));
   if (!decoded) return refused(std::move(decoded.error()));
   for (const registers::RawWrite& w : *decoded)
-    if (w.reg->key == registers::Key::edit_command) return plan_edit_command(w, state);
+    if (w.reg->key == registers::Key::edit_command) {
+      if (state.broadcast)
+        return refused(registers::Refusal::because(registers::RefusalReason::edit_broadcast, w.reg->address,
+                                                   "edit.command in an RTU broadcast: no answer could say how it "
+                                                   "went; address the module's unit id"));
+      return plan_edit_command(w, state);
+    }
   const bool settings = std::any_of(decoded->begin(), decoded->end(), [](const auto& w) { return w.reg->persisted; });
   if (settings && state.edit_state != EditState::none) return plan_staging(*decoded, start, state);
   return plan_decoded_write(*decoded, start, state);

@@ -64,6 +64,7 @@ struct WriteState {
   EditState edit_state = EditState::none;
   std::span<const registers::RawWrite> edit_staged{};
   bool edit_sessions_full = false;
+  bool broadcast = false;  // an RTU broadcast: no edit session, settings apply at once
 };
 
 enum class EditAction : std::uint8_t {

@@ -399,6 +399,62 @@ TEST_CASE("the plant's events stay in the order they happened when a setting is 
   for (std::size_t i = 1; i < kept->size(); ++i) CHECK((*kept)[i - 1].time_ms <= (*kept)[i].time_ms);
 }
 
+TEST_CASE("a write refused for its form (quantity, byte count, coil value) is counted, published and logged like any "
+          "refused write") {
+  Module m(false);
+  auto log = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(100);
+  spdlog::default_logger()->sinks().push_back(log);
+  struct Unhook {
+    std::shared_ptr<spdlog::sinks::ringbuffer_sink_mt> sink;
+    ~Unhook() { std::erase(spdlog::default_logger()->sinks(), sink); }
+  } unhook{log};
+  using registers::RefusalReason;
+  const auto seek = Module::address("axis.x.seek_feedrate");
+  const auto hi = static_cast<std::uint8_t>(seek >> 8);
+  const auto lo = static_cast<std::uint8_t>(seek);
+  std::vector<std::uint8_t> too_many{16, hi, lo, 0, 124, 248};
+  too_many.resize(6 + 248, 0);
+  const auto reset = Module::address("cmd.reset_alarm");
+  struct Case {
+    const char* what;
+    std::vector<std::uint8_t> pdu;
+    RefusalReason reason;
+    std::uint16_t address;
+  };
+  const std::vector<Case> cases{
+      {"FC16 of 124 registers", too_many, RefusalReason::malformed_write, seek},
+      {"FC16 byte count not twice the quantity", {16, hi, lo, 0, 1, 3, 0, 0, 0}, RefusalReason::malformed_write, seek},
+      {"FC16 of 0 registers", {16, hi, lo, 0, 0, 0}, RefusalReason::empty, seek},
+      {"FC5 with 1234", {5, static_cast<std::uint8_t>(reset >> 8), static_cast<std::uint8_t>(reset), 0x12, 0x34},
+       RefusalReason::malformed_write, reset},
+      {"FC15 of 1969 coils", {15, 0, 0, 0x07, 0xB1, 247}, RefusalReason::malformed_write, 0},
+  };
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    INFO(cases[i].what);
+    CHECK(m.request(cases[i].pdu) == std::vector<std::uint8_t>{static_cast<std::uint8_t>(cases[i].pdu[0] | 0x80), 3});
+    CHECK(m.last_refusal() == std::array<std::uint16_t, 3>{static_cast<std::uint16_t>(i + 1), cases[i].address,
+                                                           static_cast<std::uint16_t>(cases[i].reason)});
+  }
+  CHECK(m.read_u16("axis.x.seek_feedrate") == registers::find_register("axis.x.seek_feedrate")->default_raw);
+  m.service->flush_refusal_log();
+  std::string text;
+  for (const std::string& line : log->last_formatted()) text += line;
+  CHECK_THAT(text, Catch::Contains("malformed_write") && Catch::Contains("quantity 124"));
+}
+
+TEST_CASE("an RTU broadcast applies settings at once and cannot begin an edit session") {
+  Module m(false);
+  server::ClientInfo broadcast{0, server::Transport::rtu, "broadcast"};
+  broadcast.broadcast = true;
+  const auto pdu = single_write_pdu;
+  // Begin: refused (and, as every broadcast, not answered).
+  CHECK(m.service->handle(0, pdu(6, Module::address("edit.command"), 1), broadcast).send == false);
+  CHECK(m.last_refusal()[2] == static_cast<std::uint16_t>(registers::RefusalReason::edit_broadcast));
+  // A settings write applies at once: no session holds it back.
+  CHECK(m.service->handle(0, pdu(6, Module::address("axis.x.seek_feedrate"), 1234), broadcast).send == false);
+  CHECK(m.read_u16("axis.x.seek_feedrate") == 1234);
+}
+
 TEST_CASE("a jog coil reads back 0 once its client's disconnect released the jog") {
   Module m(false);
   const auto coil = Module::address("cmd.jog_plus.y");
