@@ -148,6 +148,13 @@ TEST_CASE("homingctl usage errors exit 2, an unreachable module exits 3, --help 
   CHECK(ctl_plain({"set", "axis.x.pull_off"}).code() == 2);
   CHECK(ctl_plain({"get", "no.such.register"}).code() == 2);
   CHECK(ctl_plain({"jog", "x", "sideways"}).code() == 2);
+  // set changes settings only: a command or host value written through it would act.
+  for (const char* not_a_setting : {"cmd.home_axes=1", "host.heartbeat=5", "axis.x.target=10", "edit.command=1"}) {
+    const auto refused = ctl_plain({"set", not_a_setting});
+    SHOW(refused);
+    CHECK(refused.code() == 2);
+    CHECK(refused.err.find("is not a setting") != std::string::npos);
+  }
   auto r = ctl_plain({"--help"});
   CHECK(r.code() == 0);
   for (const char* sub : {"status", "watch", "home", "abort", "reset", "jog", "move", "get", "set", "check", "export",
@@ -162,6 +169,9 @@ TEST_CASE("homingctl usage errors exit 2, an unreachable module exits 3, --help 
     CHECK(r.code() == 3);
     CHECK(r.err.find("cannot connect") != std::string::npos);
   }
+  // Without a port: the message names the one tried.
+  r = ctl_plain({"--tcp", "127.0.0.1", "status"});
+  CHECK(r.err.find("127.0.0.1:502") != std::string::npos);
   // .invalid never resolves (RFC 6761): the name is what is wrong, not the network.
   r = ctl_plain({"--tcp", "cabinet-7.invalid:1502", "status"});
   {

@@ -101,6 +101,12 @@ std::variant<Assignments, int> parse_assignments(Context& ctx, const std::vector
     }
     if (r->unit == Unit::module && r->table == Table::coil)
       throw Usage(fmt::format("{} is a command: use homingctl home/abort/reset/jog/move", r->name()));
+    // set changes settings; a command or a host value written through it
+    // would act (cmd.home_axes starts a cycle) while reported as a setting.
+    if (r->unit == Unit::module && !r->persisted && r->key != registers::Key::security_unlock)
+      throw Usage(fmt::format("{} is not a setting (a command or a value the host writes): use homingctl "
+                              "home/abort/reset/jog/move",
+                              r->name()));
     named.emplace_back(r, kv->second);
   }
   // A unit typed with a value is that of the kind the axis will have: this

@@ -112,7 +112,9 @@ std::string Connection::describe() const {
     return fmt::format("rtu {} {} {}{}{} unit {}", options_.rtu, options_.baud, 8, options_.parity, options_.stop_bits,
                        options_.unit);
   if (!options_.tls.empty()) return fmt::format("tls {} unit {}", options_.tls, options_.unit);
-  return fmt::format("tcp {} unit {}", options_.tcp, options_.unit);
+  // The port tried, also when the user gave none (Modbus's 502).
+  const bool has_port = options_.tcp.find(':') != std::string::npos;
+  return fmt::format("tcp {}{} unit {}", options_.tcp, has_port ? "" : ":502", options_.unit);
 }
 
 void Connection::select(Unit unit) {
