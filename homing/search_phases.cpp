@@ -30,7 +30,12 @@ void PhaseRunner::clear_sensors() {
     return;
   }
   move_to(run.target_mm, latch_v);
-  if (arrived()) fail(AlarmCode::not_released, travelled());
+  if (!arrived()) return;
+  // The alarm goes to the side whose sensor still holds: that is the sensor to check.
+  AxisMask holding = 0;
+  if (active()) holding |= axis_bit(axis);
+  if (partner_active()) holding |= axis_bit(static_cast<std::size_t>(partner));
+  ctx.alarms.raise(holding, Alarm{AlarmCode::not_released, run.phase, AxisField::none, travelled(), 0});
 }
 
 void PhaseRunner::seek() {

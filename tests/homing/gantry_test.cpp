@@ -264,6 +264,17 @@ SCENARIO("software-slaved slave whose sensor never triggers is caught by the mis
   CHECK(r.actual(1) >= -2 - 0.4 - 2 * 0.02 - 1e-9);
 }
 
+SCENARIO("a software-slaved slave whose sensor is stuck active is the side the not_released alarm names",
+         "[gantry][alarms]") {
+  Rig r = software_gantry(100);
+  r.machine.axes[1].fault = sim::Fault::sensor_stuck_active;
+  r.home_all();
+  CHECK(r.axis(1).alarm.code == AlarmCode::not_released);
+  CHECK(r.axis(1).alarm.phase == Phase::clear_sensors);
+  CHECK_FALSE(r.axis(0).alarm);  // the master's sensor released: it is not the one to check
+  CHECK(r.status().first_alarm_axis == 1);
+}
+
 SCENARIO("a gantry master accelerates at the pair's lower acceleration while homing", "[gantry][safety]") {
   // The slave's drive can do 200 mm/s², the master's 500: every velocity
   // change of either side in the cycle (the ramps of seek, back-off and
