@@ -58,8 +58,15 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
     case AlarmCode::sensor_not_found:
       return fmt::format("{}: home sensor not found within {:g} {} of travel", X, s.max_seek_travel_mm, u);
     case AlarmCode::overrun_during_stop:
+      // Unfiltered, a bouncing contact opens for a moment as a short cam ends:
+      // the technician should not be sent to rebuild a cam that is fine.
       return fmt::format("{}: home sensor released {:.3f} {} after the trigger, while stopping; the trigger is "
-                         "shorter than the stop distance ({:.3f} {})", X, a.value, u, seek_stop_distance_mm(s), u);
+                         "shorter than the stop distance ({:.3f} {}){}",
+                         X, a.value, u, seek_stop_distance_mm(s), u,
+                         s.debounce_ms > 0 ? ""
+                                           : fmt::format(", or the contact bounced (debounce_ms is 0: a bounce reads "
+                                                         "as a release; set axis.{}.debounce_ms, e.g. 10)",
+                                                         static_cast<char>(kAxisUpper[axis] - 'A' + 'a')));
     case AlarmCode::stop_distance_exceeded:
       return fmt::format("{}: came to rest {:.3f} {} past the trigger, more than max_stop_distance "
                          "{:g} {}", X, a.value, u, s.max_stop_distance_mm, u);

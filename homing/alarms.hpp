@@ -66,7 +66,8 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
     {AlarmCode::sensor_not_found, "sensor_not_found", "seek travelled max_seek_travel without a trigger",
      "check the home sensor and its wiring, its polarity (sensor_nc), the seek direction and max_seek_travel"},
     {AlarmCode::overrun_during_stop, "overrun_during_stop", "sensor released while stopping: trigger too short",
-     "lengthen the trigger cam, lower seek_feedrate or raise acceleration"},
+     "lengthen the trigger cam, lower seek_feedrate or raise acceleration; a contact that bounces looks the same "
+     "with debounce_ms 0: set debounce_ms (5-30 ms)"},
     {AlarmCode::stop_distance_exceeded, "stop_distance_exceeded", "came to rest further than max_stop_distance",
      "lower seek_feedrate or raise acceleration"},
     {AlarmCode::not_released, "not_released", "sensor still active after max_backoff",

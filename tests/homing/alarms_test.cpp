@@ -83,6 +83,10 @@ SCENARIO("overrun_during_stop: a trigger cam shorter than the stop distance", "[
   CHECK(r.axis(0).alarm.value < 0.4);
   CHECK(text_of(r, 0).find(fmt::format("released {:.3f} mm after the trigger", r.axis(0).alarm.value)) !=
         std::string::npos);
+  // Unfiltered input: the text names a bounce and debounce_ms as the other cause.
+  REQUIRE(r.settings.axes[0].debounce_ms == 0);
+  CHECK(text_of(r, 0).find("or the contact bounced") != std::string::npos);
+  CHECK(text_of(r, 0).find("axis.x.debounce_ms") != std::string::npos);
   check_latched_until_reset(r, 0, AlarmCode::overrun_during_stop);
 }
 
