@@ -36,6 +36,20 @@
 namespace {
 
 // An FC 05 or 06 request: function code, address, value.
+// The daemon's log lines while it lives: a sink beside the default logger's own.
+struct CapturedLog {
+  std::shared_ptr<spdlog::sinks::ringbuffer_sink_mt> sink = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(500);
+  CapturedLog() { spdlog::default_logger()->sinks().push_back(sink); }
+  ~CapturedLog() { std::erase(spdlog::default_logger()->sinks(), sink); }
+  CapturedLog(const CapturedLog&) = delete;
+  CapturedLog& operator=(const CapturedLog&) = delete;
+  std::string text() const {
+    std::string all;
+    for (const std::string& line : sink->last_formatted()) all += line;
+    return all;
+  }
+};
+
 std::vector<std::uint8_t> single_write_pdu(std::uint8_t fc, std::uint16_t a, std::uint16_t v) {
   return {fc, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), static_cast<std::uint8_t>(v >> 8),
           static_cast<std::uint8_t>(v)};
@@ -402,12 +416,7 @@ TEST_CASE("the plant's events stay in the order they happened when a setting is 
 TEST_CASE("a write refused for its form (quantity, byte count, coil value) is counted, published and logged like any "
           "refused write") {
   Module m(false);
-  auto log = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(100);
-  spdlog::default_logger()->sinks().push_back(log);
-  struct Unhook {
-    std::shared_ptr<spdlog::sinks::ringbuffer_sink_mt> sink;
-    ~Unhook() { std::erase(spdlog::default_logger()->sinks(), sink); }
-  } unhook{log};
+  CapturedLog log;
   using registers::RefusalReason;
   const auto seek = Module::address("axis.x.seek_feedrate");
   const auto hi = static_cast<std::uint8_t>(seek >> 8);
@@ -437,9 +446,7 @@ TEST_CASE("a write refused for its form (quantity, byte count, coil value) is co
   }
   CHECK(m.read_u16("axis.x.seek_feedrate") == registers::find_register("axis.x.seek_feedrate")->default_raw);
   m.service->flush_refusal_log();
-  std::string text;
-  for (const std::string& line : log->last_formatted()) text += line;
-  CHECK_THAT(text, Catch::Contains("malformed_write") && Catch::Contains("quantity 124"));
+  CHECK_THAT(log.text(), Catch::Contains("malformed_write") && Catch::Contains("quantity 124"));
 }
 
 TEST_CASE("an RTU broadcast applies settings at once and cannot begin an edit session") {
@@ -470,12 +477,7 @@ TEST_CASE("a jog coil reads back 0 once its client's disconnect released the jog
 
 TEST_CASE("a cycle that ended in an alarm reset before the monitor looked is recorded and logged with that alarm") {
   Module m(false);
-  auto log = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(500);
-  spdlog::default_logger()->sinks().push_back(log);
-  struct Unhook {
-    std::shared_ptr<spdlog::sinks::ringbuffer_sink_mt> sink;
-    ~Unhook() { std::erase(spdlog::default_logger()->sinks(), sink); }
-  } unhook{log};
+  CapturedLog log;
   server::Monitor monitor(*m.loop, *m.service, m.store.get());
   std::int64_t now_ms = 0;
   const auto watch = [&] { monitor.poll(now_ms += 10); };
@@ -495,8 +497,7 @@ TEST_CASE("a cycle that ended in an alarm reset before the monitor looked is rec
   REQUIRE(runs);
   REQUIRE(runs->size() == 1);
   CHECK(runs->front().result == static_cast<int>(homing::AlarmCode::aborted));
-  std::string text;
-  for (const std::string& line : log->last_formatted()) text += line;
+  const std::string text = log.text();
   CHECK_THAT(text, Catch::Contains("alarm 10 (aborted)"));
   CHECK_THAT(text, Catch::Contains("homing ended with alarm aborted"));
   CHECK_THAT(text, !Catch::Contains("homing done in"));
