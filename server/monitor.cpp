@@ -195,6 +195,7 @@ void Monitor::poll(std::int64_t now_ms) {
   if (st.alarm != last_.alarm && !st.alarm) spdlog::info("alarms reset");
   if (st.last_command_result != last_.last_command_result || st.heartbeat == 0)
     spdlog::info("command result: {}", homing::command_result_name(st.last_command_result));
+  if (!st.homing && !last_.homing) record_unseen_cycle(snap, settings);
   if (st.homing && !last_.homing) {
     run_start_ms_ = now_ms;
     run_axes_ = 0;
@@ -232,6 +233,22 @@ void Monitor::poll(std::int64_t now_ms) {
       service_.audit_position_set(a, last_.axes[a].position_mm, st.axes[a].position_mm);
   keep_sim_carriages(snap, now_ms);
   last_ = st;
+}
+
+// A cycle that started and ended between two looks of this thread (a short
+// cycle, this thread late on a busy machine): the loop's events hold it whole.
+void Monitor::record_unseen_cycle(const Snapshot& snap, const homing::Settings& settings) {
+  const StatusEvent* ended = nullptr;
+  for (std::uint64_t seq = cycle_events_taken_ + 1; seq <= snap.events.written(); ++seq)
+    if (const StatusEvent* e = snap.events.find(seq); e && e->kind == StatusEventKind::cycle_ended) ended = e;
+  cycle_events_taken_ = snap.events.written();
+  if (!ended) return;
+  run_start_ms_ = ended->time_ms - ended->duration_ms;
+  run_axes_ = ended->axes;
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) measured_at_start_[a] = last_.axes[a].measurement;
+  spdlog::info("homing started");
+  record_run(snap.status, ended, settings, ended->time_ms);
+  report_measurements(snap.status, settings);
 }
 
 void Monitor::record_run(const homing::Status& st, const StatusEvent* ended, const homing::Settings& settings,

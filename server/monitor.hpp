@@ -37,6 +37,7 @@ class Monitor {
   void refresh_diagnostics();
   void housekeeping(std::int64_t now_ms);
   // ended: the loop's event for the cycle's end (its result), if the ring still holds it.
+  void record_unseen_cycle(const Snapshot& snap, const homing::Settings& settings);
   void record_run(const homing::Status& st, const StatusEvent* ended, const homing::Settings& settings,
                   std::int64_t now_ms);
   void log_alarms(const StatusEvents& events, const homing::Settings& settings);

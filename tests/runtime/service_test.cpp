@@ -503,6 +503,33 @@ TEST_CASE("a cycle that ended in an alarm reset before the monitor looked is rec
   CHECK_THAT(text, !Catch::Contains("homing done in"));
 }
 
+TEST_CASE("a cycle that started and ended between two looks of the monitor is recorded and logged") {
+  Module m(false);
+  CapturedLog log;
+  server::Monitor monitor(*m.loop, *m.service, m.store.get());
+  std::int64_t now_ms = 0;
+  const auto watch = [&] { monitor.poll(now_ms += 10); };
+  watch();
+  // Started and aborted while the monitor does not look (a short cycle, the
+  // monitor's thread late on a busy machine).
+  m.coil("cmd.home_all");
+  REQUIRE(m.run_until([&] { return m.status().homing; }, 100));
+  m.periods(20);
+  m.coil("cmd.abort");
+  REQUIRE(m.run_until([&] { return !m.status().homing; }, 100));
+  REQUIRE(m.run_until([&] { return m.status().axes[2].velocity_mm_per_s == 0; }, 10'000));
+  watch();
+  watch();
+  const auto runs = m.store->recent_runs(10);
+  REQUIRE(runs);
+  REQUIRE(runs->size() == 1);
+  CHECK(runs->front().result == static_cast<int>(homing::AlarmCode::aborted));
+  CHECK(runs->front().axes != 0);
+  const std::string text = log.text();
+  CHECK_THAT(text, Catch::Contains("homing started"));
+  CHECK_THAT(text, Catch::Contains("homing ended with alarm aborted"));
+}
+
 TEST_CASE("the history records an axis's correction only when its cycle succeeded and it started homed") {
   homing::AxisStatus axis;
   axis.home_correction_mm = 84.2;
