@@ -140,22 +140,44 @@ void Run::limit_sensor_faults(Causes& causes) {
 // lets both run at jog feedrate; `jog_reduced` only the jog, at 100 mm/min
 // at most; `none` neither. A refused command moves nothing.
 void Run::motion_before_homing() {
+  const AllowedWithoutHoming allowed = r_.settings.global.allowed_without_homing;
+  const double reduced_v = mm_per_min_to_mm_per_s(100.0);
+  const auto jog_v_of = [&](const AxisSettings& e) {
+    return allowed == AllowedWithoutHoming::all ? mm_per_min_to_mm_per_s(e.jog_feedrate_mm_per_min)
+                                                : std::min(reduced_v, mm_per_min_to_mm_per_s(e.jog_feedrate_mm_per_min));
+  };
+  // About 1 mm of jog at full speed: the seek's travel allows 3 mm beyond where a cycle may start.
+  const auto hold_s_of = [](double jog_v) { return std::min(0.3, 1.0 / jog_v); };
+  // How far the jog and the move after it may carry the axis: a late control
+  // period (up to max_dt_s) runs the jog on, accelerating, before the engine
+  // sees the release, and the axis brakes from where it got to (seed 123942451:
+  // a 16 ms period carried a fast jog 10 mm, past a limit switch 4.7 mm away).
+  const auto reach_mm = [&](const AxisSettings& e) {
+    const double v = jog_v_of(e);
+    const double t = hold_s_of(v) + 2 * m_.max_dt_s;
+    const double peak = std::min(v, e.acceleration_mm_per_s2 * t);
+    return peak * t + stop_distance_mm(peak, e.acceleration_mm_per_s2) + 1.0;
+  };
+  const auto away_of = [](const AxisSettings& e) { return dir_of(e) > 0 ? -1 : 1; };
   std::vector<std::size_t> cand;
-  for (std::size_t a = 0; a < kAxisCount; ++a)
-    if (master_index(r_.settings, a) < 0 && r_.settings.axes[a].mode != HomingMode::disabled && !r_.axis(a).homed &&
-        !r_.axis(a).sensor && r_.sim().axis_config(a).fault == sim::Fault::none)
-      cand.push_back(a);
+  for (std::size_t a = 0; a < kAxisCount; ++a) {
+    if (master_index(r_.settings, a) >= 0 || r_.settings.axes[a].mode == HomingMode::disabled || r_.axis(a).homed ||
+        r_.axis(a).sensor || r_.sim().axis_config(a).fault != sim::Fault::none)
+      continue;
+    // Not toward a limit switch it could reach: the act is a jog clear of the sensor, not a trip.
+    const AxisSettings e = effective(r_.settings, a);
+    const auto& c = r_.sim().axis_config(a);
+    const double limit = away_of(e) > 0 ? c.limit_max_mm : c.limit_min_mm;
+    if (e.limits_fitted && (limit - r_.actual(a)) * away_of(e) < reach_mm(e) + 0.5) continue;
+    cand.push_back(a);
+  }
   if (cand.empty() || r_.status().alarm) return;
   const std::size_t a = pick(cand);
   const AxisMask movers = with_slave(a);
   const AxisSettings e = effective(r_.settings, a);
-  const AllowedWithoutHoming allowed = r_.settings.global.allowed_without_homing;
-  const int away = dir_of(e) > 0 ? -1 : 1;
-  const double reduced_v = mm_per_min_to_mm_per_s(100.0);
-  const double jog_v = allowed == AllowedWithoutHoming::all ? mm_per_min_to_mm_per_s(e.jog_feedrate_mm_per_min)
-                                                            : std::min(reduced_v, mm_per_min_to_mm_per_s(e.jog_feedrate_mm_per_min));
-  // At most 2 mm away: the seek's travel allows 3 mm beyond where a cycle may start.
-  const double hold_s = std::min(0.3, 1.0 / jog_v);
+  const int away = away_of(e);
+  const double jog_v = jog_v_of(e);
+  const double hold_s = hold_s_of(jog_v);
   w_->clear_alarms_seen();
   const bool jog_allowed = allowed != AllowedWithoutHoming::none;
   if (jog_allowed) w_->set_outside_movers(movers);
@@ -186,6 +208,7 @@ void Run::motion_before_homing() {
     w_->fail("a jog before homing ran faster than allowed_without_homing lets it",
              std::to_string(fastest) + " mm/s, at most " + std::to_string(jog_v));
   w_->set_outside_movers(0);
+  if (ok() && r_.status().alarm) w_->fail("an alarm during the jog before homing", alarm_list(w_->alarms_seen));
   if (!ok() || r_.status().alarm) return;
   // A move of 1 mm further away.
   const bool move_allowed = allowed == AllowedWithoutHoming::all;
