@@ -27,10 +27,16 @@ int axis_index(std::string_view letter) {
   return -1;
 }
 
-std::string command_result_text(int r) {
-  // The engine's own text (homing/status.hpp), the one HMIs show too.
+std::string command_result_text(int r, int axis) {
+  // The engine's own text (homing/status.hpp), the one HMIs show too, with
+  // the axis named where the table says <a> (register names are lower case).
   const auto& table = homing::kCommandResultInfo;
-  return r >= 0 && r < std::ssize(table) ? std::string(table[r].text) : fmt::format("result {}", r);
+  if (r < 0 || r >= std::ssize(table)) return fmt::format("result {}", r);
+  std::string text(table[r].text);
+  if (axis >= 0 && axis < static_cast<int>(homing::kAxisCount))
+    for (std::size_t at = text.find("<a>"); at != std::string::npos; at = text.find("<a>", at))
+      text.replace(at, 3, homing::kAxisLetters[static_cast<std::size_t>(axis)]);
+  return text;
 }
 
 namespace {
@@ -120,10 +126,10 @@ struct Session {
     return out;
   }
 
-  ActionResult refused(const std::string& what, CommandResult r, const StatusView* s = nullptr) {
+  ActionResult refused(const std::string& what, CommandResult r, const StatusView* s = nullptr, int axis = -1) {
     ActionResult res;
     res.exit_code = 1;
-    res.message = fmt::format("{} refused: {}", what, command_result_text(static_cast<int>(r)));
+    res.message = fmt::format("{} refused: {}", what, command_result_text(static_cast<int>(r), axis));
     StatusView st = s ? *s : read_status(c, settings);
     if (st.interlocks) res.message += fmt::format(" (blocking motion: {})", interlocks_text(st.interlocks));
     for (const auto& a : alarms(st)) res.message += "\n  " + a;
@@ -176,9 +182,9 @@ ActionResult failure(std::string message) {
   return r;
 }
 
-ActionResult not_waited(const std::string& what, CommandResult r) {
+ActionResult not_waited(const std::string& what, CommandResult r, int axis = -1) {
   ActionResult res;
-  res.message = fmt::format("{}: {} (not waiting)", what, command_result_text(static_cast<int>(r)));
+  res.message = fmt::format("{}: {} (not waiting)", what, command_result_text(static_cast<int>(r), axis));
   res.json = {{"command", what}, {"ok", true}, {"result", std::string(homing::command_result_name(r))}};
   return res;
 }
@@ -327,8 +333,8 @@ ActionResult refcheck(Connection& c, const std::string& axis, const ActionOption
   const std::string what = fmt::format("refcheck {}", homing::kAxisUpper[i]);
   auto r = s.pulse(fmt::format("cmd.refcheck.{}", homing::kAxisLetters[i]));
   if (!r) return failure(r.error());
-  if (!taken(*r)) return s.refused(what, *r);
-  if (!o.wait) return not_waited(what, *r);
+  if (!taken(*r)) return s.refused(what, *r, nullptr, a);
+  if (!o.wait) return not_waited(what, *r, a);
   auto st = s.wait_for(at_rest, true);
   if (!st) return failure(st.error());
   ActionResult res = s.finished(what, *st);
@@ -404,8 +410,8 @@ ActionResult measure(Connection& c, const std::string& axis, bool apply, const A
   const std::string what = fmt::format("measure {}", homing::kAxisUpper[i]);
   auto r = s.pulse(fmt::format("cmd.measure.{}", letter));
   if (!r) return failure(r.error());
-  if (!taken(*r)) return s.refused(what, *r);
-  if (!o.wait) return not_waited(what, *r);
+  if (!taken(*r)) return s.refused(what, *r, nullptr, a);
+  if (!o.wait) return not_waited(what, *r, a);
   auto st = s.wait_for(at_rest, true);
   if (!st) return failure(st.error());
   ActionResult res = s.finished(what, *st);

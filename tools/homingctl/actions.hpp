@@ -49,6 +49,7 @@ ActionResult measure(Connection& c, const std::string& axis, bool apply, const A
 
 // Axis index of "x".."c" (case-insensitive) or -1.
 int axis_index(std::string_view letter);
-std::string command_result_text(int result);
+// axis >= 0: that axis's letter where the text says <a>.
+std::string command_result_text(int result, int axis = -1);
 
 }  // namespace homingctl
