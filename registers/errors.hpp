@@ -65,6 +65,7 @@ enum class RefusalReason : std::uint8_t {
   edit_sessions_full,   // edit.command = begin while the most edit sessions are open
   edit_broadcast,       // edit.command in an RTU broadcast: no answer could say how it went
   malformed_write,      // a write request outside the standard: quantity, byte count or coil value
+  no_unlock_code,       // security.unlock or cmd.lock_settings while homingd has no --unlock-code
 };
 // Each reason with the exception it is answered with, its name and its text.
 struct RefusalReasonInfo {
@@ -123,8 +124,11 @@ inline constexpr RefusalReasonInfo kRefusalReasonInfo[] = {
     {RefusalReason::malformed_write, ExceptionCode::illegal_data_value, "malformed_write",
      "the write request breaks the standard: a quantity outside 1-123 registers (1-121 for FC 23) or 1-1968 coils, a "
      "byte count that does not match it, or a coil value other than FF00 or 0000; nothing was written"},
+    {RefusalReason::no_unlock_code, ExceptionCode::illegal_data_value, "no_unlock_code",
+     "homingd runs without an unlock code (--unlock-code): settings cannot be locked, so there is nothing to lock or "
+     "unlock; start homingd with --unlock-code to protect the settings"},
 };
-static_assert(homing::lists_every_value(kRefusalReasonInfo, RefusalReason::malformed_write));
+static_assert(homing::lists_every_value(kRefusalReasonInfo, RefusalReason::no_unlock_code));
 constexpr std::span<const RefusalReasonInfo> enum_table(RefusalReason) { return kRefusalReasonInfo; }
 
 inline constexpr std::uint16_t kRuleReasonBase = 100;

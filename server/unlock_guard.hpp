@@ -42,6 +42,7 @@ class UnlockGuard {
   // Whole seconds left of the lockout, rounded up; 0 when codes are compared.
   std::chrono::seconds remaining(Clock::time_point now) const;
   std::uint32_t wrong_in_a_row() const { return wrong_in_a_row_; }
+  bool configured() const { return code_ != 0; }
   // The lockout the n-th wrong code in a row begins (0 s below free_wrong_codes).
   std::chrono::seconds lockout_after(std::uint32_t wrong_in_a_row) const;
 

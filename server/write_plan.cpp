@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "client_role.hpp"
+#include "registers/lookup.hpp"
 #include "write_log.hpp"
 
 namespace server {
@@ -25,6 +26,12 @@ std::uint16_t unlock_address(const registers::AcceptedWrite& w, std::uint16_t st
 // 5: the unlock code the request carries. Judged whether or not settings are
 // locked, so that a code is never tried for free.
 std::optional<PlannedRefusal> unlock_refusal(std::uint32_t code, std::uint16_t address, const WriteState& state) {
+  // No code to guess: nothing counted, and an answer that says why.
+  if (!state.unlock_guard.configured())
+    return PlannedRefusal{Refusal::because(RefusalReason::no_unlock_code, address,
+                                           "security.unlock written, but homingd runs without an unlock code "
+                                           "(--unlock-code): settings are not locked, nothing was unlocked or counted"),
+                          std::nullopt};
   const UnlockGuard::Outcome outcome = state.unlock_guard.judge(code, state.now);
   switch (outcome.verdict) {
     case UnlockVerdict::right: return std::nullopt;
@@ -165,6 +172,12 @@ std::expected<WritePlan, PlannedRefusal> plan_decoded_write(std::span<const regi
   auto accepted = registers::validate_raw_writes(writes, state.settings, state.host);
   if (!accepted) return refused(std::move(accepted.error()));
   if (auto r = registers::refusal_now(*accepted, state.status)) return refused(std::move(*r));
+  // A lock that cannot lock: an HMI's "lock" button would otherwise seem to protect the settings.
+  for (const registers::CommandRequest& c : accepted->commands)
+    if (c.command == registers::Command::lock_settings && c.on && !state.unlock_guard.configured())
+      return refused(Refusal::because(RefusalReason::no_unlock_code, registers::find_register("cmd.lock_settings")->address,
+                                      "cmd.lock_settings written, but homingd runs without an unlock code "
+                                      "(--unlock-code): settings cannot be locked; nothing was locked"));
 
   WritePlan plan;
   bool unlocks = false;

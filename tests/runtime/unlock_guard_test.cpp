@@ -225,3 +225,22 @@ TEST_CASE("thousands of unlock codes over Modbus with the clock standing still n
   CHECK(s.unlock16(kCode) == 0);
   CHECK(s.input("status.settings_locked") == 0);
 }
+
+TEST_CASE("without an unlock code security.unlock and cmd.lock_settings are refused as no_unlock_code and count no wrong code") {
+  Service s(0);
+  CHECK(s.input("status.settings_locked") == 0);
+  for (std::uint16_t n = 1; n <= 7; ++n) CHECK(s.unlock16(n) == kIllegalDataValue);
+  CHECK(s.input("status.wrong_unlock_codes") == 0);
+  CHECK(s.input("status.unlock_lockout_s") == 0);
+  CHECK(s.input("status.last_refusal_reason") == static_cast<int>(registers::RefusalReason::no_unlock_code));
+  CHECK(s.input("status.last_refused_register") == Service::address("security.unlock"));
+  const auto lock = Service::address("cmd.lock_settings");
+  const auto r = s.request({5, static_cast<std::uint8_t>(lock >> 8), static_cast<std::uint8_t>(lock), 0xFF, 0x00});
+  CHECK(Service::outcome(r) == kIllegalDataValue);
+  CHECK(s.input("status.last_refused_register") == lock);
+  CHECK(s.input("status.settings_locked") == 0);
+  // The settings stay writable.
+  const auto feed = Service::address("axis.x.seek_feedrate");
+  const auto w = s.request({6, static_cast<std::uint8_t>(feed >> 8), static_cast<std::uint8_t>(feed), 0x03, 0xEF});
+  CHECK(Service::outcome(w) == 0);
+}

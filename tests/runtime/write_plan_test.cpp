@@ -159,6 +159,25 @@ TEST_CASE("plan_write: the right unlock code plans the unlock and keeps no code 
   CHECK(p->stored.empty());
 }
 
+TEST_CASE("plan_write: without an unlock code an unlock is refused as no_unlock_code and handed back with nothing to count") {
+  World w;
+  w.guard = server::UnlockGuard{0, server::UnlockPolicy{}};
+  const auto p = w.plan(Table::holding_register, kUnlock, {1234});
+  CHECK(reason_of(p) == RefusalReason::no_unlock_code);
+  CHECK(address_of(p) == kUnlock);
+  CHECK_FALSE(p.error().wrong_unlock_code);
+}
+
+TEST_CASE("plan_write: without an unlock code cmd.lock_settings is refused as no_unlock_code, with one it is planned") {
+  World w;
+  const auto lock = registers::find_register("cmd.lock_settings")->address;
+  CHECK(w.plan(Table::coil, lock, {1}).has_value());
+  w.guard = server::UnlockGuard{0, server::UnlockPolicy{}};
+  const auto p = w.plan(Table::coil, lock, {1});
+  CHECK(reason_of(p) == RefusalReason::no_unlock_code);
+  CHECK(address_of(p) == lock);
+}
+
 TEST_CASE("plan_write: a locked setting is refused before the wiring is asked") {
   World w;
   w.locked = true;
