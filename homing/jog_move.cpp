@@ -16,6 +16,8 @@ CommandResult Engine::motion_refusal(const Settings& settings, std::size_t axis)
   if (comm_lost_) return CommandResult::refused_communication_lost;
   if (cycle_active_) return CommandResult::refused_busy;
   if (master_of(settings.axes[axis]) >= 0) return CommandResult::refused_slave_axis;
+  // A disabled axis is no axis of this machine (homing-methods.md: never moves).
+  if (settings.axes[axis].mode == HomingMode::disabled) return CommandResult::refused_invalid;
   // The same rule set as homing: an axis (or its gantry partner) whose
   // configuration is refused does not move at all.
   // Every axis linked to this one by slave_of, directly or through others.

@@ -557,3 +557,27 @@ SCENARIO("an abort that comes with starts in the same period starts nothing and 
     }
   }
 }
+
+SCENARIO("a disabled axis is refused a jog and a move and never moves, whatever allowed_without_homing lets unhomed axes do",
+         "[safety]") {
+  Rig r;
+  r.settings.axes[2] = typical_axis();  // feedrates and all: only its mode says it is not fitted
+  r.settings.axes[2].mode = HomingMode::disabled;
+  r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+  r.step();
+  r.clear_trace();
+  r.jog(2, +1);
+  r.run_for(0.3);
+  r.release_jogs();
+  CHECK(r.status().last_command_result == CommandResult::refused_invalid);
+  r.move(2, 10);
+  CHECK(r.status().last_command_result == CommandResult::refused_invalid);
+  r.run_for(0.3);
+  CHECK(r.trace[2].path_mm == 0);
+  // An enabled unhomed axis beside it may (allowed_without_homing all).
+  r.jog(0, +1);
+  r.run_for(0.1);
+  r.release_jogs();
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  CHECK(r.trace[0].path_mm > 0);
+}
