@@ -143,7 +143,11 @@ void ControlLoop::raise_settings_lost() {
 }
 
 void ControlLoop::heartbeat_written(std::uint16_t value) {
-  if (heartbeat_value_.exchange(value) != value) heartbeat_changed_ns_ = watchdog_clock_();
+  if (heartbeat_value_.exchange(value) == value) return;
+  heartbeat_changed_ns_ = watchdog_clock_();
+  // A heartbeat back after the watchdog expired: status.interlocks clears in
+  // the next period, not at the quiet loop's next tick.
+  if (heartbeat_stale_seen_.load(std::memory_order_relaxed)) waiter_->wake();
 }
 
 bool ControlLoop::edit_sim(const SimEdit& edit, std::chrono::milliseconds timeout) {
@@ -253,10 +257,11 @@ bool ControlLoop::take_mailbox(Mailbox& out) {
   return true;
 }
 
-bool ControlLoop::heartbeat_stale() const {
-  const std::uint32_t ms = settings_.global.watchdog_ms;
-  if (ms == 0) return false;
-  return watchdog_clock_() - heartbeat_changed_ns_.load() > std::int64_t{ms} * 1'000'000;
+bool ControlLoop::heartbeat_stale() const { return !heartbeat_fresh(settings_.global.watchdog_ms); }
+
+bool ControlLoop::heartbeat_fresh(std::uint32_t watchdog_ms) const {
+  if (watchdog_ms == 0) return true;
+  return watchdog_clock_() - heartbeat_changed_ns_.load() <= std::int64_t{watchdog_ms} * 1'000'000;
 }
 
 void ControlLoop::run_period(double wall_dt_s) {
@@ -330,6 +335,7 @@ void ControlLoop::step_engine(double dt, const Mailbox& mail) {
   // Stale, moving or not, is what the interlock shows and what a reset is
   // refused for; lost is what stops motion started over Modbus.
   inputs.heartbeat_stale = heartbeat_stale_ = heartbeat_stale();
+  heartbeat_stale_seen_.store(heartbeat_stale_, std::memory_order_relaxed);
   inputs.communication_lost = heartbeat_stale_ && modbus_motion_;
   const std::int64_t t0 = monotonic_ns();
   const homing::StepResult r = engine_.step(settings_, inputs, dt);

@@ -145,6 +145,9 @@ class ControlLoop {
   void raise_settings_lost();
   // The host wrote host.heartbeat (the watchdog only cares that it changes).
   void heartbeat_written(std::uint16_t value);
+  // host.heartbeat changed within watchdog_ms (the caller's settings; 0:
+  // no watchdog), on the live heartbeat rather than the last snapshot.
+  bool heartbeat_fresh(std::uint32_t watchdog_ms) const;
   // Runs edit inside the loop and returns true once a snapshot that shows its
   // effect is published, so a read that follows sees it. False when the loop
   // did not take it within timeout: then it never runs. Without the loop
@@ -249,6 +252,7 @@ class ControlLoop {
   bool loop_permit_ = false;
   bool modbus_motion_ = false;
   bool heartbeat_stale_ = false;  // in the last engine step
+  std::atomic<bool> heartbeat_stale_seen_{false};  // the same, for the threads that write the heartbeat
 
   std::atomic<std::uint16_t> heartbeat_value_{0};
   const Clock watchdog_clock_;

@@ -140,7 +140,14 @@ bool ModbusService::process_batch(const std::vector<WriteTicket*>& batch) {
     homing::Settings planned = settings_;  // with the settings of the durable plans decided so far
     registers::HostRegisters planned_host = host_;
     for (WriteTicket* t : batch) {
-      const homing::Status status = loop_.status();  // one machine snapshot per request
+      homing::Status status = loop_.status();  // one machine snapshot per request
+      // The snapshot is up to a period old (50 ms idle): a heartbeat written
+      // since (this request's, or the one just before a cmd.home_axes, as a
+      // PLC's next scan or homingctl writes it) has already cleared what the
+      // engine will judge the start on, the live heartbeat.
+      if ((status.interlocks & homing::interlock::communication_lost) &&
+          loop_.heartbeat_fresh(settings_.global.watchdog_ms))
+        status.interlocks &= static_cast<std::uint16_t>(~homing::interlock::communication_lost);
       const std::string owner = EditSessions::owner_of(t->client);
       const std::vector<registers::RawWrite> staged = edits_.staged(owner);
       const WriteState state{.settings = planned,

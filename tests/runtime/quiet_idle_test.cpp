@@ -317,9 +317,20 @@ TEST_CASE("with nothing moving a stale heartbeat shows communication_lost at the
   l.loop->submit(reset, true);
   l.turn();
   CHECK(l.snap().status.last_command_result == homing::CommandResult::refused_cause_present);
+  l.turn();  // the loop idles again: only a wake ends its wait early
+  REQUIRE_FALSE(l.waiter->woken);
   l.loop->heartbeat_written(1);
+  // The heartbeat back wakes the loop: the interlock clears in the next
+  // period, not at the slow tick (a PLC's cmd.home_axes a scan later).
+  CHECK(l.waiter->woken);
   l.turn();
+  CHECK(l.waiter->last().ended_ns - l.waiter->last().from_ns <= kMs);  // a period, not the slow tick
   CHECK((l.snap().status.interlocks & homing::interlock::communication_lost) == 0);
+  // The same value again is no heartbeat, and a fresh one wakes nothing.
+  l.loop->heartbeat_written(2);
+  l.turn();
+  l.loop->heartbeat_written(3);
+  CHECK_FALSE(l.waiter->woken);
 }
 
 TEST_CASE("a simulator write to a running quiet loop wakes it: the write is not left for the slow tick") {

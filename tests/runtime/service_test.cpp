@@ -503,6 +503,23 @@ TEST_CASE("a cycle that ended in an alarm reset before the monitor looked is rec
   CHECK_THAT(text, !Catch::Contains("homing done in"));
 }
 
+TEST_CASE("a cmd.home_axes written just after the heartbeat came back is not refused for the watchdog on a snapshot "
+          "older than the heartbeat") {
+  Module m(false);
+  REQUIRE(m.write_u16("global.watchdog_ms", 100).at(0) == 6);
+  m.periods(2);
+  std::this_thread::sleep_for(std::chrono::milliseconds(150));  // the watchdog expires, nothing moving
+  m.periods(1);
+  REQUIRE((m.status().interlocks & homing::interlock::communication_lost) != 0);
+  // The PLC beats again and, a scan later, starts X: no period between the two.
+  REQUIRE(m.write_u16("host.heartbeat", 1).at(0) == 6);
+  REQUIRE((m.status().interlocks & homing::interlock::communication_lost) != 0);
+  CHECK(m.write_u16("cmd.home_axes", 0b001).at(0) == 6);
+  m.periods(3);
+  CHECK(m.status().homing);
+  CHECK(m.status().last_command_result == homing::CommandResult::accepted);
+}
+
 TEST_CASE("a cycle that started and ended between two looks of the monitor is recorded and logged") {
   Module m(false);
   CapturedLog log;
