@@ -6,6 +6,7 @@
 #include <regex>
 
 #include "daemon.hpp"
+#include "registers/errors.hpp"
 
 using namespace e2e;
 
@@ -114,11 +115,12 @@ TEST_CASE("locked settings refuse writes with exception 04 until the unlock code
   CHECK(c.read("axis.x.seek_feedrate") == 1200);
 }
 
-TEST_CASE("without an unlock code the settings are never locked") {
+TEST_CASE("without an unlock code the settings are never locked and cmd.lock_settings says so with exception 03") {
   Daemon d;
   Client c = Client::tcp(d.port());
   CHECK(c.read("status.settings_locked") == 0);
-  CHECK(c.write("cmd.lock_settings", 1) == 0);
+  CHECK(c.write("cmd.lock_settings", 1) == 3);
+  CHECK(c.read("status.last_refusal_reason") == static_cast<int>(registers::RefusalReason::no_unlock_code));
   CHECK(c.read("status.settings_locked") == 0);
   CHECK(c.write("axis.x.seek_feedrate", 1200) == 0);
 }
