@@ -89,8 +89,9 @@ inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
     {CommandResult::refused_gantry_pair, "refused_gantry_pair",
      "reference check or measurement refused: the axis is one side of a gantry pair, which only a full cycle squares"},
     {CommandResult::refused_no_travel_end, "refused_no_travel_end",
-     "measurement refused: the axis does not home at an end of its travel (switch, pushing or hard-stop methods "
-     "do), or nothing tells the opposite end (limits_fitted, or hard_stop with stall_detect stall_input)"},
+     "measurement refused: it needs both a homing method that homes at one end of the travel (a switch, pushing "
+     "or a hard stop; not a home cam, manual, absolute or drive) and something that tells the opposite end "
+     "(limit switches: limits_fitted = 1; or a hard stop with stall_detect = stall_input)"},
     {CommandResult::cancelled_by_abort, "cancelled_by_abort",
      "not started: an abort came with it (in the same request or within the same control period) and abort wins; "
      "send the start again once the abort is done"},

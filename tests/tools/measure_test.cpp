@@ -63,8 +63,10 @@ TEST_CASE("homingctl measure names what refuses it, with a non-zero exit code, a
   auto r = ctl(d, {"measure", "y"});  // Y: a switch method, no limit switches
   SHOW(r);
   CHECK(r.code() == 1);
-  CHECK(r.err.find("measure Y refused: measurement refused: the axis does not home at an end of its travel") !=
+  CHECK(r.err.find("measure Y refused: measurement refused: it needs both a homing method that homes at one end") !=
         std::string::npos);
+  // The half this axis lacks, in its register names.
+  CHECK(r.err.find("axis.y.limits_fitted is 0: no limit switch tells the opposite end") != std::string::npos);
   r = ctl(d, {"measure", "q"});
   CHECK(r.code() == 2);  // not an axis: a usage error, nothing written
 }

@@ -401,6 +401,22 @@ std::expected<void, std::string> apply_measured(Connection& c, std::string_view 
 }
 }  // namespace
 
+namespace {
+
+// Which half of a measurement's needs this axis lacks, in its own register names.
+std::string travel_end_missing(const homing::Settings& settings, std::size_t a) {
+  const homing::AxisSettings& s = settings.axes[a];
+  const auto letter = homing::kAxisLetters[a];
+  if (!homing::homes_at_travel_end(s.mode))
+    return fmt::format("axis.{}.mode is {}, which does not home at an end of the travel", letter, homing::mode_name(s.mode));
+  std::string text = fmt::format("axis.{}.limits_fitted is 0: no limit switch tells the opposite end", letter);
+  if (homing::mode_row(s.mode).runs(homing::Phase::push_to_stop))
+    text += fmt::format(", and axis.{}.stall_detect is not stall_input", letter);
+  return text;
+}
+
+}  // namespace
+
 ActionResult measure(Connection& c, const std::string& axis, bool apply, const ActionOptions& o) {
   const int a = axis_index(axis);
   if (a < 0) throw std::invalid_argument(fmt::format("measure: '{}' is not an axis (x, y, z, a, b, c)", axis));
@@ -410,7 +426,11 @@ ActionResult measure(Connection& c, const std::string& axis, bool apply, const A
   const std::string what = fmt::format("measure {}", homing::kAxisUpper[i]);
   auto r = s.pulse(fmt::format("cmd.measure.{}", letter));
   if (!r) return failure(r.error());
-  if (!taken(*r)) return s.refused(what, *r, nullptr, a);
+  if (!taken(*r)) {
+    ActionResult res = s.refused(what, *r, nullptr, a);
+    if (*r == CommandResult::refused_no_travel_end) res.message += "\n  " + travel_end_missing(s.settings, i);
+    return res;
+  }
   if (!o.wait) return not_waited(what, *r, a);
   auto st = s.wait_for(at_rest, true);
   if (!st) return failure(st.error());
