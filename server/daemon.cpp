@@ -244,6 +244,9 @@ void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, Modbu
   if (rtu_thread.joinable()) rtu_thread.join();
   loop.stop();
   log_stop(loop.stop_report());
+  // Before anything that may wait on the network: a clean stop's trust is kept
+  // even if a stuck broker connection makes systemd kill what follows.
+  keep_last_stops(store, loop.stop_report());  // the only place a clean stop is written
   if (mqtt) mqtt->stop();  // after the stop, so the last values are published; then NDEATH
   monitor.stop();
   t.tcp.reset();
@@ -296,7 +299,6 @@ int run_daemon(const Options& opt, const Wiring& wiring) {
   }
 
   serve(opt, signals, loop, service, *store, *transports, std::move(mqtt), events ? &*events : nullptr);
-  keep_last_stops(*store, loop.stop_report());  // the only place a clean stop is written
   store->close();
   spdlog::info("stopped cleanly");
   return 0;

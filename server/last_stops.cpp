@@ -95,12 +95,14 @@ std::optional<homing::LastStops> take_last_stops(persistence::SettingsStore& sto
 }
 
 void keep_last_stops(persistence::SettingsStore& store, const StopReport& report) {
-  if (auto r = store.record_last_stops(to_store(report.last_stops)); !r)
+  if (auto r = store.record_last_stops(to_store(report.last_stops)); !r) {
     spdlog::error("last stops not kept: no axis will be offered a reference check at the next start: {}",
                   r.error().message);
-  int clean = 0;
-  for (const homing::LastStop& s : report.last_stops) clean += s.clean ? 1 : 0;
-  spdlog::info("last stops kept: {} axis(es) stopped cleanly", clean);
+  } else {
+    int clean = 0;
+    for (const homing::LastStop& s : report.last_stops) clean += s.clean ? 1 : 0;
+    spdlog::info("last stops kept: {} axis(es) stopped cleanly", clean);
+  }
   if (report.sim_carriages_mm)
     if (auto r = store.record_sim_carriages(*report.sim_carriages_mm); !r)
       spdlog::warn("simulator carriages not kept: {}", r.error().message);

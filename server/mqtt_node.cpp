@@ -164,8 +164,11 @@ void MqttNode::network_loop() {
   };
   while (!stop_network_) {
     if (!have_socket) {
-      const int rc = mosquitto_connect(mosq_, config_.host.c_str(), config_.port, config_.keepalive_s);
-      if (rc != MOSQ_ERR_SUCCESS) {
+      // Asynchronous: a broker host that drops the SYN leaves the connect
+      // pending in mosquitto_loop below, which returns every 100 ms, so a stop
+      // never waits for the kernel's connect timeout (about 2 minutes).
+      const int rc = mosquitto_connect_async(mosq_, config_.host.c_str(), config_.port, config_.keepalive_s);
+      if (rc != MOSQ_ERR_SUCCESS && rc != MOSQ_ERR_CONN_PENDING) {
         log_once(fmt::format("cannot connect: {}; retrying",
                              rc == MOSQ_ERR_ERRNO ? std::string(std::strerror(errno)) : mosquitto_strerror(rc)));
         wait();
@@ -177,6 +180,10 @@ void MqttNode::network_loop() {
     if (rc != MOSQ_ERR_SUCCESS) {
       have_socket = false;
       if (connected_.exchange(false)) on_session_lost(rc);
+      else
+        log_once(fmt::format("no MQTT session: {} before the broker accepted the connection (is it an MQTT "
+                             "listener? mqtts:// for a TLS port); retrying",
+                             rc == MOSQ_ERR_ERRNO ? std::string(std::strerror(errno)) : mosquitto_strerror(rc)));
       wait();
     } else if (connected_) {
       delay_s = 1;
@@ -186,8 +193,10 @@ void MqttNode::network_loop() {
 
 void MqttNode::log_once(const std::string& text) {
   std::lock_guard lock(log_mutex_);
-  if (last_lib_error_ == text) return;
-  last_lib_error_ = text;
+  // Once per reason until a session is made: a refused connection reports
+  // two (the broker's answer, then the closed socket), alternating each retry.
+  if (logged_reasons_.size() >= 64) logged_reasons_.clear();  // texts with varying figures stay bounded
+  if (!logged_reasons_.insert(text).second) return;
   spdlog::warn("mqtt: {}:{}: {}", config_.host, config_.port, text);
 }
 
@@ -227,7 +236,7 @@ void MqttNode::on_connect(mosquitto* m, void* self_ptr, int rc) {
   self->need_birth_ = true;
   {
     std::lock_guard lock(self->log_mutex_);
-    self->last_lib_error_.clear();
+    self->logged_reasons_.clear();
   }
   spdlog::info("mqtt: connected to {}:{} (bdSeq {})", self->config_.host, self->config_.port, self->bd_seq_.load());
 }
@@ -320,6 +329,11 @@ void MqttNode::take_command(const std::string& metric, bool on) {
       answer.new_value = refusal->reason_code();
       answer.text = fmt::format("NCMD {} refused: {} ({}): {}", metric, homing::name_of(refusal->reason),
                                 registers::exception_name(refusal->code), refusal->message);
+    } else if (reg->key == registers::Key::cmd_lock_settings) {
+      // Carried out by the service itself: the loop never judges it, so
+      // waiting for a judgement would hold this network thread for nothing.
+      answer.code = static_cast<std::int32_t>(homing::CommandResult::accepted);
+      answer.text = fmt::format("NCMD {}: settings locked", metric);
     } else {
       // The loop judges a command within a period or two; the network thread
       // may wait that long (the control loop never waits for it).
@@ -355,6 +369,16 @@ void MqttNode::on_message(mosquitto*, void* self_ptr, const mosquitto_message* m
   auto* self = static_cast<MqttNode*>(self_ptr);
   if (!self->config_.primary_host.empty() && sparkplug::state_topic(self->config_.primary_host) == msg->topic) {
     self->take_host_state(msg);
+    return;
+  }
+  // Sparkplug B: an NCMD is never retained. A retained one is an old message
+  // the broker replays at every subscription, that is at every start and
+  // reconnection: carried out, it would home or move the machine each time.
+  if (msg->retain) {
+    spdlog::warn("mqtt: NCMD on {} ignored: it is retained on the broker (an old command replayed at this "
+                 "subscription; Sparkplug B NCMDs are published with retain false); clear it with an empty "
+                 "retained message on that topic",
+                 msg->topic);
     return;
   }
   sparkplug::Payload cmd;

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cstdint>
 #include <expected>
+#include <set>
 #include <string>
 #include <map>
 #include <mutex>
@@ -99,7 +100,7 @@ class MqttNode {
   std::mutex flight_mutex_;
   std::map<int, std::int64_t> in_flight_;  // message id -> event id, until written to the broker
   std::mutex log_mutex_;
-  std::string last_lib_error_;  // the last libmosquitto error logged
+  std::set<std::string> logged_reasons_;  // why connecting failed, each logged once since the last session
 };
 
 }  // namespace server

@@ -113,11 +113,12 @@ def sparkplug_host(client_id, broker, on_payload, setup=None, subscribe=True, st
     return client
 
 
-def ncmd(client, node, name, value=True):
-    """An NCMD to a node of the group plant: one Boolean metric, QoS 1."""
+def ncmd(client, node, name, value=True, retain=False):
+    """An NCMD to a node of the group plant: one Boolean metric, QoS 1 (retained
+    only to show a module ignores what the specification forbids)."""
     cmd = spb.Payload()
     m = cmd.metrics.add(); m.name = name; m.datatype = spb.Boolean; m.boolean_value = value
-    client.publish(f"spBv1.0/plant/NCMD/{node}", cmd.SerializeToString(), qos=1)
+    return client.publish(f"spBv1.0/plant/NCMD/{node}", cmd.SerializeToString(), qos=1, retain=retain)
 
 
 def alias_names(birth):

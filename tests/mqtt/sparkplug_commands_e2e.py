@@ -44,7 +44,7 @@ def answers(node):
                         ev["event/new_value"].long_value if "event/new_value" in ev else 0, ev["event/text"].string_value))
     return out
 
-def ncmd(node, name, value=True): e2e_support.ncmd(sub, node, name, value)
+def ncmd(node, name, value=True, retain=False): return e2e_support.ncmd(sub, node, name, value, retain)
 
 daemons = []
 try:
@@ -107,6 +107,21 @@ try:
     feed = mb.read_holding_registers(102, 1, slave=1).registers[0]
     check(feed == 1000, "no setting was written over MQTT")
     mb.close(); mb_off.close()
+
+    # A retained NCMD (forbidden by Sparkplug B, replayed by the broker at
+    # every subscription) is ignored and logged: a module started, or
+    # reconnected, after it does not home.
+    ncmd("ret", "cmd/home_all", retain=True).wait_for_publish(5)
+    ret, ret_port = start("ret", "--mqtt-commands"); daemons.append(ret)
+    check(wait_until(lambda: births("ret"), 15), "the module started after a retained NCMD is born")
+    mb_ret = ModbusTcpClient("127.0.0.1", port=ret_port, timeout=2, retries=0)
+    check(wait_until(lambda: mb_ret.connect(), 5), "Modbus connects")
+    retained_logged = lambda: "retained on the broker" in open(os.path.join(work, "ret.log")).read()
+    check(wait_until(retained_logged, 10), "the retained NCMD is logged as ignored")
+    check(ir(mb_ret, 1) == 0 and ir(mb_ret, 11) == 0, "and nothing was carried out (not_homed, no command judged)")
+    check(not any(a[0] == "cmd.home_all" for a in answers("ret")), "nor answered as a command")
+    mb_ret.close()
+    sub.publish("spBv1.0/plant/NCMD/ret", b"", qos=1, retain=True).wait_for_publish(5)  # cleared
 finally:
     shut_down(daemons, sub, broker)
 if failures:
