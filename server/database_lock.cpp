@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <utility>
 
@@ -25,7 +26,11 @@ std::string holder_of(int fd) {
 }  // namespace
 
 std::expected<DatabaseLock, std::string> DatabaseLock::take(const std::string& db_path) {
-  const std::string path = db_path + ".lock";
+  // The lock belongs to the file SQLite opens: through a symbolic link (or
+  // another spelling of the path) it is the same database and the same lock.
+  std::error_code ec;
+  const std::filesystem::path real = std::filesystem::weakly_canonical(db_path, ec);
+  const std::string path = (ec ? db_path : real.string()) + ".lock";
   const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (fd < 0) {
     const int err = errno;

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
 #include <optional>
 #include <string>
 
@@ -34,4 +35,17 @@ TEST_CASE("a database lock in a directory that does not exist is refused naming 
   REQUIRE_FALSE(lock);
   CHECK_THAT(lock.error(), Catch::Contains("cannot open its lock file " + db + ".lock") &&
                                Catch::Contains("check that the directory exists"));
+}
+
+TEST_CASE("a database reached through a symbolic link is the same database: its lock refuses the second holder") {
+  test_support::TempDir dir{"db-lock-test"};
+  const std::string db = dir.file("machine.db");
+  const std::string alias = dir.file("alias.db");
+  std::ofstream(db) << "";  // the running daemon's database
+  std::filesystem::create_symlink(db, alias);
+  auto first = server::DatabaseLock::take(db);
+  REQUIRE(first);
+  const auto second = server::DatabaseLock::take(alias);
+  REQUIRE_FALSE(second);
+  CHECK_THAT(second.error(), Catch::Contains("another homingd uses this database"));
 }
