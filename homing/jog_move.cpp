@@ -16,8 +16,6 @@ CommandResult Engine::motion_refusal(const Settings& settings, std::size_t axis)
   if (comm_lost_) return CommandResult::refused_communication_lost;
   if (cycle_active_) return CommandResult::refused_busy;
   if (master_of(settings.axes[axis]) >= 0) return CommandResult::refused_slave_axis;
-  // A disabled axis is no axis of this machine (homing-methods.md: never moves).
-  if (settings.axes[axis].mode == HomingMode::disabled) return CommandResult::refused_invalid;
   // The same rule set as homing: an axis (or its gantry partner) whose
   // configuration is refused does not move at all.
   // Every axis linked to this one by slave_of, directly or through others.
@@ -31,6 +29,9 @@ CommandResult Engine::motion_refusal(const Settings& settings, std::size_t axis)
     }
   for (std::size_t a = 0; a < kAxisCount; ++a)
     if ((group & axis_bit(a)) && faults()[a]) return CommandResult::refused_settings_fault;
+  // A disabled axis is no axis of this machine (homing-methods.md: never moves);
+  // one named in a gantry is the settings fault above, which says more.
+  if (settings.axes[axis].mode == HomingMode::disabled) return CommandResult::refused_invalid;
   const int partner = gantry_partner(settings, axis);
   if (axes_[axis].limit_tripped || (partner >= 0 && axes_[static_cast<std::size_t>(partner)].limit_tripped))
     return CommandResult::refused_hard_limit;
