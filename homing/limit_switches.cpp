@@ -43,6 +43,10 @@ void Engine::check_limit_switches(const Settings& settings) {
     if (const auto* m = run.phase_data_if<phase_data::Measure>();
         run.in_cycle && run.phase == Phase::measure_travel && m && m->toward == toward)
       continue;
+    // A hard-stop home pushes into the stop its limit switch stands before:
+    // that switch is on the way to the reference, not a hard limit (the push
+    // is bounded by max_seek_travel and stall_timeout, as without limits).
+    if (run.in_cycle && run.phase == Phase::push_to_stop && toward == (s.direction == Direction::positive ? 1 : -1)) continue;
     // Reset while still braking onto it: the trip is known, no second alarm.
     // Only that braking: a motion started since (a homing phase; jogs and
     // moves toward it are refused) trips the switch again at once.

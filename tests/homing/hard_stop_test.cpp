@@ -168,3 +168,28 @@ TEST_CASE("hard-stop homing needs a time bound and has no sensor to share with a
     CHECK(slave->rule == CheckRule::slave_needs_sensor);
   }
 }
+
+SCENARIO("hard-stop homing with limit switches: the switch before the stop it pushes into is on its way, the other "
+         "end still trips",
+         "[modes][hard_stop][limits]") {
+  Rig r = hard_stop_rig();
+  AxisSettings& s = r.settings.axes[0];
+  s.limits_fitted = true;
+  s.limit_overtravel_mm = 1.4;
+  s.pull_off_mm = 2;                      // the rest, 2 mm off the stop, is off the switch
+  r.machine.axes[0].limit_min_mm = -3.5;  // 1.5 mm before the stop at -5
+  r.machine.axes[0].limit_max_mm = 100;
+  REQUIRE_FALSE(check_axis(r.settings, 0));
+  r.clear_trace();
+  REQUIRE(r.home_all());
+  CHECK(r.trace[0].min_actual == Approx(-5).margin(1e-9));  // through the switch, into the stop
+  CHECK(r.axis(0).position_mm == Approx(0).margin(1e-9));
+  CHECK(r.axis(0).homed);
+  CHECK(r.actual(0) == Approx(-3).margin(1e-9));
+  CHECK_FALSE(r.axis(0).alarm);
+  // Homed, a move onto the same switch is a hard limit again.
+  r.settings.axes[0].soft_limits_enable = false;
+  r.move(0, -1.5);  // 0.5 mm past the switch
+  r.run_for(2);
+  CHECK(r.axis(0).alarm.code == AlarmCode::limit_switch);
+}
