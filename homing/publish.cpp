@@ -23,6 +23,8 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
     as.velocity_mm_per_s = run.motor.velocity_mm_per_s;
     as.homed = run.counts_as_homed(s.mode);
     as.sensor = inputs_[a].sensor_active;
+    as.limit_min = run.readings.limit_min;
+    as.limit_max = run.readings.limit_max;
     as.busy = run.busy();
     as.trigger_position_mm = run.trigger_position_mm;
     as.home_correction_mm = run.home_correction_mm;

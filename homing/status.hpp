@@ -157,6 +157,8 @@ struct AxisStatus {
   double velocity_mm_per_s = 0;
   bool homed = false;
   bool sensor = false;              // home sensor active (debounced, polarity applied)
+  bool limit_min = false;           // the negative end's limit switch active (limits_fitted, polarity applied)
+  bool limit_max = false;           // the positive end's
   bool busy = false;
   double trigger_position_mm = 0;   // reference edge, in the coordinates believed before assign
   double home_correction_mm = 0;    // assigned - believed at the reference edge

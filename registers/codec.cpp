@@ -160,6 +160,7 @@ std::int64_t read_raw(const Register& reg, const ModuleView& view) {
       case Key::axis_alarm_phase: return a.alarm ? raw_of(a.alarm.phase) : 0;
       case Key::axis_alarm_value: return a.alarm ? to_raw(reg, a.alarm.value) : 0;
       case Key::axis_alarm_side: return a.alarm ? raw_of(a.alarm.side) : 0;
+      case Key::axis_alarm_rule: return a.alarm ? a.alarm.rule : 0;
       case Key::axis_alarm_rack_at_start: return a.alarm ? to_raw(reg, a.alarm.rack_at_start_mm) : 0;
       case Key::axis_position: return to_raw(reg, a.position_mm);
       case Key::axis_velocity: return to_raw(reg, a.velocity_mm_per_s);
@@ -188,6 +189,8 @@ std::int64_t read_raw(const Register& reg, const ModuleView& view) {
       case Key::axis_homed: return a.homed ? 1 : 0;
       case Key::axis_sensor: return a.sensor ? 1 : 0;
       case Key::axis_busy: return a.busy ? 1 : 0;
+      case Key::axis_limit_min: return a.limit_min ? 1 : 0;
+      case Key::axis_limit_max: return a.limit_max ? 1 : 0;
       default: unbound(reg, "status");
     }
   }

@@ -88,10 +88,11 @@ constexpr AlarmConfirm kAlarmConfirm[] = {
      "`axis.<a>.alarm_phase` names the phase that ran into the limit switch (not `cam_seek`); "
      "`axis.<a>.alarm_value` is where it stood"},
     {homing::AlarmCode::both_limits_active,
-     "with the carriage between the ends, both limit inputs read active (`homingctl status`, or the GPIO lines "
-     "`limit_min`/`limit_max`); on NC switches, a wire is open"},
+     "with the carriage between the ends, both limit inputs read active (`axis.<a>.limit_min` and "
+     "`axis.<a>.limit_max`, the `limits` column of `homingctl status`); on NC switches, a wire is open"},
     {homing::AlarmCode::limit_switch,
-     "`axis.<a>.alarm_phase` is `jog`, `move` or `idle`; the limit input of that end reads active and "
+     "`axis.<a>.alarm_phase` is `jog`, `move` or `idle`; `axis.<a>.alarm_rule` names the end (1 negative, 2 "
+     "positive), whose input (`axis.<a>.limit_min` or `limit_max`) reads active while the carriage stands on it, and "
      "`axis.<a>.alarm_value` is the position where it tripped"},
     {homing::AlarmCode::switch_not_repeatable,
      "`axis.<a>.latch_spread` (the figure in `axis.<a>.alarm_value`) is above `axis.<a>.max_latch_spread` over "

@@ -63,9 +63,9 @@ enum class Key : std::uint8_t {
   axis_hysteresis, axis_seek_latch_difference, axis_chatter_edges, axis_index_distance, axis_index_near_edge,
   axis_gantry_skew, axis_health_warning, axis_trust, axis_refcheck_error,
   axis_measured_travel, axis_measured_soft_limit_min, axis_measured_soft_limit_max, axis_measured_max_seek_travel,
-  axis_alarm_side, axis_alarm_rack_at_start,
+  axis_alarm_side, axis_alarm_rack_at_start, axis_alarm_rule,
   // discrete inputs, module
-  status_alarm, status_homing, status_estop, axis_homed, axis_sensor, axis_busy,
+  status_alarm, status_homing, status_estop, axis_homed, axis_sensor, axis_busy, axis_limit_min, axis_limit_max,
   // coils, module
   cmd_home_all, cmd_abort, cmd_reset_alarm, host_homing_permit, cmd_lock_settings, security_unlock,
   cmd_home, cmd_unhome, cmd_jog_plus,

@@ -123,6 +123,7 @@ TEST_CASE("homingctl set: a refused write says why, names the setting, and chang
     CHECK(r.err.find("cannot work together") != std::string::npos);
     CHECK(r.err.find("(about axis.x.") != std::string::npos);
     CHECK(r.err.find("nothing was changed") != std::string::npos);
+    CHECK(r.out.find("->") == std::string::npos);  // stdout records no change that did not happen
   }
   CHECK(d.log().find("discarded by its client (2 staged settings dropped)") != std::string::npos);
   CHECK(holding_snapshot(c) == before);
@@ -138,6 +139,7 @@ TEST_CASE("homingctl set: a refused write says why, names the setting, and chang
     SHOW(r);
     CHECK(r.code() == 1);
     CHECK(r.err.find("a homing cycle is running: settings cannot change now") != std::string::npos);
+    CHECK(r.out.find("axis.x.pull_off") == std::string::npos);
   }
   CHECK(ctl(d, {"abort"}).code() == 0);
 }
@@ -493,4 +495,25 @@ TEST_CASE("homingctl health: the last cycle's switch figures per axis, and the i
   j = json_of(ctl(d, {"--json", "health"}));
   CHECK(j["x"]["index_distance"].get<double>() == Approx(0.1).margin(0.005));
   CHECK(j["x"]["warnings"].size() == 1);
+}
+
+TEST_CASE("a limit switch trip names the end it was at, over Modbus and in homingctl status, and the inputs read active") {
+  Daemon d;
+  Client c = Client::tcp(d.port());
+  REQUIRE(ctl(d, {"set", "sim.x.limit_min=-3", "sim.x.limit_max=990", "axis.x.limits_fitted=1",
+                  "axis.x.limit_overtravel=2"}).code() == 0);
+  REQUIRE(ctl(d, {"home", "x"}).code() == 0);
+  CHECK(c.read("axis.x.limit_min") == 0);
+  CHECK(c.read("axis.x.limit_max") == 0);
+  auto r = ctl(d, {"move", "x", "-10"});
+  SHOW(r);
+  REQUIRE(c.read("axis.x.alarm") == static_cast<int>(homing::AlarmCode::limit_switch));
+  CHECK(c.read("axis.x.alarm_rule") == 1);  // the negative end
+  CHECK(c.read("axis.x.limit_min") == 1);   // the carriage stands on it
+  CHECK(c.read("axis.x.limit_max") == 0);
+  r = ctl(d, {"status"});
+  SHOW(r);
+  CHECK(r.out.find("negative limit switch tripped") != std::string::npos);
+  CHECK(r.out.find("positive limit switch") == std::string::npos);
+  CHECK(r.out.find(" -on ") != std::string::npos);
 }

@@ -23,10 +23,10 @@ StatusView read_status(Connection& c, const homing::Settings& settings) {
                         "status.homing", "status.estop"})
     regs.push_back(&register_named(n));
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
-    for (const char* f : {"homed", "sensor", "busy"}) regs.push_back(&register_named(ax(a, f)));
+    for (const char* f : {"homed", "sensor", "busy", "limit_min", "limit_max"}) regs.push_back(&register_named(ax(a, f)));
     if (settings.axes[a].mode == homing::HomingMode::disabled) continue;
     for (const char* f :
-         {"phase", "alarm", "alarm_phase", "alarm_value", "alarm_side", "alarm_rack_at_start", "position", "velocity",
+         {"phase", "alarm", "alarm_phase", "alarm_value", "alarm_side", "alarm_rack_at_start", "alarm_rule", "position", "velocity",
           "phase_distance", "stop_distance", "trust", "refcheck_error"})
       regs.push_back(&register_named(ax(a, f)));
   }
@@ -49,12 +49,15 @@ StatusView read_status(Connection& c, const homing::Settings& settings) {
     x.homed = get(ax(a, "homed")) != 0;
     x.sensor = get(ax(a, "sensor")) != 0;
     x.busy = get(ax(a, "busy")) != 0;
+    x.limit_min = get(ax(a, "limit_min")) != 0;
+    x.limit_max = get(ax(a, "limit_max")) != 0;
     x.phase = static_cast<homing::Phase>(get(ax(a, "phase")));
     x.alarm = static_cast<homing::AlarmCode>(get(ax(a, "alarm")));
     x.alarm_phase = static_cast<homing::Phase>(get(ax(a, "alarm_phase")));
     x.alarm_value = mm(ax(a, "alarm_value"));
     x.alarm_side = static_cast<homing::GantrySide>(get(ax(a, "alarm_side")));
     x.alarm_rack_at_start = mm(ax(a, "alarm_rack_at_start"));
+    x.alarm_rule = static_cast<std::uint8_t>(get(ax(a, "alarm_rule")));
     x.position = mm(ax(a, "position"));
     x.velocity = mm(ax(a, "velocity"));
     x.phase_distance = mm(ax(a, "phase_distance"));
@@ -73,6 +76,7 @@ std::string alarm_text(std::size_t axis, const AxisView& a, const homing::Settin
   alarm.value = a.alarm_value;  // the figure the engine quoted when it raised the alarm
   alarm.side = a.alarm_side;
   alarm.rack_at_start_mm = a.alarm_rack_at_start;
+  alarm.rule = a.alarm_rule;  // a limit alarm's end: the text names it
   if (a.alarm == homing::AlarmCode::settings_fault || a.alarm == homing::AlarmCode::slave_sensor_missing) {
     if (auto f = homing::check_axis(settings, axis)) {
       alarm.field = f->field;
@@ -123,8 +127,8 @@ std::string progress_bar(double done, double bound, int width) {
 
 std::string render_status(const StatusView& s, const homing::Settings& settings, bool progress) {
   std::string out;
-  out += fmt::format("{:<4} {:<18} {:<11} {:>14} {:<5} {:<19} {:<6} {}\n", "axis", "mode", "phase", "position",
-                     "homed", "trust", "sensor", "alarm");
+  out += fmt::format("{:<4} {:<18} {:<11} {:>14} {:<5} {:<19} {:<6} {:<7} {}\n", "axis", "mode", "phase", "position",
+                     "homed", "trust", "sensor", "limits", "alarm");
   const homing::Settings moves = homing::motion_settings(settings);  // a slave's bounds are its master's
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     const AxisView& x = s.axes[a];
@@ -134,10 +138,16 @@ std::string render_status(const StatusView& s, const homing::Settings& settings,
     std::string alarm = x.alarm == homing::AlarmCode::none
                             ? "-"
                             : fmt::format("{}: {}", homing::alarm_name(x.alarm), alarm_text(a, x, settings));
-    out += fmt::format("{:<4} {:<18} {:<11} {:>14} {:<5} {:<19} {:<6} {}\n", homing::kAxisUpper[a],
+    // The limit switches: "-" none fitted, "off", "-on" (negative end active), "+on", "- +" (both).
+    const std::string limits = disabled || !st.limits_fitted ? "-"
+                               : x.limit_min && x.limit_max ? "- +"
+                               : x.limit_min                ? "-on"
+                               : x.limit_max                ? "+on"
+                                                            : "off";
+    out += fmt::format("{:<4} {:<18} {:<11} {:>14} {:<5} {:<19} {:<6} {:<7} {}\n", homing::kAxisUpper[a],
                        homing::mode_name(st.mode), disabled ? "-" : std::string(homing::phase_name(x.phase)), pos,
                        x.homed ? "yes" : "no", disabled ? "-" : std::string(homing::name_of(x.trust)),
-                       disabled ? "-" : (x.sensor ? "on" : "off"), alarm);
+                       disabled ? "-" : (x.sensor ? "on" : "off"), limits, alarm);
     if (progress && !disabled && x.busy) {
       const homing::AxisSettings& homes_with = homing::is_commutator_slave(settings, a)
                                                    ? homing::commutator_slave_homing(moves.axes[a])
@@ -209,6 +219,7 @@ nlohmann::json status_json(const StatusView& s, const homing::Settings& settings
     e["unit"] = std::string(homing::axis_unit(settings, a));
     e["homed"] = x.homed;
     e["sensor"] = x.sensor;
+    if (settings.axes[a].limits_fitted) e["limits"] = {{"min", x.limit_min}, {"max", x.limit_max}};
     e["busy"] = x.busy;
     e["trust"] = std::string(homing::name_of(x.trust));
     e["refcheck_error"] = x.refcheck_error;

@@ -19,8 +19,10 @@ struct AxisView {
   double alarm_value = 0;  // axis.<a>.alarm_value: distance travelled, misalignment, ...
   homing::GantrySide alarm_side = homing::GantrySide::none;  // misalignment: the side at fault
   double alarm_rack_at_start = 0;  // misalignment: how far out of square the cycle found the pair
+  std::uint8_t alarm_rule = 0;     // axis.<a>.alarm_rule: a limit alarm's end (1 negative, 2 positive), ...
   double position = 0, velocity = 0, phase_distance = 0, stop_distance = 0;
   bool homed = false, sensor = false, busy = false;
+  bool limit_min = false, limit_max = false;  // the end-of-travel limit switches read active
   homing::Trust trust = homing::Trust::unknown;  // axis.<a>.trust
   double refcheck_error = 0;                    // axis.<a>.refcheck_error: the last reference check's figure
 };
