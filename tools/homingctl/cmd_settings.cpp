@@ -143,14 +143,16 @@ int set_module_settings(Context& ctx, const RawMap& wanted, const SetOptions& o)
     fmt::print(stderr, "refused: {}\n", plan.error());
     return kFailed;
   }
-  print_changes(ctx, *plan);
-  if (plan->changes.empty() && !ctx.json) fmt::print("nothing to change\n");
+  // Printed once the module took them (a dry run: as planned): stdout never
+  // records a change the module refused.
   if (!o.dry_run) {
     if (auto done = execute_plan(c, *plan); !done) {
       fmt::print(stderr, "refused: {}\n", done.error());
       return kFailed;
     }
   }
+  print_changes(ctx, *plan);
+  if (plan->changes.empty() && !ctx.json) fmt::print("nothing to change\n");
   return kOk;
 }
 
@@ -291,12 +293,12 @@ int import_settings(Context& ctx, const std::string& file, bool dry_run) {
     fmt::print(stderr, "refused: {}{}\n", rule_location(file, *wanted, current), plan.error());
     return kFailed;
   }
-  print_changes(ctx, *plan);
   if (!dry_run)
     if (auto done = execute_plan(c, *plan); !done) {
       fmt::print(stderr, "refused: {}\n", done.error());
       return kFailed;
     }
+  print_changes(ctx, *plan);
   const std::size_t not_in_file = current.size() - wanted->values.size();
   if (ctx.json)
     print_json({{"ok", true}, {"dry_run", dry_run}, {"changed", plan->changes.size()}, {"not_in_file", not_in_file}});
