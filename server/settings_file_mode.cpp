@@ -1,6 +1,7 @@
 #include "settings_file_mode.hpp"
 
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <string>
@@ -43,6 +44,11 @@ int import_settings(persistence::SettingsStore& store, const Options& opt) {
 bool is_settings_file_mode(const Options& opt) { return !opt.export_settings.empty() || !opt.import_settings.empty(); }
 
 int run_settings_file_mode(const Options& opt) {
+  // An export is a backup: of a database that is not there it would write
+  // factory defaults (and create the database), a backup of nothing.
+  if (!opt.export_settings.empty() && !std::filesystem::exists(opt.db_path))
+    return fail_start("--export-settings: no settings database at " + opt.db_path +
+                      " (check --db, or the service's db in /etc/homingd/homingd.toml); nothing was written");
   // Not beside a running daemon: an import would change settings under it.
   const auto lock = DatabaseLock::take(opt.db_path);
   if (!lock)
@@ -52,7 +58,13 @@ int run_settings_file_mode(const Options& opt) {
                                                 opt.db_path + " export FILE write the same file"));
   auto store = open_settings(opt);
   if (!store) return fail_start(store.error());
-  if (!opt.export_settings.empty()) return export_settings(*store, opt);
+  if (!opt.export_settings.empty()) {
+    if (store->settings_lost())
+      return fail_start("--export-settings: the settings of " + opt.db_path +
+                        " were lost (damaged, no usable backup): the file would hold factory defaults; nothing was "
+                        "written (see docs/troubleshooting.md, settings_lost)");
+    return export_settings(*store, opt);
+  }
   return import_settings(*store, opt);
 }
 

@@ -38,11 +38,18 @@ for f in /usr/bin/homingd /usr/bin/homingctl /usr/lib/systemd/system/homingd.ser
 done
 /usr/bin/homingd --version | grep -q homingd || fail "homingd --version"
 
-# The service user can write its database where the config says.
+# The service user can write its database where the config says (an import
+# creates it, an export reads it back).
+seed=$(mktemp /tmp/dpkg-test-XXXXXX.toml)
+printf 'format = "homing-module-settings"\nformat_version = 2\n[settings]\naxis.x.pull_off = 1.0\n' > "$seed"
+chmod 644 "$seed"
+setpriv --reuid homingd --regid homingd --init-groups \
+  /usr/bin/homingd --config /etc/homingd/homingd.toml --db /var/lib/homingd/dpkg-test.db \
+  --import-settings "$seed" >/dev/null || fail "homingd as user homingd cannot create its database in /var/lib/homingd"
 setpriv --reuid homingd --regid homingd --init-groups \
   /usr/bin/homingd --config /etc/homingd/homingd.toml --db /var/lib/homingd/dpkg-test.db \
   --export-settings /var/lib/homingd/dpkg-test.toml >/dev/null || fail "homingd as user homingd cannot use /var/lib/homingd"
-rm -f /var/lib/homingd/dpkg-test.*
+rm -f /var/lib/homingd/dpkg-test.* "$seed"
 
 dpkg --purge homingd || fail "dpkg --purge"
 [ ! -e /usr/bin/homingd ] || fail "/usr/bin/homingd left after purge"

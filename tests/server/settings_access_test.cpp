@@ -43,6 +43,17 @@ TEST_CASE("settings exported from one module's database import onto another and 
   CHECK(c.read("axis.y.seek_feedrate") == 1500);
 }
 
+TEST_CASE("an export of a database that is not there is refused and writes nothing: a backup of defaults is none") {
+  TempDir dir;
+  const std::string db = dir.file("typo.db"), file = dir.file("backup.toml");
+  const RunResult r = run_program({homingd_path(), "--db", db, "--export-settings", file}, 20s);
+  CHECK(r.code() == 1);
+  CHECK(r.err.find("no settings database at " + db) != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(file));
+  CHECK_FALSE(std::filesystem::exists(db));
+  CHECK_FALSE(std::filesystem::exists(db + ".lock"));
+}
+
 TEST_CASE("a settings file of raw register values (format_version 1) still imports") {
   TempDir dir;
   const std::string db = dir.file("m.db"), file = dir.file("old.toml");
@@ -59,6 +70,10 @@ TEST_CASE("a settings file of raw register values (format_version 1) still impor
 TEST_CASE("an imported file that a Modbus write would refuse changes nothing and names the setting") {
   TempDir dir;
   const std::string db = dir.file("m.db"), file = dir.file("bad.toml");
+  {
+    Daemon d({.db = db});  // a module's database, on its defaults
+    REQUIRE(d.stop() == 0);
+  }
   REQUIRE(run_program({homingd_path(), "--db", db, "--export-settings", file}, 20s).code() == 0);
   const std::string good = read_file(file);
   {
