@@ -46,6 +46,14 @@ std::vector<CLI::ConfigItem> ConfigFileReader::from_config(std::istream& in) con
   for (const auto& [name, value] : file) {
     const std::string key(name.str());
     if (key == "gpiod" && value.is_table()) continue;
+    // One-shot actions, not how the service runs: in /etc/homingd/homingd.toml
+    // they would end every start with exit 0 (never restarted) and apply a file
+    // over the settings written since.
+    if (key == "import_settings" || key == "export_settings" || key == "import-settings" || key == "export-settings")
+      throw ConfigFileError("key '" + key + "' is a one-shot action, not a setting of the service: give --" +
+                            (key.starts_with("import") ? "import" : "export") +
+                            "-settings on the command line (homingd --db ... --" +
+                            (key.starts_with("import") ? "import" : "export") + "-settings FILE)");
     if (!is_option_key(key) && value.is_table())
       throw ConfigFileError("unknown section [" + key + "] (known: [gpiod])");
     if (!is_option_key(key))

@@ -1,6 +1,7 @@
 // Start-up options from a TOML config file (--config), the command line winning.
 #include <catch2/catch.hpp>
 
+#include <filesystem>
 #include <fstream>
 
 #include "daemon.hpp"
@@ -43,4 +44,16 @@ TEST_CASE("an unknown key or a wrong value in the config file stops the start na
   CHECK(b.code() == 2);
   CHECK(b.err.find("--parity") != std::string::npos);
   CHECK(b.err.find("N,E,O") != std::string::npos);
+}
+
+TEST_CASE("import_settings and export_settings in the config file stop the start: they are one-shot actions") {
+  TempDir dir;
+  const std::string settings = dir.file("base.toml"), config = dir.file("service.toml");
+  std::ofstream(settings) << "format = \"homing-module-settings\"\nformat_version = 2\n[settings]\naxis.x.pull_off = 2.5\n";
+  std::ofstream(config) << "db = \"" << dir.file("z.db") << "\"\nimport_settings = \"" << settings << "\"\n";
+  const RunResult r = run_program({homingd_path(), "--config", config}, 20s);
+  CHECK(r.code() == 2);
+  CHECK(r.err.find("import_settings") != std::string::npos);
+  CHECK(r.err.find("one-shot action") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(dir.file("z.db")));  // nothing applied
 }
