@@ -257,6 +257,18 @@ void serve(const Options& opt, const sigset_t& signals, ControlLoop& loop, Modbu
 
 int run_daemon(const Options& opt, const Wiring& wiring) {
   const sigset_t signals = take_signals();
+  // An option's file read before the database is touched: a refused start
+  // consumes no last stop (the axes' trust) and exits 2 like every option
+  // error (the service's RestartPreventExitStatus).
+  std::optional<MqttConfig> mqtt_options;
+  if (opt.mqtt_enabled) {
+    auto config = mqtt_config(opt);
+    if (!config) {
+      fail_start(config.error());
+      return 2;
+    }
+    mqtt_options = std::move(*config);
+  }
   const auto lock = DatabaseLock::take(opt.db_path);
   if (!lock) return fail_start(lock.error());
   auto store = open_settings(opt);
@@ -282,9 +294,8 @@ int run_daemon(const Options& opt, const Wiring& wiring) {
   std::optional<persistence::EventOutbox> outbox;
   std::optional<PlantEvents> events;
   std::unique_ptr<MqttNode> mqtt;
-  if (opt.mqtt_enabled) {
-    auto config = mqtt_config(opt);
-    if (!config) return fail_start(config.error());
+  if (mqtt_options) {
+    auto config = std::move(mqtt_options);
     auto opened = persistence::EventOutbox::open(config->outbox, config->outbox_max);
     if (!opened) return fail_start("--mqtt-outbox " + config->outbox + ": " + opened.error().message);
     outbox.emplace(std::move(*opened));

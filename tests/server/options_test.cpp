@@ -37,6 +37,8 @@ TEST_CASE("homingd --help lists every option of the spec and exits 0") {
 TEST_CASE("homingd exits 2 with one line naming a wrong option") {
   TempDir dir;
   const std::string db = dir.file("never.db");
+  const std::string empty_password = dir.file("empty.pw");
+  std::ofstream(empty_password) << "";
   struct Case {
     std::vector<std::string> args;
     std::string names;
@@ -57,6 +59,9 @@ TEST_CASE("homingd exits 2 with one line naming a wrong option") {
       {{"--word-order", "middle"}, "--word-order"},
       {{"--no-such-option"}, "--no-such-option"},
       {{"--no-tcp=trux"}, "--no-tcp"},  // was an uncaught std::invalid_argument (abort), found by fuzz_config
+      // read before the database: a refused start must not consume the axes' last stops
+      {{"--mqtt", "mqtt://127.0.0.1:1", "--mqtt-user", "m", "--mqtt-password-file", empty_password},
+       "--mqtt-password-file"},
   };
   for (const Case& c : cases) {
     std::vector<std::string> argv{homingd_path(), "--db", db};
