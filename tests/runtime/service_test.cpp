@@ -475,21 +475,38 @@ TEST_CASE("a jog coil reads back 0 once its client's disconnect released the jog
   CHECK(m.request(read) == std::vector<std::uint8_t>{1, 1, 0});
 }
 
-TEST_CASE("a cycle that ended in an alarm reset before the monitor looked is recorded and logged with that alarm") {
-  Module m(false);
+namespace {
+
+// A module with its monitor, looked at by hand: watch() is one 10 ms look.
+struct Watched {
+  Module m{false};
   CapturedLog log;
-  server::Monitor monitor(*m.loop, *m.service, m.store.get());
+  server::Monitor monitor{*m.loop, *m.service, m.store.get()};
   std::int64_t now_ms = 0;
-  const auto watch = [&] { monitor.poll(now_ms += 10); };
-  watch();
-  m.coil("cmd.home_all");
-  REQUIRE(m.run_until([&] { return m.status().homing; }, 100, watch));
-  watch();
-  // Aborted, and reset at once (a PLC with an auto-reset), while the monitor does not look.
+  Watched() { watch(); }
+  void watch() { monitor.poll(now_ms += 10); }
+};
+
+// Aborts the running cycle and steps the loop, without the monitor looking,
+// until the axes have come to rest with the alarm latched.
+void abort_unwatched(Module& m) {
   m.coil("cmd.abort");
   REQUIRE(m.run_until([&] { return !m.status().homing; }, 100));
   REQUIRE(m.status().alarm);
   REQUIRE(m.run_until([&] { return m.status().axes[2].velocity_mm_per_s == 0; }, 10'000));
+}
+
+}  // namespace
+
+TEST_CASE("a cycle that ended in an alarm reset before the monitor looked is recorded and logged with that alarm") {
+  Watched w;
+  Module& m = w.m;
+  const auto watch = [&] { w.watch(); };
+  m.coil("cmd.home_all");
+  REQUIRE(m.run_until([&] { return m.status().homing; }, 100, watch));
+  watch();
+  // Aborted, and reset at once (a PLC with an auto-reset), while the monitor does not look.
+  abort_unwatched(m);
   m.coil("cmd.reset_alarm");
   REQUIRE(m.run_until([&] { return !m.status().alarm; }, 100));
   watch();
@@ -497,7 +514,7 @@ TEST_CASE("a cycle that ended in an alarm reset before the monitor looked is rec
   REQUIRE(runs);
   REQUIRE(runs->size() == 1);
   CHECK(runs->front().result == static_cast<int>(homing::AlarmCode::aborted));
-  const std::string text = log.text();
+  const std::string text = w.log.text();
   CHECK_THAT(text, Catch::Contains("alarm 10 (aborted)"));
   CHECK_THAT(text, Catch::Contains("homing ended with alarm aborted"));
   CHECK_THAT(text, !Catch::Contains("homing done in"));
@@ -521,20 +538,15 @@ TEST_CASE("a cmd.home_axes written just after the heartbeat came back is not ref
 }
 
 TEST_CASE("a cycle that started and ended between two looks of the monitor is recorded and logged") {
-  Module m(false);
-  CapturedLog log;
-  server::Monitor monitor(*m.loop, *m.service, m.store.get());
-  std::int64_t now_ms = 0;
-  const auto watch = [&] { monitor.poll(now_ms += 10); };
-  watch();
+  Watched w;
+  Module& m = w.m;
+  const auto watch = [&] { w.watch(); };
   // Started and aborted while the monitor does not look (a short cycle, the
   // monitor's thread late on a busy machine).
   m.coil("cmd.home_all");
   REQUIRE(m.run_until([&] { return m.status().homing; }, 100));
   m.periods(20);
-  m.coil("cmd.abort");
-  REQUIRE(m.run_until([&] { return !m.status().homing; }, 100));
-  REQUIRE(m.run_until([&] { return m.status().axes[2].velocity_mm_per_s == 0; }, 10'000));
+  abort_unwatched(m);
   watch();
   watch();
   const auto runs = m.store->recent_runs(10);
@@ -542,7 +554,7 @@ TEST_CASE("a cycle that started and ended between two looks of the monitor is re
   REQUIRE(runs->size() == 1);
   CHECK(runs->front().result == static_cast<int>(homing::AlarmCode::aborted));
   CHECK(runs->front().axes != 0);
-  const std::string text = log.text();
+  const std::string text = w.log.text();
   CHECK_THAT(text, Catch::Contains("homing started"));
   CHECK_THAT(text, Catch::Contains("homing ended with alarm aborted"));
 }
