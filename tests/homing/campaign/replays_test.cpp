@@ -182,6 +182,11 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
   // 123942451: a jog before homing, fast and with a late 16 ms period, ran
   // 10 mm toward a home cam axis's limit switch 4.7 mm away (the campaign's
   // act, which now keeps such jogs off limit switches they can reach).
+  // 244790: a stuck-active slave sensor injected between a software pair's
+  // release and re-approach: the slave met a false edge as it turned and
+  // waited again in that period, so the master turned a period later (the
+  // watch's, which took that for a side turning alone). 248571: the same
+  // with a wire broken on an NO slave sensor before the pair's back-off.
   const std::uint64_t seeds[] = {1,        7,        3,        8,        490,      715,      2,       173,
                                  959,      1242,     2054,     84,       4,        103,      1069,    412,
                                  627,      3972,     8001884,  31342370, 9,        5000422,  5001903, 9001798,
@@ -197,7 +202,7 @@ TEST_CASE("the campaign's regression seeds run clean", "[replay]") {
                                  189001276, 190010418, 190056107, 190061984,
                                  191006514, 191055091, 192007033, 193011366, 193061989,
                                  194020875, 194064769, 194066258, 194072538, 195009253, 195049782,
-                                 4661283270, 908624361, 7400000045, 7410015997, 123942451};
+                                 4661283270, 908624361, 7400000045, 7410015997, 123942451, 244790, 248571};
   for (const std::uint64_t seed : seeds) {
     INFO("seed " << seed);
     replay_seed(seed);

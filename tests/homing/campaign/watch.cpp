@@ -496,7 +496,14 @@ void Watch::racking(double engine_dt) {
       const auto turns = [](Phase p) { return p == Phase::back_off || p == Phase::reapproach || p == Phase::pull_off; };
       const bool alone = (pair_phase_prev_[s] != ps && turns(ps) && pm != ps) ||
                          (pair_phase_prev_[mi] != pm && turns(pm) && ps != pm);
-      if (alone && !r_.status().alarm)
+      // A side whose sensor a fault forced meets a false edge the moment it
+      // turns, and is back waiting within that period: the other side then
+      // turns a period later, alone to look at (seed 244790: a slave sensor
+      // stuck active between the pair's release and re-approach; 248571: a
+      // wire broken on an NO slave sensor as the pair stopped on it, the
+      // back-off "released" at once).
+      const bool false_edge = (tampered & (axis_bit(s) | axis_bit(mi))) != 0;
+      if (alone && !r_.status().alarm && !false_edge)
         fail("a software-slaved gantry side turned at its edge without the other",
              fmt_axis(s, r_, r_.actual(s)) + "; " + fmt_axis(mi, r_, r_.actual(mi)));
       pair_phase_prev_[s] = ps;
