@@ -161,10 +161,13 @@ Status SettingsStore::prune_audit() {
   std::lock_guard lock(impl_->mu);
   auto& m = *impl_;
   if (!m.db || m.opt.read_only) return {};
+  if (sqlite3_total_changes64(m.db.get()) == m.pruned_at_changes) return {};  // no row added since
   auto prune = m.db.prepare("DELETE FROM audit WHERE id <= (SELECT max(id) FROM audit) - ?");
   if (!prune) return std::unexpected(prune.error());
   prune->bind(1, static_cast<std::int64_t>(std::max<std::size_t>(m.opt.audit_max_rows, 1)));
-  return prune->run("pruning the audit log");
+  if (auto s = prune->run("pruning the audit log"); !s) return s;
+  m.pruned_at_changes = sqlite3_total_changes64(m.db.get());
+  return {};
 }
 
 bool SettingsStore::settings_lost() const { return impl_->settings_lost.load(); }
@@ -224,6 +227,7 @@ Status SettingsStore::set_limits(std::size_t audit_max_rows, std::size_t history
   std::lock_guard lock(impl_->mu);
   impl_->opt.audit_max_rows = std::max<std::size_t>(audit_max_rows, 1);
   impl_->opt.history_max_rows = std::max<std::size_t>(history_max_rows, 1);
+  impl_->pruned_at_changes = -1;  // a lower bound prunes at the next look
   return {};
 }
 

@@ -166,11 +166,23 @@ Status SettingsStore::backup_now() {
 Status SettingsStore::checkpoint() {
   auto& m = *impl_;
   if (m.opt.read_only) return {};
+  std::int64_t changes = 0;
+  {
+    std::lock_guard lock(m.mu);
+    if (!m.db) return {};
+    changes = sqlite3_total_changes64(m.db.get());
+  }
+  if (changes == m.checkpointed_at_changes) return {};  // the WAL holds nothing new since the last whole one
   std::lock_guard house_lock(m.house_mu);
   auto db = m.house_db();
   if (!db) return std::unexpected(db.error());
-  int rc = sqlite3_wal_checkpoint_v2((*db)->get(), "main", SQLITE_CHECKPOINT_PASSIVE, nullptr, nullptr);
+  int log_frames = -1;
+  int checkpointed_frames = -1;
+  int rc = sqlite3_wal_checkpoint_v2((*db)->get(), "main", SQLITE_CHECKPOINT_PASSIVE, &log_frames, &checkpointed_frames);
   if (rc != SQLITE_OK && rc != SQLITE_BUSY) return std::unexpected((*db)->error(rc, "checkpointing the WAL"));
+  // Whole: every frame of the WAL is in the database file (a reader or the
+  // writer may hold some back: tried again at the next look).
+  if (rc == SQLITE_OK && log_frames >= 0 && checkpointed_frames == log_frames) m.checkpointed_at_changes = changes;
   return {};
 }
 

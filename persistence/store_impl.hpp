@@ -28,6 +28,11 @@ struct SettingsStore::Impl {
   bool backed_up_once = false;
   std::chrono::steady_clock::time_point last_backup{};
   mutable std::mutex mu;
+  // sqlite3_total_changes64 of `db` when the audit log was last pruned and the
+  // WAL last checkpointed whole: the monitor's housekeeping twice a second
+  // skips both while nothing was written since (an idle module touches no file).
+  std::int64_t pruned_at_changes = -1;
+  std::atomic<std::int64_t> checkpointed_at_changes{-1};
 
   std::int64_t now_ms() const;
   const char* vfs() const { return opt.vfs.empty() ? nullptr : opt.vfs.c_str(); }

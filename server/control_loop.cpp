@@ -304,24 +304,27 @@ void ControlLoop::run_period(double wall_dt_s) {
   s.status = engine_.status();
   s.outputs = outputs_;
   s.periods = loop_stats_.periods;
-  if (s.events.written() != status_events_.written()) s.events = status_events_;  // rare: no copy per period
+  const bool events_shown = s.events.written() != status_events_.written();
+  if (events_shown) s.events = status_events_;  // rare: no copy per period
   // The histogram is 32 KiB: copied now and then, and in every quiet period
   // (a few a second), so the figures are current while idle.
   if (++stats_publish_tick_ % 64 == 0 || quiet_) stats_ = loop_stats_;
   publish_sim(s);
   const bool edits_shown = s.sim_edits_applied != edits_applied_;
   s.sim_edits_applied = edits_applied_;
-  // Idle periods and the first one after: a watcher that follows an idle
-  // loop's pace (wait_for_period) waits for these.
-  const bool idle_news = s.quiet || quiet_;
+  const bool news = !quiet_ || !s.quiet || !slow_tick_period_ || events_shown || edits_shown;
+  if (news) ++s.news;
+  // Idle periods with news and the first one after: a watcher of the idle
+  // loop (wait_for_news) waits for these.
+  const bool idle_news = news && (s.quiet || quiet_);
   s.quiet = quiet_;
   lock.unlock();
   if (edits_shown || idle_news) published_.notify_all();  // a simulator write waits for this
 }
 
-bool ControlLoop::wait_for_period(std::uint64_t after, std::chrono::milliseconds timeout) {
+bool ControlLoop::wait_for_news(std::uint64_t after, std::chrono::milliseconds timeout) {
   std::unique_lock lock(snapshot_mutex_);
-  return published_.wait_for(lock, timeout, [&] { return snapshot_.periods > after || !snapshot_.quiet; });
+  return published_.wait_for(lock, timeout, [&] { return snapshot_.news > after || !snapshot_.quiet; });
 }
 
 void ControlLoop::step_engine(double dt, const Mailbox& mail) {
@@ -449,9 +452,10 @@ bool ControlLoop::run_turn() {
   }
   const bool quiet_wait = quiet_ && !stop_requested_;
   std::int64_t now = 0;
+  bool woken = false;
   if (quiet_wait) {
     const std::int64_t until = quiet_deadline_ns();
-    const bool woken = waiter_->wait_until(until, io_->event_fds());
+    woken = waiter_->wait_until(until, io_->event_fds());
     now = waiter_->now_ns();
     // Never sooner than a period after the last: the engine plans what the
     // wake brings on a period of the nominal length at least.
@@ -495,10 +499,13 @@ bool ControlLoop::run_turn() {
     // engine plans whatever the wake brought on a period's dt, not the
     // stretch's (its look-aheads and braking use the last dt).
     step_engine((wall_dt_s - nominal_s) * time_scale_, Mailbox{});
+    slow_tick_period_ = !woken;
     run_period(nominal_s);
   } else {
+    slow_tick_period_ = quiet_wait && !woken;
     run_period(wall_dt_s);
   }
+  slow_tick_period_ = false;
   last_period_ns_ = now;
   if (stop_started_ns_ != 0) {
     const Snapshot s = snapshot();

@@ -44,6 +44,12 @@ struct Snapshot {
   // The period ended quiet: the loop idles (a period at its slow tick) until
   // something comes (ControlLoop::kQuietTickMs).
   bool quiet = false;
+  // Counts the published periods that brought more than time: every period at
+  // the full rate, the first quiet one, one that a wake or an input event
+  // began, one that raised a status event or showed a simulator edit. A bare
+  // slow tick is no news: a watcher of the idle loop (wait_for_news) sleeps
+  // through it.
+  std::uint64_t news = 0;
   StatusEvents events;  // what changed period by period, for readers that sample
 };
 
@@ -159,11 +165,11 @@ class ControlLoop {
   // the snapshot (which carries the event ring and the simulator's view too),
   // so that readers copy less and hold the lock the loop publishes under for less.
   homing::Status status() const;
-  // While the loop idles: waits until a period after `after` is published
-  // (at its slow tick, or at once when something wakes it) or the timeout.
-  // False on the timeout. A watcher that polls the snapshot follows an idle
-  // loop's pace with it instead of waking at its own.
-  bool wait_for_period(std::uint64_t after, std::chrono::milliseconds timeout);
+  // While the loop idles: waits until a snapshot with news beyond `after`
+  // (Snapshot::news) is published, or the timeout. False on the timeout. A
+  // watcher that polls the snapshot wakes when something happened instead of
+  // at its own pace or at every slow tick; at the full rate it does not wait.
+  bool wait_for_news(std::uint64_t after, std::chrono::milliseconds timeout);
   // The trace of the last finished homing cycle of one axis.
   AxisTrace trace(std::size_t axis) const;
   LoopStats stats() const;
@@ -270,6 +276,7 @@ class ControlLoop {
   bool quiet_ = false;           // the last period ended quiet
   double io_quiet_for_s_ = 0;    // then: MachineIo::quiet_for_s, machine seconds
   bool turns_begun_ = false;
+  bool slow_tick_period_ = false;  // the period run_turn runs ends a quiet wait nothing woke
   std::int64_t last_period_ns_ = 0;  // loop clock: when the last period ran
   std::int64_t deadline_ns_ = 0;     // the next full-rate deadline
   std::int64_t stop_started_ns_ = 0;

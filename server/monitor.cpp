@@ -95,8 +95,12 @@ void Monitor::refresh_diagnostics() {
 // counts of an interval that has passed, the settings backup that the store
 // keeps after a batch of changes and the WAL checkpoint (both beside the
 // writer, so no settings write waits for them).
+std::chrono::milliseconds Monitor::until_housekeeping(std::int64_t now_ms) const {
+  return std::chrono::milliseconds(std::clamp<std::int64_t>(last_housekeeping_ms_ + kHousekeepingMs - now_ms, 1, kHousekeepingMs));
+}
+
 void Monitor::housekeeping(std::int64_t now_ms) {
-  if (now_ms - last_housekeeping_ms_ < 500) return;
+  if (now_ms - last_housekeeping_ms_ < kHousekeepingMs) return;
   last_housekeeping_ms_ = now_ms;
   refresh_diagnostics();
   service_.set_extras(extras_);
@@ -122,10 +126,11 @@ void Monitor::start() {
     name_this_thread("monitor");
     while (!stop_) {
       poll(unix_ms());
-      // While the loop idles nothing changes between its periods: the next
-      // look comes with its next period (a command's wakes it at once), so
-      // an idle daemon does not wake 100 times a second for this thread.
-      if (last_quiet_) loop_.wait_for_period(last_periods_, std::chrono::milliseconds(100));
+      // While the loop idles nothing changes until something comes: the next
+      // look comes with the loop's next news (a command, an input edge, an
+      // alarm) or with the housekeeping, so an idle daemon's monitor wakes
+      // twice a second, not at every slow tick.
+      if (last_quiet_) loop_.wait_for_news(last_news_, until_housekeeping(unix_ms()));
       else std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
   });
@@ -175,7 +180,7 @@ void Monitor::judge_health(std::size_t axis, const homing::Settings& settings) {
 void Monitor::poll(std::int64_t now_ms) {
   const Snapshot snap = loop_.snapshot();
   const homing::Status& st = snap.status;
-  last_periods_ = snap.periods;
+  last_news_ = snap.news;
   last_quiet_ = snap.quiet;
   if (first_) {
     // Nothing to report of the state at start, except an alarm already

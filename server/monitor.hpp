@@ -5,6 +5,7 @@
 // run judges the health trend of its axes (health_trend.hpp).
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -36,6 +37,8 @@ class Monitor {
   void judge_health(std::size_t axis, const homing::Settings& settings);
   void refresh_diagnostics();
   void housekeeping(std::int64_t now_ms);
+  std::chrono::milliseconds until_housekeeping(std::int64_t now_ms) const;
+  static constexpr std::int64_t kHousekeepingMs = 500;
   // ended: the loop's event for the cycle's end (its result), if the ring still holds it.
   void record_unseen_cycle(const Snapshot& snap, const homing::Settings& settings);
   void record_run(const homing::Status& st, const StatusEvent* ended, const homing::Settings& settings,
@@ -60,9 +63,9 @@ class Monitor {
   std::array<homing::Measurement, homing::kAxisCount> measured_at_start_{};  // figures as the cycle started
   PlantEvents* events_ = nullptr;
   bool sim_behind_logged_ = false;
-  // The last snapshot looked at: its period, and whether the loop idled.
-  std::uint64_t last_periods_ = 0;
-  bool last_quiet_ = false;  // LoopStats::sim_held_back_periods: said once
+  // The last snapshot looked at: its news (Snapshot::news), and whether the loop idled.
+  std::uint64_t last_news_ = 0;
+  bool last_quiet_ = false;
   // The simulator's carriages as last written to the store, and when.
   std::optional<std::array<double, homing::kAxisCount>> carriages_kept_;
   std::int64_t carriages_kept_ms_ = 0;

@@ -17,6 +17,7 @@ namespace {
 std::atomic<Fault> g_fault{Fault::none};
 std::atomic<int> g_countdown{0};
 std::atomic<int> g_hits{0};
+std::atomic<long> g_touches{0};
 std::atomic<int> g_errno{0};
 sqlite3_vfs* g_real = nullptr;
 sqlite3_vfs g_vfs{};
@@ -60,8 +61,12 @@ int x_close(sqlite3_file* f) {
   int rc = R(f)->pMethods ? R(f)->pMethods->xClose(R(f)) : SQLITE_OK;
   return rc;
 }
-int x_read(sqlite3_file* f, void* b, int n, sqlite3_int64 o) { return R(f)->pMethods->xRead(R(f), b, n, o); }
+int x_read(sqlite3_file* f, void* b, int n, sqlite3_int64 o) {
+  ++g_touches;
+  return R(f)->pMethods->xRead(R(f), b, n, o);
+}
 int x_write(sqlite3_file* f, const void* b, int n, sqlite3_int64 o) {
+  ++g_touches;
   pass_gate(f);
   if (int rc = should_fail(SQLITE_IOERR_WRITE)) return rc;
   return R(f)->pMethods->xWrite(R(f), b, n, o);
@@ -84,7 +89,17 @@ int x_fcntl(sqlite3_file* f, int op, void* a) {
   return vfs_passthrough::FileMethods<R>::fcntl(f, op, a);
 }
 
-const sqlite3_io_methods kMethods = vfs_passthrough::FileMethods<R>::with(x_close, x_read, x_write, x_truncate, x_sync, x_fcntl);
+// A lock on the WAL index: every transaction, read or write, and every checkpoint takes some.
+int x_shmlock(sqlite3_file* f, int offset, int n, int flags) {
+  ++g_touches;
+  return R(f)->pMethods->xShmLock(R(f), offset, n, flags);
+}
+
+const sqlite3_io_methods kMethods = [] {
+  sqlite3_io_methods m = vfs_passthrough::FileMethods<R>::with(x_close, x_read, x_write, x_truncate, x_sync, x_fcntl);
+  m.xShmLock = x_shmlock;
+  return m;
+}();
 
 int x_open(sqlite3_vfs*, sqlite3_filename name, sqlite3_file* f, int flags, int* out_flags) {
   auto* file = reinterpret_cast<File*>(f);
@@ -129,6 +144,8 @@ void disarm() {
 }
 
 int faults_hit() { return g_hits.load(); }
+
+long file_touches() { return g_touches.load(); }
 
 BackupGate::BackupGate() {
   std::lock_guard lock(g_gate_mu);

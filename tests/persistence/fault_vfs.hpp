@@ -18,6 +18,9 @@ void install();  // idempotent
 void arm(Fault fault, int writes_before = 0);
 void disarm();
 int faults_hit();  // writes refused since the last arm()
+// Reads, writes and WAL-index locks of every file opened through the VFS so
+// far: a store that touches no file leaves it unchanged.
+long file_touches();
 
 // Holds every write to a backup file (a name ending in ".bak.tmp") from
 // construction until release(), so a test can act while a backup is half

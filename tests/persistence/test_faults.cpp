@@ -220,6 +220,36 @@ TEST_CASE("a checkpoint beside the writer leaves every committed setting in the 
   CHECK(store.value("axis.x.mode") == 40);
 }
 
+TEST_CASE("the housekeeping of an idle store touches no file until something is written again",
+          "[persistence][checkpoint]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  OpenReport report;
+  auto o = faulty_options();
+  o.audit_max_rows = 3;
+  auto store = test::open_ok(db, report, o);
+  for (int v = 10; v < 16; ++v) REQUIRE(store.commit({{"axis.x.mode", v}}, test::kTcp));
+  REQUIRE(store.prune_audit());
+  REQUIRE(store.checkpoint());
+  const long idle_from = fault_vfs::file_touches();
+  for (int look = 0; look < 5; ++look) {  // the monitor's looks, twice a second
+    REQUIRE(store.prune_audit());
+    REQUIRE(store.checkpoint());
+  }
+  CHECK(fault_vfs::file_touches() == idle_from);
+  // A write makes both due again: the audit log keeps its bound, the WAL is emptied into the file.
+  REQUIRE(store.commit({{"axis.x.mode", 99}}, test::kTcp));
+  const long written_at = fault_vfs::file_touches();
+  REQUIRE(store.prune_audit());
+  REQUIRE(store.checkpoint());
+  CHECK(fault_vfs::file_touches() > written_at);
+  CHECK(store.recent_changes(100)->size() == 3);
+  const std::string file_alone = dir.file("file-alone.db");
+  std::filesystem::copy_file(db, file_alone);
+  test::sql_exec(file_alone, "PRAGMA journal_mode=DELETE");
+  CHECK(test::sql_int(file_alone, "SELECT value FROM settings WHERE name='axis.x.mode'") == 99);
+}
+
 TEST_CASE("backups are deferred while commits come fast, and written by close", "[persistence][backup]") {
   test::TempDir dir;
   const auto db = dir.file("settings.db");

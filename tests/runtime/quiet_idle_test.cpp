@@ -132,17 +132,44 @@ TEST_CASE("an idle loop runs a period at the slow tick only, each advancing the 
   CHECK(l.loop->stats().engine_steps - steps0 == 10);
 }
 
-TEST_CASE("a watcher of an idle loop waits for its next period, and not at all while it runs at the full rate") {
+TEST_CASE("a watcher of an idle loop sleeps through its slow ticks and wakes for a command or an alarm") {
   Loop l = Loop::simulated();
-  REQUIRE(l.snap().quiet);
-  const std::uint64_t p = l.snap().periods;
-  CHECK_FALSE(l.loop->wait_for_period(p, std::chrono::milliseconds(1)));  // stepped by hand: nothing comes
   l.turn();
-  CHECK(l.loop->wait_for_period(p, std::chrono::milliseconds(0)));
+  REQUIRE(l.snap().quiet);
+  const std::uint64_t news = l.snap().news;
+  CHECK_FALSE(l.loop->wait_for_news(news, std::chrono::milliseconds(1)));  // stepped by hand: nothing comes
+  for (int i = 0; i < 3; ++i) l.turn();
+  REQUIRE(l.waiter->last().ended_ns == l.waiter->last().deadline_ns);  // slow ticks, nothing woke them
+  CHECK(l.snap().news == news);
+  CHECK_FALSE(l.loop->wait_for_news(news, std::chrono::milliseconds(0)));
+  // A command wakes the loop: its period is news, even one the command leaves quiet.
+  l.loop->submit(homing::Commands{.reset_alarm = true}, true);
+  l.turn();
+  REQUIRE(l.snap().quiet);
+  CHECK(l.loop->wait_for_news(news, std::chrono::milliseconds(0)));
+  const std::uint64_t after_reset = l.snap().news;
+  l.turn();
+  CHECK(l.snap().news == after_reset);
   l.loop->submit(homing::Commands{.home_all = true}, true);
   l.turn();
-  REQUIRE_FALSE(l.snap().quiet);  // homing: the full rate
-  CHECK(l.loop->wait_for_period(l.snap().periods, std::chrono::milliseconds(0)));
+  REQUIRE_FALSE(l.snap().quiet);  // homing: the full rate, the watcher does not wait
+  CHECK(l.loop->wait_for_news(l.snap().news, std::chrono::milliseconds(0)));
+}
+
+TEST_CASE("an alarm raised at a slow tick is news to a watcher of the idle loop") {
+  auto machine = std::make_unique<EventMachine>();
+  EventMachine* m = machine.get();
+  Loop l(std::move(machine));
+  for (int i = 0; i < 3; ++i) l.turn();
+  REQUIRE(l.snap().quiet);
+  const std::uint64_t news = l.snap().news;
+  l.turn();
+  REQUIRE(l.snap().news == news);
+  m->estop = true;  // seen at the slow tick: this machine gives no event for it
+  l.turn();
+  REQUIRE(l.waiter->last().ended_ns == l.waiter->last().deadline_ns);
+  REQUIRE(l.snap().status.global_alarm == homing::AlarmCode::emergency_stop);
+  CHECK(l.loop->wait_for_news(news, std::chrono::milliseconds(0)));
 }
 
 TEST_CASE("a time-scaled simulator idles too, and its machine time keeps pace with the scale") {
