@@ -171,7 +171,7 @@ bool ControlLoop::edit_sim(const SimEdit& edit, std::chrono::milliseconds timeou
   auto shown = [&] { return snapshot_.sim_edits_applied >= seq; };
   {
     std::unique_lock lock(snapshot_mutex_);
-    if (published_.wait_for(lock, timeout, shown)) return true;
+    if (edit_shown_.wait_for(lock, timeout, shown)) return true;
   }
   {
     // Not shown in time: withdraw it if the loop has not taken it yet. The loop
@@ -185,7 +185,7 @@ bool ControlLoop::edit_sim(const SimEdit& edit, std::chrono::milliseconds timeou
     }
   }
   std::unique_lock lock(snapshot_mutex_);
-  published_.wait_for(lock, timeout, shown);
+  edit_shown_.wait_for(lock, timeout, shown);
   return true;
 }
 
@@ -301,6 +301,7 @@ void ControlLoop::run_period(double wall_dt_s) {
   io_quiet_for_s_ = io_quiet_for_s;
   quiet_ = io_quiet_for_s > 0;
   Snapshot& s = snapshot_;
+  const std::uint32_t commands_before = s.status.command_count;
   s.status = engine_.status();
   s.outputs = outputs_;
   s.periods = loop_stats_.periods;
@@ -312,19 +313,23 @@ void ControlLoop::run_period(double wall_dt_s) {
   publish_sim(s);
   const bool edits_shown = s.sim_edits_applied != edits_applied_;
   s.sim_edits_applied = edits_applied_;
-  const bool news = !quiet_ || !s.quiet || !slow_tick_period_ || events_shown || edits_shown;
+  // What the watcher acts on: motion, an event (an alarm, a cycle), a
+  // command judged. A simulator edit is none: its writer waits for it alone,
+  // and the watcher keeps a carriage it placed at its next look.
+  const bool news = !quiet_ || !s.quiet || events_shown || s.status.command_count != commands_before;
   if (news) ++s.news;
   // Idle periods with news and the first one after: a watcher of the idle
   // loop (wait_for_news) waits for these.
   const bool idle_news = news && (s.quiet || quiet_);
   s.quiet = quiet_;
   lock.unlock();
-  if (edits_shown || idle_news) published_.notify_all();  // a simulator write waits for this
+  if (edits_shown) edit_shown_.notify_all();  // a simulator write waits for this
+  if (idle_news) news_published_.notify_all();
 }
 
 bool ControlLoop::wait_for_news(std::uint64_t after, std::chrono::milliseconds timeout) {
   std::unique_lock lock(snapshot_mutex_);
-  return published_.wait_for(lock, timeout, [&] { return snapshot_.news > after || !snapshot_.quiet; });
+  return news_published_.wait_for(lock, timeout, [&] { return snapshot_.news > after || !snapshot_.quiet; });
 }
 
 void ControlLoop::step_engine(double dt, const Mailbox& mail) {
@@ -452,10 +457,9 @@ bool ControlLoop::run_turn() {
   }
   const bool quiet_wait = quiet_ && !stop_requested_;
   std::int64_t now = 0;
-  bool woken = false;
   if (quiet_wait) {
     const std::int64_t until = quiet_deadline_ns();
-    woken = waiter_->wait_until(until, io_->event_fds());
+    const bool woken = waiter_->wait_until(until, io_->event_fds());
     now = waiter_->now_ns();
     // Never sooner than a period after the last: the engine plans what the
     // wake brings on a period of the nominal length at least.
@@ -499,13 +503,10 @@ bool ControlLoop::run_turn() {
     // engine plans whatever the wake brought on a period's dt, not the
     // stretch's (its look-aheads and braking use the last dt).
     step_engine((wall_dt_s - nominal_s) * time_scale_, Mailbox{});
-    slow_tick_period_ = !woken;
     run_period(nominal_s);
   } else {
-    slow_tick_period_ = quiet_wait && !woken;
     run_period(wall_dt_s);
   }
-  slow_tick_period_ = false;
   last_period_ns_ = now;
   if (stop_started_ns_ != 0) {
     const Snapshot s = snapshot();

@@ -44,11 +44,11 @@ struct Snapshot {
   // The period ended quiet: the loop idles (a period at its slow tick) until
   // something comes (ControlLoop::kQuietTickMs).
   bool quiet = false;
-  // Counts the published periods that brought more than time: every period at
-  // the full rate, the first quiet one, one that a wake or an input event
-  // began, one that raised a status event or showed a simulator edit. A bare
-  // slow tick is no news: a watcher of the idle loop (wait_for_news) sleeps
-  // through it.
+  // Counts the published periods that brought what a watcher acts on: every
+  // period at the full rate, the first quiet one, one that raised a status
+  // event (an alarm) or judged a command. A slow tick, a simulator edit or an
+  // input edge that changes nothing else is no news: a watcher of the idle
+  // loop (wait_for_news) sleeps through it.
   std::uint64_t news = 0;
   StatusEvents events;  // what changed period by period, for readers that sample
 };
@@ -276,13 +276,13 @@ class ControlLoop {
   bool quiet_ = false;           // the last period ended quiet
   double io_quiet_for_s_ = 0;    // then: MachineIo::quiet_for_s, machine seconds
   bool turns_begun_ = false;
-  bool slow_tick_period_ = false;  // the period run_turn runs ends a quiet wait nothing woke
   std::int64_t last_period_ns_ = 0;  // loop clock: when the last period ran
   std::int64_t deadline_ns_ = 0;     // the next full-rate deadline
   std::int64_t stop_started_ns_ = 0;
 
   mutable std::mutex snapshot_mutex_;
-  std::condition_variable published_;  // with snapshot_mutex_: snapshot_.sim_edits_applied grew
+  std::condition_variable edit_shown_;      // with snapshot_mutex_: snapshot_.sim_edits_applied grew
+  std::condition_variable news_published_;  // with snapshot_mutex_: snapshot_.news grew while idle
   Snapshot snapshot_{};
   StatusEvents status_events_;  // the loop's own, copied into each snapshot
   LoopStats stats_{};       // published copy (under snapshot_mutex_)

@@ -95,8 +95,12 @@ void Monitor::refresh_diagnostics() {
 // counts of an interval that has passed, the settings backup that the store
 // keeps after a batch of changes and the WAL checkpoint (both beside the
 // writer, so no settings write waits for them).
-std::chrono::milliseconds Monitor::until_housekeeping(std::int64_t now_ms) const {
-  return std::chrono::milliseconds(std::clamp<std::int64_t>(last_housekeeping_ms_ + kHousekeepingMs - now_ms, 1, kHousekeepingMs));
+// The idle monitor's next look without news: its housekeeping, or sooner
+// the carriages it could not keep yet.
+std::chrono::milliseconds Monitor::until_next_look(std::int64_t now_ms) const {
+  std::int64_t at = last_housekeeping_ms_ + kHousekeepingMs;
+  if (carriages_due_ms_) at = std::min(at, *carriages_due_ms_);
+  return std::chrono::milliseconds(std::clamp<std::int64_t>(at - now_ms, 1, kHousekeepingMs));
 }
 
 void Monitor::housekeeping(std::int64_t now_ms) {
@@ -130,7 +134,7 @@ void Monitor::start() {
       // look comes with the loop's next news (a command, an input edge, an
       // alarm) or with the housekeeping, so an idle daemon's monitor wakes
       // twice a second, not at every slow tick.
-      if (last_quiet_) loop_.wait_for_news(last_news_, until_housekeeping(unix_ms()));
+      if (last_quiet_) loop_.wait_for_news(last_news_, until_next_look(unix_ms()));
       else std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
   });
@@ -337,15 +341,21 @@ void Monitor::report_refcheck(const homing::Status& st, const homing::Settings& 
 
 // The simulator keeps its carriages across a restart, as a real machine
 // does, even one that ends without a clean shutdown: each time they come to
-// rest somewhere new (a cycle, a jog, a carriage placed), at most 5 times a second.
+// rest somewhere new (a cycle, a jog, a carriage placed: seen at the next
+// look, half a second at most), at most 5 times a second.
 void Monitor::keep_sim_carriages(const Snapshot& snap, std::int64_t now_ms) {
-  if (!store_ || !snap.has_sim || now_ms - carriages_kept_ms_ < 200) return;
+  carriages_due_ms_.reset();
+  if (!store_ || !snap.has_sim) return;
   std::array<double, homing::kAxisCount> at{};
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     if (snap.sim.axes[a].moving) return;
     at[a] = snap.sim.axes[a].actual_position_mm;
   }
   if (carriages_kept_ == at) return;
+  if (now_ms - carriages_kept_ms_ < kCarriagesMinGapMs) {
+    carriages_due_ms_ = carriages_kept_ms_ + kCarriagesMinGapMs;  // the idle monitor looks again then
+    return;
+  }
   carriages_kept_ms_ = now_ms;
   if (auto r = store_->record_sim_carriages(at); !r) {
     spdlog::warn("simulator carriages not kept: {}", r.error().message);

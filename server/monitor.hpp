@@ -37,8 +37,9 @@ class Monitor {
   void judge_health(std::size_t axis, const homing::Settings& settings);
   void refresh_diagnostics();
   void housekeeping(std::int64_t now_ms);
-  std::chrono::milliseconds until_housekeeping(std::int64_t now_ms) const;
+  std::chrono::milliseconds until_next_look(std::int64_t now_ms) const;
   static constexpr std::int64_t kHousekeepingMs = 500;
+  static constexpr std::int64_t kCarriagesMinGapMs = 200;
   // ended: the loop's event for the cycle's end (its result), if the ring still holds it.
   void record_unseen_cycle(const Snapshot& snap, const homing::Settings& settings);
   void record_run(const homing::Status& st, const StatusEvent* ended, const homing::Settings& settings,
@@ -69,6 +70,7 @@ class Monitor {
   // The simulator's carriages as last written to the store, and when.
   std::optional<std::array<double, homing::kAxisCount>> carriages_kept_;
   std::int64_t carriages_kept_ms_ = 0;
+  std::optional<std::int64_t> carriages_due_ms_;  // at rest somewhere new, kept no sooner than this
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };
