@@ -55,11 +55,19 @@ inline constexpr std::uint8_t kAlarmCodeCount = 35;
 // maintenance technician checks (what_to_check). describe_alarm() says what
 // happened with the axis and the figures, then what to check from here;
 // hmi_maps/alarms.csv is this table.
+// The unit of the figure an alarm quotes (axis.<a>.alarm_value): the axis's
+// own (mm, deg on a rotary axis) unless its row says otherwise.
+enum class AlarmValueUnit : std::uint8_t {
+  axis,     // a distance or a position
+  seconds,  // a time waited (the register's 0.001 is then ms)
+  setting,  // the value of the setting the alarm names, in that setting's unit
+};
 struct AlarmInfo {
   AlarmCode value;
   std::string_view name;
   std::string_view text;
   std::string_view what_to_check;
+  AlarmValueUnit value_unit = AlarmValueUnit::axis;
 };
 inline constexpr AlarmInfo kAlarmInfo[] = {
     {AlarmCode::none, "none", "no alarm", ""},
@@ -90,7 +98,7 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
     {AlarmCode::emergency_stop, "emergency_stop", "emergency stop", "release the e-stop, reset and home again"},
     {AlarmCode::drive_fault, "drive_fault", "drive fault", "check the drive's alarm display and power, then reset"},
     {AlarmCode::settings_fault, "settings_fault", "settings cannot work (see the message)",
-     "correct the setting named (homingctl check lists every fault), then reset"},
+     "correct the setting named (homingctl check lists every fault), then reset", AlarmValueUnit::setting},
     {AlarmCode::communication_lost, "communication_lost", "host watchdog expired",
      "check the PLC/HMI link and that the PLC changes host.heartbeat within global.watchdog_ms, then reset"},
     {AlarmCode::settings_lost, "settings_lost", "stored settings lost",
@@ -108,17 +116,17 @@ inline constexpr AlarmInfo kAlarmInfo[] = {
      "following_error, that max_following_error fits in the travel left beyond the stop"},
     {AlarmCode::stall_timeout, "stall_timeout", "hard-stop homing pushed for stall_timeout_ms without a stall",
      "check the drive's stall output and its detection time; raise stall_timeout_ms if the stop lies further "
-     "than latch_feedrate covers in that time (with stall_detect following_error: plus max_following_error)"},
+     "than latch_feedrate covers in that time (with stall_detect following_error: plus max_following_error)", AlarmValueUnit::seconds},
     {AlarmCode::stall_at_start, "stall_at_start", "the stall input was active before the axis moved",
      "check the stall input's wiring and the drive (a stall output stuck on, or the drive still in torque "
      "limit); reset the drive, then home again"},
     {AlarmCode::drive_no_answer, "drive_no_answer", "the drive did not report home done within drive_home_timeout",
      "check the home request and home done wiring, that the drive's homing function is enabled and set up "
-     "(its own home sensor, speeds), the drive's display, or raise drive_home_timeout_s"},
+     "(its own home sensor, speeds), the drive's display, or raise drive_home_timeout_s", AlarmValueUnit::seconds},
     {AlarmCode::drive_answered_at_once, "drive_answered_at_once",
      "the drive reported home done at once: it did not home",
      "check that home done is the drive's home-end output (not ready or in-position), that it drops when a "
-     "homing starts, and that the home request reaches the drive"},
+     "homing starts, and that the home request reaches the drive", AlarmValueUnit::seconds},
     {AlarmCode::drive_reference_lost, "drive_reference_lost", "the drive's home done went off while the axis was homed",
      "check the drive's alarm history and the home done wiring; the axis is no longer homed: reset and home again"},
     {AlarmCode::unlock_not_confirmed, "unlock_not_confirmed", "locking indexer did not report unlocked in time",
@@ -197,6 +205,9 @@ struct Alarm {
 std::string_view alarm_name(AlarmCode code);
 // What a technician checks for this alarm ("" for none).
 std::string_view alarm_what_to_check(AlarmCode code);
+// The unit of axis.<a>.alarm_value for this alarm, as an HMI shows it:
+// "axis" (mm, deg on a rotary axis), "s", or "setting" (the unit of the setting named).
+std::string_view alarm_value_unit_name(AlarmCode code);
 
 // A sentence a technician can act on, e.g.
 // "X: home sensor not found within 200 mm of travel; check the sensor wiring and direction".

@@ -19,6 +19,16 @@ std::string_view alarm_what_to_check(AlarmCode c) {
   return e ? e->what_to_check : "?";
 }
 
+std::string_view alarm_value_unit_name(AlarmCode c) {
+  const auto* e = entry_of(c);
+  switch (e ? e->value_unit : AlarmValueUnit::axis) {
+    case AlarmValueUnit::axis: return "axis";
+    case AlarmValueUnit::seconds: return "s";
+    case AlarmValueUnit::setting: return "setting";
+  }
+  return "axis";
+}
+
 std::string_view interlock_name(int bit) {
   return bit >= 0 && bit < interlock::kCount ? interlock::kInfo[bit].text : "?";
 }

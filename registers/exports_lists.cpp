@@ -11,11 +11,13 @@ namespace registers {
 
 std::string export_alarms_csv() {
   using exports_detail::csv_field;
-  std::string out = "code,name,text,what_to_check\n";
+  // alarm_value_unit: what the axis's alarm_value (declared in the axis's
+  // unit) is in for this alarm, so an HMI labels the figure right.
+  std::string out = "code,name,text,what_to_check,alarm_value_unit\n";
   for (const homing::AlarmInfo& a : homing::kAlarmInfo) {
     if (a.value == homing::AlarmCode::none) continue;  // "no alarm" is not an alarm to import
-    out += fmt::format("{},{},{},{}\n", static_cast<int>(a.value), csv_field(a.name), csv_field(a.text),
-                       csv_field(a.what_to_check));
+    out += fmt::format("{},{},{},{},{}\n", static_cast<int>(a.value), csv_field(a.name), csv_field(a.text),
+                       csv_field(a.what_to_check), homing::alarm_value_unit_name(a.value));
   }
   return out;
 }

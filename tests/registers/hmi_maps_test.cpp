@@ -75,13 +75,27 @@ std::vector<std::string> lines_of(const std::string& text) {
 TEST_CASE("alarms.csv lists every alarm code of the engine with its name, text and what to check") {
   const auto lines = lines_of(generated("alarms.csv"));
   REQUIRE(lines.size() == homing::kAlarmCodeCount);  // the header, then codes 1..n-1
-  CHECK(lines[0] == "code,name,text,what_to_check");
+  CHECK(lines[0] == "code,name,text,what_to_check,alarm_value_unit");
   for (std::uint8_t c = 1; c < homing::kAlarmCodeCount; ++c) {
     const auto code = static_cast<homing::AlarmCode>(c);
     INFO(lines[c]);
     CHECK(lines[c].rfind(std::to_string(c) + "," + std::string(homing::alarm_name(code)) + ",", 0) == 0);
     CHECK(lines[c].find(homing::alarm_what_to_check(code)) != std::string::npos);
   }
+}
+
+TEST_CASE("alarms.csv says which alarms quote seconds in alarm_value, so an HMI does not label a wait in mm") {
+  const auto lines = lines_of(generated("alarms.csv"));
+  const auto unit_of = [&](homing::AlarmCode code) {
+    const std::string& line = lines.at(static_cast<std::size_t>(code));
+    return line.substr(line.rfind(',') + 1);
+  };
+  CHECK(unit_of(homing::AlarmCode::stall_timeout) == "s");
+  CHECK(unit_of(homing::AlarmCode::drive_no_answer) == "s");
+  CHECK(unit_of(homing::AlarmCode::drive_answered_at_once) == "s");
+  CHECK(unit_of(homing::AlarmCode::settings_fault) == "setting");
+  CHECK(unit_of(homing::AlarmCode::sensor_not_found) == "axis");
+  CHECK(unit_of(homing::AlarmCode::misalignment) == "axis");
 }
 
 TEST_CASE("refusals.csv lists every code status.last_refusal_reason can take, with its exception") {
