@@ -64,8 +64,8 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
                          "shorter than the stop distance ({:.3f} {}){}",
                          X, a.value, u, seek_stop_distance_mm(s), u,
                          s.debounce_ms > 0 ? ""
-                                           : fmt::format(", or the contact bounced (debounce_ms is 0: a bounce reads "
-                                                         "as a release; set axis.{}.debounce_ms, e.g. 10)",
+                                           : fmt::format(", or the contact bounced (axis.{}.debounce_ms is 0: a "
+                                                         "bounce reads as a release)",
                                                          static_cast<char>(kAxisUpper[axis] - 'A' + 'a')));
     case AlarmCode::stop_distance_exceeded:
       return fmt::format("{}: came to rest {:.3f} {} past the trigger, more than max_stop_distance "
@@ -140,7 +140,7 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
       return fmt::format("{}: locking indexer reported locked during {} while the unlock output was on", X, ph);
     case AlarmCode::cam_not_found:
       return fmt::format("{}: home cam not found: the search reversed at one limit switch and met the other "
-                         "after {:.3f} {} without the cam", X, a.value, u);
+                         "at {:.3f} {} without passing the cam", X, a.value, u);
     case AlarmCode::limit_in_homing:
       if (a.phase == Phase::return_to_start)
         return fmt::format("{}: {} limit switch met at {:.3f} {} while going back to where the cycle found it "

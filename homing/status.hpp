@@ -43,7 +43,7 @@ enum class CommandResult : std::uint8_t {
   refused_invalid = 12,      // the command itself makes no sense (bad axis, bad target)
   refused_communication_lost = 13,
   refused_settings_fault = 14,  // the configuration check refused the cycle: see the axis alarm
-  refused_hard_limit = 15,   // on a tripped shared limit: only a jog away from the sensor is allowed
+  refused_hard_limit = 15,   // on a tripped limit or toward an active limit switch: only a jog away is allowed
   refused_home_all_only = 16,  // global.single_axis_homing is off: the machine homes all axes or none
   refused_homed = 17,        // set position: the axis is homed; its coordinate comes from its reference
   refused_no_switch_edge = 18,  // reference check: the axis's method has no switch edge to check
@@ -75,7 +75,8 @@ inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
     {CommandResult::refused_settings_fault, "refused_settings_fault",
      "the configuration check refused the command: see the axis alarm or homingctl check"},
     {CommandResult::refused_hard_limit, "refused_hard_limit",
-     "on a tripped shared limit: only a jog away from the sensor is allowed until it releases"},
+     "on a tripped limit (an end-of-travel limit switch, or a home sensor shared as a limit) or toward an active "
+     "limit switch: only a jog away from it is allowed until it releases"},
     {CommandResult::refused_home_all_only, "refused_home_all_only",
      "global.single_axis_homing is off: this machine homes all axes together (cmd.home_all), never one alone"},
     {CommandResult::refused_homed, "refused_homed",

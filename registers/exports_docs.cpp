@@ -81,7 +81,8 @@ constexpr AlarmConfirm kAlarmConfirm[] = {
     {homing::AlarmCode::lock_engaged,
      "`axis.<a>.alarm_phase` is the phase the axis moved in; the unlocked input went to 0 during the motion"},
     {homing::AlarmCode::cam_not_found,
-     "`axis.<a>.alarm_phase` is `cam_seek` after a `limit_reversal`: the axis met both limit switches and "
+     "`axis.<a>.alarm_phase` is `limit_reversal` (the search back from the first limit switch) and "
+     "`axis.<a>.alarm_value` the position where it met the other: the axis met both limit switches and "
      "`axis.<a>.sensor` never went to 1 on the way; move the carriage onto the cam by hand and watch "
      "`axis.<a>.sensor`"},
     {homing::AlarmCode::limit_in_homing,

@@ -86,7 +86,13 @@ SCENARIO("overrun_during_stop: a trigger cam shorter than the stop distance", "[
   // Unfiltered input: the text names a bounce and debounce_ms as the other cause.
   REQUIRE(r.settings.axes[0].debounce_ms == 0);
   CHECK(text_of(r, 0).find("or the contact bounced") != std::string::npos);
-  CHECK(text_of(r, 0).find("axis.x.debounce_ms") != std::string::npos);
+  CHECK(text_of(r, 0).find("axis.x.debounce_ms is 0") != std::string::npos);
+  // The advice what to set comes once, from what to check.
+  const std::string text = text_of(r, 0);
+  const auto first = text.find("set debounce_ms");
+  REQUIRE(first != std::string::npos);
+  CHECK(text.find("set debounce_ms", first + 1) == std::string::npos);
+  CHECK(text.find("set axis.x.debounce_ms") == std::string::npos);
   check_latched_until_reset(r, 0, AlarmCode::overrun_during_stop);
 }
 

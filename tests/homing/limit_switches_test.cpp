@@ -4,6 +4,9 @@
 
 #include <cmath>
 
+#include <fmt/format.h>
+
+#include "homing/alarms.hpp"
 #include "homing/settings_check.hpp"
 #include "rig.hpp"
 
@@ -89,6 +92,11 @@ SCENARIO("home cam not between the limit switches: cam_not_found", "[limits][hom
   CHECK_FALSE(r.home_all());
   CHECK(r.axis(0).alarm.code == AlarmCode::cam_not_found);
   CHECK(r.axis(0).alarm.phase == Phase::limit_reversal);
+  // The figure is where the search met the other limit switch, and the text says so.
+  CHECK(r.axis(0).alarm.value == Approx(r.axis(0).position_mm).margin(0.5));
+  const std::string text = describe_alarm(0, r.axis(0).alarm, r.settings);
+  INFO(text);
+  CHECK(text.find(fmt::format("met the other at {:.3f} mm", r.axis(0).alarm.value)) != std::string::npos);
 }
 
 SCENARIO("both limit switches active at once: both_limits_active, nothing searched", "[limits][home_cam][alarms]") {
