@@ -1,6 +1,6 @@
 // homing-settings: the module's settings database from the command line,
 // without the module (for a machine that does not start, or a copied file).
-//   homing-settings --db /var/lib/homing/settings.db show
+//   homing-settings --db /var/lib/homing/homingd.db show
 //   homing-settings --db ... export machine-7.toml
 //   homing-settings --db ... check
 // Opens the database read-only (safe while the module runs). Import is done by
@@ -58,7 +58,7 @@ int check(const persistence::SettingsStore& store, const std::string& db, int sc
 
 int main(int argc, char** argv) {
   CLI::App app{"Read the homing module's settings database (the history: homingctl history)"};
-  std::string db_path = "settings.db";
+  std::string db_path = "homingd.db";  // homingd's own --db default, as homingctl history's
   std::string out_file;
   app.add_option("--db", db_path, "settings database file")->capture_default_str();
   auto* show_cmd = app.add_subcommand("show", "all settings (raw register values)");

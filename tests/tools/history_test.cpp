@@ -175,6 +175,18 @@ TEST_CASE("homing-settings leaves the history to homingctl history and says so")
   }
 }
 
+TEST_CASE("homing-settings without --db reads homingd.db, the daemon's own default") {
+  TempDir dir;
+  {
+    persistence::OpenReport report;
+    REQUIRE(persistence::SettingsStore::open(dir.file("homingd.db"), {{"axis.x.pull_off", 2500}}, report));
+  }
+  auto r = run_program({"/bin/sh", "-c", "cd '" + dir.path().string() + "' && exec '" + std::string(HOMING_SETTINGS_PATH) + "' show"}, 30s);
+  SHOW(r);
+  CHECK(r.code() == 0);
+  CHECK(r.out == "axis.x.pull_off = 2500\n");
+}
+
 TEST_CASE("homing-settings shows, exports and checks a database without the module") {
   TempDir dir;
   const std::string db = dir.file("settings.db");
