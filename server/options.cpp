@@ -2,6 +2,8 @@
 
 #include <arpa/inet.h>
 
+#include <charconv>
+
 #include <CLI/CLI.hpp>
 
 #include "config_file.hpp"
@@ -73,6 +75,28 @@ std::expected<void, std::string> check_mqtt(const std::string& url, Options& o, 
   if (!o.mqtt_password_file.empty() && o.mqtt_user.empty())
     return std::unexpected("--mqtt-password-file needs --mqtt-user: the user name the password belongs to");
   return {};
+}
+
+// CLI::Range on a whole-number option answers a fraction (unit = 1.5 in the
+// config file) with "Value 1.5 not in range 1 to 247": say what is expected.
+CLI::Validator whole_range(std::int64_t lo, std::int64_t hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& text) -> std::string {
+        std::int64_t v = 0;
+        const char* end = text.data() + text.size();
+        const auto [p, ec] = std::from_chars(text.data(), end, v);
+        if (ec != std::errc() || p != end || v < lo || v > hi)
+          return "expected a whole number from " + std::to_string(lo) + " to " + std::to_string(hi) + ", got '" +
+                 text + "'";
+        return "";
+      },
+      "INT in [" + std::to_string(lo) + " - " + std::to_string(hi) + "]");
+}
+
+// A file option given as "" (db = "" in the config file) names no file.
+CLI::Validator non_empty_path() {
+  return CLI::Validator([](std::string& text) -> std::string { return text.empty() ? "empty path: give a file name" : ""; },
+                        "PATH");
 }
 
 }  // namespace
@@ -177,43 +201,43 @@ OptionParser::Table::Table() {
       ->capture_default_str();
   app.add_option("--parity", parity, "RTU parity")->check(CLI::IsMember({"N", "E", "O"}))->capture_default_str();
   app.add_option("--stop-bits,--stop_bits", o.stop_bits, "RTU stop bits")->check(CLI::IsMember({1, 2}))->capture_default_str();
-  app.add_option("--unit", o.unit_id, "Modbus unit id of the module")->check(CLI::Range(1, 247))->capture_default_str();
-  app.add_option("--db", o.db_path, "SQLite settings database")->capture_default_str();
+  app.add_option("--unit", o.unit_id, "Modbus unit id of the module")->check(whole_range(1, 247))->capture_default_str();
+  app.add_option("--db", o.db_path, "SQLite settings database")->check(non_empty_path())->capture_default_str();
   app.add_option("--backend", o.backend, "Machine I/O backend")
       ->check(CLI::IsMember({"sim", "gpiod"}))
       ->capture_default_str();
   app.add_option("--period-us,--period_us", o.period_us, "Control period in microseconds")
-      ->check(CLI::Range(100, 100000))
+      ->check(whole_range(100, 100000))
       ->capture_default_str();
   app.add_option("--rt-priority,--rt_priority", o.rt_priority,
                  "SCHED_FIFO priority of the control loop thread (1..99); 0 = normal scheduling")
-      ->check(CLI::Range(0, 99))
+      ->check(whole_range(0, 99))
       ->capture_default_str();
   app.add_option("--word-order,--word_order", word_order, "Order of the two words of 32-bit values")
       ->check(CLI::IsMember({"high-first", "low-first"}))
       ->capture_default_str();
   app.add_option("--max-clients,--max_clients", o.max_clients, "Maximum simultaneous TCP clients")
-      ->check(CLI::Range(1, 1024))
+      ->check(whole_range(1, 1024))
       ->capture_default_str();
   app.add_option("--max-clients-per-address,--max_clients_per_address", o.max_clients_per_address,
                  "Maximum simultaneous TCP clients from one address; 0: as many as --max-clients")
-      ->check(CLI::Range(0, 1024))
+      ->check(whole_range(0, 1024))
       ->capture_default_str();
   app.add_option("--privileged", o.privileged,
                  "Privileged TCP client addresses (the PLC, the HMI; IPv4 address or CIDR, comma separated): their "
                  "connections never give way, and when the server is full one of another client is closed for them")
       ->delimiter(',');
   app.add_option("--idle-timeout-s,--idle_timeout_s", o.idle_timeout_s, "Drop a TCP client silent for this long")
-      ->check(CLI::Range(1, 86400))
+      ->check(whole_range(1, 86400))
       ->capture_default_str();
   app.add_option("--poll-us,--poll_us", o.poll_us,
                  "After a turn in which it answered a client, a TCP/TLS event loop polls for the next request up to "
                  "this long before it sleeps (learnt from the traffic, per loop: back-to-back requests answer sooner, "
                  "slow pollers cost nothing); 0: never poll")
-      ->check(CLI::Range(0, 1000))
+      ->check(whole_range(0, 1000))
       ->capture_default_str();
   app.add_option("--sim-unit,--sim_unit", o.sim_unit_id, "Unit id of the simulator (sim backend only)")
-      ->check(CLI::Range(1, 247))
+      ->check(whole_range(1, 247))
       ->capture_default_str();
   app.add_option("--time-scale,--time_scale", o.time_scale, "Simulated time runs this many times faster than the wall clock")
       ->check(CLI::Range(0.01, 1000.0))
@@ -228,20 +252,20 @@ OptionParser::Table::Table() {
   app.add_option("--unlock-code,--unlock_code", o.unlock_code,
                  "Lock settings writes until this code is written: 1..65535 to security.unlock (FC 06) or "
                  "security.unlock32, up to 4294967295 to security.unlock32 (both words in one FC 16 request)")
-      ->check(CLI::Range(std::int64_t{1}, std::int64_t{4294967295LL}));
+      ->check(whole_range(1, 4294967295LL));
   app.add_option("--unlock-lockout-s,--unlock_lockout_s", o.unlock_lockout_s,
                  "After 5 wrong unlock codes in a row every unlock is refused for this long, doubling with each "
                  "further wrong code")
-      ->check(CLI::Range(1, 86400))
+      ->check(whole_range(1, 86400))
       ->capture_default_str();
   app.add_option("--unlock-lockout-max-s,--unlock_lockout_max_s", o.unlock_lockout_max_s,
                  "The longest lockout of the unlock code")
-      ->check(CLI::Range(1, 86400))
+      ->check(whole_range(1, 86400))
       ->capture_default_str();
   app.add_option("--refusal-log-interval-s,--refusal_log_interval_s", o.refusal_log_interval_s,
                  "Refused writes and connections: the first of a client and reason is logged whole, the rest as "
                  "one count per client and reason every this many seconds")
-      ->check(CLI::Range(1, 3600))
+      ->check(whole_range(1, 3600))
       ->capture_default_str();
   app.add_option("--vendor-name,--vendor_name", o.vendor_name,
                  "Vendor name the module reports (FC 43 object 0)")
@@ -262,7 +286,7 @@ OptionParser::Table::Table() {
       ->check(sparkplug_id);
   app.add_option("--mqtt-keepalive-s,--mqtt_keepalive_s", o.mqtt_keepalive_s,
                  "MQTT keep-alive: the broker publishes the death certificate this long (x1.5) after the module falls silent")
-      ->check(CLI::Range(5, 3600))
+      ->check(whole_range(5, 3600))
       ->capture_default_str();
   app.add_option("--mqtt-ca,--mqtt_ca", o.mqtt_ca,
                  "mqtts://: the CA certificate (PEM) that signs the broker's certificate; the broker's name or "
@@ -289,7 +313,7 @@ OptionParser::Table::Table() {
                  "(default: the --db path + .mqtt-events)");
   app.add_option("--mqtt-outbox-max,--mqtt_outbox_max", o.mqtt_outbox_max,
                  "Events kept at most while the broker is away; past it the oldest are dropped and counted")
-      ->check(CLI::Range(100, 10000000))
+      ->check(whole_range(100, 10000000))
       ->capture_default_str();
   app.add_option("--mqtt-deadband,--mqtt_deadband", o.mqtt_deadband,
                  "Positions and other lengths are published again once they moved this far from the value last "
@@ -298,15 +322,15 @@ OptionParser::Table::Table() {
       ->capture_default_str();
   app.add_option("--mqtt-min-interval-ms,--mqtt_min_interval_ms", o.mqtt_min_interval_ms,
                  "A moving position is published at most this often (ms); other values as they change")
-      ->check(CLI::Range(0, 60000))
+      ->check(whole_range(0, 60000))
       ->capture_default_str();
   app.add_option("--mqtt-diagnostics-interval-ms,--mqtt_diagnostics_interval_ms", o.mqtt_diagnostics_interval_ms,
                  "Loop timing and resource figures (diag.*) are published at most this often (ms)")
-      ->check(CLI::Range(1000, 3600000))
+      ->check(whole_range(1000, 3600000))
       ->capture_default_str();
   app.add_option("--mqtt-sample-ms,--mqtt_sample_ms", o.mqtt_sample_ms,
                  "How often the edge node looks at the module for changes and events to publish (ms)")
-      ->check(CLI::Range(10, 10000))
+      ->check(whole_range(10, 10000))
       ->capture_default_str();
   app.add_option("--export-settings,--export_settings", o.export_settings,
                  "Write every setting of --db to this TOML file and exit (no server)");

@@ -46,6 +46,24 @@ TEST_CASE("an unknown key or a wrong value in the config file stops the start na
   CHECK(b.err.find("N,E,O") != std::string::npos);
 }
 
+TEST_CASE("a fraction for a whole-number option or an empty db in the config file stops the start saying what is expected") {
+  TempDir dir;
+  const std::string fraction = dir.file("fraction.toml"), empty_db = dir.file("empty_db.toml");
+  std::ofstream(fraction) << "db = \"" << dir.file("f.db") << "\"\nunit = 1.5\n";
+  std::ofstream(empty_db) << "db = \"\"\n";
+  const RunResult a = run_program({homingd_path(), "--config", fraction}, 20s);
+  INFO(a.err);
+  CHECK(a.code() == 2);
+  CHECK(a.err.find("--unit: expected a whole number from 1 to 247, got '1.5'") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(dir.file("f.db")));
+  const RunResult b = run_program({homingd_path(), "--config", empty_db}, 20s);
+  INFO(b.err);
+  CHECK(b.code() == 2);
+  CHECK(b.err.find("--db") != std::string::npos);
+  CHECK(b.err.find("empty path") != std::string::npos);
+  CHECK(b.err.find("WAL") == std::string::npos);
+}
+
 TEST_CASE("import_settings and export_settings in the config file stop the start: they are one-shot actions") {
   TempDir dir;
   const std::string settings = dir.file("base.toml"), config = dir.file("service.toml");
