@@ -283,11 +283,6 @@ int run_daemon(const Options& opt, const Wiring& wiring) {
     loop.raise_settings_lost();
     loop.run_period(0);  // latched in the snapshot before the first client can read it
   }
-  // Before anything can move: the clean marks are wiped as they are taken.
-  if (const auto stops = take_last_stops(*store, *settings)) {
-    loop.restore_last_stops(*stops);
-    loop.run_period(0);  // trust shown before the first client can read it
-  }
   ModbusService service(service_config(opt, loop, wiring), loop, &*store, *settings);
   auto transports = open_transports(opt, service);
   if (!transports) return fail_start(transports.error());
@@ -309,6 +304,14 @@ int run_daemon(const Options& opt, const Wiring& wiring) {
     }
   }
 
+  // Last, once nothing else can refuse the start (a port taken, a TLS file
+  // or the outbox that cannot be used): the clean marks are wiped as they are
+  // taken, and a start that ended here would have cost every axis its trust.
+  // Still before anything can move and before the first client is served.
+  if (const auto stops = take_last_stops(*store, *settings)) {
+    loop.restore_last_stops(*stops);
+    loop.run_period(0);  // trust shown before the first client can read it
+  }
   serve(opt, signals, loop, service, *store, *transports, std::move(mqtt), events ? &*events : nullptr);
   store->close();
   spdlog::info("stopped cleanly");

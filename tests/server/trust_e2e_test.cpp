@@ -99,6 +99,25 @@ TEST_CASE("over Modbus: a carriage moved through the simulator unit before the c
   CHECK(c.read("axis.x.trust") == v(homing::Trust::homed_this_power_on));
 }
 
+TEST_CASE("a start refused for a port already taken keeps the axes' clean stops for the next start") {
+  TempDir dir;
+  const std::string db = dir.file("machine.db");
+  home_and_stop(db);
+  {
+    Daemon holder;  // another program on the port the next start asks for
+    const RunResult r = run_program(
+        {homingd_path(), "--db", db, "--tcp", "127.0.0.1:" + std::to_string(holder.port())}, 20s);
+    INFO("stderr: " << r.err);
+    REQUIRE(r.exited());
+    REQUIRE(r.code() == 1);
+    CHECK(r.err.find("--tcp") != std::string::npos);
+  }
+  Daemon again({.db = db});
+  Client c = Client::tcp(again.port());
+  for (const char* a : {"x", "y", "z"}) CHECK(c.read(std::string("axis.") + a + ".trust") == v(homing::Trust::last_stop_clean));
+  CHECK(command(c, "cmd.refcheck.x") == v(homing::CommandResult::accepted));
+}
+
 TEST_CASE("over Modbus: after a SIGKILL no axis is trusted, even one that stopped cleanly the time before") {
   TempDir dir;
   const std::string db = dir.file("machine.db");
