@@ -16,6 +16,7 @@ bool is_operating_row(const registers::Register& reg) {
   switch (reg.key) {
     case Key::cmd_home_all:
     case Key::cmd_home:
+    case Key::cmd_home_axes:
     case Key::cmd_unhome:
     case Key::cmd_refcheck:
     case Key::cmd_abort:

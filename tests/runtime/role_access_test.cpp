@@ -73,7 +73,7 @@ TEST_CASE("commands, heartbeat, move targets and the permit need commands, the r
     REQUIRE(r);
     return server::access_needed(r->unit, r->table, r->address, r->words());
   };
-  for (const char* name : {"cmd.home_all", "cmd.abort", "cmd.reset_alarm", "cmd.home.x", "cmd.jog_plus.y",
+  for (const char* name : {"cmd.home_all", "cmd.home_axes", "cmd.abort", "cmd.reset_alarm", "cmd.home.x", "cmd.jog_plus.y",
                            "cmd.jog_minus.z", "cmd.move.a", "axis.a.target", "host.heartbeat", "host.homing_permit"})
     CHECK(needed(name) == Access::commands);
   for (const char* name : {"axis.x.seek_feedrate", "global.watchdog_ms", "sequence.step1", "security.unlock",
@@ -106,6 +106,16 @@ TEST_CASE("an operator commands the machine but its settings and simulator write
   CHECK(s.accepted(Access::commands, "cmd.home_all", 1));
   for (int i = 0; i < 5; ++i) s.loop->run_period(0.001);
   CHECK(s.loop->snapshot().status.homing);
+}
+
+TEST_CASE("an operator homes chosen axes with cmd.home_axes, as homingctl home x does") {
+  Service s;
+  CHECK(s.accepted(Access::commands, "cmd.home_axes", 0b1));
+  for (int i = 0; i < 5; ++i) s.loop->run_period(0.001);
+  const auto st = s.loop->snapshot().status;
+  CHECK(st.homing);
+  CHECK(st.axes[0].busy);
+  CHECK_FALSE(st.axes[1].busy);
 }
 
 TEST_CASE("an engineer writes settings and the simulator unit") {

@@ -29,7 +29,9 @@ const Register& register_named(std::string_view name) {
 
 std::string exception_sentence(int code) {
   switch (code) {
-    case 1: return "exception 01: the module does not know this function";
+    case 1:
+      return "exception 01: this client may not write that (its certificate's role or --write-allow; the module's "
+             "log names which), or the module does not know the function";
     case 2: return "exception 02: address not writable (read-only register, unmapped address or half of a 32-bit value)";
     case 3: return "exception 03: a value is out of range or the settings cannot work together (the module's log names it)";
     case 4: return "exception 04: the module could not store the setting (disk full or read-only?); nothing changed";
