@@ -20,7 +20,7 @@ constexpr std::uint8_t kDiagnostics = 0x08;
 
 }  // namespace
 
-std::optional<std::size_t> rtu_request_length(const std::vector<std::uint8_t>& f) {
+std::optional<std::size_t> rtu_request_length(std::span<const std::uint8_t> f) {
   constexpr std::size_t kUnitFcCrc = 4;  // unit id, function code, CRC
   if (f.size() < 2) return std::nullopt;
   switch (f[1]) {
@@ -63,17 +63,36 @@ std::optional<RtuFramer::Result> RtuFramer::check_own_frame(std::size_t length) 
   }
   // Function 08 sub-function 00 echoes any number of words: extend by words.
   if (buf_[1] == kDiagnostics && buf_[2] == 0 && buf_[3] == 0) return std::nullopt;
-  buf_.clear();
-  discarding_ = true;
+  hunting_ = true;  // its bytes are kept: a request may begin inside them
   return Result{Event::bad_crc, {}};
 }
 
-std::optional<RtuFramer::Result> RtuFramer::push(std::uint8_t byte) {
-  if (discarding_) return std::nullopt;
-  buf_.push_back(byte);
-  if (buf_.size() > longest()) {
+std::optional<RtuFramer::Result> RtuFramer::own_frame_inside() {
+  const std::size_t n = buf_.size();
+  for (std::size_t start = 1; start + 4 <= n; ++start) {
+    if (buf_[start] != own_unit_ && buf_[start] != 0) continue;
+    const std::span<const std::uint8_t> candidate(buf_.data() + start, n - start);
+    const auto length = rtu_request_length(candidate);
+    if (!length || *length != candidate.size() || !crc_matches(candidate)) continue;
+    Result r{Event::frame, {candidate.begin(), candidate.end()}};
     buf_.clear();
-    discarding_ = true;
+    hunting_ = false;
+    return r;
+  }
+  return std::nullopt;
+}
+
+std::optional<RtuFramer::Result> RtuFramer::push(std::uint8_t byte) {
+  buf_.push_back(byte);
+  if (hunting_) {
+    if (auto r = own_frame_inside()) return r;
+    // The longest request for this module is searched for whole; older bytes go.
+    constexpr std::size_t kKept = 2 * MODBUS_RTU_MAX_ADU_LENGTH;
+    if (buf_.size() > kKept) buf_.erase(buf_.begin(), buf_.begin() + static_cast<std::ptrdiff_t>(buf_.size() - kKept));
+    return std::nullopt;
+  }
+  if (buf_.size() > longest()) {
+    hunting_ = true;
     return Result{Event::overrun, {}};
   }
   if (buf_.size() < 4) return std::nullopt;
@@ -89,16 +108,19 @@ std::optional<RtuFramer::Result> RtuFramer::push(std::uint8_t byte) {
   }
   // Another unit's frame (request or answer) or an unknown function: the
   // frame ends where its CRC first matches.
-  if (!crc_matches(buf_)) return std::nullopt;
-  Result r{Event::frame, std::move(buf_)};
-  buf_.clear();
-  return r;
+  if (crc_matches(buf_)) {
+    Result r{Event::frame, std::move(buf_)};
+    buf_.clear();
+    return r;
+  }
+  // Noise before a request for this module: the request is taken as it ends.
+  return own_frame_inside();
 }
 
 std::optional<RtuFramer::Result> RtuFramer::silence() {
-  const bool had = !buf_.empty();
+  const bool had = !buf_.empty() && !hunting_;  // a search follows an error already counted
   buf_.clear();
-  discarding_ = false;
+  hunting_ = false;
   if (had) return Result{Event::bad_crc, {}};
   return std::nullopt;
 }

@@ -7,9 +7,17 @@
 // frame is extended word by word until its CRC matches); any other frame (for
 // another unit on the bus, or a function the module does not know) ends where
 // its CRC first matches. Silence on the line (the caller's byte timeout) ends
-// a frame that never matched: a communication error. Pure: no I/O, no clock.
+// a frame that never matched: a communication error.
+//
+// A bad frame does not leave the module deaf until the line falls silent (a
+// master that retries at once, a busy multi-drop bus): after one, and while
+// bytes that are no request for this module pile up (a noise byte before a
+// request), every byte ends a search for a request for this module that
+// ends there (its unit id, its function's length, its CRC), so the next good
+// request is answered as it completes. Pure: no I/O, no clock.
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <vector>
 
 namespace server {
@@ -33,20 +41,23 @@ class RtuFramer {
   // The line stayed quiet for the byte timeout: a frame begun ends here.
   std::optional<Result> silence();
   // Bytes of a frame are waiting (the caller then polls with the byte timeout).
-  bool pending() const { return !buf_.empty() || discarding_; }
+  bool pending() const { return !buf_.empty(); }
 
  private:
   std::optional<Result> check_own_frame(std::size_t length);
+  // A request for this module that begins after the first byte and ends at
+  // the last one: taken, with everything before it.
+  std::optional<Result> own_frame_inside();
   std::size_t longest() const;  // bytes a frame may have so far before it is an overrun
 
   std::uint8_t own_unit_;
   std::vector<std::uint8_t> buf_;
-  bool discarding_ = false;  // after a bad frame: drop bytes until silence
+  bool hunting_ = false;  // after a bad frame: the bytes kept are searched for a request, until silence
 };
 
-// The whole length (unit id to CRC) of a request for function `pdu_head[0]`,
+// The whole length (unit id to CRC) of a request for function `frame[1]`,
 // once enough of the frame is there to know it: nullopt while more header
 // bytes are needed, 0 for a function code the module does not know.
-std::optional<std::size_t> rtu_request_length(const std::vector<std::uint8_t>& frame);
+std::optional<std::size_t> rtu_request_length(std::span<const std::uint8_t> frame);
 
 }  // namespace server

@@ -73,16 +73,58 @@ TEST_CASE("rtu framer: two requests back to back are two frames") {
   CHECK(r[1].frame == b);
 }
 
-TEST_CASE("rtu framer: a bad CRC is one error, the rest of the frame is dropped until silence") {
+TEST_CASE("rtu framer: a bad CRC is one error, and the next frame after silence is read normally") {
   RtuFramer f(1);
   const auto r = feed(f, {1, 0x03, 0x00, 0x00, 0x00, 0x01, 0xDE, 0xAD, 0x55, 0xAA});
   REQUIRE(r.size() == 1);
   CHECK(r[0].event == RtuFramer::Event::bad_crc);
-  // The next frame after the silence is read normally.
   const Bytes good = with_crc({1, 0x03, 0x00, 0x00, 0x00, 0x01});
   const auto next = feed(f, good, false);
   REQUIRE(next.size() == 1);
   CHECK(next[0].frame == good);
+}
+
+TEST_CASE("rtu framer: a master's retry right after a corrupted request is a frame, with no silence between") {
+  RtuFramer f(1);
+  const Bytes good = with_crc({1, 0x04, 0x00, 0x00, 0x00, 0x02});
+  Bytes corrupted = good;
+  corrupted[5] ^= 0x10;  // one bit flipped on the line
+  Bytes line = corrupted;
+  line.insert(line.end(), good.begin(), good.end());
+  const auto r = feed(f, line, false);
+  REQUIRE(r.size() == 2);
+  CHECK(r[0].event == RtuFramer::Event::bad_crc);
+  CHECK(r[1].event == RtuFramer::Event::frame);
+  CHECK(r[1].frame == good);
+  CHECK_FALSE(f.pending());
+}
+
+TEST_CASE("rtu framer: a request cut short and then sent again whole is a frame as it ends") {
+  RtuFramer f(1);
+  const Bytes good = with_crc({1, 0x03, 0x00, 0x64, 0x00, 0x0A});
+  Bytes line(good.begin(), good.begin() + 3);
+  line.insert(line.end(), good.begin(), good.end());
+  const auto r = feed(f, line, false);
+  REQUIRE_FALSE(r.empty());
+  CHECK(r.back().event == RtuFramer::Event::frame);
+  CHECK(r.back().frame == good);
+}
+
+TEST_CASE("rtu framer: a noise byte before a request does not hide it, nor another unit's traffic after the noise") {
+  for (const std::uint8_t noise : {std::uint8_t{0xFF}, std::uint8_t{0x00}, std::uint8_t{0x01}, std::uint8_t{0x55}}) {
+    INFO("noise byte " << int(noise));
+    RtuFramer f(1);
+    const Bytes good = with_crc({1, 0x03, 0x00, 0x00, 0x00, 0x01});
+    Bytes line{noise};
+    // Another unit's request and answer on the bus, then ours, with no silence anywhere.
+    for (const Bytes& other : {with_crc({5, 0x03, 0x00, 0x00, 0x00, 0x01}), with_crc({5, 0x03, 0x02, 0x12, 0x34})})
+      line.insert(line.end(), other.begin(), other.end());
+    line.insert(line.end(), good.begin(), good.end());
+    const auto r = feed(f, line, false);
+    REQUIRE_FALSE(r.empty());
+    CHECK(r.back().event == RtuFramer::Event::frame);
+    CHECK(r.back().frame == good);
+  }
 }
 
 TEST_CASE("rtu framer: another unit's request and its answer are frames too, ended by their CRC") {
