@@ -204,12 +204,15 @@ void EventLoop::close(std::uint64_t id, Slot& slot, bool stopping) {
     closed_for = entry.closed_for;
   }
   const std::string& address = c.client().address;
-  if (c.refused())
-    spdlog::warn("{}: refused {}: {}", shared_.name, address, stopping ? "server stopping" : c.end_reason());
-  else if (!closed_for.empty())
+  if (c.refused()) {
+    const std::string reason = stopping ? "server stopping" : c.end_reason();
+    if (shared_.refused) shared_.refused(address, reason);
+    else spdlog::warn("{}: refused {}: {}", shared_.name, address, reason);
+  } else if (!closed_for.empty()) {
     spdlog::info("{}: client {} disconnected: closed to make room for {}", shared_.name, address, closed_for);
-  else
+  } else {
     spdlog::info("{}: client {} disconnected: {}", shared_.name, address, stopping ? "server stopping" : c.end_reason());
+  }
   if (served) shared_.handler.disconnected(c.client());  // its jogs stop, its edit session ends
   {
     // Under the lock: the acceptor never shuts down a descriptor number

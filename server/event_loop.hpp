@@ -8,6 +8,7 @@
 // settings writer (a write of the module unit) or runs on RequestWorkers,
 // and its reply comes back through the loop's inbox.
 #include <atomic>
+#include <functional>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -52,6 +53,11 @@ class EventLoop {
     const std::atomic<bool>& stop;
     std::string_view name;  // "tcp", "tls": for the log
     std::chrono::microseconds poll_longest{0};  // server/poll_window.hpp; 0: never poll
+    // A connection refused after it was accepted (a TLS handshake that failed
+    // or never came): given to the server's refusal log, which writes the
+    // first of a client's refusals for a reason whole and counts the rest.
+    // Unset: each is one warn line.
+    std::function<void(const std::string& address, const std::string& reason)> refused{};
   };
   explicit EventLoop(Shared shared);
   ~EventLoop();

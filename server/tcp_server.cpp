@@ -77,7 +77,10 @@ TcpServer::TcpServer(ListenConfig config, RequestHandler& handler, std::unique_p
   for (int i = 0; i < loops; ++i)
     loops_.push_back(std::make_unique<EventLoop>(
         EventLoop::Shared{handler_, workers_, connections_mutex_, active_, stop_, name(),
-                          std::chrono::microseconds(config_.poll_us)}));
+                          std::chrono::microseconds(config_.poll_us),
+                          [this](const std::string& address, const std::string& reason) {
+                            refused_after_accept(address, reason);
+                          }}));
 }
 
 TcpServer::~TcpServer() {
@@ -120,6 +123,10 @@ void TcpServer::run() {
     // refusals are counted it looks every 200 ms to write their summary.
     pollfd p[2] = {{listen_fd_, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
     const int rc = ::poll(p, 2, counting ? 200 : -1);
+    if (rc > 0 && (p[1].revents & POLLIN)) {
+      eventfd_t drained = 0;
+      (void)::eventfd_read(wake_fd_, &drained);
+    }
     reap(false);
     {
       std::lock_guard lock(connections_mutex_);
@@ -163,6 +170,17 @@ void TcpServer::run() {
 EventLoop& TcpServer::quietest_loop() {
   return **std::min_element(loops_.begin(), loops_.end(),
                             [](const auto& a, const auto& b) { return a->connections() < b->connections(); });
+}
+
+// From an event loop: a failed or missing TLS handshake. A scanner, a health
+// check on the port or an HMI left with an expired certificate repeats it
+// for as long as it runs: one line, then counts per interval.
+void TcpServer::refused_after_accept(const std::string& address, const std::string& reason) {
+  {
+    std::lock_guard lock(connections_mutex_);
+    refuse(address.substr(0, address.rfind(':')), reason, fmt::format("{}: refused {}: {}", name(), address, reason));
+  }
+  ::eventfd_write(wake_fd_, 1);  // the acceptor writes the counts when the interval ends
 }
 
 void TcpServer::refuse(const std::string& ip, const std::string& reason, const std::string& line) {

@@ -80,6 +80,7 @@ class TcpServer {
   std::mutex connections_mutex_;
   std::list<ConnectionEntry> connections_;  // under connections_mutex_
   RefusalLog refusals_;                     // under connections_mutex_
+  void refused_after_accept(const std::string& address, const std::string& reason);
   RequestWorkers workers_;
   std::vector<std::unique_ptr<EventLoop>> loops_;
 };

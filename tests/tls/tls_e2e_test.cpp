@@ -8,6 +8,7 @@
 #include <netinet/in.h>
 #include <signal.h>
 #include <sys/socket.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -238,6 +239,40 @@ TEST_CASE("an expired certificate is refused at the handshake and the log says s
   CHECK(why.find("certificate expired") != std::string::npos);
   CHECK(log_has(d, {"tls: refused 127.0.0.1:", "CN=expired", "certificate has expired",
                     "valid until 2021-01-01 00:00:00 UTC"}));
+}
+
+TEST_CASE("a client refused at the handshake again and again is one log line and then a count per interval") {
+  Daemon d(tls_options({"--refusal-log-interval-s", "1"}));
+  constexpr int kTries = 20;
+  for (int i = 0; i < kTries; ++i) CHECK_FALSE(refusal(d, tls_identity("expired")).empty());
+  // A client that connects and closes without a handshake (a health check on the port).
+  for (int i = 0; i < kTries; ++i) {
+    const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    a.sin_port = htons(static_cast<std::uint16_t>(d.tls_port()));
+    CHECK(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)) == 0);
+    ::close(fd);
+  }
+  REQUIRE(log_has(d, {"tls 127.0.0.1:", "more connections refused", "certificate has expired"}));
+  const std::string log = d.log();
+  const auto lines_with = [&](std::string_view a, std::string_view b) {
+    int n = 0;
+    std::size_t start = 0;
+    while (start < log.size()) {
+      const std::size_t end = std::min(log.find('\n', start), log.size());
+      const std::string_view line(log.data() + start, end - start);
+      if (line.find(a) != line.npos && line.find(b) != line.npos) ++n;
+      start = end + 1;
+    }
+    return n;
+  };
+  INFO(log);
+  CHECK(lines_with("tls: refused 127.0.0.1:", "certificate has expired") == 1);
+  CHECK(lines_with("tls: refused 127.0.0.1:", "closed before the TLS handshake") <= 2);
+  // Still refused, still served to the others.
+  CHECK(refusal(d, tls_identity("engineer")).empty());
 }
 
 TEST_CASE("a certificate that is not valid yet is refused at the handshake") {
