@@ -4,6 +4,12 @@
 #include <openssl/pem.h>
 #include <openssl/x509_vfy.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
 #include "tls/certificate.hpp"
 #include "tls/errors.hpp"
 
@@ -40,6 +46,21 @@ int remember_refusal(int ok, X509_STORE_CTX* store) {
   return ok;
 }
 
+// A file OpenSSL cannot open is reported by it as "error 13; system lib";
+// opened here first, the error names the system's reason (a key the service
+// user may not read is the mistake commonly made).
+std::expected<void, std::string> readable(const std::string& what, const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
+    const int err = errno;
+    std::string why = what + " " + path + ": cannot be read: " + std::strerror(err);
+    if (err == EACCES) why += " (it must be readable by the user homingd runs as)";
+    return std::unexpected(why);
+  }
+  ::close(fd);
+  return {};
+}
+
 // What both sides share.
 std::expected<SslCtx, std::string> base_context(const SSL_METHOD* method) {
   SslCtx ctx(SSL_CTX_new(method));
@@ -59,6 +80,8 @@ std::expected<SslCtx, std::string> base_context(const SSL_METHOD* method) {
 }
 
 std::expected<void, std::string> use_identity(SSL_CTX* ctx, const std::string& cert, const std::string& key) {
+  if (auto r = readable("certificate", cert); !r) return r;
+  if (auto r = readable("private key", key); !r) return r;
   if (SSL_CTX_use_certificate_chain_file(ctx, cert.c_str()) != 1)
     return std::unexpected("certificate " + cert + ": " + take_errors());
   if (SSL_CTX_use_PrivateKey_file(ctx, key.c_str(), SSL_FILETYPE_PEM) != 1) {
@@ -73,12 +96,14 @@ std::expected<void, std::string> use_identity(SSL_CTX* ctx, const std::string& c
 }
 
 std::expected<void, std::string> trust(SSL_CTX* ctx, const std::string& ca) {
+  if (auto r = readable("CA certificate", ca); !r) return r;
   if (SSL_CTX_load_verify_locations(ctx, ca.c_str(), nullptr) != 1)
     return std::unexpected("CA certificate " + ca + ": " + take_errors());
   return {};
 }
 
 std::expected<void, std::string> add_crls(SSL_CTX* ctx, const std::string& path) {
+  if (auto r = readable("CRL", path); !r) return r;
   Bio in(BIO_new_file(path.c_str(), "r"));
   if (!in) return std::unexpected("CRL " + path + ": " + take_errors());
   X509_STORE* store = SSL_CTX_get_cert_store(ctx);

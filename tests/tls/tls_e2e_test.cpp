@@ -423,6 +423,19 @@ TEST_CASE("homingd does not start when a TLS file cannot be used and names it") 
   CHECK(r.code() == 1);
   CHECK(r.err.find("--tls: certificate " + pki + "missing.crt") != std::string::npos);
 
+  // A file the system cannot open: its reason, not OpenSSL's "error 2; system lib" (and no pass-phrase hint).
+  r = start({"--tls-cert", pki + "server.crt", "--tls-key", pki + "missing.key", "--tls-ca", pki + "ca.crt"});
+  INFO(r.err);
+  CHECK(r.code() == 1);
+  CHECK(r.err.find("--tls: private key " + pki + "missing.key: cannot be read: No such file or directory") !=
+        std::string::npos);
+  CHECK(r.err.find("pass phrase") == std::string::npos);
+  r = start({"--tls-cert", pki + "server.crt", "--tls-key", pki + "server.key", "--tls-ca", pki + "missing-ca.crt"});
+  INFO(r.err);
+  CHECK(r.code() == 1);
+  CHECK(r.err.find("--tls: CA certificate " + pki + "missing-ca.crt: cannot be read: No such file or directory") !=
+        std::string::npos);
+
   r = start({"--tls-cert", pki + "server.crt", "--tls-key", pki + "viewer.key", "--tls-ca", pki + "ca.crt"});
   INFO(r.err);
   CHECK(r.code() == 1);
