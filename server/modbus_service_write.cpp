@@ -281,15 +281,19 @@ void ModbusService::apply_effect(registers::Effect effect) {
 void ModbusService::count_wrong_unlock_code(std::uint32_t code, const ClientInfo& client) {
   const UnlockGuard::Outcome outcome = unlock_guard_.attempt(code, now());
   if (outcome.lockout_started)
-    spdlog::warn("security.unlock: {} wrong unlock codes in a row, the last from {} {}: every unlock is refused "
-                 "for {} s (status.unlock_lockout_s), longer with each further wrong code",
-                 outcome.wrong_in_a_row, client.transport, client.address, outcome.lockout.count());
+    spdlog::warn("security.unlock: {} wrong unlock codes in a row, the last from {} {}{}{}: every unlock is refused "
+                 "for {} s (status.unlock_lockout_s), longer with each further wrong code up to "
+                 "--unlock-lockout-max-s",
+                 outcome.wrong_in_a_row, client.transport, client.address, client.identity.empty() ? "" : " ",
+                 client.identity, outcome.lockout.count());
 }
 
 // Under mutex_: the right code, once the rest of its request has passed.
 void ModbusService::unlock(std::uint32_t code, const ClientInfo& client) {
   (void)unlock_guard_.attempt(code, now());  // clears the count of wrong codes
-  if (locked_) spdlog::info("settings unlocked by {} {}", client.transport, client.address);
+  if (locked_)
+    spdlog::info("settings unlocked by {} {}{}{}", client.transport, client.address, client.identity.empty() ? "" : " ",
+                 client.identity);
   locked_ = false;
   extras_.settings_locked = false;
 }

@@ -46,8 +46,7 @@ std::optional<PlannedRefusal> unlock_refusal(std::uint32_t code, std::uint16_t a
     case UnlockVerdict::wrong:
       return PlannedRefusal{
           Refusal::because(RefusalReason::wrong_unlock_code, address,
-                           fmt::format("wrong unlock code written to security.unlock ({} in a row); settings stay "
-                                       "locked",
+                           fmt::format("wrong unlock code ({} in a row); settings stay locked",
                                        outcome.wrong_in_a_row)),
           code};
   }

@@ -378,6 +378,8 @@ TEST_CASE("the write allow-list and the unlock code still apply to an engineer o
     CHECK(c.write("axis.x.seek_feedrate", 1200) == 4);
     REQUIRE(c.write("security.unlock", 4711) == 0);
     CHECK(c.write("axis.x.seek_feedrate", 1200) == 0);
+    // Who unlocked is the certificate, as in every other TLS line.
+    CHECK(log_has(d, {"settings unlocked by tls 127.0.0.1:", "CN=engineer", "(role engineer)"}));
   }
 }
 
