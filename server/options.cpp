@@ -2,8 +2,6 @@
 
 #include <arpa/inet.h>
 
-#include <charconv>
-
 #include <CLI/CLI.hpp>
 
 #include "config_file.hpp"
@@ -82,10 +80,10 @@ std::expected<void, std::string> check_mqtt(const std::string& url, Options& o, 
 CLI::Validator whole_range(std::int64_t lo, std::int64_t hi) {
   return CLI::Validator(
       [lo, hi](std::string& text) -> std::string {
+        // Read as CLI11 then stores it (0x.. hex, a leading 0 octal), so that
+        // the value checked is the value used.
         std::int64_t v = 0;
-        const char* end = text.data() + text.size();
-        const auto [p, ec] = std::from_chars(text.data(), end, v);
-        if (ec != std::errc() || p != end || v < lo || v > hi)
+        if (!CLI::detail::lexical_cast(text, v) || v < lo || v > hi)
           return "expected a whole number from " + std::to_string(lo) + " to " + std::to_string(hi) + ", got '" +
                  text + "'";
         return "";

@@ -17,6 +17,7 @@ bool crc_matches(std::span<const std::uint8_t> frame) {
 }
 
 constexpr std::uint8_t kDiagnostics = 0x08;
+constexpr std::uint8_t kFirstReservedUnit = 248;
 
 }  // namespace
 
@@ -70,7 +71,11 @@ std::optional<RtuFramer::Result> RtuFramer::check_own_frame(std::size_t length) 
 std::optional<RtuFramer::Result> RtuFramer::own_frame_inside() {
   const std::size_t n = buf_.size();
   for (std::size_t start = 1; start + 4 <= n; ++start) {
-    if (buf_[start] != own_unit_ && buf_[start] != 0) continue;
+    // Addressed to this unit only: a broadcast is never answered, so one
+    // missed after a line error costs nothing, while one read out of the bytes
+    // that follow the error (another unit's frame may carry any data) would
+    // be applied.
+    if (buf_[start] != own_unit_) continue;
     const std::span<const std::uint8_t> candidate(buf_.data() + start, n - start);
     const auto length = rtu_request_length(candidate);
     if (!length || *length != candidate.size() || !crc_matches(candidate)) continue;
@@ -95,6 +100,12 @@ std::optional<RtuFramer::Result> RtuFramer::push(std::uint8_t byte) {
     hunting_ = true;
     return Result{Event::overrun, {}};
   }
+  // 248-255 are no device's address (reserved): a noise byte (a line glitch
+  // reads as 0xFF), the error that starts a search.
+  if (buf_.size() == 1 && buf_[0] >= kFirstReservedUnit) {
+    hunting_ = true;
+    return Result{Event::bad_crc, {}};
+  }
   if (buf_.size() < 4) return std::nullopt;
   const bool ours = buf_[0] == own_unit_ || buf_[0] == 0;
   if (ours) {
@@ -107,14 +118,12 @@ std::optional<RtuFramer::Result> RtuFramer::push(std::uint8_t byte) {
     }
   }
   // Another unit's frame (request or answer) or an unknown function: the
-  // frame ends where its CRC first matches.
-  if (crc_matches(buf_)) {
-    Result r{Event::frame, std::move(buf_)};
-    buf_.clear();
-    return r;
-  }
-  // Noise before a request for this module: the request is taken as it ends.
-  return own_frame_inside();
+  // frame ends where its CRC first matches. Its data is not searched for a
+  // request for this module: it may carry any bytes.
+  if (!crc_matches(buf_)) return std::nullopt;
+  Result r{Event::frame, std::move(buf_)};
+  buf_.clear();
+  return r;
 }
 
 std::optional<RtuFramer::Result> RtuFramer::silence() {

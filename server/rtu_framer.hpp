@@ -10,11 +10,14 @@
 // a frame that never matched: a communication error.
 //
 // A bad frame does not leave the module deaf until the line falls silent (a
-// master that retries at once, a busy multi-drop bus): after one, and while
-// bytes that are no request for this module pile up (a noise byte before a
-// request), every byte ends a search for a request for this module that
-// ends there (its unit id, its function's length, its CRC), so the next good
-// request is answered as it completes. Pure: no I/O, no clock.
+// master that retries at once, a busy multi-drop bus): after a frame for this
+// module that fails its CRC, an overrun, or a noise byte no device has as its
+// address (248-255, 0xFF: a line glitch), every byte ends a search for a
+// request addressed to this unit that ends there (its unit id, its
+// function's length, its CRC), so the next good request is answered as it
+// completes. A search takes no broadcast, and ends at the first request
+// found or at silence; outside one, another unit's frame is never searched
+// (its data may hold any bytes). Pure: no I/O, no clock.
 #include <cstdint>
 #include <optional>
 #include <span>

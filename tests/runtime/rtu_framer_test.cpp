@@ -110,8 +110,25 @@ TEST_CASE("rtu framer: a request cut short and then sent again whole is a frame 
   CHECK(r.back().frame == good);
 }
 
+TEST_CASE("rtu framer: another unit's frame whose data holds a whole request for this module or a broadcast is not taken apart") {
+  for (const std::uint8_t inner_unit : {std::uint8_t{1}, std::uint8_t{0}}) {
+    INFO("inner unit " << int(inner_unit));
+    RtuFramer f(1);
+    // FC 16 to unit 5 whose data is, byte for byte, a complete FC 06 for the
+    // module (or a broadcast one) with its CRC.
+    const Bytes inner = with_crc({inner_unit, 0x06, 0x00, 0x10, 0x00, 0x01});
+    Bytes body{5, 0x10, 0x00, 0x00, 0x00, 0x04, 0x08};
+    body.insert(body.end(), inner.begin(), inner.end());
+    const Bytes other = with_crc(body);
+    const auto r = feed(f, other, false);
+    REQUIRE(r.size() == 1);
+    CHECK(r[0].event == RtuFramer::Event::frame);
+    CHECK(r[0].frame == other);
+  }
+}
+
 TEST_CASE("rtu framer: a noise byte before a request does not hide it, nor another unit's traffic after the noise") {
-  for (const std::uint8_t noise : {std::uint8_t{0xFF}, std::uint8_t{0x00}, std::uint8_t{0x01}, std::uint8_t{0x55}}) {
+  for (const std::uint8_t noise : {std::uint8_t{0xFF}, std::uint8_t{0xF8}, std::uint8_t{0x00}, std::uint8_t{0x01}}) {
     INFO("noise byte " << int(noise));
     RtuFramer f(1);
     const Bytes good = with_crc({1, 0x03, 0x00, 0x00, 0x00, 0x01});

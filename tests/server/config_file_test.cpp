@@ -56,6 +56,12 @@ TEST_CASE("a fraction for a whole-number option or an empty db in the config fil
   CHECK(a.code() == 2);
   CHECK(a.err.find("--unit: expected a whole number from 1 to 247, got '1.5'") != std::string::npos);
   CHECK_FALSE(std::filesystem::exists(dir.file("f.db")));
+  // The value checked is the value used: "0100" is octal to CLI11 (64), below --period-us's 100.
+  const RunResult octal = run_program({homingd_path(), "--db", dir.file("o.db"), "--period-us", "0100"}, 20s);
+  INFO(octal.err);
+  CHECK(octal.code() == 2);
+  CHECK(octal.err.find("--period-us") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(dir.file("o.db")));
   const RunResult b = run_program({homingd_path(), "--config", empty_db}, 20s);
   INFO(b.err);
   CHECK(b.code() == 2);
