@@ -135,10 +135,20 @@ void Engine::abort_command(const Settings& settings) {
 // Reset is refused while its cause is still present, and while a failed
 // cycle winds down (the alarm that started it stays until the axes rest;
 // abort stops it).
+CommandResult reset_refusal_of(std::uint16_t interlocks) {
+  using namespace interlock;
+  if (interlocks & (estop | drive_fault | communication_lost)) return CommandResult::refused_cause_present;
+  return CommandResult::accepted;
+}
+
 void Engine::reset_command() {
   ++command_count_;
-  if (estop_ || any_drive_fault() || heartbeat_stale_) {
-    last_result_ = CommandResult::refused_cause_present;
+  std::uint16_t causes = 0;
+  if (estop_) causes |= interlock::estop;
+  if (any_drive_fault()) causes |= interlock::drive_fault;
+  if (heartbeat_stale_) causes |= interlock::communication_lost;
+  if (const CommandResult r = reset_refusal_of(causes); r != CommandResult::accepted) {
+    last_result_ = r;
   } else if (wind_down_ != WindDown::none) {
     last_result_ = CommandResult::refused_busy;
   } else {

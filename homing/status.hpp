@@ -146,6 +146,11 @@ static_assert(bits_in_order());
 // The engine judges every home command with it, and the runtime answers a
 // cmd.home_axes write with it before anything of the write is applied.
 CommandResult homing_refusal_of(std::uint16_t interlocks);
+// Whether cmd.reset_alarm is refused for a cause still present (e-stop,
+// drive fault, a stale heartbeat), judged by the same bits. The engine also
+// refuses it while a failed cycle winds down (refused_busy), which no
+// interlock bit shows.
+CommandResult reset_refusal_of(std::uint16_t interlocks);
 
 std::string_view state_name(MachineState s);
 std::string_view command_result_name(CommandResult r);

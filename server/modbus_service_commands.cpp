@@ -51,9 +51,19 @@ void ModbusService::run_commands(const std::vector<registers::CommandRequest>& c
       case Command::reset_alarm:
         c.reset_alarm = true;
         any = true;
+        // Lost settings are acknowledged only by a reset the engine takes: one
+        // refused for a cause still present (judged on the same interlock bits
+        // the engine judges it on, one period old) leaves the flag, so the
+        // alarm comes back after a restart until a reset is really taken.
         if (store_ && store_->settings_lost()) {
+          const homing::CommandResult judged = homing::reset_refusal_of(loop_.status().interlocks);
           std::lock_guard lock(mutex_);
-          (void)store_->acknowledge_settings_lost(source_of(client));
+          if (judged == homing::CommandResult::accepted)
+            (void)store_->acknowledge_settings_lost(source_of(client));
+          else
+            spdlog::warn("'settings lost' not acknowledged by {} {}: the reset is refused ({}); clear the cause and "
+                         "reset again",
+                         client.transport, client.address, homing::command_result_name(judged));
         }
         break;
       case Command::jog_plus: loop_.set_jog(a, r.on ? 1 : 0, client.id); break;
