@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "homing/gantry.hpp"
 
@@ -43,6 +44,10 @@ ControlLoop::~ControlLoop() { stop(); }
 void ControlLoop::start(int rt_priority) {
   if (running_.exchange(true)) return;
   stop_requested_ = false;
+  {
+    std::lock_guard lock(mailbox_mutex_);
+    taking_later_edits_ = true;
+  }
   thread_ = std::thread([this] {
     name_this_thread("control");
     thread_main();
@@ -65,6 +70,19 @@ void ControlLoop::stop() {
   waiter_->wake();
   if (thread_.joinable()) thread_.join();
   running_ = false;
+  // Writes still waiting for the loop are answered: applied ones as shown
+  // (they were), the others as not taken.
+  std::vector<std::function<void(bool)>> not_taken;
+  {
+    std::lock_guard lock(mailbox_mutex_);
+    taking_later_edits_ = false;
+    for (PendingEdit& e : sim_edits_)
+      if (e.done) not_taken.push_back(std::move(e.done));
+    std::erase_if(sim_edits_, [](const PendingEdit& e) { return e.owned != nullptr; });
+  }
+  if (!edits_to_answer_.empty())
+    for (auto& done : std::exchange(edits_to_answer_, {})) done(true);
+  for (auto& done : not_taken) done(false);
 }
 
 // Every piece of mailbox news wakes a quiet loop: it is taken in the period
@@ -189,6 +207,31 @@ bool ControlLoop::edit_sim(const SimEdit& edit, std::chrono::milliseconds timeou
   return true;
 }
 
+void ControlLoop::edit_sim_later(SimEdit edit, std::function<void(bool shown)> done) {
+  homing::sim::SimulatorControls* sim = io_->simulator_controls();
+  if (!sim) {
+    done(false);
+    return;
+  }
+  {
+    std::unique_lock mail(mailbox_mutex_);
+    if (!taking_later_edits_) {
+      // Stepped by hand (or stopped): the caller is the only one running the loop.
+      edit(*sim, outputs_);
+      std::lock_guard lock(snapshot_mutex_);
+      publish_sim(snapshot_);
+    } else {
+      sim_edits_.push_back(
+          PendingEdit{nullptr, ++next_edit_seq_, std::make_shared<const SimEdit>(std::move(edit)), std::move(done)});
+      sim_edits_.back().edit = sim_edits_.back().owned.get();
+      mail.unlock();
+      waiter_->wake();  // a quiet loop runs it at once: the answer comes within a period
+      return;
+    }
+  }
+  done(true);
+}
+
 void ControlLoop::simulator_follows_settings() {
   if (homing::sim::SimulatorControls* sim = io_->simulator_controls()) sim->follow_settings(settings_);
 }
@@ -243,9 +286,10 @@ bool ControlLoop::take_mailbox(Mailbox& out) {
     simulator_follows_settings();
   }
   if (homing::sim::SimulatorControls* sim = io_->simulator_controls()) {
-    for (const PendingEdit& e : sim_edits_) {
+    for (PendingEdit& e : sim_edits_) {
       (*e.edit)(*sim, outputs_);
       edits_applied_ = e.seq;
+      if (e.done) edits_to_answer_.push_back(std::move(e.done));
     }
   }
   sim_edits_.clear();
@@ -324,6 +368,10 @@ void ControlLoop::run_period(double wall_dt_s) {
   s.quiet = quiet_;
   lock.unlock();
   if (edits_shown) edit_shown_.notify_all();  // a simulator write waits for this
+  // Published: the writes handed over are answered (outside every lock: each
+  // hands its answer to its event loop).
+  if (!edits_to_answer_.empty())
+    for (auto& done : std::exchange(edits_to_answer_, {})) done(true);
   if (idle_news) news_published_.notify_all();
 }
 

@@ -159,6 +159,13 @@ class ControlLoop {
   // did not take it within timeout: then it never runs. Without the loop
   // thread (tests and fuzzers step run_period by hand) it runs at once.
   bool edit_sim(const SimEdit& edit, std::chrono::milliseconds timeout);
+  // The same without a thread waiting for it (a write of the simulator unit
+  // on an event loop): done(true) is called on the loop's thread, outside
+  // every lock of the loop, once a published period shows the edit; done(false)
+  // when the loop stopped before taking it. Without the loop thread the edit
+  // runs at once and done(true) is called before this returns. done must not
+  // block: it hands the answer over.
+  void edit_sim_later(SimEdit edit, std::function<void(bool shown)> done);
 
   Snapshot snapshot() const;
   // Its status alone: what a read of the module's registers needs, a sixth of
@@ -244,16 +251,20 @@ class ControlLoop {
   bool settings_pending_ = false;
   homing::Settings new_settings_{};
   struct PendingEdit {
-    const SimEdit* edit = nullptr;  // owned by the edit_sim caller, who waits for it
+    const SimEdit* edit = nullptr;  // owned by the edit_sim caller, who waits for it, or by `owned`
     std::uint64_t seq = 0;
+    std::shared_ptr<const SimEdit> owned{};  // edit_sim_later's
+    std::function<void(bool shown)> done{};  // edit_sim_later's
   };
   std::vector<PendingEdit> sim_edits_;
+  bool taking_later_edits_ = false;  // the loop thread runs and will answer edit_sim_later
   std::uint64_t next_edit_seq_ = 0;
   bool permit_coil_ = false;
   bool settings_lost_pending_ = false;
   std::optional<homing::LastStops> restore_pending_;
 
   // Loop-private copies of the mailbox state.
+  std::vector<std::function<void(bool shown)>> edits_to_answer_;  // applied, answered once published
   std::array<std::int8_t, homing::kAxisCount> loop_jog_{};
   bool loop_permit_ = false;
   bool modbus_motion_ = false;

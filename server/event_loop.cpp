@@ -96,6 +96,10 @@ void EventLoop::take_inbox(std::vector<std::uint64_t>& ready) {
     ready.push_back(id);
   }
   for (Answer& a : answers) {
+    if (a.reply.resolve) {
+      const auto resolve = std::move(a.reply.resolve);
+      a.reply = resolve();
+    }
     const auto it = slots_.find(a.id);
     if (it == slots_.end()) continue;
     it->second.connection->answered(a.reply, now);

@@ -70,7 +70,9 @@ class ModbusService final : public RequestHandler {
   // Writes (FC 05, 06, 15, 16) to the module unit over TCP or TLS, taken by
   // the settings writer (modbus_service_writer.cpp): one thread that leads
   // every batch of them, so a settings write needs no thread of its own.
-  // The simulator unit, FC 23, RTU and reads: false.
+  // Writes (the same functions) to the simulator unit, handed to the control
+  // loop, which answers them once a published period shows them
+  // (modbus_service_sim.cpp). FC 23, RTU and reads: false.
   bool handle_later(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client,
                     std::function<void(Reply)> done) override;
   void disconnected(const ClientInfo& client) override;
@@ -118,6 +120,10 @@ class ModbusService final : public RequestHandler {
                                     std::span<const std::uint16_t> values, const ClientInfo& client);
   std::optional<Reply> write_sim(std::uint8_t fc, registers::Table table, std::uint16_t start,
                                  std::span<const std::uint16_t> values, const ClientInfo& client);
+  struct SimWrite;
+  ControlLoop::SimEdit sim_edit(std::shared_ptr<SimWrite> write) const;
+  std::optional<Reply> sim_outcome(const SimWrite& write, bool shown);
+  bool write_sim_later(std::span<const std::uint8_t> pdu, const ClientInfo& client, std::function<void(Reply)> done);
   void run_commands(const std::vector<registers::CommandRequest>& commands, const ClientInfo& client);
   std::int64_t sim_raw(const registers::Register& reg, const Snapshot& snap) const;
   // Logs a refused write (warn: client, reason, register, the rule in words),

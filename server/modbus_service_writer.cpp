@@ -15,7 +15,11 @@ namespace server {
 
 bool ModbusService::handle_later(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client,
                                  std::function<void(Reply)> done) {
-  if (pdu.empty() || !over_network(client.transport) || !module_unit(unit, true)) return false;
+  if (pdu.empty() || !over_network(client.transport)) return false;
+  if (!module_unit(unit, true)) {
+    if (config_.sim_unit_id && unit == *config_.sim_unit_id) return write_sim_later(pdu, client, std::move(done));
+    return false;
+  }
   const auto function = static_cast<FunctionCode>(pdu[0]);
   if (function != FunctionCode::write_single_coil && function != FunctionCode::write_single_register &&
       function != FunctionCode::write_multiple_coils && function != FunctionCode::write_multiple_registers)

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <functional>
 #include <vector>
 
 namespace server {
@@ -14,6 +15,10 @@ inline constexpr std::size_t kMaxPdu = 253;
 struct Reply {
   bool send = false;  // false: broadcast or a unit that stays silent
   std::vector<std::uint8_t> pdu;
+  // Set on an answer handed over from a thread that must not log or wait (the
+  // control loop answering a simulator write): the event loop that sends it
+  // calls it first, on its own thread, for the answer to send.
+  std::function<Reply()> resolve{};
 };
 
 Reply exception_reply(std::uint8_t function, std::uint8_t code);

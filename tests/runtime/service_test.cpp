@@ -637,8 +637,112 @@ TEST_CASE("a reset that acknowledges lost settings is not answered on the caller
   CHECK(m.service->handle_now(1, reset, m.client).has_value());
 }
 
+TEST_CASE("a reset refused for an e-stop still pressed leaves lost settings unacknowledged until a reset is taken") {
+  Module m(false, {}, true);
+  REQUIRE(m.store->settings_lost());
+  m.loop->raise_settings_lost();
+  REQUIRE(m.loop->edit_sim([](homing::sim::SimulatorControls& sim, const homing::Outputs&) { sim.set_estop(true); },
+                           std::chrono::seconds(1)));
+  m.periods(3);
+  REQUIRE(m.status().interlocks & homing::interlock::estop);
+  m.coil("cmd.reset_alarm");
+  m.periods(3);
+  CHECK(m.status().last_command_result == homing::CommandResult::refused_cause_present);
+  // The flag stays: a restart now raises settings_lost again.
+  CHECK(m.store->settings_lost());
+  REQUIRE(m.loop->edit_sim([](homing::sim::SimulatorControls& sim, const homing::Outputs&) { sim.set_estop(false); },
+                           std::chrono::seconds(1)));
+  m.periods(3);
+  m.coil("cmd.reset_alarm");
+  m.periods(3);
+  CHECK(m.status().last_command_result == homing::CommandResult::accepted);
+  CHECK_FALSE(m.status().interlocks & homing::interlock::settings_lost);
+  CHECK_FALSE(m.store->settings_lost());
+}
+
+TEST_CASE("a jog coil written 1 again while it reads 1 is the button still held: a refused jog never restarts by itself") {
+  Module m(false);
+  const auto set_estop = [&](bool on) {
+    REQUIRE(m.loop->edit_sim([on](homing::sim::SimulatorControls& sim, const homing::Outputs&) { sim.set_estop(on); },
+                             std::chrono::seconds(1)));
+    m.periods(3);
+  };
+  const auto jog = [&](bool on) {
+    const auto a = Module::address("cmd.jog_plus.x");
+    REQUIRE(m.request({5, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a),
+                       static_cast<std::uint8_t>(on ? 0xFF : 0), 0})
+                .size() == 5);
+    m.periods(3);
+  };
+  set_estop(true);
+  const std::uint32_t before = m.status().command_count;
+  jog(true);
+  CHECK(m.status().command_count == before + 1);
+  CHECK(m.status().last_command_result == homing::CommandResult::refused_estop);
+  set_estop(false);
+  m.coil("cmd.reset_alarm");
+  m.periods(3);
+  const std::uint32_t after_reset = m.status().command_count;
+  jog(true);  // the coil reads 1 already: held, not pressed
+  CHECK(m.status().command_count == after_reset);
+  CHECK(m.status().state != homing::MachineState::moving);
+  CHECK(m.status().axes[0].velocity_mm_per_s == 0);
+  jog(false);
+  jog(true);  // released and pressed: judged and taken
+  CHECK(m.status().command_count == after_reset + 1);
+  CHECK(m.status().last_command_result == homing::CommandResult::accepted);
+  CHECK(m.status().state == homing::MachineState::moving);
+  jog(false);
+}
+
+TEST_CASE("a simulator write on an event loop is answered by the running control loop once a published period shows "
+          "it and made into its answer on the event loop's thread") {
+  Module m(false);
+  m.loop->start();
+  struct Answer {
+    std::mutex mutex;
+    std::condition_variable came;
+    std::optional<server::Reply> reply;
+    std::thread::id on;
+  };
+  const auto later = [&m](const std::vector<std::uint8_t>& request, Answer& a) {
+    return m.service->handle_later(247, request, m.client, [&a](server::Reply r) {
+      std::lock_guard lock(a.mutex);
+      a.reply = std::move(r);
+      a.on = std::this_thread::get_id();
+      a.came.notify_all();
+    });
+  };
+  const auto wait = [](Answer& a) {
+    std::unique_lock lock(a.mutex);
+    return a.came.wait_for(lock, std::chrono::seconds(10), [&a] { return a.reply.has_value(); });
+  };
+  const auto press = single_write_pdu(5, Module::address("sim.estop"), 0xFF00);
+  REQUIRE_FALSE(m.status().interlocks & homing::interlock::estop);
+  Answer pressed;
+  REQUIRE(later(press, pressed));
+  REQUIRE(wait(pressed));
+  CHECK(pressed.on != std::this_thread::get_id());  // the control loop's thread
+  // Handed over undecided: the event loop makes the answer (and any log line).
+  REQUIRE(pressed.reply->resolve);
+  CHECK(pressed.reply->pdu.empty());
+  const server::Reply answer = pressed.reply->resolve();
+  CHECK(answer.pdu == press);
+  // Answered once a published period shows it: the engine's status already has it.
+  CHECK(m.status().interlocks & homing::interlock::estop);
+
+  // Refused for its address at once, on the caller's thread, with nothing handed to the loop.
+  Answer nowhere;
+  REQUIRE(later(single_write_pdu(6, 0xFFF0, 1), nowhere));
+  REQUIRE(wait(nowhere));
+  CHECK(nowhere.on == std::this_thread::get_id());
+  CHECK_FALSE(nowhere.reply->resolve);
+  CHECK(nowhere.reply->pdu == std::vector<std::uint8_t>{6 | 0x80, 2});
+  m.loop->stop();
+}
+
 TEST_CASE("a write of the module unit over TCP is taken by the settings writer and answered through its callback once "
-          "stored, a refusal too, while the simulator unit, reads, FC 23 and RTU are not taken") {
+          "stored, a refusal too, while reads, FC 23 and RTU are not taken") {
   Module m(false);
   const auto pdu = single_write_pdu;
   struct Answer {
@@ -695,7 +799,6 @@ TEST_CASE("a write of the module unit over TCP is taken by the settings writer a
   // Not taken, nothing done, the callback never called: the caller runs
   // these where waiting is allowed.
   Answer none;
-  CHECK_FALSE(later(247, pdu(6, 0, 0), m.client, none));  // the simulator unit
   CHECK_FALSE(later(1, {3, 0, 0, 0, 1}, m.client, none));  // a read
   const std::vector<std::uint8_t> fc23{23, 0, 0, 0, 1, static_cast<std::uint8_t>(seek >> 8),
                                        static_cast<std::uint8_t>(seek), 0, 1, 2, 0x03, 0xE8};
