@@ -44,6 +44,7 @@ ControlLoop::~ControlLoop() { stop(); }
 void ControlLoop::start(int rt_priority) {
   if (running_.exchange(true)) return;
   stop_requested_ = false;
+  edits_to_answer_.reserve(16);  // before the thread: its answers then rarely allocate
   {
     std::lock_guard lock(mailbox_mutex_);
     taking_later_edits_ = true;
@@ -109,6 +110,17 @@ void ControlLoop::set_jog(std::size_t axis, std::int8_t direction, std::uint64_t
       jog_owner_[axis] = owner;
       pending_from_modbus_ = true;
     }
+  }
+  waiter_->wake();
+}
+
+void ControlLoop::release_jog(std::size_t axis, std::int8_t direction, std::uint64_t owner) {
+  {
+    std::lock_guard lock(mailbox_mutex_);
+    // Only the direction this coil pressed, and only by the client that holds it (or nobody).
+    if (jog_dir_[axis] != direction) return;
+    if (jog_owner_[axis] != owner) return;
+    jog_dir_[axis] = 0;
   }
   waiter_->wake();
 }
@@ -370,8 +382,10 @@ void ControlLoop::run_period(double wall_dt_s) {
   if (edits_shown) edit_shown_.notify_all();  // a simulator write waits for this
   // Published: the writes handed over are answered (outside every lock: each
   // hands its answer to its event loop).
-  if (!edits_to_answer_.empty())
-    for (auto& done : std::exchange(edits_to_answer_, {})) done(true);
+  if (!edits_to_answer_.empty()) {
+    for (auto& done : edits_to_answer_) done(true);
+    edits_to_answer_.clear();  // keeps its capacity: no allocation per write on this thread
+  }
   if (idle_news) news_published_.notify_all();
 }
 

@@ -136,6 +136,9 @@ class ControlLoop {
   void submit(const homing::Commands& commands, bool from_modbus);
   // A jog held by an owner (a client connection); 0 releases.
   void set_jog(std::size_t axis, std::int8_t direction, std::uint64_t owner);
+  // A jog coil written 0: releases that direction only (the other coil's 0,
+  // in the same FC 15 as this one's 1, leaves a jog running), if this owner holds it.
+  void release_jog(std::size_t axis, std::int8_t direction, std::uint64_t owner);
   // Releases every jog held by an owner (its client disconnected).
   // The axes whose jog that owner held.
   homing::AxisMask release_jogs(std::uint64_t owner);

@@ -51,23 +51,21 @@ void ModbusService::run_commands(const std::vector<registers::CommandRequest>& c
       case Command::reset_alarm:
         c.reset_alarm = true;
         any = true;
-        // Lost settings are acknowledged only by a reset the engine takes: one
-        // refused for a cause still present (judged on the same interlock bits
-        // the engine judges it on, one period old) leaves the flag, so the
-        // alarm comes back after a restart until a reset is really taken.
-        if (store_ && store_->settings_lost()) {
-          const homing::CommandResult judged = homing::reset_refusal_of(loop_.status().interlocks);
-          std::lock_guard lock(mutex_);
-          if (judged == homing::CommandResult::accepted)
-            (void)store_->acknowledge_settings_lost(source_of(client));
-          else
-            spdlog::warn("'settings lost' not acknowledged by {} {}: the reset is refused ({}); clear the cause and "
-                         "reset again",
-                         client.transport, client.address, homing::command_result_name(judged));
-        }
+        if (store_ && store_->settings_lost()) acknowledge_settings_lost(client);
         break;
-      case Command::jog_plus: loop_.set_jog(a, r.on ? 1 : 0, client.id); break;
-      case Command::jog_minus: loop_.set_jog(a, r.on ? -1 : 0, client.id); break;
+      case Command::jog_plus:
+      case Command::jog_minus: {
+        const std::int8_t dir = r.command == Command::jog_plus ? 1 : -1;
+        if (!r.on) {
+          loop_.release_jog(a, dir, client.id);
+          break;
+        }
+        loop_.set_jog(a, dir, client.id);
+        // One direction is held per axis: the other coil reads back 0.
+        std::lock_guard lock(mutex_);
+        (dir > 0 ? host_.jog_minus : host_.jog_plus)[a] = false;
+        break;
+      }
       case Command::move: {
         std::lock_guard lock(mutex_);
         c.move_axes |= homing::axis_bit(a);
@@ -116,6 +114,29 @@ std::optional<registers::Refusal> ModbusService::command(const registers::Regist
   r.message = "the module answered with exception " + std::string(registers::exception_name(r.code));
   r.address = address;
   return r;
+}
+
+// Lost settings are acknowledged only by a reset the engine takes: one
+// refused for a cause still present leaves the flag, so the alarm comes back
+// after a restart until a reset is really taken. Judged as the engine will
+// judge it: on the causes the last period showed, with a heartbeat written
+// since counted as fresh (the engine reads the live one; homingctl writes the
+// heartbeat just before its reset). A failed cycle winding down (the engine's
+// other refusal) cannot run while settings are lost: their alarm blocks every
+// cycle.
+void ModbusService::acknowledge_settings_lost(const ClientInfo& client) {
+  std::uint16_t interlocks = loop_.status().interlocks;
+  std::unique_lock lock(mutex_);
+  if ((interlocks & homing::interlock::communication_lost) && loop_.heartbeat_fresh(settings_.global.watchdog_ms))
+    interlocks &= static_cast<std::uint16_t>(~homing::interlock::communication_lost);
+  const homing::CommandResult judged = homing::reset_refusal_of(interlocks);
+  if (judged == homing::CommandResult::accepted) {
+    (void)store_->acknowledge_settings_lost(source_of(client));
+    return;
+  }
+  lock.unlock();
+  spdlog::warn("'settings lost' not acknowledged by {} {}: the reset is refused ({}); clear the cause and reset again",
+               client.transport, client.address, homing::command_result_name(judged));
 }
 
 void ModbusService::audit_position_set(std::size_t axis, double old_mm, double new_mm) {

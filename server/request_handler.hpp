@@ -82,7 +82,10 @@ class RequestHandler {
   // through done(reply) on the writer's thread, once decided (and committed
   // when it changes a setting): an event loop hands a write over without a
   // thread waiting for it. false: not taken, nothing was done; call handle()
-  // where waiting is allowed. done is called exactly once for a taken request.
+  // where waiting is allowed. done is called exactly once for a taken request,
+  // on the thread that decided it (the settings writer, the control loop), and
+  // must not block; a reply handed over with Reply::resolve set is made by
+  // calling resolve on the receiver's own thread before it is sent.
   virtual bool handle_later(std::uint8_t, std::span<const std::uint8_t>, const ClientInfo&,
                             std::function<void(Reply)>) {
     return false;

@@ -34,14 +34,16 @@ void RequestWorkers::work() {
   }
 }
 
-void RequestWorkers::begin_elsewhere() {
-  std::lock_guard lock(mutex_);
-  ++elsewhere_;
-}
+// No lock on the way: end_elsewhere may run on the control loop's thread (a
+// simulator write's answer), which must not wait for a thread that holds the
+// mutex while it starts a worker. Only join() waits, and only it is woken.
+void RequestWorkers::begin_elsewhere() { elsewhere_.fetch_add(1); }
 
 void RequestWorkers::end_elsewhere() {
-  std::lock_guard lock(mutex_);
-  if (--elsewhere_ == 0) elsewhere_done_.notify_all();
+  if (elsewhere_.fetch_sub(1) == 1 && joining_.load()) {
+    std::lock_guard lock(mutex_);
+    elsewhere_done_.notify_all();
+  }
 }
 
 void RequestWorkers::join() {
@@ -50,7 +52,8 @@ void RequestWorkers::join() {
     std::unique_lock lock(mutex_);
     stopping_ = true;
     threads.swap(threads_);
-    elsewhere_done_.wait(lock, [this] { return elsewhere_ == 0; });
+    joining_.store(true);  // before the count is read: an answer ending after this wakes the wait
+    elsewhere_done_.wait(lock, [this] { return elsewhere_.load() == 0; });
   }
   wake_.notify_all();
   for (std::thread& t : threads) t.join();

@@ -660,6 +660,58 @@ TEST_CASE("a reset refused for an e-stop still pressed leaves lost settings unac
   CHECK_FALSE(m.store->settings_lost());
 }
 
+TEST_CASE("a reset written just after the heartbeat that ended a stale watchdog acknowledges lost settings as the "
+          "engine takes it") {
+  Module m(false, {}, true);
+  REQUIRE(m.store->settings_lost());
+  m.loop->raise_settings_lost();
+  REQUIRE(m.write_u16("global.watchdog_ms", 100).at(0) == 6);
+  m.write_u16("host.heartbeat", 1);
+  m.periods(3);
+  std::this_thread::sleep_for(std::chrono::milliseconds(150));
+  m.periods(3);
+  REQUIRE(m.status().interlocks & homing::interlock::communication_lost);
+  // As homingctl does: the heartbeat, then the reset, before the loop ran a period.
+  m.write_u16("host.heartbeat", 2);
+  m.coil("cmd.reset_alarm");
+  m.periods(3);
+  CHECK(m.status().last_command_result == homing::CommandResult::accepted);
+  CHECK_FALSE(m.status().interlocks & homing::interlock::settings_lost);
+  CHECK_FALSE(m.store->settings_lost());
+}
+
+TEST_CASE("a PLC writing both jog coils of an axis in one FC 15 jogs the direction written 1 and a reversal releases "
+          "the other coil") {
+  Module m(false);
+  const auto plus = Module::address("cmd.jog_plus.x");
+  REQUIRE(Module::address("cmd.jog_minus.x") == plus + 1);
+  const auto both = [&](bool p, bool n) {
+    const auto bits = static_cast<std::uint8_t>((p ? 1 : 0) | (n ? 2 : 0));
+    REQUIRE(m.request({15, static_cast<std::uint8_t>(plus >> 8), static_cast<std::uint8_t>(plus), 0, 2, 1, bits})
+                .size() == 5);
+    m.periods(3);
+  };
+  const auto read_both = [&] {
+    return m.request({1, static_cast<std::uint8_t>(plus >> 8), static_cast<std::uint8_t>(plus), 0, 2});
+  };
+  both(true, false);
+  CHECK(m.status().state == homing::MachineState::moving);
+  CHECK(m.status().axes[0].velocity_mm_per_s > 0);
+  CHECK(read_both() == std::vector<std::uint8_t>{1, 1, 0x01});
+  // The minus coil pressed alone: a reversal; the plus coil reads back 0.
+  const auto minus = Module::address("cmd.jog_minus.x");
+  REQUIRE(m.request({5, static_cast<std::uint8_t>(minus >> 8), static_cast<std::uint8_t>(minus), 0xFF, 0}).size() == 5);
+  m.run_until([&] { return m.status().axes[0].velocity_mm_per_s < 0; }, 2000);
+  CHECK(m.status().axes[0].velocity_mm_per_s < 0);
+  CHECK(read_both() == std::vector<std::uint8_t>{1, 1, 0x02});
+  // The plus coil written 0 releases nothing it does not hold.
+  REQUIRE(m.request({5, static_cast<std::uint8_t>(plus >> 8), static_cast<std::uint8_t>(plus), 0, 0}).size() == 5);
+  m.periods(3);
+  CHECK(m.status().axes[0].velocity_mm_per_s < 0);
+  both(false, false);
+  CHECK(m.run_until([&] { return m.status().state != homing::MachineState::moving; }, 5000));
+}
+
 TEST_CASE("a jog coil written 1 again while it reads 1 is the button still held: a refused jog never restarts by itself") {
   Module m(false);
   const auto set_estop = [&](bool on) {
