@@ -111,10 +111,14 @@ void Monitor::housekeeping(std::int64_t now_ms) {
   service_.flush_refusal_log();
   service_.flush_edit_sessions();
   if (store_) {
-    if (auto r = store_->backup_if_due(); !r) spdlog::warn("settings backup not written: {}", r.error().message);
-    if (auto r = store_->checkpoint(); !r) spdlog::warn("settings database not checkpointed: {}", r.error().message);
+    const auto note = [now_ms](RecurringWarning& w, const persistence::Status& r) {
+      if (r) w.worked(now_ms);
+      else w.failed(now_ms, r.error().message);
+    };
+    note(backup_warning_, store_->backup_if_due());
+    note(checkpoint_warning_, store_->checkpoint());
     // The audit log's bound, kept here rather than on a write's path.
-    if (auto r = store_->prune_audit(); !r) spdlog::warn("audit log not pruned: {}", r.error().message);
+    note(prune_warning_, store_->prune_audit());
   }
   if (events_) events_->settings_changes();
 }

@@ -15,6 +15,7 @@
 #include "modbus_service.hpp"
 #include "persistence/settings_store.hpp"
 #include "plant_events.hpp"
+#include "recurring_warning.hpp"
 
 namespace server {
 
@@ -55,6 +56,10 @@ class Monitor {
   std::function<std::uint32_t()> tcp_clients_;
   registers::StatusExtras extras_{};
   std::int64_t last_housekeeping_ms_ = 0;
+  // The store's housekeeping, tried at every look: a full disk is one line a minute, not two a second.
+  RecurringWarning backup_warning_{"settings backup not written", "settings backup written again"};
+  RecurringWarning checkpoint_warning_{"settings database not checkpointed", "settings database checkpointed again"};
+  RecurringWarning prune_warning_{"audit log not pruned", "audit log pruned again"};
   homing::Status last_{};
   bool first_ = true;
   std::int64_t run_start_ms_ = 0;
