@@ -2,6 +2,7 @@
 
 #include <openssl/x509_vfy.h>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <sys/socket.h>
 
 #include <cerrno>
@@ -143,6 +144,7 @@ std::expected<std::unique_ptr<TlsOpener>, std::string> TlsOpener::create(const T
     return std::unexpected("--tls-default-role " + config.default_role + ": not a role (viewer, operator, engineer, none)");
   auto ctx = tls::server_context(config.files);
   if (!ctx) return std::unexpected("--tls: " + ctx.error());
+  for (const std::string& w : tls::server_file_warnings(config.files)) spdlog::warn("--tls: {}", w);
   return std::unique_ptr<TlsOpener>(new TlsOpener(std::move(*ctx), config));
 }
 
@@ -157,6 +159,7 @@ std::shared_ptr<SSL_CTX> TlsOpener::context() const {
 std::expected<void, std::string> TlsOpener::reload() {
   auto ctx = tls::server_context(config_.files);
   if (!ctx) return std::unexpected(ctx.error());
+  for (const std::string& w : tls::server_file_warnings(config_.files)) spdlog::warn("--tls: {}", w);
   std::shared_ptr<SSL_CTX> fresh(ctx->release(), SSL_CTX_free);
   std::lock_guard lock(mutex_);
   ctx_ = std::move(fresh);

@@ -17,6 +17,8 @@ std::string bio_text(BIO* bio) {
   return n > 0 ? std::string(data, static_cast<std::size_t>(n)) : std::string();
 }
 
+}  // namespace
+
 std::string time_text(const ASN1_TIME* t) {
   std::tm tm{};
   if (!t || ASN1_TIME_to_tm(t, &tm) != 1) return "?";
@@ -24,8 +26,6 @@ std::string time_text(const ASN1_TIME* t) {
   std::strftime(out, sizeof out, "%Y-%m-%d %H:%M:%S UTC", &tm);
   return out;
 }
-
-}  // namespace
 
 std::string subject_of(const X509* cert) {
   const X509_NAME* name = cert ? X509_get_subject_name(cert) : nullptr;

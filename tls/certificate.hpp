@@ -24,6 +24,8 @@ std::expected<std::optional<std::string>, std::string> role_of(const X509* cert)
 // "2031-05-01 12:00:00 UTC": when the certificate stops (not_after) or starts
 // (not_before) being valid.
 std::string not_after_text(const X509* cert);
+// "2026-11-29 14:32:00 UTC", "?" when unreadable.
+std::string time_text(const ASN1_TIME* t);
 std::string not_before_text(const X509* cert);
 
 }  // namespace tls

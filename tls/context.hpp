@@ -8,6 +8,7 @@
 #include <expected>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "tls/handles.hpp"
 
@@ -23,6 +24,13 @@ struct ServerFiles {
 // A context that requires a client certificate signed by files.ca (and not
 // revoked by files.crl). The error names the file and what is wrong with it.
 std::expected<SslCtx, std::string> server_context(const ServerFiles& files);
+
+// What the server's files allow but a technician should fix, in words that
+// say how: a private key that every user of the machine may read, a CRL past
+// its next update (OpenSSL then refuses every client certificate with "CRL
+// has expired") or not valid yet. Empty when nothing is; unreadable files are
+// server_context's errors, not warnings.
+std::vector<std::string> server_file_warnings(const ServerFiles& files);
 
 struct ClientFiles {
   std::string cert;  // the client's certificate, PEM; empty: none is shown
