@@ -33,13 +33,30 @@ std::span<const std::uint8_t> MbapFramer::pdu() const {
 
 void MbapFramer::pop() { begin_ += kMbapHeaderSize + header().pdu_size(); }
 
+std::string_view MbapFramer::foreign_protocol() const {
+  if (size() < 3) return {};
+  const std::uint8_t* b = buf_.data() + begin_;
+  // A TLS record of type handshake, version 3.x: a ClientHello.
+  if (b[0] == 0x16 && b[1] == 0x03 && b[2] <= 0x04)
+    return "a TLS handshake: this port serves plain Modbus TCP; a Modbus/TCP Security client connects to the "
+           "module's --tls port";
+  static constexpr std::string_view kHttp[] = {"GET ", "POST", "HEAD", "PUT ", "OPTI", "CONN"};
+  if (size() >= 4)
+    for (std::string_view m : kHttp)
+      if (std::memcmp(b, m.data(), 4) == 0) return "an HTTP request: the module speaks Modbus TCP, not HTTP";
+  return {};
+}
+
 FrameStep take_frame(const MbapFramer& framer, RequestHandler& handler, const ClientInfo& client) {
   FrameStep step{framer.front(), {}, {}};
   if (step.front == MbapFramer::Front::malformed) {
     const MbapHeader h = framer.header();
     handler.bus_event(client.transport, BusEvent::comm_error);
-    spdlog::warn("{}: {}: MBAP protocol {} length {}; closing the connection", client.transport, client.address,
-                 h.protocol, h.length);
+    if (const std::string_view foreign = framer.foreign_protocol(); !foreign.empty())
+      spdlog::warn("{}: {}: not Modbus but {}; closing the connection", client.transport, client.address, foreign);
+    else
+      spdlog::warn("{}: {}: MBAP protocol {} length {}; closing the connection", client.transport, client.address,
+                   h.protocol, h.length);
   } else if (step.front == MbapFramer::Front::frame) {
     handler.bus_event(client.transport, BusEvent::message);
     step.header = framer.header();

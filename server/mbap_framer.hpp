@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string_view>
 
 #include "mbap.hpp"
 #include "request_handler.hpp"
@@ -29,6 +30,10 @@ class MbapFramer {
   };
   Front front() const;
   MbapHeader header() const;
+  // What a malformed front is when it is another protocol a client mistook
+  // for Modbus TCP (a TLS handshake, an HTTP request), said so that the log
+  // tells the technician; empty otherwise.
+  std::string_view foreign_protocol() const;
   std::span<const std::uint8_t> pdu() const;
   // Drops the whole frame at the front.
   void pop();

@@ -13,6 +13,9 @@
 #include <string>
 #include <vector>
 
+#include <spdlog/sinks/ringbuffer_sink.h>
+#include <spdlog/spdlog.h>
+
 #include "server/tcp_connection.hpp"
 
 using namespace std::chrono_literals;
@@ -219,6 +222,34 @@ TEST_CASE("a malformed MBAP header closes the connection and is not served") {
   CHECK(f.connection.advance(f.t0, f.handler) == Wait::closed);
   CHECK(f.connection.end_reason() == "malformed MBAP header");
   CHECK(f.handler.functions.empty());
+}
+
+TEST_CASE("a TLS client or a web browser on the plain Modbus TCP port is told apart in the log and closed") {
+  const auto sink = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(20);
+  spdlog::default_logger()->sinks().push_back(sink);
+  const auto logged = [&] {
+    std::string all;
+    for (const std::string& line : sink->last_formatted()) all += line;
+    return all;
+  };
+  Fixture tls;
+  // A ClientHello's record header: handshake (0x16), TLS 1.0 record version, length, type 1.
+  tls.wire.incoming.push_back({0x16, 0x03, 0x01, 0x02, 0x00, 0x01, 0x00, 0x01, 0xfc, 0x03, 0x03});
+  CHECK(tls.connection.advance(tls.t0, tls.handler) == Wait::closed);
+  CHECK(tls.handler.functions.empty());
+  CHECK(logged().find("not Modbus but a TLS handshake: this port serves plain Modbus TCP") != std::string::npos);
+  CHECK(logged().find("--tls port") != std::string::npos);
+  Fixture web;
+  const std::string get = "GET / HTTP/1.1\r\nHost: 127.0.0.1:1502\r\n\r\n";
+  web.wire.incoming.push_back(std::vector<std::uint8_t>(get.begin(), get.end()));
+  CHECK(web.connection.advance(web.t0, web.handler) == Wait::closed);
+  CHECK(logged().find("not Modbus but an HTTP request") != std::string::npos);
+  // Garbage that is neither is named by its header fields, as before.
+  Fixture junk;
+  junk.wire.incoming.push_back({0x00, 0x01, 0x00, 0x07, 0x00, 0x06, 0x01});
+  CHECK(junk.connection.advance(junk.t0, junk.handler) == Wait::closed);
+  CHECK(logged().find("MBAP protocol 7 length 6") != std::string::npos);
+  std::erase(spdlog::default_logger()->sinks(), sink);
 }
 
 TEST_CASE("a write longer than the standard's largest frame is read whole and handed on, so that it can be refused "
