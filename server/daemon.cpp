@@ -177,7 +177,9 @@ std::string announce(const Options& opt, const Transports& t, bool has_sim) {
     where += std::string(where.empty() ? "" : ", ") + "tls " + opt.tls_host + ":" + std::to_string(opt.tls_port);
   if (t.rtu) where += std::string(where.empty() ? "" : ", ") + "rtu " + opt.rtu_device + " " + std::to_string(opt.baud) +
                       " 8" + opt.parity + std::to_string(opt.stop_bits);
-  const std::string sim_unit = has_sim ? ", simulator unit " + std::to_string(opt.sim_unit_id) : std::string();
+  // The simulator unit is served over TCP and TLS only.
+  const std::string sim_unit =
+      has_sim && (t.tcp || t.tls) ? ", simulator unit " + std::to_string(opt.sim_unit_id) : std::string();
   std::printf("homingd: listening on %s (unit %d%s, backend %s, db %s)\n", where.c_str(), opt.unit_id,
               sim_unit.c_str(), opt.backend.c_str(), opt.db_path.c_str());
   std::fflush(stdout);

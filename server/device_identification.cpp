@@ -15,8 +15,12 @@ Reply device_identification(const DeviceIdRequest& request, const DeviceIdentity
   const std::uint8_t code = request.read_code;
   std::uint8_t object = request.object_id;
   const std::uint8_t last = code == 1 ? 2 : 6;  // basic: 0..2; regular: 0..6 (no extended objects)
+  // The regular objects (3..6) are optional: one not configured (the vendor
+  // URL without --vendor-url) is not there, rather than there and empty.
+  const auto present = [&](std::uint8_t id) { return id < 3 || !objects[id].empty(); };
   if (code == 4) {
-    if (object > 6) return exception_reply(fc, static_cast<std::uint8_t>(registers::ExceptionCode::illegal_data_address));
+    if (object > 6 || !present(object))
+      return exception_reply(fc, static_cast<std::uint8_t>(registers::ExceptionCode::illegal_data_address));
   } else if (object > last) {
     object = 0;  // stream access from an unknown object restarts at 0
   }
@@ -25,6 +29,7 @@ Reply device_identification(const DeviceIdRequest& request, const DeviceIdentity
   std::uint8_t count = 0;
   const std::uint8_t stop = code == 4 ? object : last;
   for (std::uint8_t id = object; id <= stop; ++id) {
+    if (!present(id)) continue;
     const std::string_view text = objects[id].substr(0, 0xFF);
     if (count > 0 && reply.pdu.size() + 2 + text.size() > kMaxPdu) {
       reply.pdu[kMoreFollows] = 0xFF;  // the client asks again from this object
