@@ -206,7 +206,13 @@ void Monitor::poll(std::int64_t now_ms) {
   housekeeping(now_ms);
   log_alarms(snap.events, settings);
   if (st.alarm != last_.alarm && !st.alarm) spdlog::info("alarms reset");
-  if (st.last_command_result != last_.last_command_result || st.heartbeat == 0)
+  // Every command judged since the last look, also one whose result equals
+  // the one before (two accepted commands in a row, a jog after a home);
+  // several judged between two looks are one line with the last one's result.
+  if (const std::uint32_t judged = st.command_count - last_.command_count; judged > 1)
+    spdlog::info("command result: {} (the last of {} commands)", homing::command_result_name(st.last_command_result),
+                 judged);
+  else if (judged == 1 || st.last_command_result != last_.last_command_result || st.heartbeat == 0)
     spdlog::info("command result: {}", homing::command_result_name(st.last_command_result));
   if (!st.homing && !last_.homing) record_unseen_cycle(snap, settings);
   if (st.homing && !last_.homing) {

@@ -537,6 +537,41 @@ TEST_CASE("a cmd.home_axes written just after the heartbeat came back is not ref
   CHECK(m.status().last_command_result == homing::CommandResult::accepted);
 }
 
+TEST_CASE("every command judged is a command result line: two accepted in a row are two lines and several between "
+          "two looks are one line with their count") {
+  Watched w;
+  Module& m = w.m;
+  const auto count = [&](const std::string& what) {
+    std::size_t n = 0;
+    for (const std::string& line : w.log.sink->last_formatted()) n += line.find(what) != std::string::npos;
+    return n;
+  };
+  const auto jog = [&](std::uint8_t on) {
+    const auto a = Module::address("cmd.jog_plus.x");
+    REQUIRE(m.request({5, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), on, 0}).size() == 5);
+    m.periods(3);
+  };
+  jog(0xFF);  // a jog: accepted
+  w.watch();
+  jog(0);
+  m.run_until([&] { return m.status().state != homing::MachineState::moving; }, 5000);
+  w.watch();
+  CHECK(count("command result: accepted") == 1);
+  jog(0xFF);  // accepted again: the same result, a new command
+  w.watch();
+  CHECK(count("command result: accepted") == 2);
+  jog(0);
+  m.run_until([&] { return m.status().state != homing::MachineState::moving; }, 5000);
+  // Two presses before the monitor looks.
+  jog(0xFF);
+  jog(0);
+  m.run_until([&] { return m.status().state != homing::MachineState::moving; }, 5000);
+  jog(0xFF);
+  w.watch();
+  CHECK(count("command result: accepted (the last of 2 commands)") == 1);
+  jog(0);
+}
+
 TEST_CASE("a cycle that started and ended between two looks of the monitor is recorded and logged") {
   Watched w;
   Module& m = w.m;
