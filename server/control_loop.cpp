@@ -117,9 +117,8 @@ void ControlLoop::set_jog(std::size_t axis, std::int8_t direction, std::uint64_t
 void ControlLoop::release_jog(std::size_t axis, std::int8_t direction, std::uint64_t owner) {
   {
     std::lock_guard lock(mailbox_mutex_);
-    // Only the direction this coil pressed, and only by the client that holds it (or nobody).
-    if (jog_dir_[axis] != direction) return;
-    if (jog_owner_[axis] != owner) return;
+    // Only the direction this coil pressed, and only by the client that holds it.
+    if (jog_dir_[axis] != direction || jog_owner_[axis] != owner) return;
     jog_dir_[axis] = 0;
   }
   waiter_->wake();
@@ -384,7 +383,7 @@ void ControlLoop::run_period(double wall_dt_s) {
   // hands its answer to its event loop).
   if (!edits_to_answer_.empty()) {
     for (auto& done : edits_to_answer_) done(true);
-    edits_to_answer_.clear();  // keeps its capacity: no allocation per write on this thread
+    edits_to_answer_.clear();  // keeps its capacity (each answer's own hand-over still allocates a little)
   }
   if (idle_news) news_published_.notify_all();
 }

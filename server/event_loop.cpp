@@ -121,15 +121,16 @@ void EventLoop::send_off(std::uint64_t id, Slot& slot) {
   // Not watched meanwhile: the connection reads nothing until its reply is
   // in, and a hang-up would wake the loop for nothing until then.
   watch(id, slot, 0);
-  // A write of the module unit goes to the service's settings writer, which
-  // answers it through this loop; any other request that may wait runs on a
-  // worker thread of its own.
+  // A write of the module unit goes to the service's settings writer, and one
+  // of the simulator unit to the control loop, which answer it through this
+  // loop; any other request that may wait runs on a worker thread of its own.
   const auto& request = slot.connection->request();
   slot.entry->last_active_ns.store(steady_now_ns());
   shared_.workers.begin_elsewhere();
   if (shared_.handler.handle_later(request.unit, request.pdu, slot.connection->client(), [this, id](Reply reply) {
         post_answer(id, std::move(reply));
-        shared_.workers.end_elsewhere();  // the last use of this loop: the listener may go once none is left
+        // The last use of this loop and of the workers: the listener may go once none is left.
+        shared_.workers.end_elsewhere();
       }))
     return;
   shared_.workers.end_elsewhere();

@@ -34,10 +34,10 @@ std::span<const std::uint8_t> MbapFramer::pdu() const {
 void MbapFramer::pop() { begin_ += kMbapHeaderSize + header().pdu_size(); }
 
 std::string_view MbapFramer::foreign_protocol() const {
-  if (size() < 3) return {};
+  if (size() < 4) return {};
   const std::uint8_t* b = buf_.data() + begin_;
-  // A TLS record of type handshake, version 3.x: a ClientHello.
-  if (b[0] == 0x16 && b[1] == 0x03 && b[2] <= 0x04)
+  // A TLS record of type handshake, version 3.x, holding a ClientHello (type 1).
+  if (size() >= 6 && b[0] == 0x16 && b[1] == 0x03 && b[2] <= 0x04 && b[5] == 0x01)
     return "a TLS handshake: this port serves plain Modbus TCP; a Modbus/TCP Security client connects to the "
            "module's --tls port";
   static constexpr std::string_view kHttp[] = {"GET ", "POST", "HEAD", "PUT ", "OPTI", "CONN"};

@@ -60,10 +60,15 @@ void ModbusService::run_commands(const std::vector<registers::CommandRequest>& c
           loop_.release_jog(a, dir, client.id);
           break;
         }
-        loop_.set_jog(a, dir, client.id);
-        // One direction is held per axis: the other coil reads back 0.
-        std::lock_guard lock(mutex_);
-        (dir > 0 ? host_.jog_minus : host_.jog_plus)[a] = false;
+        // Both directions held (a PLC's FC 15 with both 1, a second finger on
+        // the other button) is no jog: the axis stops, as with two buttons
+        // pressed on a pendant, and starts again only on a new press of one.
+        bool other_held = false;
+        {
+          std::shared_lock lock(mutex_);
+          other_held = (dir > 0 ? host_.jog_minus : host_.jog_plus)[a];
+        }
+        loop_.set_jog(a, other_held ? 0 : dir, client.id);
         break;
       }
       case Command::move: {
@@ -119,16 +124,18 @@ std::optional<registers::Refusal> ModbusService::command(const registers::Regist
 // Lost settings are acknowledged only by a reset the engine takes: one
 // refused for a cause still present leaves the flag, so the alarm comes back
 // after a restart until a reset is really taken. Judged as the engine will
-// judge it: on the causes the last period showed, with a heartbeat written
-// since counted as fresh (the engine reads the live one; homingctl writes the
-// heartbeat just before its reset). A failed cycle winding down (the engine's
+// judge it: on the causes the last period showed, the heartbeat's on the
+// live heartbeat as the engine reads it (homingctl writes the heartbeat just
+// before its reset; a watchdog may expire after the last period). A failed cycle winding down (the engine's
 // other refusal) cannot run while settings are lost: their alarm blocks every
 // cycle.
 void ModbusService::acknowledge_settings_lost(const ClientInfo& client) {
   std::uint16_t interlocks = loop_.status().interlocks;
   std::unique_lock lock(mutex_);
-  if ((interlocks & homing::interlock::communication_lost) && loop_.heartbeat_fresh(settings_.global.watchdog_ms))
+  if (loop_.heartbeat_fresh(settings_.global.watchdog_ms))
     interlocks &= static_cast<std::uint16_t>(~homing::interlock::communication_lost);
+  else
+    interlocks |= homing::interlock::communication_lost;
   const homing::CommandResult judged = homing::reset_refusal_of(interlocks);
   if (judged == homing::CommandResult::accepted) {
     (void)store_->acknowledge_settings_lost(source_of(client));

@@ -34,26 +34,30 @@ void RequestWorkers::work() {
   }
 }
 
-// No lock on the way: end_elsewhere may run on the control loop's thread (a
-// simulator write's answer), which must not wait for a thread that holds the
-// mutex while it starts a worker. Only join() waits, and only it is woken.
-void RequestWorkers::begin_elsewhere() { elsewhere_.fetch_add(1); }
+// A mutex of its own, held only for the count: end_elsewhere may run on the
+// control loop's thread (a simulator write's answer), which must not wait
+// for run() starting a worker under mutex_. Counted and woken under it, so
+// join() cannot return while an answering thread still touches this object.
+void RequestWorkers::begin_elsewhere() {
+  std::lock_guard lock(elsewhere_mutex_);
+  ++elsewhere_;
+}
 
 void RequestWorkers::end_elsewhere() {
-  if (elsewhere_.fetch_sub(1) == 1 && joining_.load()) {
-    std::lock_guard lock(mutex_);
-    elsewhere_done_.notify_all();
-  }
+  std::lock_guard lock(elsewhere_mutex_);
+  if (--elsewhere_ == 0) elsewhere_done_.notify_all();
 }
 
 void RequestWorkers::join() {
   std::vector<std::thread> threads;
   {
-    std::unique_lock lock(mutex_);
+    std::lock_guard lock(mutex_);
     stopping_ = true;
     threads.swap(threads_);
-    joining_.store(true);  // before the count is read: an answer ending after this wakes the wait
-    elsewhere_done_.wait(lock, [this] { return elsewhere_.load() == 0; });
+  }
+  {
+    std::unique_lock lock(elsewhere_mutex_);
+    elsewhere_done_.wait(lock, [this] { return elsewhere_ == 0; });
   }
   wake_.notify_all();
   for (std::thread& t : threads) t.join();

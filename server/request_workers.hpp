@@ -5,7 +5,6 @@
 // up to the connections the server admits (each has at most one in flight),
 // so a write never queues behind another and writes that arrive together
 // still meet in one group commit; threads stay for the next ones.
-#include <atomic>
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
@@ -47,8 +46,8 @@ class RequestWorkers {
   std::deque<std::function<void()>> jobs_;
   std::vector<std::thread> threads_;
   std::size_t idle_ = 0;
-  std::atomic<std::size_t> elsewhere_{0};
-  std::atomic<bool> joining_{false};
+  std::mutex elsewhere_mutex_;  // the count below and its condition only
+  std::size_t elsewhere_ = 0;
   std::condition_variable elsewhere_done_;
   bool stopping_ = false;
 };

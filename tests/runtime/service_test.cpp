@@ -715,36 +715,67 @@ TEST_CASE("a reset written just after the heartbeat that ended a stale watchdog 
   CHECK_FALSE(m.store->settings_lost());
 }
 
-TEST_CASE("a PLC writing both jog coils of an axis in one FC 15 jogs the direction written 1 and a reversal releases "
-          "the other coil") {
+TEST_CASE("a PLC writing both jog coils of an axis in one FC 15 jogs the one written 1 and both held is no jog") {
   Module m(false);
   const auto plus = Module::address("cmd.jog_plus.x");
-  REQUIRE(Module::address("cmd.jog_minus.x") == plus + 1);
+  const auto minus = Module::address("cmd.jog_minus.x");
+  REQUIRE(minus == plus + 1);
   const auto both = [&](bool p, bool n) {
     const auto bits = static_cast<std::uint8_t>((p ? 1 : 0) | (n ? 2 : 0));
     REQUIRE(m.request({15, static_cast<std::uint8_t>(plus >> 8), static_cast<std::uint8_t>(plus), 0, 2, 1, bits})
                 .size() == 5);
     m.periods(3);
   };
+  const auto one = [&](std::uint16_t coil, bool on) {
+    REQUIRE(m.request({5, static_cast<std::uint8_t>(coil >> 8), static_cast<std::uint8_t>(coil),
+                       static_cast<std::uint8_t>(on ? 0xFF : 0), 0})
+                .size() == 5);
+    m.periods(3);
+  };
   const auto read_both = [&] {
     return m.request({1, static_cast<std::uint8_t>(plus >> 8), static_cast<std::uint8_t>(plus), 0, 2});
+  };
+  const auto stops = [&] {
+    return m.run_until([&] { return m.status().state != homing::MachineState::moving; }, 5000);
   };
   both(true, false);
   CHECK(m.status().state == homing::MachineState::moving);
   CHECK(m.status().axes[0].velocity_mm_per_s > 0);
   CHECK(read_both() == std::vector<std::uint8_t>{1, 1, 0x01});
-  // The minus coil pressed alone: a reversal; the plus coil reads back 0.
-  const auto minus = Module::address("cmd.jog_minus.x");
-  REQUIRE(m.request({5, static_cast<std::uint8_t>(minus >> 8), static_cast<std::uint8_t>(minus), 0xFF, 0}).size() == 5);
-  m.run_until([&] { return m.status().axes[0].velocity_mm_per_s < 0; }, 2000);
-  CHECK(m.status().axes[0].velocity_mm_per_s < 0);
-  CHECK(read_both() == std::vector<std::uint8_t>{1, 1, 0x02});
-  // The plus coil written 0 releases nothing it does not hold.
-  REQUIRE(m.request({5, static_cast<std::uint8_t>(plus >> 8), static_cast<std::uint8_t>(plus), 0, 0}).size() == 5);
-  m.periods(3);
-  CHECK(m.status().axes[0].velocity_mm_per_s < 0);
+  // The minus button pressed too: both held is no jog, and the coils read back as written.
+  one(minus, true);
+  CHECK(stops());
+  CHECK(read_both() == std::vector<std::uint8_t>{1, 1, 0x03});
+  // Releasing plus leaves minus held, not pressed: nothing starts by itself.
+  one(plus, false);
+  m.periods(50);
+  CHECK(m.status().state != homing::MachineState::moving);
+  one(minus, false);
+  one(minus, true);  // a press
+  CHECK(m.run_until([&] { return m.status().axes[0].velocity_mm_per_s < 0; }, 2000));
+  one(minus, false);
+  CHECK(stops());
+  // Both written 1 in one request: no jog.
+  both(true, true);
+  m.periods(50);
+  CHECK(m.status().state != homing::MachineState::moving);
+  CHECK(read_both() == std::vector<std::uint8_t>{1, 1, 0x03});
   both(false, false);
-  CHECK(m.run_until([&] { return m.status().state != homing::MachineState::moving; }, 5000));
+}
+
+TEST_CASE("a reset written after the watchdog expired but before a period showed it leaves lost settings "
+          "unacknowledged") {
+  Module m(false, {}, true);
+  REQUIRE(m.store->settings_lost());
+  m.loop->raise_settings_lost();
+  REQUIRE(m.write_u16("global.watchdog_ms", 100).at(0) == 6);
+  m.write_u16("host.heartbeat", 1);
+  m.periods(3);
+  std::this_thread::sleep_for(std::chrono::milliseconds(150));
+  m.coil("cmd.reset_alarm");  // the last period still shows a fresh heartbeat
+  m.periods(3);
+  CHECK(m.status().last_command_result == homing::CommandResult::refused_cause_present);
+  CHECK(m.store->settings_lost());
 }
 
 TEST_CASE("a jog coil written 1 again while it reads 1 is the button still held: a refused jog never restarts by itself") {

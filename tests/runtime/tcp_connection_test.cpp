@@ -244,6 +244,11 @@ TEST_CASE("a TLS client or a web browser on the plain Modbus TCP port is told ap
   web.wire.incoming.push_back(std::vector<std::uint8_t>(get.begin(), get.end()));
   CHECK(web.connection.advance(web.t0, web.handler) == Wait::closed);
   CHECK(logged().find("not Modbus but an HTTP request") != std::string::npos);
+  // A Modbus frame whose transaction id happens to be 0x1603 is no TLS handshake.
+  Fixture modbus;
+  modbus.wire.incoming.push_back({0x16, 0x03, 0x00, 0x00, 0x01, 0x2C, 0x01});
+  CHECK(modbus.connection.advance(modbus.t0, modbus.handler) == Wait::closed);
+  CHECK(logged().find("MBAP protocol 0 length 300") != std::string::npos);
   // Garbage that is neither is named by its header fields, as before.
   Fixture junk;
   junk.wire.incoming.push_back({0x00, 0x01, 0x00, 0x07, 0x00, 0x06, 0x01});
