@@ -8,6 +8,17 @@
 #include "gantry.hpp"
 
 namespace homing {
+namespace {
+
+// At (within a micrometre) or beyond the soft limit a jog in dir heads for:
+// where a jog held toward it ends.
+bool at_soft_limit(const AxisSettings& s, const AxisRun& run, std::int8_t dir) {
+  constexpr double kAtLimitMm = 1e-6;
+  const double at = run.machine_position_mm();
+  return dir > 0 ? at >= s.soft_limit_max_mm - kAtLimitMm : at <= s.soft_limit_min_mm + kAtLimitMm;
+}
+
+}  // namespace
 
 CommandResult Engine::motion_refusal(const Settings& settings, std::size_t axis) const {
   if (estop_) return CommandResult::refused_estop;
@@ -88,6 +99,10 @@ void Engine::jog_commands(const Settings& settings, const Commands& c) {
         if (r == CommandResult::accepted && !homed && !recovering &&
             allowed_without_homing(settings, a) == AllowedWithoutHoming::none)
           r = CommandResult::refused_not_homed;
+        // A jog toward the soft limit it stands at would not move: refused, as a move there is.
+        if (r == CommandResult::accepted && homed && settings.axes[a].soft_limits_enable &&
+            at_soft_limit(settings.axes[a], run, req))
+          r = CommandResult::refused_soft_limit;
         if (r == CommandResult::accepted && run.phase == Phase::move) r = CommandResult::refused_busy;
         last_result_ = r;
         if (r == CommandResult::accepted) {
@@ -146,9 +161,12 @@ void Engine::run_motion(const Settings& settings) {
         if (homed && s.soft_limits_enable) {
           const double limit = (run.jog_dir() > 0 ? s.soft_limit_max_mm : s.soft_limit_min_mm) - run.offset_mm;
           const bool beyond = run.jog_dir() > 0 ? run.motor.position_mm >= limit : run.motor.position_mm <= limit;
-          // At or past the limit in the jog's direction: hold still rather
-          // than head back to the limit against the operator's direction.
+          // At or past the limit in the jog's direction: stop rather than
+          // head back to the limit against the operator's direction; at rest
+          // there the jog has ended (the axis no longer reads moving), and a
+          // new press toward the limit is refused_soft_limit.
           run.command = beyond ? stop_command(accel) : move_to_command(run.motor, limit, v, accel, last_dt_s_);
+          if (beyond && run.motor.velocity_mm_per_s == 0) run.set_phase(Phase::idle);
         } else {
           run.command = velocity_command(run.jog_dir() * v, accel);
         }

@@ -1,6 +1,8 @@
 // What raises an alarm from the inputs each period: e-stop, lost settings,
 // drive faults, a drive's lost reference, the watchdog, the homing permit, and the hard and soft limits
 // of a homed axis.
+#include <bit>
+
 #include "engine.hpp"
 #include "mutation.hpp"
 
@@ -8,13 +10,19 @@ namespace homing {
 
 void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
   if (inputs.estop && !estop_) {
-    AxisMask busy = 0;
+    AxisMask busy = 0, moving = 0;
     for (std::size_t a = 0; a < kAxisCount; ++a) {
       const AxisRun& run = axes_[a];
       if (run.in_cycle || run.moving() || run.phase == Phase::jog || run.phase == Phase::move) busy |= axis_bit(a);
+      const bool homing_phase = run.in_cycle && run.phase != Phase::waiting && run.phase != Phase::done;
+      if (homing_phase || run.moving() || run.phase == Phase::jog || run.phase == Phase::move) moving |= axis_bit(a);
     }
+    const bool first = first_alarm_axis_ < 0;
     raise(settings, busy, Alarm{AlarmCode::emergency_stop});
     raise_global(settings, AlarmCode::emergency_stop);
+    // The axis shown as the machine's first (status.alarm_axis) is one the
+    // e-stop stopped, not one waiting for its step of the sequence (as for an abort).
+    if (first && moving) first_alarm_axis_ = static_cast<int>(std::countr_zero(static_cast<unsigned>(moving)));
   }
   estop_ = inputs.estop;
 

@@ -37,7 +37,7 @@ enum class CommandResult : std::uint8_t {
   refused_busy = 6,          // another homing cycle or motion is running
   refused_not_homed = 7,     // not allowed before homing (global.allowed_without_homing)
   refused_no_permit = 8,     // global.permit_required and the permit is off
-  refused_soft_limit = 9,    // target outside the soft limits
+  refused_soft_limit = 9,    // target outside the soft limits, or a jog toward the soft limit it stands at
   refused_slave_axis = 10,   // a slave axis is commanded through its master
   refused_cause_present = 11,  // reset refused: e-stop, drive fault or watchdog still active
   refused_invalid = 12,      // the command itself makes no sense (bad axis, bad target)
@@ -65,7 +65,7 @@ inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
      "not allowed before homing (global.allowed_without_homing): home first"},
     {CommandResult::refused_no_permit, "refused_no_permit",
      "global.permit_required is on and the homing permit (host.homing_permit or the permit input) is off"},
-    {CommandResult::refused_soft_limit, "refused_soft_limit", "target outside the soft limits"},
+    {CommandResult::refused_soft_limit, "refused_soft_limit", "target outside the soft limits, or a jog toward the soft limit it stands at"},
     {CommandResult::refused_slave_axis, "refused_slave_axis", "this axis is a gantry slave: command its master"},
     {CommandResult::refused_cause_present, "refused_cause_present",
      "the cause (e-stop, drive fault or watchdog) is still present: remove it, then reset"},

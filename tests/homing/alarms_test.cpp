@@ -280,6 +280,24 @@ SCENARIO("aborted: the machine's alarm axis is the one that was moving, not one 
   CHECK(reported_alarm_axis(r.status()) == 2);
 }
 
+SCENARIO("emergency_stop: the machine's alarm axis is the one that was moving, not one waiting for its step",
+         "[alarms][stop]") {
+  Rig r;  // X in step 1
+  r.settings.global.sequence_steps = {axis_bit(2), 0, 0, 0, 0, 0};
+  r.add_axis(2, 1);  // Z seeks first
+  r.add_axis(0, 2);  // X waits for step 2
+  r.add_axis(1, 2);  // Y too
+  r.pending.home_all = true;
+  r.step();
+  r.run_until([&] { return r.axis(2).phase == Phase::seek; }, 5);
+  REQUIRE(r.axis(0).phase == Phase::waiting);
+  r.sim().set_estop(true);
+  r.step();
+  CHECK(r.axis(2).alarm.code == AlarmCode::emergency_stop);
+  CHECK(r.status().first_alarm_axis == 2);
+  CHECK(reported_alarm_axis(r.status()) == 2);
+}
+
 SCENARIO("emergency_stop: e-stop during a cycle stops within the deceleration distance", "[alarms][stop]") {
   Rig r;
   run_to_full_seek(r);

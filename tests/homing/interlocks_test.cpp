@@ -134,7 +134,34 @@ SCENARIO("after homing, soft limits are enforced", "[interlocks][limits]") {
       CHECK(r.axis(0).velocity_mm_per_s == 0);
       CHECK_FALSE(r.status().alarm);
     }
+    THEN("held there, it has ended: the axis reads at rest, not moving") {
+      CHECK(r.axis(0).phase == Phase::idle);
+      CHECK(r.status().state != MachineState::moving);
+      CHECK((r.status().interlocks & interlock::motion_active) == 0);
+    }
     r.release_jogs();
+    r.step();
+    AND_WHEN("pressed again toward the limit") {
+      r.clear_trace();
+      const auto count = r.status().command_count;
+      r.jog(0, +1);
+      r.run_for(0.2);
+      THEN("it is refused for the soft limit and moves nothing") {
+        CHECK(r.status().command_count == count + 1);
+        CHECK(r.status().last_command_result == CommandResult::refused_soft_limit);
+        CHECK(r.trace[0].path_mm == 0);
+      }
+      r.release_jogs();
+    }
+    AND_WHEN("pressed away from the limit") {
+      r.jog(0, -1);
+      r.run_for(0.2);
+      THEN("it runs") {
+        CHECK(r.status().last_command_result == CommandResult::accepted);
+        CHECK(r.axis(0).position_mm < 20);
+      }
+      r.release_jogs();
+    }
   }
   WHEN("jogging toward the minimum") {
     r.jog(0, -1);

@@ -107,15 +107,13 @@ TEST_CASE("over Modbus each locking-indexer alarm is raised by its simulator fau
     CHECK(alarm_is(c, AlarmCode::none));
   }
 
-  SECTION("lock_engaged: the pin goes in while a jog is held at the soft limit") {
-    // Homed, a held jog rests at soft_limit_max unlocked: the simulator
-    // takes a fault write at rest, and the pin going in is then the alarm.
+  SECTION("lock_engaged: the pin goes in while a jog runs") {
+    // Homed, a jog runs unlocked: a fault may strike a moving carriage, and
+    // the pin going in is then the alarm.
     REQUIRE(c.write("cmd.home.a", 1) == 0);
     REQUIRE(wait_until([&] { return c.read("axis.a.homed") == 1 && c.read("sim.a.indexer_locked") == 1; }, 20s));
-    REQUIRE(c.write("axis.a.soft_limit_max", 2'000) == 0);
-    REQUIRE(c.write("axis.a.soft_limits_enable", 1) == 0);
     REQUIRE(c.write("cmd.jog_plus.a", 1) == 0);
-    REQUIRE(wait_until([&] { return c.read("axis.a.position") == 2'000 && c.read("axis.a.velocity") == 0; }, 10s));
+    REQUIRE(wait_until([&] { return c.read("axis.a.velocity") > 0; }, 10s));
     CHECK(c.read("axis.a.phase") == code(Phase::jog));
     REQUIRE(c.write("sim.a.fault", code(homing::sim::Fault::indexer_stuck_locked)) == 0);
     REQUIRE(wait_until([&] { return c.read("status.alarm") == 1; }, 2s));
