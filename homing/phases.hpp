@@ -55,7 +55,7 @@ inline constexpr EnumInfo<Phase> kPhaseInfo[] = {
     {Phase::assign, "assign", "at rest: home_position is assigned"},
     {Phase::final_move, "final_move", "moving to final_position"},
     {Phase::align_slave, "align_slave", "external commutator: the slave finds its own edge"},
-    {Phase::done, "done", "homed; the cycle of this axis is complete"},
+    {Phase::done, "done", "the cycle of this axis completed (axis.<a>.homed says whether it still counts as homed)"},
     {Phase::jog, "jog", "jogging"},
     {Phase::move, "move", "moving to a commanded target"},
     {Phase::stopping, "stopping", "decelerating after an alarm or abort"},
