@@ -262,9 +262,10 @@ SCENARIO("aborted: abort during a cycle stops within the deceleration distance",
   check_latched_until_reset(r, 0, AlarmCode::aborted);
 }
 
-SCENARIO("aborted: the machine's alarm axis is the one that was moving, not one waiting for its step",
-         "[alarms][stop]") {
-  Rig r;  // X in step 1
+namespace {
+
+// A home-all in two steps, Z seeking in the first while X and Y wait for the second.
+void start_z_first_cycle(Rig& r) {
   r.settings.global.sequence_steps = {axis_bit(2), 0, 0, 0, 0, 0};
   r.add_axis(2, 1);  // Z seeks first
   r.add_axis(0, 2);  // X waits for step 2
@@ -273,6 +274,14 @@ SCENARIO("aborted: the machine's alarm axis is the one that was moving, not one 
   r.step();
   r.run_until([&] { return r.axis(2).phase == Phase::seek; }, 5);
   REQUIRE(r.axis(0).phase == Phase::waiting);
+}
+
+}  // namespace
+
+SCENARIO("aborted: the machine's alarm axis is the one that was moving, not one waiting for its step",
+         "[alarms][stop]") {
+  Rig r;  // X in step 1
+  start_z_first_cycle(r);
   r.pending.abort = true;
   r.step();
   CHECK(r.axis(2).alarm.code == AlarmCode::aborted);
@@ -283,14 +292,7 @@ SCENARIO("aborted: the machine's alarm axis is the one that was moving, not one 
 SCENARIO("emergency_stop: the machine's alarm axis is the one that was moving, not one waiting for its step",
          "[alarms][stop]") {
   Rig r;  // X in step 1
-  r.settings.global.sequence_steps = {axis_bit(2), 0, 0, 0, 0, 0};
-  r.add_axis(2, 1);  // Z seeks first
-  r.add_axis(0, 2);  // X waits for step 2
-  r.add_axis(1, 2);  // Y too
-  r.pending.home_all = true;
-  r.step();
-  r.run_until([&] { return r.axis(2).phase == Phase::seek; }, 5);
-  REQUIRE(r.axis(0).phase == Phase::waiting);
+  start_z_first_cycle(r);
   r.sim().set_estop(true);
   r.step();
   CHECK(r.axis(2).alarm.code == AlarmCode::emergency_stop);

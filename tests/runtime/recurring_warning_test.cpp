@@ -6,20 +6,13 @@
 #include <string>
 #include <vector>
 
-#include <spdlog/sinks/ringbuffer_sink.h>
-#include <spdlog/spdlog.h>
-
 #include "server/recurring_warning.hpp"
+#include "tests/support/captured_log.hpp"
 
 namespace {
 
-struct Lines {
-  std::shared_ptr<spdlog::sinks::ringbuffer_sink_mt> sink = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(100);
-  Lines() { spdlog::default_logger()->sinks().push_back(sink); }
-  ~Lines() { std::erase(spdlog::default_logger()->sinks(), sink); }
-  Lines(const Lines&) = delete;
-  Lines& operator=(const Lines&) = delete;
-  std::vector<std::string> all() const { return sink->last_formatted(); }
+struct Lines : test_support::CapturedLog {
+  std::vector<std::string> all() const { return lines(); }
 };
 
 }  // namespace

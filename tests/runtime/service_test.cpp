@@ -31,24 +31,13 @@
 #include "server/modbus_service.hpp"
 #include "server/monitor.hpp"
 #include "server/plant_events.hpp"
+#include "tests/support/captured_log.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace {
 
 // An FC 05 or 06 request: function code, address, value.
-// The daemon's log lines while it lives: a sink beside the default logger's own.
-struct CapturedLog {
-  std::shared_ptr<spdlog::sinks::ringbuffer_sink_mt> sink = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(500);
-  CapturedLog() { spdlog::default_logger()->sinks().push_back(sink); }
-  ~CapturedLog() { std::erase(spdlog::default_logger()->sinks(), sink); }
-  CapturedLog(const CapturedLog&) = delete;
-  CapturedLog& operator=(const CapturedLog&) = delete;
-  std::string text() const {
-    std::string all;
-    for (const std::string& line : sink->last_formatted()) all += line;
-    return all;
-  }
-};
+using test_support::CapturedLog;
 
 std::vector<std::uint8_t> single_write_pdu(std::uint8_t fc, std::uint16_t a, std::uint16_t v) {
   return {fc, static_cast<std::uint8_t>(a >> 8), static_cast<std::uint8_t>(a), static_cast<std::uint8_t>(v >> 8),
@@ -695,15 +684,25 @@ TEST_CASE("a reset refused for an e-stop still pressed leaves lost settings unac
   CHECK_FALSE(m.store->settings_lost());
 }
 
-TEST_CASE("a reset written just after the heartbeat that ended a stale watchdog acknowledges lost settings as the "
-          "engine takes it") {
-  Module m(false, {}, true);
+namespace {
+
+// Settings lost at start, the watchdog at 100 ms, the heartbeat written once
+// and then not for 150 ms: expired, though no period has run since.
+void expire_watchdog_with_settings_lost(Module& m) {
   REQUIRE(m.store->settings_lost());
   m.loop->raise_settings_lost();
   REQUIRE(m.write_u16("global.watchdog_ms", 100).at(0) == 6);
   m.write_u16("host.heartbeat", 1);
   m.periods(3);
   std::this_thread::sleep_for(std::chrono::milliseconds(150));
+}
+
+}  // namespace
+
+TEST_CASE("a reset written just after the heartbeat that ended a stale watchdog acknowledges lost settings as the "
+          "engine takes it") {
+  Module m(false, {}, true);
+  expire_watchdog_with_settings_lost(m);
   m.periods(3);
   REQUIRE(m.status().interlocks & homing::interlock::communication_lost);
   // As homingctl does: the heartbeat, then the reset, before the loop ran a period.
@@ -766,12 +765,7 @@ TEST_CASE("a PLC writing both jog coils of an axis in one FC 15 jogs the one wri
 TEST_CASE("a reset written after the watchdog expired but before a period showed it leaves lost settings "
           "unacknowledged") {
   Module m(false, {}, true);
-  REQUIRE(m.store->settings_lost());
-  m.loop->raise_settings_lost();
-  REQUIRE(m.write_u16("global.watchdog_ms", 100).at(0) == 6);
-  m.write_u16("host.heartbeat", 1);
-  m.periods(3);
-  std::this_thread::sleep_for(std::chrono::milliseconds(150));
+  expire_watchdog_with_settings_lost(m);
   m.coil("cmd.reset_alarm");  // the last period still shows a fresh heartbeat
   m.periods(3);
   CHECK(m.status().last_command_result == homing::CommandResult::refused_cause_present);

@@ -13,10 +13,8 @@
 #include <string>
 #include <vector>
 
-#include <spdlog/sinks/ringbuffer_sink.h>
-#include <spdlog/spdlog.h>
-
 #include "server/tcp_connection.hpp"
+#include "tests/support/captured_log.hpp"
 
 using namespace std::chrono_literals;
 using server::TcpConnection;
@@ -225,13 +223,8 @@ TEST_CASE("a malformed MBAP header closes the connection and is not served") {
 }
 
 TEST_CASE("a TLS client or a web browser on the plain Modbus TCP port is told apart in the log and closed") {
-  const auto sink = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(20);
-  spdlog::default_logger()->sinks().push_back(sink);
-  const auto logged = [&] {
-    std::string all;
-    for (const std::string& line : sink->last_formatted()) all += line;
-    return all;
-  };
+  const test_support::CapturedLog log;
+  const auto logged = [&] { return log.text(); };
   Fixture tls;
   // A ClientHello's record header: handshake (0x16), TLS 1.0 record version, length, type 1.
   tls.wire.incoming.push_back({0x16, 0x03, 0x01, 0x02, 0x00, 0x01, 0x00, 0x01, 0xfc, 0x03, 0x03});
@@ -254,7 +247,6 @@ TEST_CASE("a TLS client or a web browser on the plain Modbus TCP port is told ap
   junk.wire.incoming.push_back({0x00, 0x01, 0x00, 0x07, 0x00, 0x06, 0x01});
   CHECK(junk.connection.advance(junk.t0, junk.handler) == Wait::closed);
   CHECK(logged().find("MBAP protocol 7 length 6") != std::string::npos);
-  std::erase(spdlog::default_logger()->sinks(), sink);
 }
 
 TEST_CASE("a write longer than the standard's largest frame is read whole and handed on, so that it can be refused "
