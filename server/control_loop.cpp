@@ -103,13 +103,16 @@ void ControlLoop::set_jog(std::size_t axis, std::int8_t direction, std::uint64_t
   {
     std::lock_guard lock(mailbox_mutex_);
     if (direction == 0) {
-      // Only the client that holds a jog (or nobody) can release it.
-      if (jog_owner_[axis] == owner || jog_dir_[axis] == 0) jog_dir_[axis] = 0;
-    } else {
+      // Both buttons held, by whichever clients: no jog, whoever started it.
+      jog_dir_[axis] = 0;
+    } else if (jog_dir_[axis] != direction) {
       jog_dir_[axis] = direction;
       jog_owner_[axis] = owner;
       pending_from_modbus_ = true;
     }
+    // The direction already held stays its first client's: a second client's
+    // 1 must not take it over, or the first one's release (or disconnect)
+    // would no longer stop the axis.
   }
   waiter_->wake();
 }

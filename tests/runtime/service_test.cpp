@@ -762,6 +762,39 @@ TEST_CASE("a PLC writing both jog coils of an axis in one FC 15 jogs the one wri
   both(false, false);
 }
 
+TEST_CASE("a jog stays the client's that pressed it: another client writing 1 to it takes nothing over and its "
+          "press of the other direction stops the axis") {
+  Module m(false);
+  const server::ClientInfo panel{8, server::Transport::tcp, "127.0.0.1:50001"};
+  const auto write = [&](const server::ClientInfo& who, std::string_view name, bool on) {
+    const auto a = Module::address(name);
+    REQUIRE(m.service->handle(1, single_write_pdu(5, a, on ? 0xFF00 : 0), who).pdu.size() == 5);
+    m.periods(3);
+  };
+  const auto stops = [&] {
+    return m.run_until([&] { return m.status().state != homing::MachineState::moving; }, 5000);
+  };
+  write(m.client, "cmd.jog_plus.x", true);
+  REQUIRE(m.status().state == homing::MachineState::moving);
+  // A cyclic panel rewriting the word it reads: its 1 is no press and no takeover.
+  write(panel, "cmd.jog_plus.x", true);
+  m.service->disconnected(panel);
+  m.periods(3);
+  CHECK(m.status().state == homing::MachineState::moving);
+  // The client that pressed still stops it.
+  write(m.client, "cmd.jog_plus.x", false);
+  CHECK(stops());
+  // A second operator pressing the other direction: both held, no jog.
+  write(m.client, "cmd.jog_plus.x", true);
+  REQUIRE(m.status().state == homing::MachineState::moving);
+  write(panel, "cmd.jog_minus.x", true);
+  CHECK(stops());
+  m.periods(50);
+  CHECK(m.status().state != homing::MachineState::moving);
+  write(m.client, "cmd.jog_plus.x", false);
+  write(panel, "cmd.jog_minus.x", false);
+}
+
 TEST_CASE("a reset written after the watchdog expired but before a period showed it leaves lost settings "
           "unacknowledged") {
   Module m(false, {}, true);
