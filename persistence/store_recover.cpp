@@ -14,11 +14,38 @@ namespace persistence {
 
 namespace {
 
+// A database of another program (--db pointed at the wrong file): no schema
+// version of ours, yet tables. Refused before anything (its journal mode
+// included) is changed in it. Errors reading it are returned as they are, so
+// a damaged file is still restored.
+Status refuse_foreign(const sql::Db& db, const std::string& path) {
+  auto version = db.query_int("PRAGMA user_version", "reading the schema version");
+  if (!version) return std::unexpected(version.error());
+  if (*version != 0) return {};
+  auto names = db.prepare("SELECT name FROM sqlite_master WHERE type IN ('table', 'view') ORDER BY name");
+  if (!names) return std::unexpected(names.error());
+  std::string listed;
+  int count = 0;
+  for (;;) {
+    auto row = names->step("listing the tables");
+    if (!row) return std::unexpected(row.error());
+    if (!*row) break;
+    if (++count <= 5) listed += (listed.empty() ? "" : ", ") + names->text_at(0);
+  }
+  if (count == 0) return {};
+  return fail(ErrorKind::invalid,
+              fmt::format("{}: an SQLite database of another program ({} table(s): {}{}), not homingd's settings; "
+                          "it was left untouched. Give --db the path of homingd's database, or of a new file",
+                          path, count, listed, count > 5 ? ", ..." : ""));
+}
+
 // Opens a database and configures durability: WAL + synchronous=FULL.
 Result<sql::Db> open_configured(const std::string& path, bool create, const char* vfs) {
   int flags = SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0);
   auto db = sql::Db::open(path, flags, vfs);
   if (!db) return db;
+  if (!create)
+    if (auto s = refuse_foreign(*db, path); !s) return std::unexpected(s.error());
   auto mode = db->prepare("PRAGMA journal_mode=WAL");
   if (!mode) return std::unexpected(mode.error());
   auto row = mode->step("switching to WAL journal mode");

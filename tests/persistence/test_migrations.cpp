@@ -2,6 +2,8 @@
 // versions shipped) upgrade to the current schema and keep their values.
 #include <catch2/catch.hpp>
 
+#include <iterator>
+
 #include "helpers.hpp"
 
 using namespace persistence;
@@ -220,4 +222,28 @@ TEST_CASE("a database from a newer firmware is refused and left untouched", "[pe
   CHECK(store.error().kind == ErrorKind::version);
   CHECK_THAT(store.error().message, Catch::Contains("newer firmware"));
   CHECK(test::sql_int(db, "PRAGMA user_version") == 99);
+}
+
+TEST_CASE("a database of another program is refused by name and left byte for byte as it was",
+          "[persistence][migration]") {
+  test::TempDir dir;
+  const auto db = dir.file("tooltable.db");
+  test::sql_exec(db, "CREATE TABLE tools(number INTEGER PRIMARY KEY, diameter REAL);"
+                     "INSERT INTO tools VALUES (1, 6.0);");
+  const auto bytes = [&] {
+    std::ifstream in(db, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string before = bytes();
+  REQUIRE_FALSE(before.empty());
+  OpenReport report;
+  auto store = SettingsStore::open(db, test::defaults(), report, test::options());
+  REQUIRE_FALSE(store);
+  CHECK(store.error().kind == ErrorKind::invalid);
+  CHECK_THAT(store.error().message, Catch::Contains("another program") && Catch::Contains("tools") &&
+                                        Catch::Contains("left untouched"));
+  CHECK(bytes() == before);  // its journal mode too: still a rollback journal, no WAL
+  CHECK_FALSE(std::filesystem::exists(db + "-wal"));
+  CHECK_FALSE(std::filesystem::exists(db + ".bak"));
+  CHECK(test::sql_int(db, "SELECT count(*) FROM tools") == 1);
 }
