@@ -13,6 +13,7 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
   bool all_homed = true;
   bool limited = false;  // an unhomed axis that may not do everything yet
   bool moving = false;
+  bool on_limit = false;
   for (std::size_t a = 0; a < kAxisCount; ++a) {
     const AxisRun& run = axes_[a];
     const AxisSettings& s = settings.axes[a];
@@ -40,6 +41,7 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
     all_homed = all_homed && as.homed;
     limited = limited || (!as.homed && allowed_without_homing(settings, a) != AllowedWithoutHoming::all);
     moving = moving || (!run.in_cycle && as.busy);
+    on_limit = on_limit || as.limit_min || as.limit_max;
   }
   const bool alarm = any_alarm();
   st.alarm = alarm;
@@ -69,6 +71,7 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
   if (limited) il |= interlock::not_homed;
   if (cycle_active_) il |= interlock::homing_active;
   if (moving) il |= interlock::motion_active;
+  if (on_limit) il |= interlock::limit_active;
   st.interlocks = il;
   outputs_.homing_done_lamp = all_homed && !alarm;
 }

@@ -112,7 +112,8 @@ inline constexpr std::uint16_t permit_missing = 1u << 5;
 inline constexpr std::uint16_t not_homed = 1u << 6;       // motion limited until homed
 inline constexpr std::uint16_t homing_active = 1u << 7;
 inline constexpr std::uint16_t motion_active = 1u << 8;   // jog or move running
-inline constexpr int kCount = 9;
+inline constexpr std::uint16_t limit_active = 1u << 9;    // an axis stands on a limit switch: no jog or move toward it
+inline constexpr int kCount = 10;
 
 // Per bit: its name (register bit name) and text (what homingctl and HMIs show).
 struct BitInfo {
@@ -131,6 +132,7 @@ inline constexpr BitInfo kInfo[] = {
     {6, not_homed, "not_homed", "not homed (motion limited)"},
     {7, homing_active, "homing_active", "homing cycle running"},
     {8, motion_active, "motion_active", "jog or move running"},
+    {9, limit_active, "limit_active", "limit switch active (axis.<a>.limit_min/max): jog away from it"},
 };
 constexpr bool bits_in_order() {
   for (int i = 0; i < kCount; ++i)

@@ -66,6 +66,7 @@ enum class RefusalReason : std::uint8_t {
   edit_broadcast,       // edit.command in an RTU broadcast: no answer could say how it went
   malformed_write,      // a write request outside the standard: quantity, byte count or coil value
   no_unlock_code,       // security.unlock or cmd.lock_settings while homingd has no --unlock-code
+  beyond_hard_stop,     // simulator: sim.<a>.actual_position outside the carriage's hard stops
 };
 // Each reason with the exception it is answered with, its name and its text.
 struct RefusalReasonInfo {
@@ -127,8 +128,11 @@ inline constexpr RefusalReasonInfo kRefusalReasonInfo[] = {
     {RefusalReason::no_unlock_code, ExceptionCode::illegal_data_value, "no_unlock_code",
      "homingd runs without an unlock code (--unlock-code): settings cannot be locked, so there is nothing to lock or "
      "unlock; start homingd with --unlock-code to protect the settings"},
+    {RefusalReason::beyond_hard_stop, ExceptionCode::illegal_data_value, "beyond_hard_stop",
+     "simulator: sim.<a>.actual_position places the carriage beyond its hard stops, where no carriage can be: "
+     "place it between sim.<a>.hard_stop_min and hard_stop_max (or move a stop in the same request)"},
 };
-static_assert(homing::lists_every_value(kRefusalReasonInfo, RefusalReason::no_unlock_code));
+static_assert(homing::lists_every_value(kRefusalReasonInfo, RefusalReason::beyond_hard_stop));
 constexpr std::span<const RefusalReasonInfo> enum_table(RefusalReason) { return kRefusalReasonInfo; }
 
 inline constexpr std::uint16_t kRuleReasonBase = 100;

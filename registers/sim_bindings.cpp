@@ -159,6 +159,16 @@ std::expected<AcceptedSimWrite, Refusal> validate_sim_write(Table table, std::ui
           fmt::format("sim.{0}.hard_stop_min ({1}) must be below sim.{0}.hard_stop_max ({2}); nothing was written",
                       homing::kAxisLetters[i], a.hard_stop_min_mm, a.hard_stop_max_mm)));
     }
+    // Moving a stop onto the carriage pushes it along, as a real stop would;
+    // placing the carriage beyond one would be a silent clamp.
+    if (out.placed[i] && (a.actual_position_mm < a.hard_stop_min_mm || a.actual_position_mm > a.hard_stop_max_mm)) {
+      const Register* reg = find_register(fmt::format("sim.{}.actual_position", homing::kAxisLetters[i]));
+      return std::unexpected(Refusal::because(
+          RefusalReason::beyond_hard_stop, reg ? reg->address : start,
+          fmt::format("sim.{0}.actual_position ({1}) is beyond the carriage's hard stops ({2} to {3}): place it "
+                      "between them or move a stop in the same request; nothing was written",
+                      homing::kAxisLetters[i], a.actual_position_mm, a.hard_stop_min_mm, a.hard_stop_max_mm)));
+    }
   }
   return out;
 }

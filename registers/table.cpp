@@ -205,7 +205,7 @@ constexpr auto kModuleGlobals = std::to_array<Row>({
     {.pattern = "status.homing_cycles", .table = IR, .offset = 3, .type = Type::u32, .access = Access::r, .max = 4294967295LL, .key = Key::status_homing_cycles, .description = "homing cycles completed successfully since start"},
     {.pattern = "status.heartbeat", .table = IR, .offset = 5, .access = Access::r, .max = 65535, .key = Key::status_heartbeat, .description = "increments every control period (wraps at 65535)"},
     {.pattern = "status.last_command_result", .table = IR, .offset = 6, .type = Type::enumeration, .access = Access::r, .max = last_value(kCommandResults), .key = Key::status_last_command_result, .values = kCommandResults, .description = "result of the last command coil written"},
-    {.pattern = "status.interlocks", .table = IR, .offset = 7, .type = Type::bitmask, .access = Access::r, .max = 511, .key = Key::status_interlocks, .values = kInterlocks, .description = "what now blocks homing or motion; 0 = free to move"},
+    {.pattern = "status.interlocks", .table = IR, .offset = 7, .type = Type::bitmask, .access = Access::r, .max = (1 << homing::interlock::kCount) - 1, .key = Key::status_interlocks, .values = kInterlocks, .description = "what now blocks homing or motion; 0 = free to move"},
     {.pattern = "status.global_alarm", .table = IR, .offset = 8, .type = Type::enumeration, .access = Access::r, .max = last_value(kAlarms), .key = Key::status_global_alarm, .values = kAlarms, .description = "alarm not tied to one axis (e-stop at rest, settings lost)"},
     {.pattern = "status.alarm_axis", .table = IR, .offset = 9, .type = Type::enumeration, .access = Access::r, .max = 6, .key = Key::status_alarm_axis, .values = kAlarmAxis, .description = "the axis that latched the first alarm since the last reset (1 = X ... 6 = C), 0 none: later alarms on other axes do not take its place"},
     {.pattern = "status.command_count", .table = IR, .offset = 11, .access = Access::r, .max = 65535, .key = Key::status_command_count, .description = "commands judged so far (wraps): status.last_command_result is the result of the command that moved it"},
@@ -349,7 +349,7 @@ constexpr auto kSimGlobals = std::to_array<Row>({
 });
 
 constexpr auto kSimAxisRows = std::to_array<Row>({
-    {.pattern = "sim.<a>.actual_position", .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = 100'000, .key = Key::sim_actual_position, .description = "where the carriage really is; writing places it (exception 06 while the axis moves)"},
+    {.pattern = "sim.<a>.actual_position", .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = 100'000, .key = Key::sim_actual_position, .description = "where the carriage really is; writing places it (exception 06 while the axis moves, 03 beyond its hard stops)"},
     {.pattern = "sim.<a>.sensor_min", .offset = 2, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = -1'000'000, .key = Key::sim_sensor_min, .description = "the cam holding the home sensor active starts here"},
     {.pattern = "sim.<a>.sensor_max", .offset = 4, .type = Type::i32, .quantity = LEN, .min = -kLengthMax, .max = kLengthMax, .def = 0, .key = Key::sim_sensor_max, .description = "the cam holding the home sensor active ends here"},
     {.pattern = "sim.<a>.hysteresis", .offset = 6, .quantity = LEN, .max = 65535, .def = 50, .key = Key::sim_hysteresis, .description = "the sensor turns inactive this far outside the cam"},

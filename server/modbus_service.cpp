@@ -206,7 +206,8 @@ Reply ModbusService::dispatch(Target target, std::span<const std::uint8_t> pdu, 
   // simulator unit has none.
   if ((fc == static_cast<std::uint8_t>(FunctionCode::read_file_record) ||
        fc == static_cast<std::uint8_t>(FunctionCode::diagnostics) ||
-       fc == static_cast<std::uint8_t>(FunctionCode::report_server_id)) &&
+       fc == static_cast<std::uint8_t>(FunctionCode::report_server_id) ||
+       fc == static_cast<std::uint8_t>(FunctionCode::encapsulated_interface)) &&
       target != Target::module)
     return fail(fc, ExceptionCode::illegal_function);
   const auto request = decode_request(pdu);

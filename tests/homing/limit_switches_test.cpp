@@ -180,6 +180,7 @@ SCENARIO("a jog onto a limit switch stops with limit_switch, within its accelera
   Rig r = cam_rig(95, 10, 20);
   r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
   r.step();
+  CHECK_FALSE(r.status().interlocks & interlock::limit_active);
   r.jog(0, +1);
   r.run_until([&] { return r.status().alarm; }, 10);
   r.release_jogs();
@@ -189,6 +190,8 @@ SCENARIO("a jog onto a limit switch stops with limit_switch, within its accelera
   CHECK(r.actual(0) < 110);  // stopped before the mechanical stop
   r.reset_alarm();
   CHECK_FALSE(r.status().alarm);
+  // Standing on the switch: shown before any jog is refused for it.
+  CHECK(r.status().interlocks & interlock::limit_active);
   r.jog(0, +1);  // further in: refused
   r.step();
   CHECK(r.status().last_command_result == CommandResult::refused_hard_limit);
@@ -201,6 +204,7 @@ SCENARIO("a jog onto a limit switch stops with limit_switch, within its accelera
   r.release_jogs();
   r.run_until([&] { return !r.any_moving(); }, 5);
   CHECK_FALSE(r.status().alarm);
+  CHECK_FALSE(r.status().interlocks & interlock::limit_active);
 }
 
 SCENARIO("a homing cycle started on a tripped limit switch does not drive further onto it",

@@ -80,6 +80,38 @@ TEST_CASE("a simulator write applies to a copy and reports lost steps and placem
   CHECK(pressed->switches.estop);
 }
 
+TEST_CASE("a carriage placed beyond its hard stops is refused with its reason and the placement register") {
+  const auto c = default_sim_config();  // Z between its stops at -5 and 1000 mm
+  const SimSwitches sw;
+  const SimReadback rb;
+  const Register& actual = reg("sim.z.actual_position");
+  const auto place = [&](std::int64_t um) {
+    std::array<std::uint16_t, 2> w{};
+    encode_words(actual, um, WordOrder::high_first, w);
+    return validate_sim_write(Table::holding_register, actual.address, w, WordOrder::high_first, c, sw, rb);
+  };
+  for (const std::int64_t um : {-5'001, 1'000'001}) {
+    const auto refused = place(um);
+    REQUIRE_FALSE(refused);
+    CHECK(refused.error().code == ExceptionCode::illegal_data_value);
+    CHECK(refused.error().reason == RefusalReason::beyond_hard_stop);
+    CHECK(refused.error().address == actual.address);
+    CHECK(refused.error().message.find("sim.z.actual_position") != std::string::npos);
+  }
+  // At a stop is where a carriage can be.
+  REQUIRE(place(-5'000));
+  CHECK(place(-5'000)->placed[2]);
+  REQUIRE(place(1'000'000));
+  // Against the stops as they are (a stop written before makes room).
+  auto moved = c;
+  moved.axes[2].hard_stop_min_mm = -20;
+  std::array<std::uint16_t, 2> w{};
+  encode_words(actual, -10'000, WordOrder::high_first, w);
+  const auto placed = validate_sim_write(Table::holding_register, actual.address, w, WordOrder::high_first, moved, sw, rb);
+  REQUIRE(placed);
+  CHECK(placed->config.axes[2].actual_position_mm == -10);
+}
+
 TEST_CASE("every simulator row is bound: reading any of them never throws") {
   const auto c = default_sim_config();
   for (const Register& r : registers_of(Unit::simulator)) {

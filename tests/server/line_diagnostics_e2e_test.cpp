@@ -126,6 +126,9 @@ TEST_CASE("function 17 reports the unit id, run indicator ON and the product, ve
   const Bytes one = raw_tcp_transaction(d.port(), 1, {0x2B, 0x0E, 0x04, 0x06});
   REQUIRE(one.size() >= 9);
   CHECK(std::string(one.begin() + 9, one.end()) == "Gantry mill 3");
+  // The simulator unit is no device of its own: neither identifies it.
+  CHECK(raw_tcp_transaction(d.port(), 247, {0x11}) == Bytes{0x91, 0x01});
+  CHECK(raw_tcp_transaction(d.port(), 247, {0x2B, 0x0E, 0x01, 0x00}) == Bytes{0xAB, 0x01});
 }
 
 TEST_CASE("over RTU function 08 counts bad CRCs, other units' frames and broadcasts apart from TCP") {
