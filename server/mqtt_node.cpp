@@ -76,6 +76,7 @@ std::expected<MqttConfig, std::string> mqtt_config(const Options& o) {
   c.group = o.mqtt_group;
   c.keepalive_s = o.mqtt_keepalive_s;
   c.sample_ms = o.mqtt_sample_ms;
+  c.refusal_log_interval = std::chrono::seconds(o.refusal_log_interval_s);
   c.report.length_deadband = o.mqtt_deadband;
   c.report.length_min_interval_ms = static_cast<std::uint64_t>(o.mqtt_min_interval_ms);
   c.report.diagnostics_min_interval_ms = static_cast<std::uint64_t>(o.mqtt_diagnostics_interval_ms);
@@ -92,7 +93,11 @@ std::expected<MqttConfig, std::string> mqtt_config(const Options& o) {
 }
 
 MqttNode::MqttNode(MqttConfig config, ModbusService& service, persistence::EventOutbox* outbox)
-    : config_(std::move(config)), service_(service), outbox_(outbox) {
+    : config_(std::move(config)),
+      service_(service),
+      outbox_(outbox),
+      ncmd_log_("NCMDs", config_.refusal_log_interval,
+                [](spdlog::level::level_enum level, const std::string& line) { spdlog::log(level, "{}", line); }) {
   static LibInit lib;
   const std::string client_id = "homingd-" + config_.group + "-" + config_.node;
   mosq_ = mosquitto_new(client_id.c_str(), true, this);
@@ -207,6 +212,10 @@ void MqttNode::stop() {
   if (publisher_.joinable()) publisher_.join();
   stop_network_ = true;
   if (network_.joinable()) network_.join();
+  {
+    std::lock_guard lock(ncmd_log_mutex_);
+    ncmd_log_.flush_all(RefusalLog::Clock::now());
+  }
   // Alone on the client now: the death certificate, written out, then goodbye.
   if (connected_) {
     const std::string bytes = sparkplug::EdgeNode::death(bd_seq_.load()).SerializeAsString();
@@ -352,10 +361,22 @@ void MqttNode::take_command(const std::string& metric, bool on) {
       }
     }
   }
-  if (answer.new_value != 0 || (answer.code > 1)) spdlog::warn("mqtt: {}", answer.text);
+  // One reason per command and outcome: a host repeating a refused command
+  // gets its first line whole, then counts.
+  if (answer.new_value != 0 || (answer.code > 1))
+    ncmd_refused(answer.new_value != 0
+                     ? fmt::format("{} refused (reason {})", metric, answer.new_value)
+                     : fmt::format("{} {}", metric,
+                                   homing::command_result_name(static_cast<homing::CommandResult>(answer.code))),
+                 "mqtt: " + answer.text);
   if (!outbox_) return;
   if (auto r = outbox_->push(std::move(answer)); !r)
     spdlog::error("mqtt: the answer to an NCMD could not be kept ({}): {}", outbox_->path(), r.error().message);
+}
+
+void MqttNode::ncmd_refused(const std::string& reason, const std::string& line) {
+  std::lock_guard lock(ncmd_log_mutex_);
+  ncmd_log_.refused(topic("NCMD"), reason, spdlog::level::warn, line, RefusalLog::Clock::now());
 }
 
 bool MqttNode::may_publish() {
@@ -375,15 +396,16 @@ void MqttNode::on_message(mosquitto*, void* self_ptr, const mosquitto_message* m
   // the broker replays at every subscription, that is at every start and
   // reconnection: carried out, it would home or move the machine each time.
   if (msg->retain) {
-    spdlog::warn("mqtt: NCMD on {} ignored: it is retained on the broker (an old command replayed at this "
-                 "subscription; Sparkplug B NCMDs are published with retain false); clear it with an empty "
-                 "retained message on that topic",
-                 msg->topic);
+    self->ncmd_refused("retained", fmt::format("mqtt: NCMD on {} ignored: it is retained on the broker (an old command "
+                                               "replayed at this subscription; Sparkplug B NCMDs are published with "
+                                               "retain false); clear it with an empty retained message on that topic",
+                                               msg->topic));
     return;
   }
   sparkplug::Payload cmd;
   if (!cmd.ParseFromArray(msg->payload, msg->payloadlen)) {
-    spdlog::warn("mqtt: NCMD on {} is not a Sparkplug B payload; ignored", msg->topic);
+    self->ncmd_refused("not a Sparkplug B payload",
+                       fmt::format("mqtt: NCMD on {} is not a Sparkplug B payload; ignored", msg->topic));
     return;
   }
   for (const auto& metric : cmd.metrics()) {
@@ -393,8 +415,10 @@ void MqttNode::on_message(mosquitto*, void* self_ptr, const mosquitto_message* m
     } else if (metric.name().starts_with("cmd/") && metric.datatype() == static_cast<std::uint32_t>(sparkplug::DataType::boolean)) {
       self->take_command(metric.name(), metric.boolean_value());
     } else {
-      spdlog::warn("mqtt: NCMD metric '{}' ignored: only Node Control/Rebirth and Boolean cmd/... metrics are taken",
-                   metric.name());
+      self->ncmd_refused("a metric not taken",
+                         fmt::format("mqtt: NCMD metric '{}' ignored: only Node Control/Rebirth and Boolean cmd/... "
+                                     "metrics are taken",
+                                     metric.name()));
     }
   }
 }
@@ -477,6 +501,10 @@ void MqttNode::publish_loop() {
         }
       });
       if (!need_birth_) send_events(node);
+    }
+    {
+      std::lock_guard lock(ncmd_log_mutex_);
+      ncmd_log_.flush(RefusalLog::Clock::now());
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(config_.sample_ms));
   }

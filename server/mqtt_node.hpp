@@ -17,6 +17,7 @@
 #include "modbus_service.hpp"
 #include "options.hpp"
 #include "persistence/event_outbox.hpp"
+#include "refusal_log.hpp"
 #include "sparkplug/host_state.hpp"
 #include "sparkplug/payload.hpp"
 
@@ -40,6 +41,9 @@ struct MqttConfig {
   bool commands = false;       // NCMD cmd.* carried out (else refused and reported)
   std::string outbox;          // the event outbox's file
   std::size_t outbox_max = 10000;
+  // Refused or ignored NCMDs in the log: the first of each reason whole, the
+  // rest counted per interval (--refusal-log-interval-s), as refused writes.
+  std::chrono::seconds refusal_log_interval{10};
 };
 // From the daemon's options; the node id defaults to the machine name, else
 // the host name. The password is read from its file here: an unreadable or
@@ -75,6 +79,8 @@ class MqttNode {
   bool may_publish();  // connected, and the primary host (if any) online
   void take_host_state(const mosquitto_message* msg);
   void take_command(const std::string& metric, bool on);
+  // A refused or ignored NCMD: its line, or its count in the next summary.
+  void ncmd_refused(const std::string& reason, const std::string& line);
   std::pair<std::int64_t, std::int64_t> judged();
   void publish_loop();
   bool publish(std::string_view type, const std::string& bytes);
@@ -101,6 +107,8 @@ class MqttNode {
   std::map<int, std::int64_t> in_flight_;  // message id -> event id, until written to the broker
   std::mutex log_mutex_;
   std::set<std::string> logged_reasons_;  // why connecting failed, each logged once since the last session
+  std::mutex ncmd_log_mutex_;             // the network thread logs, the publisher flushes
+  RefusalLog ncmd_log_;
 };
 
 }  // namespace server

@@ -94,7 +94,11 @@ def sparkplug_host(client_id, broker, on_payload, setup=None, subscribe=True, st
     client = paho.Client(client_id=client_id)
 
     def on_message(_c, _u, msg):
-        p = spb.Payload(); p.ParseFromString(msg.payload)
+        p = spb.Payload()
+        try:
+            p.ParseFromString(msg.payload)
+        except Exception:  # not Sparkplug (a test's garbage NCMD): a host ignores it; raising would end paho's loop
+            return
         kind, node = split_topic(msg.topic)
         on_payload(kind, node, p, msg)
     client.on_message = on_message

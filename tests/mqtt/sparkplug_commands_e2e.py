@@ -122,6 +122,24 @@ try:
     check(not any(a[0] == "cmd.home_all" for a in answers("ret")), "nor answered as a command")
     mb_ret.close()
     sub.publish("spBv1.0/plant/NCMD/ret", b"", qos=1, retain=True).wait_for_publish(5)  # cleared
+
+    # A host flooding refused or unreadable NCMDs: every command is still
+    # answered as an event, the log has the first of each reason whole and
+    # then one count per interval (--refusal-log-interval-s), never a line each.
+    flood, _ = start("flood", "--refusal-log-interval-s", "1"); daemons.append(flood)
+    check(wait_until(lambda: births("flood"), 15), "the flooded module is born")
+    for _ in range(20):
+        ncmd("flood", "cmd/home_all")
+    for _ in range(10):
+        sub.publish("spBv1.0/plant/NCMD/flood", b"not protobuf \xff\xff", qos=0)
+    check(wait_until(lambda: len(answers("flood")) >= 20, 15), f"all 20 commands are answered: {len(answers('flood'))}")
+    flood_log = lambda: open(os.path.join(work, "flood.log")).read()
+    counted = lambda: "more NCMDs refused, cmd/home_all refused" in flood_log() and \
+        "more NCMDs refused, not a Sparkplug B payload" in flood_log()
+    check(wait_until(counted, 10), "the repeats are counted per reason")
+    log = flood_log()
+    check(log.count("commands over MQTT are off") == 1, f"one whole line for the refused commands: {log.count('commands over MQTT are off')}")
+    check(log.count("is not a Sparkplug B payload") == 1, "one whole line for the unreadable payloads")
 finally:
     shut_down(daemons, sub, broker)
 if failures:
