@@ -11,8 +11,9 @@
 // a seek may take past a trigger; a release method's approach max_backoff
 // more, for its trigger lies the hysteresis beyond), max_backoff off the switch. A home cam
 // lies in mid-travel, so a homed axis may rest on its far side (a final move
-// or a jog across it): the check first goes back across the cam to the rest
-// point its stored position gives, as far as that position says.
+// or a jog across it), and so may one past a home switch that is a short
+// flag: the check first goes back across the cam or flag to the rest point
+// its stored position gives, as far as that position says.
 #include <algorithm>
 #include <cmath>
 
@@ -67,19 +68,21 @@ void PhaseRunner::refcheck_begin(phase_data::RefCheck& c) {
     return refcheck_step(c, Step::leave_sensor, target);
   }
   // Past the edge by the tolerance, the room a seek takes past a trigger,
-  // and the travel while the debounce time accepts the edge.
-  const double past = s.refcheck_tolerance_mm + s.max_stop_distance_mm + latch_v * s.debounce_ms / 1000.0;
-  const double target = c.expected_mm - away_from_reference() * past;
+  // the travel while the debounce time accepts the edge (approach_past_mm).
   const double approach = c.expected_mm - away_from_reference() * approach_past_mm(s, latch_v, refcheck_edge(row()));
-  // Already that far past the edge, and off the switch. A home switch runs
-  // on to the end of the travel: it is not where it was stored. A home cam
-  // lies in mid-travel: it stands on the cam's far side, where a move took
-  // it (campaign seed 187000328: a final move across the cam, refused with
-  // the cam's width as its mismatch); back across the cam to the rest point.
-  if ((target - c.start_mm) * -away_from_reference() <= 0) {
-    if (!row().runs(Phase::cam_latch)) return refcheck_judge(c, c.start_mm, false);
+  // Past the edge by more than the tolerance, and off the switch: it stands
+  // on the far side of its switch or cam, where a move took it. A home cam
+  // lies in mid-travel (campaign seed 187000328: a final move across the
+  // cam, refused with the cam's width as its mismatch), and so does a home
+  // switch that is a short flag under a proximity sensor (campaign seed
+  // 993609: a final move past the flag, refused at once, or searched for
+  // further away from it). Back across it to the rest point, as far as the
+  // stored position says, and the check from there. A switch that runs on
+  // to the end of the travel would read active there: a carriage off it is
+  // not where it was stored, and the approach from the rest point finds the
+  // edge as far off as it was moved.
+  if ((c.start_mm - c.expected_mm) * away_from_reference() < -s.refcheck_tolerance_mm)
     return refcheck_step(c, Step::cross_cam, c.expected_mm + away_from_reference() * rest_offset_mm());
-  }
   refcheck_step(c, Step::approach, approach);
 }
 

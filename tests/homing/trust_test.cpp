@@ -303,6 +303,43 @@ SCENARIO("a home cam axis left on the cam's far side is checked across the cam a
   else CHECK(r.axis(X).position_mm == Approx(s.home_position_mm).margin(s.refcheck_tolerance_mm));
 }
 
+SCENARIO("a switch axis left past its switch flag by a final move is checked back across the flag and accepted where "
+         "it stands",
+         "[trust]") {
+  // Campaign seed 993609: a home switch that is a short flag under a
+  // proximity sensor lies in mid-travel like a home cam; a final move past
+  // it left the axis off the flag beyond its edge, and the check took that
+  // for a carriage moved and refused it at once.
+  CleanStop c;
+  AxisSettings& s = c.before.settings.axes[X];
+  s.mode = GENERATE(HomingMode::switch_release, HomingMode::switch_reapproach);
+  CAPTURE(s.mode);
+  s.soft_limit_min_mm = -100;
+  sim::AxisConfig& m = c.before.machine.axes[X];
+  m.sensor_min_mm = -3;  // a 3 mm flag, travel on both sides of it
+  m.sensor_max_mm = 0;
+  m.hard_stop_min_mm = -200;
+  REQUIRE(c.before.home_all());
+  // Past the flag, toward the seek's side, off it.
+  c.before.move(X, c.before.axis(X).position_mm - 8);
+  c.before.run_until([&] { return !c.before.any_moving() && c.before.axis(X).phase == Phase::idle; }, 30);
+  REQUIRE_FALSE(c.before.sim().sensor_active(X));
+  REQUIRE(c.before.actual(X) < m.sensor_min_mm);
+  c.stops = shut_down(c.before);
+  c.offset_mm = c.before.axis(X).position_mm - c.before.actual(X);
+  REQUIRE(c.stops[X].clean);
+
+  Rig r = restart(c.before, c.stops);
+  const double start = r.actual(X);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);
+  CHECK(r.axis(X).homed);
+  CHECK(r.axis(X).trust == Trust::reference_checked);
+  CHECK(std::abs(r.axis(X).refcheck_error_mm) <= s.refcheck_tolerance_mm);
+  CHECK_FALSE(r.status().alarm);
+  CHECK(r.axis(X).position_mm - r.actual(X) == Approx(c.offset_mm).margin(s.refcheck_tolerance_mm));
+  CHECK(r.actual(X) == Approx(start).margin(1e-9));  // back where it stood
+}
+
 SCENARIO("an axis left deeper on its switch than max_backoff is checked off it and accepted where it stands",
          "[trust]") {
   // Campaign seed 187105905: a final move left the axis on its switch; the
