@@ -134,8 +134,9 @@ void set_host_raw(HostRegisters& host, const Register& reg, std::int64_t raw) {
     case Key::security_unlock: host.unlock_code = static_cast<std::uint32_t>(raw); return;
     case Key::cmd_home_axes: return;  // a command (validate_write), nothing held
     case Key::edit_command: return;   // the Modbus service's edit sessions, nothing held
-    case Key::cmd_jog_plus: host.jog_plus.at(axis_index(reg)) = raw != 0; return;
-    case Key::cmd_jog_minus: host.jog_minus.at(axis_index(reg)) = raw != 0; return;
+    // Read back who holds them (server/jog_buttons.hpp), not the last value written.
+    case Key::cmd_jog_plus:
+    case Key::cmd_jog_minus: return;
     default: unbound(reg, "host");
   }
 }

@@ -102,27 +102,10 @@ void ControlLoop::submit(const homing::Commands& c, bool from_modbus) {
 void ControlLoop::set_jog(std::size_t axis, std::int8_t direction, std::uint64_t owner) {
   {
     std::lock_guard lock(mailbox_mutex_);
-    if (direction == 0) {
-      // Both buttons held, by whichever clients: no jog, whoever started it.
-      jog_dir_[axis] = 0;
-    } else if (jog_dir_[axis] != direction) {
-      jog_dir_[axis] = direction;
-      jog_owner_[axis] = owner;
-      pending_from_modbus_ = true;
-    }
-    // The direction already held stays its first client's: a second client's
-    // 1 must not take it over, or the first one's release (or disconnect)
-    // would no longer stop the axis.
-  }
-  waiter_->wake();
-}
-
-void ControlLoop::release_jog(std::size_t axis, std::int8_t direction, std::uint64_t owner) {
-  {
-    std::lock_guard lock(mailbox_mutex_);
-    // Only the direction this coil pressed, and only by the client that holds it.
-    if (jog_dir_[axis] != direction || jog_owner_[axis] != owner) return;
-    jog_dir_[axis] = 0;
+    // Who may stop it is the service's to judge (jog_buttons.hpp).
+    jog_dir_[axis] = direction;
+    jog_owner_[axis] = owner;
+    if (direction != 0) pending_from_modbus_ = true;
   }
   waiter_->wake();
 }

@@ -134,13 +134,10 @@ class ControlLoop {
 
   // One-shot commands; merged until the loop takes them.
   void submit(const homing::Commands& commands, bool from_modbus);
-  // A jog pressed by an owner (a client connection), who alone releases it
-  // (release_jog); pressing the direction already held changes nothing.
-  // 0: both directions held, no jog, whoever pressed.
+  // The jog of an axis now (+1, -1, 0 = stop), for an owner (a client
+  // connection); which client may start or stop it is the service's to
+  // judge (server/jog_buttons.hpp).
   void set_jog(std::size_t axis, std::int8_t direction, std::uint64_t owner);
-  // A jog coil written 0: releases that direction only (the other coil's 0,
-  // in the same FC 15 as this one's 1, leaves a jog running), if this owner holds it.
-  void release_jog(std::size_t axis, std::int8_t direction, std::uint64_t owner);
   // Releases every jog held by an owner (its client disconnected).
   // The axes whose jog that owner held.
   homing::AxisMask release_jogs(std::uint64_t owner);

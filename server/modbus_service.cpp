@@ -109,12 +109,15 @@ void ModbusService::set_extras(const registers::StatusExtras& extras) {
 }
 
 void ModbusService::disconnected(const ClientInfo& client) {
-  // A jog moves only while its client is there to stop it.
-  const homing::AxisMask released = loop_.release_jogs(client.id);
-  std::lock_guard lock(mutex_);
-  // Their coils read back what is held now: nothing.
-  for (std::size_t a = 0; a < homing::kAxisCount; ++a)
-    if (released & homing::axis_bit(a)) host_.jog_plus[a] = host_.jog_minus[a] = false;
+  // A jog moves only while every client that holds it is there to stop it.
+  std::unique_lock lock(mutex_);
+  const homing::AxisMask released = jog_buttons_.disconnected(client.id);
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    if (!(released & homing::axis_bit(a))) continue;
+    host_.jog_plus[a] = jog_buttons_.held(a, 1);
+    host_.jog_minus[a] = jog_buttons_.held(a, -1);
+    loop_.set_jog(a, 0, client.id);  // the loop's mailbox lock, never held while taking this one
+  }
   // An edit session ends with its connection, as a transaction does.
   const std::string owner = EditSessions::owner_of(client);
   if (edits_.state(owner) == EditState::open)

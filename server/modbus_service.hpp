@@ -18,6 +18,7 @@
 #include <span>
 #include <thread>
 
+#include "jog_buttons.hpp"
 #include "control_loop.hpp"
 #include "device_identification.hpp"
 #include "line_diagnostics.hpp"
@@ -180,6 +181,7 @@ class ModbusService final : public RequestHandler {
   homing::Settings settings_;
   bool locked_ = false;
   registers::HostRegisters host_{};
+  JogButtons jog_buttons_;  // who holds which jog coil: host_.jog_plus/minus read back from it
   std::array<persistence::ChangeSource, homing::kAxisCount> position_set_by_{};  // under mutex_
   registers::StatusExtras extras_{};
   LineDiagnostics diagnostics_;

@@ -55,20 +55,18 @@ void ModbusService::run_commands(const std::vector<registers::CommandRequest>& c
         break;
       case Command::jog_plus:
       case Command::jog_minus: {
+        // The buttons as every client holds them (jog_buttons.hpp): a
+        // press starts the jog, or stops the axis with the other direction
+        // held; any holder's release stops it; the coils read who holds.
         const std::int8_t dir = r.command == Command::jog_plus ? 1 : -1;
-        if (!r.on) {
-          loop_.release_jog(a, dir, client.id);
-          break;
-        }
-        // Both directions held (a PLC's FC 15 with both 1, a second finger on
-        // the other button) is no jog: the axis stops, as with two buttons
-        // pressed on a pendant, and starts again only on a new press of one.
-        bool other_held = false;
+        std::optional<std::int8_t> jog;
         {
-          std::shared_lock lock(mutex_);
-          other_held = (dir > 0 ? host_.jog_minus : host_.jog_plus)[a];
+          std::lock_guard lock(mutex_);
+          jog = jog_buttons_.write(a, dir, r.on, client.id);
+          host_.jog_plus[a] = jog_buttons_.held(a, 1);
+          host_.jog_minus[a] = jog_buttons_.held(a, -1);
         }
-        loop_.set_jog(a, other_held ? 0 : dir, client.id);
+        if (jog) loop_.set_jog(a, *jog, client.id);
         break;
       }
       case Command::move: {

@@ -762,37 +762,73 @@ TEST_CASE("a PLC writing both jog coils of an axis in one FC 15 jogs the one wri
   both(false, false);
 }
 
-TEST_CASE("a jog stays the client's that pressed it: another client writing 1 to it takes nothing over and its "
-          "press of the other direction stops the axis") {
+TEST_CASE("a jog stops at the release or disconnect of any client that holds it and a client that never held it "
+          "neither stops it nor leaves a coil stuck") {
   Module m(false);
-  const server::ClientInfo panel{8, server::Transport::tcp, "127.0.0.1:50001"};
-  const auto write = [&](const server::ClientInfo& who, std::string_view name, bool on) {
-    const auto a = Module::address(name);
-    REQUIRE(m.service->handle(1, single_write_pdu(5, a, on ? 0xFF00 : 0), who).pdu.size() == 5);
+  const server::ClientInfo old_link = m.client;  // a PLC whose connection lingers half-open
+  const server::ClientInfo new_link{8, server::Transport::tcp, "127.0.0.1:50001"};  // the same PLC, reconnected
+  const server::ClientInfo panel{9, server::Transport::tcp, "127.0.0.1:50002"};
+  const auto plus = Module::address("cmd.jog_plus.x");
+  const auto write = [&](const server::ClientInfo& who, std::uint16_t coil, bool on) {
+    REQUIRE(m.service->handle(1, single_write_pdu(5, coil, on ? 0xFF00 : 0), who).pdu.size() == 5);
     m.periods(3);
   };
-  const auto stops = [&] {
-    return m.run_until([&] { return m.status().state != homing::MachineState::moving; }, 5000);
+  const auto both = [&](const server::ClientInfo& who, bool p, bool n) {
+    const auto bits = static_cast<std::uint8_t>((p ? 1 : 0) | (n ? 2 : 0));
+    const std::vector<std::uint8_t> pdu{15, static_cast<std::uint8_t>(plus >> 8), static_cast<std::uint8_t>(plus), 0, 2, 1, bits};
+    REQUIRE(m.service->handle(1, pdu, who).pdu.size() == 5);
+    m.periods(3);
   };
-  write(m.client, "cmd.jog_plus.x", true);
-  REQUIRE(m.status().state == homing::MachineState::moving);
-  // A cyclic panel rewriting the word it reads: its 1 is no press and no takeover.
-  write(panel, "cmd.jog_plus.x", true);
+  const auto coils = [&] {
+    return m.request({1, static_cast<std::uint8_t>(plus >> 8), static_cast<std::uint8_t>(plus), 0, 2}).at(2);
+  };
+  const auto at_rest = [&] {
+    return m.run_until([&] { return m.status().axes[0].velocity_mm_per_s == 0; }, 5000);
+  };
+  const auto jogging = [&] {
+    m.periods(50);
+    return m.status().axes[0].velocity_mm_per_s > 0;
+  };
+  const std::uint16_t minus = plus + 1;
+  // The reconnected PLC goes on writing its held word, then the operator lets go.
+  write(old_link, plus, true);
+  REQUIRE(jogging());
+  write(new_link, plus, true);
+  CHECK(jogging());
+  write(new_link, plus, false);
+  CHECK(at_rest());
+  CHECK(coils() == 0);
+  // A panel rewriting its word with 0 never held the button: it changes nothing.
+  write(old_link, plus, true);
+  REQUIRE(jogging());
+  write(panel, plus, false);
+  CHECK(jogging());
+  CHECK(coils() == 0x01);
+  // Its press of the other direction stops the axis; its cyclic 0 on plus does
+  // not release minus, and nothing restarts without a new press.
+  both(panel, false, true);
+  CHECK(at_rest());
+  CHECK(coils() == 0x03);
+  both(panel, false, true);
+  CHECK_FALSE(jogging());
+  // It leaves: its button reads 0, the PLC's still 1, and nothing starts.
   m.service->disconnected(panel);
   m.periods(3);
-  CHECK(m.status().state == homing::MachineState::moving);
-  // The client that pressed still stops it.
-  write(m.client, "cmd.jog_plus.x", false);
-  CHECK(stops());
-  // A second operator pressing the other direction: both held, no jog.
-  write(m.client, "cmd.jog_plus.x", true);
-  REQUIRE(m.status().state == homing::MachineState::moving);
-  write(panel, "cmd.jog_minus.x", true);
-  CHECK(stops());
-  m.periods(50);
-  CHECK(m.status().state != homing::MachineState::moving);
-  write(m.client, "cmd.jog_plus.x", false);
-  write(panel, "cmd.jog_minus.x", false);
+  CHECK(coils() == 0x01);
+  CHECK_FALSE(jogging());
+  m.service->disconnected(old_link);
+  m.periods(3);
+  CHECK(coils() == 0);
+  // Both pressed by a client that then leaves: no coil stays stuck at 1, and
+  // the next press of either direction jogs.
+  both(panel, true, true);
+  m.service->disconnected(panel);
+  m.periods(3);
+  CHECK(coils() == 0);
+  write(new_link, minus, true);
+  CHECK(m.run_until([&] { return m.status().axes[0].velocity_mm_per_s < 0; }, 2000));
+  write(new_link, minus, false);
+  CHECK(at_rest());
 }
 
 TEST_CASE("a reset written after the watchdog expired but before a period showed it leaves lost settings "
