@@ -92,4 +92,11 @@ struct FoundDatabase {
 Result<FoundDatabase> open_or_recover(const std::string& path, const char* vfs, std::int64_t now_ms,
                                       OpenReport& report, const OpenNotes& note);
 
+// An existing file that is an SQLite database of another program (tables,
+// none of them homingd's settings table, whatever its user_version): refused,
+// read over a read-only connection so that nothing in it (its WAL included)
+// is touched. Errors reading it are returned as they are, so a damaged file
+// is still restored.
+Status refuse_foreign(const std::string& path, const char* vfs);
+
 }  // namespace persistence

@@ -24,6 +24,8 @@ Result<std::set<std::string>> names_of(const std::string& path, const std::vecto
 
 // Tools read the current schema only: no migration, no defaults, no restore.
 Status open_read_only(SettingsStore::Impl& m, OpenReport& report) {
+  if (auto foreign = refuse_foreign(m.path, m.vfs()); !foreign && foreign.error().kind == ErrorKind::invalid)
+    return foreign;
   auto db = sql::Db::open(m.path, SQLITE_OPEN_READONLY, m.vfs());
   if (!db) return std::unexpected(db.error());
   auto v = db->query_int("PRAGMA user_version", "reading the schema version");

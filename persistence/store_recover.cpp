@@ -14,38 +14,11 @@ namespace persistence {
 
 namespace {
 
-// A database of another program (--db pointed at the wrong file): no schema
-// version of ours, yet tables. Refused before anything (its journal mode
-// included) is changed in it. Errors reading it are returned as they are, so
-// a damaged file is still restored.
-Status refuse_foreign(const sql::Db& db, const std::string& path) {
-  auto version = db.query_int("PRAGMA user_version", "reading the schema version");
-  if (!version) return std::unexpected(version.error());
-  if (*version != 0) return {};
-  auto names = db.prepare("SELECT name FROM sqlite_master WHERE type IN ('table', 'view') ORDER BY name");
-  if (!names) return std::unexpected(names.error());
-  std::string listed;
-  int count = 0;
-  for (;;) {
-    auto row = names->step("listing the tables");
-    if (!row) return std::unexpected(row.error());
-    if (!*row) break;
-    if (++count <= 5) listed += (listed.empty() ? "" : ", ") + names->text_at(0);
-  }
-  if (count == 0) return {};
-  return fail(ErrorKind::invalid,
-              fmt::format("{}: an SQLite database of another program ({} table(s): {}{}), not homingd's settings; "
-                          "it was left untouched. Give --db the path of homingd's database, or of a new file",
-                          path, count, listed, count > 5 ? ", ..." : ""));
-}
-
 // Opens a database and configures durability: WAL + synchronous=FULL.
 Result<sql::Db> open_configured(const std::string& path, bool create, const char* vfs) {
   int flags = SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0);
   auto db = sql::Db::open(path, flags, vfs);
   if (!db) return db;
-  if (!create)
-    if (auto s = refuse_foreign(*db, path); !s) return std::unexpected(s.error());
   auto mode = db->prepare("PRAGMA journal_mode=WAL");
   if (!mode) return std::unexpected(mode.error());
   auto row = mode->step("switching to WAL journal mode");
@@ -153,6 +126,11 @@ Result<bool> recover_damaged(const std::string& path, const char* vfs, std::int6
 // nullopt when it was damaged and nothing could replace it.
 Result<std::optional<sql::Db>> open_existing(const std::string& path, const char* vfs, std::int64_t now_ms,
                                              int& version, OpenReport& report, const OpenNotes& note) {
+  // Before anything opens it for writing (WAL mode is kept in the file).
+  if (auto foreign = refuse_foreign(path, vfs); !foreign && foreign.error().kind == ErrorKind::invalid) {
+    note(spdlog::level::critical, foreign.error().message);
+    return std::unexpected(foreign.error());
+  }
   auto db = open_verified(path, vfs, version);
   if (db && version == 0 && backups_exist(path)) {
     // An empty file next to backups is a lost database, not a first start.
@@ -172,6 +150,32 @@ Result<std::optional<sql::Db>> open_existing(const std::string& path, const char
 }
 
 }  // namespace
+
+Status refuse_foreign(const std::string& path, const char* vfs) {
+  auto db = sql::Db::open(path, SQLITE_OPEN_READONLY, vfs);
+  if (!db) return std::unexpected(db.error());
+  auto tables = db->query_int("SELECT count(*) FROM sqlite_master WHERE type IN ('table', 'view')", "listing the tables");
+  if (!tables) return std::unexpected(tables.error());
+  if (*tables == 0) return {};  // empty: a first start
+  // homingd's since schema v1: settings(name, value).
+  auto ours = db->query_int("SELECT count(*) FROM pragma_table_info('settings') WHERE name IN ('name', 'value')",
+                            "looking for the settings table");
+  if (!ours) return std::unexpected(ours.error());
+  if (*ours == 2) return {};
+  auto names = db->prepare("SELECT name FROM sqlite_master WHERE type IN ('table', 'view') ORDER BY name LIMIT 5");
+  if (!names) return std::unexpected(names.error());
+  std::string listed;
+  for (;;) {
+    auto row = names->step("listing the tables");
+    if (!row) return std::unexpected(row.error());
+    if (!*row) break;
+    listed += (listed.empty() ? "" : ", ") + names->text_at(0);
+  }
+  return fail(ErrorKind::invalid,
+              fmt::format("{}: an SQLite database of another program ({} table(s): {}{}), not homingd's settings; "
+                          "it was left untouched. Give --db the path of homingd's database, or of a new file",
+                          path, *tables, listed, *tables > 5 ? ", ..." : ""));
+}
 
 Result<FoundDatabase> open_or_recover(const std::string& path, const char* vfs, std::int64_t now_ms,
                                       OpenReport& report, const OpenNotes& note) {

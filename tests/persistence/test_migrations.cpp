@@ -247,3 +247,54 @@ TEST_CASE("a database of another program is refused by name and left byte for by
   CHECK_FALSE(std::filesystem::exists(db + ".bak"));
   CHECK(test::sql_int(db, "SELECT count(*) FROM tools") == 1);
 }
+
+TEST_CASE("a database of another program is refused whatever its schema version and its WAL is left unread",
+          "[persistence][migration]") {
+  test::TempDir dir;
+  const auto db = dir.file("other.db");
+  const auto bytes = [](const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  SECTION("a schema version of its own") {
+    test::sql_exec(db, "CREATE TABLE jobs(id INTEGER PRIMARY KEY); PRAGMA user_version = 3;");
+    const std::string before = bytes(db);
+    OpenReport report;
+    auto store = SettingsStore::open(db, test::defaults(), report, test::options());
+    REQUIRE_FALSE(store);
+    CHECK(store.error().kind == ErrorKind::invalid);
+    CHECK_THAT(store.error().message, Catch::Contains("another program") && Catch::Contains("jobs"));
+    CHECK(bytes(db) == before);
+    CHECK(test::sql_int(db, "PRAGMA user_version") == 3);
+  }
+  SECTION("in WAL mode with a WAL not yet checkpointed") {
+    sqlite3* raw = nullptr;
+    REQUIRE(sqlite3_open(db.c_str(), &raw) == SQLITE_OK);
+    int off = 1;
+    sqlite3_db_config(raw, SQLITE_DBCONFIG_NO_CKPT_ON_CLOSE, 1, &off);
+    REQUIRE(sqlite3_exec(raw, "PRAGMA journal_mode=WAL; PRAGMA wal_autocheckpoint=0; CREATE TABLE jobs(id INTEGER); "
+                              "INSERT INTO jobs VALUES (1);",
+                         nullptr, nullptr, nullptr) == SQLITE_OK);
+    sqlite3_close(raw);
+    REQUIRE(std::filesystem::exists(db + "-wal"));
+    const std::string main_before = bytes(db), wal_before = bytes(db + "-wal");
+    OpenReport report;
+    auto store = SettingsStore::open(db, test::defaults(), report, test::options());
+    REQUIRE_FALSE(store);
+    CHECK(store.error().kind == ErrorKind::invalid);
+    CHECK(bytes(db) == main_before);
+    REQUIRE(std::filesystem::exists(db + "-wal"));
+    CHECK(bytes(db + "-wal") == wal_before);
+  }
+}
+
+TEST_CASE("homingd's own database that lost its schema version is not taken for another program's",
+          "[persistence][migration]") {
+  // A repair by `sqlite3 db .dump | sqlite3 new` drops user_version.
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  test::sql_exec(db, "CREATE TABLE settings(name TEXT PRIMARY KEY NOT NULL, value INTEGER NOT NULL) WITHOUT ROWID;");
+  OpenReport report;
+  auto store = SettingsStore::open(db, test::defaults(), report, test::options());
+  if (!store) CHECK_THAT(store.error().message, !Catch::Contains("another program"));
+}
