@@ -41,7 +41,8 @@ void Engine::publish(const Settings& settings, const Inputs& inputs) {
     all_homed = all_homed && as.homed;
     limited = limited || (!as.homed && allowed_without_homing(settings, a) != AllowedWithoutHoming::all);
     moving = moving || (!run.in_cycle && as.busy);
-    on_limit = on_limit || as.limit_min || as.limit_max;
+    // A tripped shared home/limit sensor too, while the axis stands on it.
+    on_limit = on_limit || as.limit_min || as.limit_max || run.limit_tripped;
   }
   const bool alarm = any_alarm();
   st.alarm = alarm;

@@ -144,7 +144,9 @@ std::expected<AcceptedSimWrite, Refusal> validate_sim_write(Table table, std::ui
     if (reg.per_axis()) {
       const auto i = static_cast<std::size_t>(reg.axis);
       out.axes_written[i] = true;
-      if (reg.key == Key::sim_actual_position) out.placed[i] = true;
+      // The carriage's own value written back unchanged (a block write of
+      // its stops) places nothing: only a stop moved onto it pushes it along.
+      if (reg.key == Key::sim_actual_position && w.raw != old_raw) out.placed[i] = true;
       if (reg.key == Key::sim_lose_steps) out.lose_steps_mm[i] = to_engineering(reg, w.raw);
     }
     if (reg.key == Key::sim_seed) out.seed_written = true;

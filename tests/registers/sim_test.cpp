@@ -112,6 +112,34 @@ TEST_CASE("a carriage placed beyond its hard stops is refused with its reason an
   CHECK(placed->config.axes[2].actual_position_mm == -10);
 }
 
+TEST_CASE("a block write of a carriage's stops that writes its position back unchanged places nothing and the stop "
+          "pushes it along") {
+  const auto c = default_sim_config();
+  const SimSwitches sw;
+  SimReadback rb;
+  rb.actual_position_mm[2] = c.axes[2].actual_position_mm;
+  const Register& actual = reg("sim.z.actual_position");
+  const Register& stop_max = reg("sim.z.hard_stop_max");
+  // Every register from the position through the upper stop, as read back.
+  std::vector<std::uint16_t> words(stop_max.address + 2 - actual.address);
+  for (std::uint16_t at = actual.address; at < stop_max.address + 2;) {
+    const Register* r = find_register(Unit::simulator, Table::holding_register, at);
+    REQUIRE(r);
+    encode_words(*r, sim_raw(*r, c, sw, rb), WordOrder::high_first,
+                 std::span(words).subspan(at - actual.address, r->words()));
+    at = static_cast<std::uint16_t>(at + r->words());
+  }
+  // The upper stop lowered below the carriage.
+  const auto below = static_cast<std::int64_t>((c.axes[2].actual_position_mm - 10) * 1000);
+  encode_words(stop_max, below, WordOrder::high_first, std::span(words).subspan(stop_max.address - actual.address, 2));
+  const auto ok = validate_sim_write(Table::holding_register, actual.address, words, WordOrder::high_first, c, sw, rb);
+  REQUIRE(ok);
+  CHECK_FALSE(ok->placed[2]);
+  homing::sim::Simulator sim(c);
+  sim.set_axis_config(2, ok->config.axes[2]);
+  CHECK(sim.actual_position_mm(2) == Approx(c.axes[2].actual_position_mm - 10));
+}
+
 TEST_CASE("every simulator row is bound: reading any of them never throws") {
   const auto c = default_sim_config();
   for (const Register& r : registers_of(Unit::simulator)) {
