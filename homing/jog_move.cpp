@@ -95,7 +95,12 @@ void Engine::jog_commands(const Settings& settings, const Commands& c) {
         CommandResult r = jog_refusal(settings, a, req);
         const bool homed = run.counts_as_homed(settings.axes[a].mode);
         const int p = gantry_partner(settings, a);
-        const bool recovering = run.limit_tripped || (p >= 0 && axes_[static_cast<std::size_t>(p)].limit_tripped);
+        // Off a tripped limit, or off an active limit switch it stands on
+        // (powered up there: jog_refusal has refused a jog toward it).
+        const bool on_limit_switch =
+            settings.axes[a].limits_fitted && (run.readings.limit_min || run.readings.limit_max);
+        const bool recovering = run.limit_tripped || on_limit_switch ||
+                                (p >= 0 && axes_[static_cast<std::size_t>(p)].limit_tripped);
         if (r == CommandResult::accepted && !homed && !recovering &&
             allowed_without_homing(settings, a) == AllowedWithoutHoming::none)
           r = CommandResult::refused_not_homed;

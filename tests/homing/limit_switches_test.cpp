@@ -207,6 +207,34 @@ SCENARIO("a jog onto a limit switch stops with limit_switch, within its accelera
   CHECK_FALSE(r.status().interlocks & interlock::limit_active);
 }
 
+SCENARIO("an axis powered up on a limit switch jogs off it even where nothing may move before homing, only away",
+         "[limits][hard_limit]") {
+  // docs/limit-switches.md: a jog away from it is allowed also before homing,
+  // with no alarm raised first (a technician found it refused_not_homed).
+  Rig r = cam_rig(103, 10, 20);
+  r.settings.global.allowed_without_homing = AllowedWithoutHoming::none;
+  r.step();
+  REQUIRE(r.status().interlocks & interlock::limit_active);
+  r.jog(0, +1);  // further in
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::refused_hard_limit);
+  r.release_jogs();
+  r.step();
+  r.jog(0, -1);  // away
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  r.run_until([&] { return r.actual(0) < 99; }, 60);
+  r.release_jogs();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(r.actual(0) < 100);
+  CHECK_FALSE(r.status().alarm);
+  // Off the switch, the rule holds again.
+  r.jog(0, -1);
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::refused_not_homed);
+  r.release_jogs();
+}
+
 SCENARIO("a homing cycle started on a tripped limit switch does not drive further onto it",
          "[limits][home_cam][alarms]") {
   // The latch of the first cycle runs into the negative limit switch
