@@ -295,6 +295,16 @@ TEST_CASE("homingctl abort, reset, jog and move") {
   }
   CHECK(c.read_mm("axis.x.position") > x0 + 1.0);
   CHECK(c.read("cmd.jog_plus.x") == 0);
+  // Another client holds a jog button of X: homingctl presses nothing and says so.
+  REQUIRE(c.write("cmd.jog_minus.x", 1) == 0);
+  r = ctl(d, {"jog", "x", "+", "--ms", "300"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 1);
+    CHECK(r.err.find("cmd.jog_minus.x is held by another client") != std::string::npos);
+  }
+  CHECK(c.read("cmd.jog_plus.x") == 0);
+  REQUIRE(c.write("cmd.jog_minus.x", 0) == 0);
   r = ctl(d, {"move", "x", "12.5"});
   {
     SHOW(r);

@@ -286,6 +286,17 @@ ActionResult jog(Connection& c, const std::string& axis, int direction, int ms, 
   const std::string coil = fmt::format("cmd.jog_{}.{}", direction > 0 ? "plus" : "minus",
                                        homing::kAxisLetters[static_cast<std::size_t>(a)]);
   const std::string what = fmt::format("jog {}{}", homing::kAxisUpper[static_cast<std::size_t>(a)], direction > 0 ? "+" : "-");
+  // A button another client holds: pressing this one would start nothing
+  // (the same one: held already; the other: both held stops the axis), and
+  // releasing it would stop that client's jog. Said, and nothing written.
+  for (const char* side : {"plus", "minus"}) {
+    const std::string button =
+        fmt::format("cmd.jog_{}.{}", side, homing::kAxisLetters[static_cast<std::size_t>(a)]);
+    if (c.read(button) != 0)
+      return failure(fmt::format("{}: not pressed: {} is held by another client ({}); release it there first",
+                                 what, button,
+                                 button == coil ? "the axis jogs with its button" : "both directions held is no jog"));
+  }
   auto r = s.pulse(coil);
   if (!r) return failure(r.error());
   if (!taken(*r)) {
