@@ -128,6 +128,14 @@ TEST_CASE("homingctl set: a refused write says why, names the setting, and chang
   CHECK(d.log().find("discarded by its client (2 staged settings dropped)") != std::string::npos);
   CHECK(holding_snapshot(c) == before);
 
+  // A simulator write refused by the module: its reason in words, naming the register.
+  r = ctl(d, {"set", "sim.x.actual_position=2000"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 1);
+    CHECK(r.err.find("beyond its hard stops") != std::string::npos);
+    CHECK(r.err.find("(about sim.x.actual_position)") != std::string::npos);
+  }
   // During a homing cycle the module answers 06: said in words.
   c.set("sim.x.actual_position", um(400));
   c.set("sim.y.actual_position", um(400));

@@ -163,9 +163,10 @@ int set_simulator_values(Context& ctx, const std::vector<std::pair<const Registe
   for (const auto& [r, raw] : writes) {
     if (o.dry_run) continue;
     if (const int ex = c.write(*r, raw)) {
-      fmt::print(stderr, "refused: {} = {}: {}\n", r->name(), value_text(*r, raw, kinds),
+      fmt::print(stderr, "refused: {} = {}: {}: {}\n", r->name(), value_text(*r, raw, kinds),
                  ex == 6 ? "exception 06: the simulated carriage cannot be placed while it moves"
-                         : exception_sentence(ex));
+                         : exception_sentence(ex),
+                 refusal_reason(c, Unit::simulator));
       return kFailed;
     }
     if (!ctx.json) fmt::print("{} = {}\n", r->name(), value_text(*r, raw, kinds));

@@ -180,22 +180,17 @@ std::expected<WritePlan, std::string> plan_write(const RawMap& current, const Ra
   return plan;
 }
 
-namespace {
-
-// Why the module refused the last write, from its refusal registers.
-std::string refusal_reason(Connection& c) {
+std::string refusal_reason(Connection& c, Unit written) {
   const std::int64_t code = c.read("status.last_refusal_reason");
   const Register& reason = register_named("status.last_refusal_reason");
   for (const registers::EnumValue& v : reason.values)
     if (v.value == code) {
       const std::int64_t at = c.read("status.last_refused_register");
-      const Register* about = registers::find_register(Unit::module, Table::holding_register, static_cast<std::uint16_t>(at));
+      const Register* about = registers::find_register(written, Table::holding_register, static_cast<std::uint16_t>(at));
       return fmt::format("{}{}{}", v.meaning, about ? " (about " : "", about ? about->name() + ")" : "");
     }
   return fmt::format("reason {}", code);
 }
-
-}  // namespace
 
 // One edit session (docs/hmi-integration.md "Edit sessions"): every block is
 // staged, then the commit checks them together and applies all or none, in
@@ -206,17 +201,17 @@ std::expected<void, std::string> execute_plan(Connection& c, const WritePlan& pl
   const Register& edit = register_named("edit.command");
   if (const int ex = c.write(edit, 1))
     return std::unexpected(fmt::format("the module refused to begin an edit session: {}: {}", exception_sentence(ex),
-                                       refusal_reason(c)));
+                                       refusal_reason(c, Unit::module)));
   auto give_up = [&](std::string what) -> std::expected<void, std::string> {
     (void)c.write(edit, 3);  // discard: nothing of it was applied
     return std::unexpected(std::move(what) + "; nothing was changed");
   };
   for (const Block& b : plan.blocks)
     if (const int ex = c.write_words(Unit::module, b.start, b.words))
-      return give_up(fmt::format("the module refused: {}: {}", exception_sentence(ex), refusal_reason(c)));
+      return give_up(fmt::format("the module refused: {}: {}", exception_sentence(ex), refusal_reason(c, Unit::module)));
   if (const int ex = c.write(edit, 2))
     return give_up(fmt::format("the module refused the change at its commit: {}: {}", exception_sentence(ex),
-                               refusal_reason(c)));
+                               refusal_reason(c, Unit::module)));
   return {};
 }
 

@@ -60,6 +60,10 @@ std::expected<WritePlan, std::string> plan_write(const RawMap& current, const Ra
 // reason and the register it is about).
 std::expected<void, std::string> execute_plan(Connection& c, const WritePlan& plan);
 
+// Why the module refused the last write (of a holding register of `written`'s
+// unit), from its refusal registers: the reason's text and the register it is about.
+std::string refusal_reason(Connection& c, registers::Unit written);
+
 // ---- the settings file (persistence/settings_file.hpp's format) ----
 // Engineering values and value names (format_version 2), as homingd exports them.
 std::string settings_file_text(const RawMap& values, const std::string& source, std::int64_t now_ms);
