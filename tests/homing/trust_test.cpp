@@ -51,6 +51,16 @@ void home_and_stop(CleanStop& c) {
   c.offset_mm = c.before.axis(X).position_mm - c.before.actual(X);
 }
 
+// The check homed X within its tolerance, with the coordinate the cycle gave
+// this carriage, and raised nothing.
+void homed_by_the_check(Rig& r, const CleanStop& c, double tolerance_mm) {
+  CHECK(r.axis(X).homed);
+  CHECK(r.axis(X).trust == Trust::reference_checked);
+  CHECK(std::abs(r.axis(X).refcheck_error_mm) <= tolerance_mm);
+  CHECK_FALSE(r.status().alarm);
+  CHECK(r.axis(X).position_mm - r.actual(X) == Approx(c.offset_mm).margin(tolerance_mm));
+}
+
 // X homes by re-approaching a home switch that doubles as its limit, whose
 // hysteresis is this (soft limits from -2 mm).
 AxisSettings& shared_limit_reapproach(CleanStop& c, double hysteresis_mm) {
@@ -293,11 +303,7 @@ SCENARIO("a home cam axis left on the cam's far side is checked across the cam a
   const double start = r.actual(X);
   REQUIRE(r.axis(X).trust == Trust::last_stop_clean);
   CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);
-  CHECK(r.axis(X).homed);
-  CHECK(r.axis(X).trust == Trust::reference_checked);
-  CHECK(std::abs(r.axis(X).refcheck_error_mm) <= s.refcheck_tolerance_mm);
-  CHECK_FALSE(r.status().alarm);
-  CHECK(r.axis(X).position_mm - r.actual(X) == Approx(c.offset_mm).margin(s.refcheck_tolerance_mm));
+  homed_by_the_check(r, c, s.refcheck_tolerance_mm);
   // Off the cam it goes back where it stood; from on it, it ends where a cycle ends.
   if (!on_cam) CHECK(r.actual(X) == Approx(start).margin(1e-9));
   else CHECK(r.axis(X).position_mm == Approx(s.home_position_mm).margin(s.refcheck_tolerance_mm));
@@ -332,11 +338,7 @@ SCENARIO("a switch axis left past its switch flag by a final move is checked bac
   Rig r = restart(c.before, c.stops);
   const double start = r.actual(X);
   CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);
-  CHECK(r.axis(X).homed);
-  CHECK(r.axis(X).trust == Trust::reference_checked);
-  CHECK(std::abs(r.axis(X).refcheck_error_mm) <= s.refcheck_tolerance_mm);
-  CHECK_FALSE(r.status().alarm);
-  CHECK(r.axis(X).position_mm - r.actual(X) == Approx(c.offset_mm).margin(s.refcheck_tolerance_mm));
+  homed_by_the_check(r, c, s.refcheck_tolerance_mm);
   CHECK(r.actual(X) == Approx(start).margin(1e-9));  // back where it stood
 }
 
