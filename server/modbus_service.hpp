@@ -126,6 +126,7 @@ class ModbusService final : public RequestHandler {
   std::optional<Reply> sim_outcome(const SimWrite& write, bool shown);
   bool write_sim_later(std::span<const std::uint8_t> pdu, const ClientInfo& client, std::function<void(Reply)> done);
   void run_commands(const std::vector<registers::CommandRequest>& commands, const ClientInfo& client);
+  void press_jog_buttons(const std::vector<registers::CommandRequest>& commands, const ClientInfo& client);
   void acknowledge_settings_lost(const ClientInfo& client);  // a reset's, when the engine will take it
   std::int64_t sim_raw(const registers::Register& reg, const Snapshot& snap) const;
   // Logs a refused write (warn: client, reason, register, the rule in words),

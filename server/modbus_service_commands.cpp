@@ -34,8 +34,31 @@ std::string_view command_name(registers::Command c) {
 
 }  // namespace
 
+// The jog coils of one write as buttons (jog_buttons.hpp), decided and handed
+// to the loop under one lock: one jog per axis for the whole write, so that
+// the loop never takes the first coil of an FC 15 of both alone, and no other
+// client's decision lands between a decision and its hand-over (the lock
+// order mutex_, then the loop's mailbox, as in disconnected()).
+void ModbusService::press_jog_buttons(const std::vector<registers::CommandRequest>& commands,
+                                      const ClientInfo& client) {
+  using registers::Command;
+  std::array<std::optional<std::int8_t>, homing::kAxisCount> jog{};
+  std::unique_lock<std::shared_mutex> lock;
+  for (const auto& r : commands) {
+    if (r.command != Command::jog_plus && r.command != Command::jog_minus) continue;
+    if (!lock.owns_lock()) lock = std::unique_lock(mutex_);
+    const auto a = static_cast<std::size_t>(r.axis);
+    if (auto j = jog_buttons_.write(a, r.command == Command::jog_plus ? 1 : -1, r.on, client.id)) jog[a] = j;
+    host_.jog_plus[a] = jog_buttons_.held(a, 1);
+    host_.jog_minus[a] = jog_buttons_.held(a, -1);
+  }
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a)
+    if (jog[a]) loop_.set_jog(a, *jog[a], client.id);
+}
+
 void ModbusService::run_commands(const std::vector<registers::CommandRequest>& commands, const ClientInfo& client) {
   using registers::Command;
+  press_jog_buttons(commands, client);
   homing::Commands c{};
   bool any = false;
   for (const auto& r : commands) {
@@ -55,19 +78,7 @@ void ModbusService::run_commands(const std::vector<registers::CommandRequest>& c
         break;
       case Command::jog_plus:
       case Command::jog_minus: {
-        // The buttons as every client holds them (jog_buttons.hpp): a
-        // press starts the jog, or stops the axis with the other direction
-        // held; any holder's release stops it; the coils read who holds.
-        const std::int8_t dir = r.command == Command::jog_plus ? 1 : -1;
-        std::optional<std::int8_t> jog;
-        {
-          std::lock_guard lock(mutex_);
-          jog = jog_buttons_.write(a, dir, r.on, client.id);
-          host_.jog_plus[a] = jog_buttons_.held(a, 1);
-          host_.jog_minus[a] = jog_buttons_.held(a, -1);
-        }
-        if (jog) loop_.set_jog(a, *jog, client.id);
-        break;
+        break;  // handed over with the write's other jog coils (press_jog_buttons)
       }
       case Command::move: {
         std::lock_guard lock(mutex_);

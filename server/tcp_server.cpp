@@ -21,6 +21,15 @@
 #include "tcp_connection.hpp"
 
 namespace server {
+
+namespace {
+// One sequence for every listener (plain TCP and TLS): a client id names one
+// connection in the whole daemon, for the jog buttons (jog_buttons.hpp) above all.
+std::uint64_t next_client_id() {
+  static std::atomic<std::uint64_t> next{1};
+  return next++;
+}
+}  // namespace
 namespace {
 
 // Plain Modbus TCP: the socket as it is.
@@ -157,7 +166,7 @@ void TcpServer::run() {
     entry.address = address;
     entry.last_active_ns = steady_now_ns();
     auto connection = std::make_unique<TcpConnection>(
-        fd, ClientInfo(next_id_++, opener_->transport(), address), opener_->begin(fd), opener_->handshake_timeout_ms(),
+        fd, ClientInfo(next_client_id(), opener_->transport(), address), opener_->begin(fd), opener_->handshake_timeout_ms(),
         config_.idle_timeout_s * 1000, std::chrono::steady_clock::now());
     quietest_loop().adopt(entry, std::move(connection));
   }

@@ -76,7 +76,6 @@ class TcpServer {
   std::atomic<bool> stop_{false};
   std::atomic<int> active_{0};
   std::atomic<std::uint64_t> refused_{0};
-  std::atomic<std::uint64_t> next_id_{1};
   std::mutex connections_mutex_;
   std::list<ConnectionEntry> connections_;  // under connections_mutex_
   RefusalLog refusals_;                     // under connections_mutex_

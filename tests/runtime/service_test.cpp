@@ -831,6 +831,28 @@ TEST_CASE("a jog stops at the release or disconnect of any client that holds it 
   CHECK(at_rest());
 }
 
+TEST_CASE("both jog coils written 1 in one FC 15 never show the running loop the first alone") {
+  Module m(false);
+  m.loop->start();
+  const auto plus = Module::address("cmd.jog_plus.x");
+  const auto both = [&](std::uint8_t bits) {
+    const std::vector<std::uint8_t> pdu{15, static_cast<std::uint8_t>(plus >> 8), static_cast<std::uint8_t>(plus), 0, 2, 1, bits};
+    REQUIRE(m.service->handle(1, pdu, m.client).pdu.size() == 5);
+  };
+  const std::uint32_t before = m.status().command_count;
+  for (int i = 0; i < 200; ++i) {
+    both(0x03);
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+    both(0x00);
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  // A jog taken for one period would have been judged, counted and started.
+  CHECK(m.status().command_count == before);
+  CHECK(m.status().axes[0].position_mm == 0);
+  m.loop->stop();
+}
+
 TEST_CASE("a reset written after the watchdog expired but before a period showed it leaves lost settings "
           "unacknowledged") {
   Module m(false, {}, true);
