@@ -123,6 +123,23 @@ Status EventOutbox::set_audit_cursor(std::int64_t audit_id) {
   return cur->run("setting the audit cursor of the MQTT events");
 }
 
+Result<std::optional<std::uint64_t>> EventOutbox::last_bd_seq() const {
+  std::lock_guard lock(impl_->mutex);
+  auto last = impl_->db.query_int("SELECT coalesce((SELECT value FROM counters WHERE key = 'bd_seq'), -1)",
+                                  "reading the last Sparkplug bdSeq");
+  if (!last) return std::unexpected(last.error());
+  if (*last < 0 || *last > 255) return std::optional<std::uint64_t>{};  // none kept (or not one of ours)
+  return std::optional<std::uint64_t>{static_cast<std::uint64_t>(*last)};
+}
+
+Status EventOutbox::keep_bd_seq(std::uint64_t bd_seq) {
+  std::lock_guard lock(impl_->mutex);
+  auto put = impl_->db.prepare("INSERT OR REPLACE INTO counters(key, value) VALUES('bd_seq', ?)");
+  if (!put) return std::unexpected(put.error());
+  put->bind(1, static_cast<std::int64_t>(bd_seq));
+  return put->run("keeping the Sparkplug bdSeq");
+}
+
 Result<std::vector<Event>> EventOutbox::oldest(std::size_t n, std::int64_t after_id) const {
   std::lock_guard lock(impl_->mutex);
   auto q = impl_->db.prepare(

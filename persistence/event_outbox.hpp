@@ -52,6 +52,12 @@ class EventOutbox {
   // The last settings audit row turned into an event; none in a new outbox.
   std::optional<std::int64_t> audit_cursor() const;
   Status set_audit_cursor(std::int64_t audit_id);
+  // The Sparkplug bdSeq of the last MQTT session the node registered (none
+  // in a new outbox), kept so that a restart goes on from it and never
+  // registers again the bdSeq of a session a host may still hold a death
+  // certificate for. keep_bd_seq is durable once it returns.
+  Result<std::optional<std::uint64_t>> last_bd_seq() const;
+  Status keep_bd_seq(std::uint64_t bd_seq);
   // The oldest events still owed after this id, oldest first, at most n.
   Result<std::vector<Event>> oldest(std::size_t n, std::int64_t after_id = 0) const;
   // Events up to and including this id are delivered.

@@ -141,7 +141,32 @@ void MqttNode::set_will() {
   mosquitto_will_set(mosq_, topic("NDEATH").c_str(), static_cast<int>(bytes.size()), bytes.data(), 1, false);
 }
 
+// Each MQTT CONNECT registers the next bdSeq (the first one after the last
+// the outbox kept), kept in the outbox before the Will names it, so that a
+// restart (a power cut included) never reuses the bdSeq of a session whose
+// death certificate a host may still receive. The count in memory decides:
+// a value the outbox could not keep is never handed out twice in this run.
+void MqttNode::take_bd_seq(bool first) {
+  std::uint64_t next = (bd_seq_.load() + 1) % 256;
+  if (first) {
+    next = 0;
+    if (outbox_) {
+      if (auto last = outbox_->last_bd_seq(); !last)
+        spdlog::warn("mqtt: the last bdSeq could not be read from {} ({}); starting at 0", outbox_->path(),
+                     last.error().message);
+      else if (*last)
+        next = (**last + 1) % 256;
+    }
+  }
+  bd_seq_ = next;
+  if (outbox_)
+    if (auto kept = outbox_->keep_bd_seq(next); !kept)
+      spdlog::warn("mqtt: bdSeq {} could not be kept in {} ({}): a restart may register it again", next,
+                   outbox_->path(), kept.error().message);
+}
+
 void MqttNode::start() {
+  take_bd_seq(true);
   set_will();
   started_ = true;
   network_ = std::thread([this] {
@@ -251,7 +276,7 @@ void MqttNode::on_connect(mosquitto* m, void* self_ptr, int rc) {
 }
 
 // The next session gets the next bdSeq, and its Will says so before the
-// reconnect registers it. What was in flight may not have arrived: sent again
+// reconnect registers it (take_bd_seq). What was in flight may not have arrived: sent again
 // after the next birth.
 void MqttNode::on_session_lost(int rc) {
   {
@@ -259,8 +284,11 @@ void MqttNode::on_session_lost(int rc) {
     in_flight_.clear();
     resend_all_ = true;
   }
-  bd_seq_ = (bd_seq_.load() + 1) % 256;
-  set_will();
+  // A clean stop ends the last session: no next one takes a bdSeq.
+  if (!stop_network_) {
+    take_bd_seq(false);
+    set_will();
+  }
   if (rc != MOSQ_ERR_SUCCESS) spdlog::warn("mqtt: lost the broker ({}); reconnecting", mosquitto_strerror(rc));
 }
 

@@ -84,6 +84,7 @@ class MqttNode {
   std::pair<std::int64_t, std::int64_t> judged();
   void publish_loop();
   bool publish(std::string_view type, const std::string& bytes);
+  void take_bd_seq(bool first);
 
   MqttConfig config_;
   ModbusService& service_;

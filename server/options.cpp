@@ -307,8 +307,8 @@ OptionParser::Table::Table() {
                "Carry out commands sent as NCMD (cmd/home_all, cmd/abort, cmd/reset_alarm, ...) through the same "
                "interlocks as Modbus; off: refused and answered as an event");
   app.add_option("--mqtt-outbox,--mqtt_outbox", o.mqtt_outbox,
-                 "SQLite file keeping homing cycles, alarms and settings changes until the broker has them "
-                 "(default: the --db path + .mqtt-events)");
+                 "SQLite file keeping homing cycles, alarms and settings changes until the broker has them, "
+                 "and the last Sparkplug bdSeq (default: the --db path + .mqtt-events)");
   app.add_option("--mqtt-outbox-max,--mqtt_outbox_max", o.mqtt_outbox_max,
                  "Events kept at most while the broker is away; past it the oldest are dropped and counted")
       ->check(whole_range(100, 10000000))

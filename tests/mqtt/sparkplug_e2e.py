@@ -88,6 +88,22 @@ try:
     if of("NDEATH"):
         death = {m.name: m for m in of("NDEATH")[0].metrics}
         check(death.get("bdSeq") is not None and death["bdSeq"].long_value == bd, "NDEATH carries the birth's bdSeq")
+
+    # Started again on the same files after that power cut, and again after a
+    # clean stop: each session takes the next bdSeq, never one a death
+    # certificate already named (it started at 0 on every start).
+    def last_bd(kind): return {m.name: m for m in of(kind)[-1].metrics}["bdSeq"].long_value
+    for restart, expected in ((1, (bd + 1) % 256), (2, (bd + 2) % 256)):
+        births = len(of("NBIRTH"))
+        daemon = start_homingd(homingd, modbus_port, os.path.join(work, "h.db"), broker.url(), "m1")
+        check(wait_until(lambda: len(of("NBIRTH")) > births, 15), f"born again after restart {restart}")
+        if len(of("NBIRTH")) > births:
+            check(last_bd("NBIRTH") == expected, f"restart {restart}: bdSeq {last_bd('NBIRTH')}, expected {expected}")
+        deaths = len(of("NDEATH"))
+        daemon.send_signal(signal.SIGTERM); daemon.wait()
+        check(wait_until(lambda: len(of("NDEATH")) > deaths, 10), f"restart {restart}: a clean stop publishes NDEATH")
+        if len(of("NDEATH")) > deaths:
+            check(last_bd("NDEATH") == expected, f"restart {restart}: the NDEATH names its session's bdSeq")
 finally:
     if daemon.poll() is None:
         daemon.send_signal(signal.SIGKILL); daemon.wait()

@@ -110,6 +110,13 @@ try:
         return out
     def ended(): return [e for e in events() if e["event/kind"].string_value == "cycle_ended"]
     check(wait_until(lambda: len(ended()) >= 5, 40), "every cycle's end arrives after the broker is back (4 homed + 1 aborted)")
+    # The bdSeq of the birth after the power cut is none an earlier session
+    # registered: a host still holding that session's death certificate
+    # (a Will delivered late) cannot take it for this one's.
+    def bd_seq(p): return {m.name: m for m in p.metrics}["bdSeq"].long_value
+    earlier = [bd_seq(p) for t, p, _ in messages[:seen_before] if t == "NBIRTH"]
+    later = [bd_seq(p) for t, p, _ in messages[seen_before:] if t == "NBIRTH"]
+    check(later and later[0] not in earlier, f"the birth after the restart takes a new bdSeq: {later[:1]} after {earlier}")
     time.sleep(1.0)
     evs = events()
     kinds = [e["event/kind"].string_value for e in evs]

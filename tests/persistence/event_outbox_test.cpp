@@ -1,6 +1,6 @@
 // The MQTT event outbox: events kept durably in order until delivered,
 // bounded with the oldest dropped and counted, and the settings audit cursor
-// moved with the event it made.
+// moved with the event it made, and the Sparkplug bdSeq of each session.
 #include <catch2/catch.hpp>
 
 #include "persistence/event_outbox.hpp"
@@ -85,4 +85,23 @@ TEST_CASE("an outbox that cannot be created says which file and why") {
   const auto box = EventOutbox::open("/nonexistent-dir/o.db", 10);
   REQUIRE_FALSE(box);
   CHECK(box.error().message.find("/nonexistent-dir/o.db") != std::string::npos);
+}
+
+TEST_CASE("the last Sparkplug bdSeq kept is there after a restart, none in a new outbox") {
+  test_support::TempDir dir;
+  const auto path = dir.file("o.db");
+  {
+    auto box = EventOutbox::open(path, 100);
+    REQUIRE(box);
+    auto none = box->last_bd_seq();
+    REQUIRE(none);
+    CHECK_FALSE(none->has_value());
+    REQUIRE(box->keep_bd_seq(0));
+    REQUIRE(box->keep_bd_seq(255));
+  }
+  auto box = EventOutbox::open(path, 100);  // a restart (or a power cut)
+  REQUIRE(box);
+  auto last = box->last_bd_seq();
+  REQUIRE(last);
+  CHECK(*last == std::optional<std::uint64_t>{255});
 }
