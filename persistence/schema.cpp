@@ -122,6 +122,18 @@ CREATE TABLE sim_carriages(
 ) WITHOUT ROWID;
 )sql";
 
+// v7: which edge of a home cam an axis was homed on, as part of its home
+// frame. A stop recorded before keeps the frame it was homed in: the edge
+// then set for the axis, when its method was a home cam (11; never one side
+// of a gantry: the rule set refuses that pair); 0 otherwise, as the engine's
+// frame has it.
+constexpr std::string_view kV7 = R"sql(
+ALTER TABLE last_stop ADD COLUMN cam_edge INTEGER NOT NULL DEFAULT 0;
+UPDATE last_stop SET cam_edge = COALESCE((
+  SELECT value FROM settings WHERE name = 'axis.' || substr('xyzabc', last_stop.axis + 1, 1) || '.cam_edge'), 0)
+ WHERE mode = 11;
+)sql";
+
 }  // namespace
 
 const std::vector<Step>& steps() {
@@ -132,8 +144,9 @@ const std::vector<Step>& steps() {
       {4, "why a home correction is excluded from the statistics", kV4},
       {5, "switch health figures and gantry skew per axis and run", kV5},
       {6, "last stop of each axis (position trust) and the simulator's carriages", kV6},
+      {7, "the home cam's edge in each axis's last stop", kV7},
   };
-  static_assert(kSchemaVersion == 6, "append a migration step when raising kSchemaVersion");
+  static_assert(kSchemaVersion == 7, "append a migration step when raising kSchemaVersion");
   return all;
 }
 

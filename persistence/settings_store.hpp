@@ -27,7 +27,7 @@ namespace persistence {
 
 struct SettingsFileCodec;  // settings_file.hpp
 
-inline constexpr int kSchemaVersion = 6;       // see schema.cpp for the history
+inline constexpr int kSchemaVersion = 7;       // see schema.cpp for the history
 inline constexpr std::size_t kHistoryAxes = 6;  // X Y Z A B C
 
 struct SettingDefault {
@@ -174,6 +174,7 @@ struct StoredFrame {
   double pull_off_mm = 0;
   double switch_compensation_mm = 0;
   double home_position_mm = 0;
+  std::int64_t cam_edge = 0;  // 0 unless mode is home_cam (schema v7)
   friend bool operator==(const StoredFrame&, const StoredFrame&) = default;
 };
 struct AxisLastStop {
@@ -270,7 +271,7 @@ class SettingsStore {
   // oldest first (what the trend check and the trend plot read).
   Result<std::vector<HealthRecord>> health_history(std::size_t axis, std::size_t last_n) const;
 
-  // The last stops (schema v6, store_last_stop.cpp). record_last_stops
+  // The last stops (schema v6, the cam edge v7; store_last_stop.cpp). record_last_stops
   // replaces the axes given (nullopt: left as they are) in one transaction,
   // durable when it returns; clear_clean_stops keeps the positions and
   // marks every axis not clean.

@@ -1,4 +1,4 @@
-// The last stops (schema v6): where each axis came to rest when the module
+// The last stops (schema v6, the home cam's edge v7): where each axis came to rest when the module
 // last stopped, and whether that stop was clean; and the simulator's
 // carriages. One row per axis, replaced whole, committed before returning.
 #include <fmt/format.h>
@@ -25,7 +25,7 @@ Result<LastStops> SettingsStore::last_stops() const {
   auto& m = *impl_;
   auto st = m.db.prepare(
       "SELECT axis, clean, position_mm, mode, direction, sensor_nc, slave_of, slave_mode, pull_off_mm, "
-      "switch_compensation_mm, home_position_mm, time_ms FROM last_stop ORDER BY axis");
+      "switch_compensation_mm, home_position_mm, time_ms, cam_edge FROM last_stop ORDER BY axis");
   if (!st) return std::unexpected(st.error());
   LastStops out{};
   for (;;) {
@@ -46,6 +46,7 @@ Result<LastStops> SettingsStore::last_stops() const {
     s.frame.switch_compensation_mm = st->real_at(9);
     s.frame.home_position_mm = st->real_at(10);
     s.time_ms = st->int_at(11);
+    s.frame.cam_edge = st->int_at(12);
     out[static_cast<std::size_t>(axis)] = s;
   }
   return out;
@@ -60,8 +61,8 @@ Status SettingsStore::record_last_stops(const LastStops& stops) {
   {
     auto ins = m.db.prepare(
         "INSERT OR REPLACE INTO last_stop(axis, clean, position_mm, mode, direction, sensor_nc, slave_of, "
-        "slave_mode, pull_off_mm, switch_compensation_mm, home_position_mm, time_ms) "
-        "VALUES(?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+        "slave_mode, pull_off_mm, switch_compensation_mm, home_position_mm, time_ms, cam_edge) "
+        "VALUES(?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     if (!ins) return std::unexpected(ins.error());
     const std::int64_t now = m.now_ms();
     for (std::size_t a = 0; a < kHistoryAxes; ++a) {
@@ -80,7 +81,8 @@ Status SettingsStore::record_last_stops(const LastStops& stops) {
           .bind(9, finite(s.frame.pull_off_mm))
           .bind(10, finite(s.frame.switch_compensation_mm))
           .bind(11, finite(s.frame.home_position_mm))
-          .bind(12, s.time_ms != 0 ? s.time_ms : now);
+          .bind(12, s.time_ms != 0 ? s.time_ms : now)
+          .bind(13, s.frame.cam_edge);
       if (auto r = ins->run("recording the last stop of an axis"); !r) return r;
     }
   }

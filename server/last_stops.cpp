@@ -12,7 +12,8 @@ persistence::StoredFrame to_store(const homing::HomeFrame& f) {
   return persistence::StoredFrame{static_cast<std::int64_t>(f.mode),       static_cast<std::int64_t>(f.direction),
                                   f.sensor_nc,                               static_cast<std::int64_t>(f.slave_of),
                                   static_cast<std::int64_t>(f.slave_mode), f.pull_off_mm,
-                                  f.switch_compensation_mm,                 f.home_position_mm};
+                                  f.switch_compensation_mm,                 f.home_position_mm,
+                                  static_cast<std::int64_t>(f.cam_edge)};
 }
 
 homing::HomeFrame to_engine(const persistence::StoredFrame& f) {
@@ -25,6 +26,7 @@ homing::HomeFrame to_engine(const persistence::StoredFrame& f) {
   h.pull_off_mm = f.pull_off_mm;
   h.switch_compensation_mm = f.switch_compensation_mm;
   h.home_position_mm = f.home_position_mm;
+  h.cam_edge = static_cast<homing::CamEdge>(f.cam_edge);
   return h;
 }
 

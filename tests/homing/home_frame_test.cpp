@@ -23,6 +23,24 @@ SCENARIO("changing a setting that places the coordinates unhomes the axis", "[ho
   CHECK(unhomes([](AxisSettings& s) { s.sensor_nc = true; }));
 }
 
+SCENARIO("a new cam edge unhomes a home cam axis and leaves an axis homed on a switch homed",
+         "[home_frame][home_cam]") {
+  // Found by a technician: the edge was no part of the frame, so a home cam
+  // axis kept coordinates measured from the other edge of its cam.
+  Rig r;
+  fit_home_cam(r, 50, 10, 20, CamEdge::behind);
+  r.settings.axes[1] = typical_axis();  // Y homes on a switch: a cam edge places nothing
+  r.step();
+  REQUIRE(r.home_all());
+  REQUIRE(r.axis(0).homed);
+  REQUIRE(r.axis(1).homed);
+  r.settings.axes[0].cam_edge = CamEdge::ahead;
+  r.settings.axes[1].cam_edge = CamEdge::ahead;
+  r.step();
+  CHECK_FALSE(r.axis(0).homed);
+  CHECK(r.axis(1).homed);
+}
+
 SCENARIO("a change that leaves the coordinates where they are keeps the axis homed", "[home_frame]") {
   Rig r;
   REQUIRE(r.home_all());

@@ -243,4 +243,25 @@ struct Rig {
   }
 };
 
+// X homes negative onto a cam over [cam_min, cam_max] in mid-travel, between
+// limit switches at -100 and +100 (mechanical stops 10 mm beyond), its
+// carriage at start_mm.
+inline void fit_home_cam(Rig& r, double start_mm, double cam_min, double cam_max, CamEdge edge = CamEdge::behind) {
+  AxisSettings& s = r.settings.axes[0];
+  s.mode = HomingMode::home_cam;
+  s.limits_fitted = true;
+  s.limit_overtravel_mm = 10;
+  s.cam_edge = edge;
+  s.max_backoff_mm = 30;  // covers the cam's length: the far edge may be the reference
+  s.soft_limit_min_mm = -1000;
+  sim::AxisConfig& m = r.machine.axes[0];
+  m.actual_position_mm = start_mm;
+  m.sensor_min_mm = cam_min;
+  m.sensor_max_mm = cam_max;
+  m.limit_min_mm = -100;
+  m.limit_max_mm = 100;
+  m.hard_stop_min_mm = -110;
+  m.hard_stop_max_mm = 110;
+}
+
 }  // namespace rig

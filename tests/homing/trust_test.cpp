@@ -72,6 +72,13 @@ AxisSettings& shared_limit_reapproach(CleanStop& c, double hysteresis_mm) {
   return s;
 }
 
+// X homes on the behind edge (the top) of a cam over [10, 20] in mid-travel,
+// between limit switches, from carriage 50.
+AxisSettings& home_cam_between_limits(CleanStop& c) {
+  fit_home_cam(c.before, 50, 10, 20, CamEdge::behind);
+  return c.before.settings.axes[X];
+}
+
 }  // namespace
 
 SCENARIO("a restart after a clean stop offers a reference check, which homes the carriage left where it was without a full cycle",
@@ -267,27 +274,41 @@ SCENARIO("an abort during the reference check stops it with the aborted alarm", 
   CHECK_FALSE(r.axis(X).homed);
 }
 
+SCENARIO("a home cam axis whose cam edge changed since the last stop is offered no reference check",
+         "[trust][home_cam][home_frame]") {
+  // Found by a technician: the edge was no part of the home frame, so the
+  // check was offered and then refused as a carriage moved by the cam's width.
+  CleanStop c;
+  home_cam_between_limits(c);
+  home_and_stop(c);
+  Rig r = restart(c.before, c.stops);
+  REQUIRE(r.axis(X).trust == Trust::last_stop_clean);
+  r.settings.axes[X].cam_edge = CamEdge::ahead;
+  r.step();
+  CHECK(r.axis(X).trust == Trust::unknown);
+  const double start = r.actual(X);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::refused_no_clean_stop);
+  CHECK(r.actual(X) == start);
+}
+
+SCENARIO("a home cam axis restarted with its cam edge unchanged is offered the reference check and homed by it",
+         "[trust][home_cam][home_frame]") {
+  CleanStop c;
+  home_cam_between_limits(c);
+  home_and_stop(c);
+  Rig r = restart(c.before, c.stops);
+  CHECK(r.axis(X).trust == Trust::last_stop_clean);
+  CHECK(refcheck(r, axis_bit(X)) == CommandResult::accepted);
+  CHECK(r.axis(X).homed);
+}
+
 SCENARIO("a home cam axis left on the cam's far side is checked across the cam and accepted where it stands",
          "[trust][home_cam]") {
   // Campaign seed 187000328: a home cam lies in mid-travel, so a homed axis
   // may rest beyond it (a final move or a jog across it); the check took
   // that for a carriage moved past its edge and refused it with the cam's width.
   CleanStop c;
-  AxisSettings& s = c.before.settings.axes[X];
-  s.mode = HomingMode::home_cam;
-  s.cam_edge = CamEdge::behind;  // the top of the cam, left upward, is the reference
-  s.limits_fitted = true;
-  s.limit_overtravel_mm = 10;
-  s.max_backoff_mm = 30;
-  s.soft_limit_min_mm = -1000;
-  sim::AxisConfig& m = c.before.machine.axes[X];
-  m.actual_position_mm = 50;
-  m.sensor_min_mm = 10;
-  m.sensor_max_mm = 20;
-  m.limit_min_mm = -100;
-  m.limit_max_mm = 100;
-  m.hard_stop_min_mm = -110;
-  m.hard_stop_max_mm = 110;
+  const AxisSettings& s = home_cam_between_limits(c);  // the top of the cam, left upward, is the reference
   const bool on_cam = GENERATE(false, true);
   CAPTURE(on_cam);
   REQUIRE(c.before.home_all());

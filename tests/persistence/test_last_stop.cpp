@@ -19,7 +19,7 @@ AxisLastStop stop_at(double position_mm, bool clean) {
   AxisLastStop s;
   s.clean = clean;
   s.position_mm = position_mm;
-  s.frame = StoredFrame{2, 0, false, 0, 0, 1.0, 0.0, -1.5};
+  s.frame = StoredFrame{2, 0, false, 0, 0, 1.0, 0.0, -1.5, 0};
   s.time_ms = 1234;
   return s;
 }

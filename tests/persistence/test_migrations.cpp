@@ -56,7 +56,65 @@ ALTER TABLE homing_axes ADD COLUMN gantry_skew_mm REAL;
 PRAGMA user_version = 5;
 )";
 
+// What version 6 shipped: version 5 with the last stops and the simulator's carriages.
+const std::string kV6Sql = kV5Sql + R"(
+CREATE TABLE last_stop(axis INTEGER PRIMARY KEY NOT NULL, clean INTEGER NOT NULL, position_mm REAL NOT NULL,
+                       mode INTEGER NOT NULL, direction INTEGER NOT NULL, sensor_nc INTEGER NOT NULL,
+                       slave_of INTEGER NOT NULL, slave_mode INTEGER NOT NULL, pull_off_mm REAL NOT NULL,
+                       switch_compensation_mm REAL NOT NULL, home_position_mm REAL NOT NULL,
+                       time_ms INTEGER NOT NULL) WITHOUT ROWID;
+CREATE TABLE sim_carriages(axis INTEGER PRIMARY KEY NOT NULL, actual_mm REAL NOT NULL) WITHOUT ROWID;
+PRAGMA user_version = 6;
+)";
+
 }  // namespace
+
+TEST_CASE("a version 6 database upgrades: each clean last stop keeps the home cam edge it was homed on",
+          "[persistence][migration][trust]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  // X a home cam on its far edge, Y one on its near edge, Z a switch axis
+  // whose cam_edge setting places nothing, A a home cam on the default edge
+  // (no row in settings).
+  test::sql_exec(db, kV6Sql + R"(
+    INSERT INTO settings VALUES('axis.x.mode', 11);
+    INSERT INTO settings VALUES('axis.x.cam_edge', 1);
+    INSERT INTO settings VALUES('axis.y.cam_edge', 0);
+    INSERT INTO settings VALUES('axis.z.cam_edge', 1);
+    INSERT INTO last_stop VALUES(0, 1, 120.5, 11, 1, 0, 0, 0, 2.0, 0.0, 0.0, 50);
+    INSERT INTO last_stop VALUES(1, 1, 121.0, 11, 1, 0, 0, 0, 2.0, 0.0, 0.0, 50);
+    INSERT INTO last_stop VALUES(2, 1, -4.0, 3, 0, 0, 0, 0, 1.0, 0.0, 0.0, 50);
+    INSERT INTO last_stop VALUES(3, 0, 30.0, 11, 0, 0, 0, 0, 1.0, 0.0, 0.0, 50);
+    INSERT INTO sim_carriages VALUES(0, 120.5);
+  )");
+  OpenReport report;
+  auto store = test::open_ok(db, report);
+  CHECK(report.schema_version_found == 6);
+  CHECK(test::sql_int(db, "PRAGMA user_version") == kSchemaVersion);
+  auto stops = store.last_stops();
+  REQUIRE(stops);
+  REQUIRE((*stops)[0]);
+  CHECK((*stops)[0]->frame.cam_edge == 1);
+  CHECK((*stops)[0]->position_mm == 120.5);
+  CHECK((*stops)[0]->frame.pull_off_mm == 2.0);
+  REQUIRE((*stops)[1]);
+  CHECK((*stops)[1]->frame.cam_edge == 0);
+  REQUIRE((*stops)[2]);
+  CHECK((*stops)[2]->frame.cam_edge == 0);
+  REQUIRE((*stops)[3]);
+  CHECK((*stops)[3]->frame.cam_edge == 0);
+  CHECK_FALSE((*stops)[3]->clean);
+  auto carriages = store.sim_carriages();
+  REQUIRE(carriages);
+  CHECK((*carriages)[0] == 120.5);
+  // And the edge is kept from then on.
+  LastStops one{};
+  one[4] = AxisLastStop{true, 7.5, StoredFrame{11, 0, false, 0, 0, 1.0, 0.0, 0.0, 1}, 77};
+  REQUIRE(store.record_last_stops(one));
+  stops = store.last_stops();
+  REQUIRE(stops);
+  CHECK((*stops)[4] == one[4]);
+}
 
 TEST_CASE("a version 5 database upgrades: its runs stay, no axis has a last stop, and the last stops are kept from then on",
           "[persistence][migration][trust]") {
@@ -80,7 +138,7 @@ TEST_CASE("a version 5 database upgrades: its runs stay, no axis has a last stop
   REQUIRE(stops);
   for (const auto& s : *stops) CHECK_FALSE(s.has_value());
   LastStops one{};
-  one[2] = AxisLastStop{true, 12.5, StoredFrame{2, 1, false, 0, 0, 1.0, 0.0, 0.0}, 77};
+  one[2] = AxisLastStop{true, 12.5, StoredFrame{2, 1, false, 0, 0, 1.0, 0.0, 0.0, 0}, 77};
   REQUIRE(store.record_last_stops(one));
   stops = store.last_stops();
   REQUIRE(stops);

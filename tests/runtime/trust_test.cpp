@@ -13,6 +13,7 @@
 #include "registers/defaults.hpp"
 #include "registers/sim_bindings.hpp"
 #include "server/control_loop.hpp"
+#include "server/last_stops.hpp"
 
 namespace {
 
@@ -92,4 +93,26 @@ TEST_CASE("the control loop gives the engine the kept last stops, and a referenc
   CHECK(st.axes[0].trust == homing::Trust::reference_checked);
   CHECK(st.homing_cycles == 0);
   CHECK(events_since(*after, written).empty());
+}
+
+TEST_CASE("a kept last stop carries every setting of its home frame to the database and back") {
+  // A field left out on either side would make a frame that changed look
+  // unchanged after a restart (or the other way round).
+  homing::LastStops stops{};
+  homing::LastStop& s = stops[3];
+  s.clean = true;
+  s.position_mm = -12.25;
+  s.frame.mode = homing::HomingMode::home_cam;
+  s.frame.direction = homing::Direction::positive;
+  s.frame.sensor_nc = true;
+  s.frame.slave_of = 2;
+  s.frame.slave_mode = homing::SlaveMode::external_commutator;
+  s.frame.pull_off_mm = 1.5;
+  s.frame.switch_compensation_mm = -0.25;
+  s.frame.home_position_mm = 7.0;
+  s.frame.cam_edge = homing::CamEdge::ahead;
+  const homing::LastStops back = server::to_engine(server::to_store(stops));
+  CHECK(back[3].frame == s.frame);
+  CHECK(back[3].position_mm == s.position_mm);
+  CHECK(back[3].clean);
 }
