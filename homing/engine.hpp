@@ -114,6 +114,11 @@ class Engine {
   // Jog and move (jog_move.cpp).
   CommandResult motion_refusal(const Settings& settings, std::size_t axis) const;
   CommandResult jog_refusal(const Settings& settings, std::size_t axis, std::int8_t dir) const;
+  template <typename Pred>
+  bool any_of_pair(const Settings& settings, std::size_t axis, Pred pred) const;
+  bool on_both_limits(const Settings& settings, std::size_t axis) const;
+  bool limit_ahead(const Settings& settings, std::size_t axis, double toward) const;
+  bool on_limit_switch(const Settings& settings, std::size_t axis) const;
   void jog_commands(const Settings& settings, const Commands& commands);
   void move_commands(const Settings& settings, const Commands& commands);
 

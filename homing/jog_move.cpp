@@ -20,6 +20,33 @@ bool at_soft_limit(const AxisSettings& s, const AxisRun& run, std::int8_t dir) {
 
 }  // namespace
 
+// The axis and its gantry partner move together: a limit switch of either
+// counts for both.
+template <typename Pred>
+bool Engine::any_of_pair(const Settings& settings, std::size_t axis, Pred pred) const {
+  const int partner = gantry_partner(settings, axis);
+  for (const int a : {static_cast<int>(axis), partner}) {
+    if (a < 0) continue;
+    const auto i = static_cast<std::size_t>(a);
+    if (settings.axes[i].limits_fitted && pred(axes_[i].readings)) return true;
+  }
+  return false;
+}
+
+// Both ends at once cannot be (limit_switches.cpp): no direction is away
+// from them, and the technician is told to look at the wiring instead.
+bool Engine::on_both_limits(const Settings& settings, std::size_t axis) const {
+  return any_of_pair(settings, axis, [](const AxisReadings& in) { return in.limit_min && in.limit_max; });
+}
+
+bool Engine::limit_ahead(const Settings& settings, std::size_t axis, double toward) const {
+  return any_of_pair(settings, axis, [toward](const AxisReadings& in) { return in.limit_toward(toward); });
+}
+
+bool Engine::on_limit_switch(const Settings& settings, std::size_t axis) const {
+  return any_of_pair(settings, axis, [](const AxisReadings& in) { return in.limit_min || in.limit_max; });
+}
+
 CommandResult Engine::motion_refusal(const Settings& settings, std::size_t axis) const {
   if (estop_) return CommandResult::refused_estop;
   if (any_alarm()) return CommandResult::refused_alarm;
@@ -54,9 +81,9 @@ CommandResult Engine::motion_refusal(const Settings& settings, std::size_t axis)
 // Limit switches: a jog into an active one is refused, tripped or not.
 CommandResult Engine::jog_refusal(const Settings& settings, std::size_t axis, std::int8_t dir) const {
   const CommandResult r = motion_refusal(settings, axis);
-  if (r == CommandResult::accepted && settings.axes[axis].limits_fitted &&
-      axes_[axis].readings.limit_toward(dir))
-    return CommandResult::refused_hard_limit;
+  if ((r == CommandResult::accepted || r == CommandResult::refused_hard_limit) && on_both_limits(settings, axis))
+    return CommandResult::refused_both_limits;
+  if (r == CommandResult::accepted && limit_ahead(settings, axis, dir)) return CommandResult::refused_hard_limit;
   if (r != CommandResult::refused_hard_limit) return r;
   // Every tripped limit of the axis and its gantry partner must lie behind the
   // jog: a limit switch at its own end, a shared home sensor toward direction.
@@ -69,8 +96,7 @@ CommandResult Engine::jog_refusal(const Settings& settings, std::size_t axis, st
     const double toward = t.limit_side != 0 ? static_cast<double>(t.limit_side) : seek_toward;
     if (dir * toward >= 0) return CommandResult::refused_hard_limit;
   }
-  if (settings.axes[axis].limits_fitted && axes_[axis].readings.limit_toward(dir))
-    return CommandResult::refused_hard_limit;
+  if (limit_ahead(settings, axis, dir)) return CommandResult::refused_hard_limit;
   return CommandResult::accepted;
 }
 
@@ -95,11 +121,9 @@ void Engine::jog_commands(const Settings& settings, const Commands& c) {
         CommandResult r = jog_refusal(settings, a, req);
         const bool homed = run.counts_as_homed(settings.axes[a].mode);
         const int p = gantry_partner(settings, a);
-        // Off a tripped limit, or off an active limit switch it stands on
-        // (powered up there: jog_refusal has refused a jog toward it).
-        const bool on_limit_switch =
-            settings.axes[a].limits_fitted && (run.readings.limit_min || run.readings.limit_max);
-        const bool recovering = run.limit_tripped || on_limit_switch ||
+        // Off a tripped limit, or off an active limit switch it (or its gantry
+        // partner) stands on (powered up there: jog_refusal has refused a jog toward it).
+        const bool recovering = run.limit_tripped || on_limit_switch(settings, a) ||
                                 (p >= 0 && axes_[static_cast<std::size_t>(p)].limit_tripped);
         if (r == CommandResult::accepted && !homed && !recovering &&
             allowed_without_homing(settings, a) == AllowedWithoutHoming::none)
@@ -130,6 +154,8 @@ void Engine::move_commands(const Settings& settings, const Commands& c) {
     const double target = c.move_target_mm[a];
     CommandResult r = motion_refusal(settings, a);
     const bool homed = run.counts_as_homed(s.mode);
+    if ((r == CommandResult::accepted || r == CommandResult::refused_hard_limit) && on_both_limits(settings, a))
+      r = CommandResult::refused_both_limits;
     if (r == CommandResult::accepted && !std::isfinite(target)) r = CommandResult::refused_invalid;
     if (r == CommandResult::accepted && !homed &&
         allowed_without_homing(settings, a) != AllowedWithoutHoming::all)
@@ -137,9 +163,9 @@ void Engine::move_commands(const Settings& settings, const Commands& c) {
     if (r == CommandResult::accepted && homed && s.soft_limits_enable &&
         (target < s.soft_limit_min_mm || target > s.soft_limit_max_mm))
       r = CommandResult::refused_soft_limit;
-    // A move toward an active limit switch would trip it at once.
-    if (r == CommandResult::accepted && s.limits_fitted && std::isfinite(target) &&
-        target != run.machine_position_mm() && run.readings.limit_toward(target - run.machine_position_mm()))
+    // A move toward an active limit switch (its own or its gantry partner's) would trip it at once.
+    if (r == CommandResult::accepted && std::isfinite(target) &&
+        target != run.machine_position_mm() && limit_ahead(settings, a, target - run.machine_position_mm()))
       r = CommandResult::refused_hard_limit;
     if (r == CommandResult::accepted && run.phase == Phase::jog) r = CommandResult::refused_busy;
     if (r == CommandResult::accepted && s.jog_feedrate_mm_per_min <= 0) r = CommandResult::refused_invalid;

@@ -51,8 +51,9 @@ enum class CommandResult : std::uint8_t {
   refused_gantry_pair = 20,     // reference check: a gantry pair is squared by a full cycle only
   refused_no_travel_end = 21,   // measurement: the axis homes at no end of travel, or cannot tell the opposite end
   cancelled_by_abort = 22,      // a start that came with an abort (one request, or one period): abort wins
+  refused_both_limits = 23,     // jog or move: both limit switches of the axis or its partner read active (wiring, limits_nc)
 };
-inline constexpr std::uint8_t kCommandResultCount = 23;
+inline constexpr std::uint8_t kCommandResultCount = 24;
 inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
     {CommandResult::none, "none", "no command yet"},
     {CommandResult::accepted, "accepted", "the last command started"},
@@ -96,8 +97,13 @@ inline constexpr EnumInfo<CommandResult> kCommandResultInfo[] = {
     {CommandResult::cancelled_by_abort, "cancelled_by_abort",
      "not started: an abort came with it (in the same request or within the same control period) and abort wins; "
      "send the start again once the abort is done"},
+    {CommandResult::refused_both_limits, "refused_both_limits",
+     "both limit switches of the axis (or of its gantry partner) read active at once, so no direction is away "
+     "from them: a broken wire to normally-closed switches or a wrong limits_nc; check the wiring and "
+     "axis.<a>.limits_nc of the axis whose axis.<a>.limit_min and limit_max both read 1; nothing jogs or moves "
+     "until one reads released"},
 };
-static_assert(lists_every_value(kCommandResultInfo, CommandResult::cancelled_by_abort));
+static_assert(lists_every_value(kCommandResultInfo, CommandResult::refused_both_limits));
 static_assert(std::size(kCommandResultInfo) == kCommandResultCount);
 constexpr std::span<const EnumInfo<CommandResult>> enum_table(CommandResult) { return kCommandResultInfo; }
 

@@ -14,26 +14,11 @@ using namespace rig;
 
 namespace {
 
-// X between limit switches at -100 and +100 (mechanical stops 10 mm beyond),
-// homing negative; the cam covers [cam_min, cam_max], 0.05 mm hysteresis.
+// X on a home cam between limit switches (fit_home_cam), 0.05 mm hysteresis.
 Rig cam_rig(double start_mm, double cam_min, double cam_max, CamEdge edge = CamEdge::behind) {
   Rig r;
-  AxisSettings& s = r.settings.axes[0];
-  s.mode = HomingMode::home_cam;
-  s.limits_fitted = true;
-  s.limit_overtravel_mm = 10;
-  s.cam_edge = edge;
-  s.max_backoff_mm = 30;  // covers the cam's length: the far edge may be the reference
-  s.soft_limit_min_mm = -1000;
-  s.max_seek_travel_mm = 300;
-  sim::AxisConfig& m = r.machine.axes[0];
-  m.actual_position_mm = start_mm;
-  m.sensor_min_mm = cam_min;
-  m.sensor_max_mm = cam_max;
-  m.limit_min_mm = -100;
-  m.limit_max_mm = 100;
-  m.hard_stop_min_mm = -110;
-  m.hard_stop_max_mm = 110;
+  fit_home_cam(r, start_mm, cam_min, cam_max, edge);
+  r.settings.axes[0].max_seek_travel_mm = 300;
   return r;
 }
 
@@ -106,6 +91,78 @@ SCENARIO("both limit switches active at once: both_limits_active, nothing search
   CHECK_FALSE(r.home_all());
   CHECK(r.axis(0).alarm.code == AlarmCode::both_limits_active);
   CHECK(r.actual(0) == Approx(50).margin(1e-6));
+}
+
+SCENARIO("both limit switches active at rest: a jog either way or a move is refused as both active, nothing moves",
+         "[limits][hard_limit]") {
+  // Found by a technician: each jog was refused "only a jog away", which no direction is.
+  Rig r = cam_rig(50, 10, 20);
+  r.machine.axes[0].fault = sim::Fault::limits_stuck;
+  r.step();
+  REQUIRE(r.status().interlocks & interlock::limit_active);
+  for (const int dir : {+1, -1}) {
+    r.jog(0, dir);
+    r.step();
+    CHECK(r.status().last_command_result == CommandResult::refused_both_limits);
+    r.run_for(0.2);
+    r.release_jogs();
+    r.step();
+  }
+  r.move(0, 0);
+  CHECK(r.status().last_command_result == CommandResult::refused_both_limits);
+  r.run_for(0.2);
+  CHECK(r.actual(0) == Approx(50).margin(1e-9));
+  CHECK_FALSE(r.status().alarm);
+  CHECK_THAT(std::string(text_of(CommandResult::refused_both_limits)),
+             Catch::Contains("limits_nc") && Catch::Contains("wiring"));
+  // Wired right again: the jog runs.
+  r.set_fault(0, sim::Fault::none);
+  r.step();
+  r.jog(0, -1);
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  r.run_for(0.2);
+  r.release_jogs();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(r.actual(0) < 50);
+}
+
+SCENARIO("a gantry slave standing on its limit switch: a jog or move of the pair toward it is refused, one away runs",
+         "[limits][hard_limit][gantry]") {
+  // Found in review: only the jogged axis's own limit switches were looked
+  // at, so the pair was started onto the slave's switch and tripped it.
+  Rig r;
+  r.settings.axes[1] = typical_axis();
+  r.settings.axes[1].slave_of = 1;
+  r.settings.axes[1].limits_fitted = true;
+  r.settings.axes[1].limit_overtravel_mm = 10;
+  r.settings.global.allowed_without_homing = AllowedWithoutHoming::all;
+  for (std::size_t a : {0u, 1u}) r.machine.axes[a].actual_position_mm = 103;
+  r.machine.axes[1].limit_min_mm = -100;
+  r.machine.axes[1].limit_max_mm = 100;
+  r.machine.axes[1].hard_stop_max_mm = 110;
+  r.step();
+  REQUIRE(r.status().interlocks & interlock::limit_active);
+  r.jog(0, +1);  // the master toward the slave's active switch
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::refused_hard_limit);
+  r.run_for(0.2);
+  r.release_jogs();
+  r.step();
+  r.move(0, 105);
+  CHECK(r.status().last_command_result == CommandResult::refused_hard_limit);
+  r.run_for(0.2);
+  CHECK(r.actual(0) == Approx(103).margin(1e-9));
+  CHECK(r.actual(1) == Approx(103).margin(1e-9));
+  CHECK_FALSE(r.status().alarm);
+  r.jog(0, -1);  // away
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::accepted);
+  r.run_until([&] { return r.actual(1) < 99; }, 30);
+  r.release_jogs();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK(r.actual(1) < 100);
+  CHECK_FALSE(r.status().alarm);
 }
 
 SCENARIO("a limit switch met in a phase that must not reach one: limit_in_homing", "[limits][home_cam][alarms]") {
