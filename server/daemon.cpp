@@ -162,7 +162,8 @@ std::expected<Transports, std::string> open_transports(const Options& opt, Modbu
     if (auto r = open_tls(opt, service, t); !r) return std::unexpected(r.error());
   }
   if (!opt.rtu_device.empty()) {
-    t.rtu = std::make_unique<RtuServer>(RtuConfig{opt.rtu_device, opt.baud, opt.parity, opt.stop_bits, opt.unit_id},
+    t.rtu = std::make_unique<RtuServer>(RtuConfig{opt.rtu_device, opt.baud, opt.parity, opt.stop_bits, opt.unit_id,
+                                                  std::chrono::milliseconds(opt.rtu_jog_release_ms)},
                                         service);
     if (auto r = t.rtu->open(); !r) return std::unexpected(r.error());
   }

@@ -38,6 +38,7 @@ class ActivityHandler final : public RequestHandler {
     return inner_.handle_now(unit, pdu, client);
   }
   void disconnected(const ClientInfo& client) override { inner_.disconnected(client); }
+  bool release_jogs(const ClientInfo& client) override { return inner_.release_jogs(client); }
   void bus_event(Transport transport, BusEvent event) override { inner_.bus_event(transport, event); }
 
  private:

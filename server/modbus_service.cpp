@@ -108,9 +108,7 @@ void ModbusService::set_extras(const registers::StatusExtras& extras) {
   extras_.settings_locked = locked;  // owned here, not by the monitor
 }
 
-void ModbusService::disconnected(const ClientInfo& client) {
-  // A jog moves only while every client that holds it is there to stop it.
-  std::unique_lock lock(mutex_);
+bool ModbusService::release_jogs_locked(const ClientInfo& client) {
   const homing::AxisMask released = jog_buttons_.disconnected(client.id);
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     if (!(released & homing::axis_bit(a))) continue;
@@ -118,6 +116,18 @@ void ModbusService::disconnected(const ClientInfo& client) {
     host_.jog_minus[a] = jog_buttons_.held(a, -1);
     loop_.set_jog(a, 0, client.id);  // the loop's mailbox lock, never held while taking this one
   }
+  return released != 0;
+}
+
+bool ModbusService::release_jogs(const ClientInfo& client) {
+  std::unique_lock lock(mutex_);
+  return release_jogs_locked(client);
+}
+
+void ModbusService::disconnected(const ClientInfo& client) {
+  // A jog moves only while every client that holds it is there to stop it.
+  std::unique_lock lock(mutex_);
+  release_jogs_locked(client);
   // An edit session ends with its connection, as a transaction does.
   const std::string owner = EditSessions::owner_of(client);
   if (edits_.state(owner) == EditState::open)

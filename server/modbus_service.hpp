@@ -77,6 +77,7 @@ class ModbusService final : public RequestHandler {
   bool handle_later(std::uint8_t unit, std::span<const std::uint8_t> pdu, const ClientInfo& client,
                     std::function<void(Reply)> done) override;
   void disconnected(const ClientInfo& client) override;
+  bool release_jogs(const ClientInfo& client) override;
   void bus_event(Transport transport, BusEvent event) override { diagnostics_.bus_event(transport, event); }
   LineCounters line_counters(Transport transport) const { return diagnostics_.counters(transport); }
 
@@ -115,6 +116,7 @@ class ModbusService final : public RequestHandler {
   static Reply accepted_write_reply(FunctionCode function, const WriteRequest& w);
   Reply read(Target target, std::uint8_t fc, const ReadRequest& request, const ClientInfo& client);
   registers::StatusExtras extras_now() const;  // under mutex_ (shared is enough)
+  bool release_jogs_locked(const ClientInfo& client);  // under mutex_ (unique)
   // Validates and applies a write; nullopt when accepted.
   std::optional<Reply> write(Target target, std::uint8_t fc, const WriteRequest& request, const ClientInfo& client);
   std::optional<Reply> write_module(std::uint8_t fc, registers::Table table, std::uint16_t start,

@@ -199,6 +199,12 @@ OptionParser::Table::Table() {
       ->capture_default_str();
   app.add_option("--parity", parity, "RTU parity")->check(CLI::IsMember({"N", "E", "O"}))->capture_default_str();
   app.add_option("--stop-bits,--stop_bits", o.stop_bits, "RTU stop bits")->check(CLI::IsMember({1, 2}))->capture_default_str();
+  app.add_option("--rtu-jog-release-ms,--rtu_jog_release_ms", o.rtu_jog_release_ms,
+                 "Over RTU, the jog buttons the master holds are released when no request for the module has come "
+                 "for this long (a serial line has no disconnect: a dead panel's jog stops); above the master's "
+                 "poll cycle; 0: never")
+      ->check(whole_range(0, 60000))
+      ->capture_default_str();
   app.add_option("--unit", o.unit_id, "Modbus unit id of the module")->check(whole_range(1, 247))->capture_default_str();
   app.add_option("--db", o.db_path, "SQLite settings database")->check(non_empty_path())->capture_default_str();
   app.add_option("--backend", o.backend, "Machine I/O backend")

@@ -21,6 +21,8 @@ struct Options {
   int baud = 19200;
   char parity = 'E';
   int stop_bits = 1;
+  // A serial master silent this long releases the jog buttons it holds (0: never).
+  int rtu_jog_release_ms = 1000;
   int unit_id = 1;
   std::string db_path = "homingd.db";
   std::string backend = "sim";

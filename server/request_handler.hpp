@@ -91,6 +91,9 @@ class RequestHandler {
     return false;
   }
   virtual void disconnected(const ClientInfo& client) = 0;
+  // The jog buttons `client` holds are released (a serial master gone silent:
+  // a line has no disconnect); its edit session stays. true: one was held.
+  virtual bool release_jogs(const ClientInfo&) { return false; }
   virtual void bus_event(Transport, BusEvent) {}
 };
 

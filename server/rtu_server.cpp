@@ -6,6 +6,7 @@
 
 #include <poll.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstring>
@@ -41,10 +42,11 @@ void RtuServer::run() {
     // Idle: wake up regularly to notice stop(). Inside a frame: its bytes must
     // follow within the byte timeout, else the frame ends there.
     pollfd p{fd, POLLIN, 0};
-    const int ready = ::poll(&p, 1, framer.pending() ? kByteTimeoutMs : kIdleWakeMs);
+    const int ready = ::poll(&p, 1, wait_ms(framer.pending()));
     if (ready < 0 && errno == EINTR) continue;
     if (ready <= 0) {
       if (auto r = framer.silence()) take(*r, broadcast_info, unit_info);
+      release_if_silent(unit_info);
       continue;
     }
     const ssize_t n = ::read(fd, chunk.data(), chunk.size());
@@ -56,7 +58,30 @@ void RtuServer::run() {
     }
     for (ssize_t i = 0; i < n; ++i)
       if (auto r = framer.push(chunk[static_cast<std::size_t>(i)])) take(*r, broadcast_info, unit_info);
+    release_if_silent(unit_info);  // a bus busy with other units' frames: poll() never times out
   }
+}
+
+int RtuServer::wait_ms(bool pending) const {
+  if (pending) return kByteTimeoutMs;
+  if (config_.jog_release.count() <= 0 || silence_handled_) return kIdleWakeMs;
+  const auto left = std::chrono::ceil<std::chrono::milliseconds>(last_heard_ + config_.jog_release - Clock::now());
+  return static_cast<int>(std::clamp<std::int64_t>(left.count(), 0, kIdleWakeMs));
+}
+
+void RtuServer::release_if_silent(const ClientInfo& master) {
+  if (config_.jog_release.count() <= 0 || silence_handled_) return;
+  const auto silent = Clock::now() - last_heard_;
+  if (silent < config_.jog_release) return;
+  silence_handled_ = true;
+  // A panel holding a jog button keeps talking to the module; one that went
+  // quiet (power, cable, crash) can no longer release it, and a serial line
+  // has no disconnect to say so.
+  if (handler_.release_jogs(master))
+    spdlog::warn("rtu {}: no request from the master for {} ms (--rtu-jog-release-ms {}): the jog buttons it held "
+                 "are released and the jog stopped; press again once the master talks again",
+                 config_.device, std::chrono::duration_cast<std::chrono::milliseconds>(silent).count(),
+                 config_.jog_release.count());
 }
 
 void RtuServer::take(const RtuFramer::Result& r, const ClientInfo& broadcast_info, const ClientInfo& unit_info) {
@@ -70,6 +95,8 @@ void RtuServer::take(const RtuFramer::Result& r, const ClientInfo& broadcast_inf
   handler_.bus_event(Transport::rtu, BusEvent::message);
   const std::uint8_t unit = r.frame[0];
   if (unit != config_.unit_id && unit != 0) return;  // another device on the bus
+  last_heard_ = Clock::now();
+  silence_handled_ = false;
   const auto pdu = std::span<const std::uint8_t>(r.frame.data() + 1, r.frame.size() - 3);
   const Reply reply = handler_.handle(unit, pdu, unit == 0 ? broadcast_info : unit_info);
   if (!reply.send || unit == 0) return;  // broadcasts are never answered

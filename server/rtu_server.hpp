@@ -5,6 +5,7 @@
 // simulator unit is reached over TCP. Every frame on the line, for any unit,
 // is counted for function 08.
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <expected>
 #include <string>
@@ -22,6 +23,9 @@ struct RtuConfig {
   char parity = 'E';
   int stop_bits = 1;
   int unit_id = 1;
+  // No request for the module (its unit or a broadcast) for this long
+  // releases the jog buttons the master holds; zero: never.
+  std::chrono::milliseconds jog_release{1000};
 };
 
 class RtuServer {
@@ -41,6 +45,13 @@ class RtuServer {
   static constexpr int kByteTimeoutMs = 100;
   static constexpr int kIdleWakeMs = 200;
   void take(const RtuFramer::Result& result, const ClientInfo& broadcast_info, const ClientInfo& unit_info);
+  // How long poll() may sleep before the master's silence must be looked at.
+  int wait_ms(bool pending) const;
+  void release_if_silent(const ClientInfo& master);
+
+  using Clock = std::chrono::steady_clock;
+  Clock::time_point last_heard_ = Clock::now();
+  bool silence_handled_ = false;  // the jogs were released (or none held) since the master was last heard
 
   RtuConfig config_;
   RequestHandler& handler_;

@@ -16,9 +16,12 @@ struct RtuRig {
   Daemon daemon;
   Client rtu;
   Client tcp;
-  RtuRig()
-      : daemon(DaemonOptions{.time_scale = 10,
-                             .extra = {"--rtu", pty.server_end(), "--baud", "19200", "--parity", "E"}}),
+  explicit RtuRig(std::vector<std::string> more = {})
+      : daemon(DaemonOptions{.time_scale = 10, .extra = [&] {
+                               std::vector<std::string> extra{"--rtu", pty.server_end(), "--baud", "19200", "--parity", "E"};
+                               extra.insert(extra.end(), more.begin(), more.end());
+                               return extra;
+                             }()}),
         rtu(Client::rtu(pty.client_end(), 19200, 'E')),
         tcp(Client::tcp(daemon.port())) {}
 };
@@ -184,4 +187,50 @@ TEST_CASE("RTU: a broadcast write is applied and never answered, other units are
   const auto st = rig.daemon.stop(SIGTERM);
   REQUIRE(st);
   CHECK(WIFEXITED(*st));
+}
+
+TEST_CASE("RTU: a jog held by a master that goes silent stops after --rtu-jog-release-ms and its coil reads 0") {
+  RtuRig rig({"--rtu-jog-release-ms", "400"});
+  Client& rtu = rig.rtu;
+  Client& tcp = rig.tcp;
+  rtu.set("axis.x.jog_feedrate", 100);  // slow: the carriage stays well inside its travel
+  REQUIRE(rtu.write("cmd.jog_plus.x", 1) == 0);
+  const double start = tcp.read_mm("sim.x.actual_position");
+  // A master that keeps polling (here every 100 ms, three times the release
+  // time in all) keeps its jog: silence is what releases it, not time.
+  for (int i = 0; i < 12; ++i) {
+    std::this_thread::sleep_for(100ms);
+    REQUIRE(rtu.read("cmd.jog_plus.x") == 1);
+  }
+  CHECK(tcp.read("cmd.jog_plus.x") == 1);
+  CHECK(tcp.read("axis.x.velocity") != 0);
+  CHECK(tcp.read_mm("sim.x.actual_position") > start);
+  // The panel dies: nothing more on the line. The daemon is watched over TCP only.
+  const auto silent_from = Clock::now();
+  REQUIRE(wait_until([&] { return tcp.read("cmd.jog_plus.x") == 0; }, 5s));
+  CHECK(Clock::now() - silent_from >= 350ms);
+  REQUIRE(wait_until([&] { return tcp.read("axis.x.velocity") == 0; }, 5s));
+  const double stopped = tcp.read_mm("sim.x.actual_position");
+  std::this_thread::sleep_for(300ms);
+  CHECK(tcp.read_mm("sim.x.actual_position") == stopped);
+  CHECK(rig.daemon.log().find("no request from the master for") != std::string::npos);
+  // The master talks again: nothing restarts by itself; a new press jogs.
+  CHECK(rtu.read("cmd.jog_plus.x") == 0);
+  REQUIRE(rtu.write("cmd.jog_plus.x", 1) == 0);
+  REQUIRE(wait_until([&] { return tcp.read("axis.x.velocity") != 0; }, 5s));
+  REQUIRE(rtu.write("cmd.jog_plus.x", 0) == 0);
+}
+
+TEST_CASE("RTU: with --rtu-jog-release-ms 0 a silent master's jog runs on until its coil is written 0") {
+  RtuRig rig({"--rtu-jog-release-ms", "0"});
+  Client& rtu = rig.rtu;
+  Client& tcp = rig.tcp;
+  rtu.set("axis.x.jog_feedrate", 100);
+  REQUIRE(rtu.write("cmd.jog_plus.x", 1) == 0);
+  std::this_thread::sleep_for(1500ms);  // the default release (1000 ms) would have stopped it
+  CHECK(tcp.read("cmd.jog_plus.x") == 1);
+  CHECK(tcp.read("axis.x.velocity") != 0);
+  REQUIRE(rtu.write("cmd.jog_plus.x", 0) == 0);
+  REQUIRE(wait_until([&] { return tcp.read("axis.x.velocity") == 0; }, 5s));
+  CHECK(rig.daemon.log().find("no request from the master for") == std::string::npos);
 }
