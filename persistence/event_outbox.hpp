@@ -33,9 +33,9 @@ struct Event {
   std::int32_t code = 0;     // alarm code; a cycle's result (0 = homed, else its alarm)
   std::int64_t duration_ms = 0;  // cycle_ended
   std::int32_t axes = 0;     // a cycle's axes, bit 0 = X
-  std::string name;          // setting_changed: the register name
+  std::string name{};        // setting_changed: the register name
   std::int64_t old_value = 0, new_value = 0;  // setting_changed: raw register values
-  std::string text;          // what a technician reads
+  std::string text{};        // what a technician reads
 };
 
 class EventOutbox {

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 
+#include "frame_changes.hpp"
 #include "modbus_service.hpp"
 #include "registers/lookup.hpp"
 #include "write_log.hpp"
@@ -238,9 +239,11 @@ void ModbusService::carry_out(WriteTicket& t, WritePlan& plan, const std::string
   }
   if (plan.unlock_code) unlock(*plan.unlock_code, client);
   if (plan.accepted.changes_persisted()) {
+    const std::vector<std::string> lost = references_lost(settings_, plan.accepted.settings, loop_.status());
     settings_ = plan.accepted.settings;  // the control loop gets them once the batch is carried out
     for (const registers::Effect e : plan.effects) apply_effect(e);
     spdlog::info("settings changed by {} {}: {}", client.transport, client.address, plan.changes);
+    for (const std::string& line : lost) spdlog::warn("{} (settings changed by {} {})", line, client.transport, client.address);
   }
   // Only the host values this request wrote: another client's, carried out
   // since this plan was decided, stay.

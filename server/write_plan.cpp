@@ -98,7 +98,7 @@ std::expected<WritePlan, PlannedRefusal> plan_edit_command(const registers::RawW
 // A settings write while the client's session is open: range-checked (done),
 // staged alone, refused while settings are locked or after the session timed out.
 std::expected<WritePlan, PlannedRefusal> plan_staging(std::span<const registers::RawWrite> writes,
-                                                      std::uint16_t start, const WriteState& state) {
+                                                      const WriteState& state) {
   const registers::Register& first =
       *std::find_if(writes.begin(), writes.end(), [](const auto& w) { return w.reg->persisted; })->reg;
   const std::uint16_t about = first.address;
@@ -162,7 +162,7 @@ std::expected<WritePlan, PlannedRefusal> plan_write(registers::Table table, std:
       return plan_edit_command(w, state);
     }
   const bool settings = std::any_of(decoded->begin(), decoded->end(), [](const auto& w) { return w.reg->persisted; });
-  if (settings && state.edit_state != EditState::none) return plan_staging(*decoded, start, state);
+  if (settings && state.edit_state != EditState::none) return plan_staging(*decoded, state);
   return plan_decoded_write(*decoded, start, state);
 }
 

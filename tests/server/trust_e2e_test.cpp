@@ -154,3 +154,40 @@ TEST_CASE("over Modbus: after a SIGKILL no axis is trusted, even one that stoppe
     CHECK(command(c, "cmd.refcheck.x") == v(homing::CommandResult::refused_no_clean_stop));
   }
 }
+
+TEST_CASE("over Modbus: a home position written to a homed axis unhomes it and the log says why and what to do") {
+  TempDir dir;
+  const std::string db = dir.file("machine.db");
+  home_and_stop(db);
+
+  Daemon d({.db = db});
+  Client c = Client::tcp(d.port());
+  REQUIRE(c.read("axis.y.trust") == v(homing::Trust::last_stop_clean));
+  c.set("axis.y.pull_off", c.read("axis.y.pull_off") + 500);
+  REQUIRE(wait_until([&] { return c.read("axis.y.trust") == v(homing::Trust::unknown); }, 5s));
+  REQUIRE(wait_until(
+      [&] {
+        return d.log().find("axis y: the reference check its clean stop offered is withdrawn: pull_off changed") !=
+               std::string::npos;
+      },
+      5s));
+  CHECK(command(c, "cmd.refcheck.y") == v(homing::CommandResult::refused_no_clean_stop));
+
+  REQUIRE(command(c, "cmd.home.x") == v(homing::CommandResult::accepted));
+  REQUIRE(c.read("axis.x.homed") == 1);
+  c.set("axis.x.home_position", c.read("axis.x.home_position") + 1000);
+  REQUIRE(wait_until([&] { return c.read("axis.x.homed") == 0; }, 5s));
+  REQUIRE(wait_until(
+      [&] {
+        return d.log().find("axis x is no longer homed: home_position changed, which places its coordinates; home it "
+                            "again") != std::string::npos;
+      },
+      5s));
+  // A setting that places nothing unhomes nothing and says nothing.
+  REQUIRE(command(c, "cmd.home.x") == v(homing::CommandResult::accepted));
+  c.set("axis.x.seek_feedrate", c.read("axis.x.seek_feedrate") - 100);
+  std::this_thread::sleep_for(200ms);
+  CHECK(c.read("axis.x.homed") == 1);
+  const std::string log = d.log();
+  CHECK(log.find("axis x is no longer homed") == log.rfind("axis x is no longer homed"));  // the one line, above
+}

@@ -1,0 +1,56 @@
+// The log lines of a settings change that costs axes their reference (server/frame_changes.hpp).
+#include <catch2/catch.hpp>
+
+#include <map>
+
+#include "registers/defaults.hpp"
+#include "server/frame_changes.hpp"
+
+namespace {
+
+homing::Settings default_settings() {
+  std::map<std::string, std::int64_t> raw;
+  for (const auto& [name, value] : registers::persisted_defaults()) raw[name] = value;
+  return registers::settings_from_raw(raw).settings;
+}
+
+}  // namespace
+
+TEST_CASE("a home position changed on a homed axis is one line naming the axis the setting and the way back") {
+  const homing::Settings before = default_settings();
+  homing::Settings after = before;
+  after.axes[0].home_position_mm += 1.0;
+  homing::Status status{};
+  status.axes[0].trust = homing::Trust::homed_this_power_on;
+  status.axes[1].trust = homing::Trust::homed_this_power_on;  // its frame did not change
+  const auto lines = server::references_lost(before, after, status);
+  REQUIRE(lines.size() == 1);
+  CHECK(lines[0] ==
+        "axis x is no longer homed: home_position changed, which places its coordinates; home it again before "
+        "moving it by coordinates");
+}
+
+TEST_CASE("a frame change withdraws a clean stop's reference check offer and says a full cycle is needed") {
+  const homing::Settings before = default_settings();
+  homing::Settings after = before;
+  after.axes[2].pull_off_mm += 0.5;
+  after.axes[2].sensor_nc = !after.axes[2].sensor_nc;
+  homing::Status status{};
+  status.axes[2].trust = homing::Trust::last_stop_clean;
+  const auto lines = server::references_lost(before, after, status);
+  REQUIRE(lines.size() == 1);
+  CHECK(lines[0] ==
+        "axis z: the reference check its clean stop offered is withdrawn: sensor_nc, pull_off changed, which places "
+        "its coordinates; home it with a full cycle");
+}
+
+TEST_CASE("a frame change of an axis with nothing to lose and a change that places nothing are not logged") {
+  const homing::Settings before = default_settings();
+  homing::Settings after = before;
+  after.axes[0].home_position_mm += 1.0;          // X: unknown trust, nothing lost
+  after.axes[1].seek_feedrate_mm_per_min += 100;  // Y homed: not in its frame
+  homing::Status status{};
+  status.axes[0].trust = homing::Trust::unknown;
+  status.axes[1].trust = homing::Trust::reference_checked;
+  CHECK(server::references_lost(before, after, status).empty());
+}
