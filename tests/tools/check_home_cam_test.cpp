@@ -127,3 +127,13 @@ TEST_CASE("homingctl check on a home cam axis reads the simulated cam and limit 
   CHECK(j["axes"][0]["phases"].contains("limit_reversal"));
   CHECK(j["axes"][0]["limit_stop_distance"].get<double>() > 0);
 }
+
+TEST_CASE("homingctl check lists the limit switches in the wiring of any axis that has them fitted") {
+  homing::Settings s = home_cam_x(homing::CamEdge::behind);
+  s.axes[0].mode = homing::HomingMode::switch_release;  // homes on its switch, stops at its limit switches
+  const homingctl::CheckReport r = homingctl::check_settings(s, {});
+  INFO(homingctl::render_check(r));
+  REQUIRE(r.axes[0].enabled);
+  CHECK(r.axes[0].signals == std::vector<std::string>{"step", "home", "limit_min", "limit_max"});
+  CHECK(r.axes[1].signals == std::vector<std::string>{"step", "home"});  // Y: none fitted
+}

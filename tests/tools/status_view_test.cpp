@@ -47,3 +47,19 @@ TEST_CASE("the seek bar of a slave on its own output is bounded by its master's 
   REQUIRE_FALSE(homing::is_commutator_slave(settings, 1));
   CHECK_THAT(progress_of_y(settings), Catch::Contains("seek 1.000 / 300 mm"));
 }
+
+TEST_CASE("homingctl status sends the technician to the wiring when both limit switches of an axis read active") {
+  homing::Settings settings = gantry_xy(homing::SlaveMode::own_output);
+  settings.axes[0].limits_fitted = true;
+  settings.axes[1].limits_fitted = true;
+  homingctl::StatusView view;
+  view.interlocks = homing::interlock::limit_active;
+  view.axes[0].limit_min = true;
+  view.axes[0].limit_max = true;
+  view.axes[1].limit_min = true;  // one switch: jog away from it, as the interlock says
+  const std::string out = homingctl::render_status(view, settings, false);
+  CHECK_THAT(out, Catch::Contains("X: both limit switches read active: no direction is away from them"));
+  CHECK_THAT(out, Catch::Contains("check the wiring (a broken wire to normally-closed switches) and axis.x.limits_nc"));
+  CHECK_THAT(out, !Catch::Contains("Y: both limit switches"));
+  CHECK_THAT(out, Catch::Contains("X    switch_release"));
+}

@@ -124,8 +124,11 @@ CheckReport check_settings(const homing::Settings& settings,
       c.limit_overtravel_mm = s.limit_overtravel_mm;
     }
     // What the row needs wired, with the stop detection the axis chose.
-    for (const homing::SignalInfo& sig : homing::kSignalInfo)
-      if (homing::needs_signal(s, sig.signal)) c.signals.emplace_back(sig.name);
+    // Limit switches fitted are read on every method (hard limits), not only by one that reverses at them.
+    for (const homing::SignalInfo& sig : homing::kSignalInfo) {
+      const bool limit = sig.signal == homing::Signal::limit_min || sig.signal == homing::Signal::limit_max;
+      if (homing::needs_signal(s, sig.signal) || (limit && s.limits_fitted)) c.signals.emplace_back(sig.name);
+    }
     if (homing::mode_row(s.mode).detects_stop()) {
       c.stop_detection = homing::name_of(s.stall_detect);
       if (homing::detects_stop_by_following_error(s)) c.max_following_error_mm = s.max_following_error_mm;

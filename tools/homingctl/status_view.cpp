@@ -167,6 +167,16 @@ std::string render_status(const StatusView& s, const homing::Settings& settings,
                      homing::command_result_name(s.last_command_result));
   out += fmt::format("blocking motion: {}\n", s.interlocks == 0 ? std::string("nothing (free to move)")
                                                                    : interlocks_text(s.interlocks));
+  // limit_active says "jog away from it"; with both switches active no
+  // direction is away, and the cause is almost always the wiring.
+  for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
+    const auto& st = settings.axes[a];
+    if (st.mode == homing::HomingMode::disabled || !st.limits_fitted || !s.axes[a].limit_min || !s.axes[a].limit_max)
+      continue;
+    out += fmt::format("{}: both limit switches read active: no direction is away from them, nothing jogs or moves; "
+                       "check the wiring (a broken wire to normally-closed switches) and axis.{}.limits_nc\n",
+                       homing::kAxisUpper[a], homing::kAxisLetters[a]);
+  }
   if (s.global_alarm != homing::AlarmCode::none)
     out += fmt::format("alarm: {}: {}\n", homing::alarm_name(s.global_alarm), global_alarm_text(s.global_alarm, settings));
   return out;
