@@ -161,7 +161,20 @@ Status refuse_foreign(const std::string& path, const char* vfs) {
   auto ours = db->query_int("SELECT count(*) FROM pragma_table_info('settings') WHERE name IN ('name', 'value')",
                             "looking for the settings table");
   if (!ours) return std::unexpected(ours.error());
-  if (*ours == 2) return {};
+  std::string why;
+  if (*ours == 2) {
+    // Another program may keep a settings(name, value) table too: homingd's
+    // holds its registers' names (every one, from the first start on).
+    auto rows = db->query_int("SELECT count(*) FROM settings", "counting the settings");
+    if (!rows) return std::unexpected(rows.error());
+    auto mine = db->query_int("SELECT count(*) FROM settings WHERE name LIKE 'axis.%' OR name LIKE 'global.%' OR "
+                              "name LIKE 'sequence.%'",
+                              "looking for homingd's settings");
+    if (!mine) return std::unexpected(mine.error());
+    if (*rows == 0 || *mine > 0) return {};
+    why = fmt::format("; its settings table holds {} row(s), none of them homingd's (axis.*, global.*, sequence.*)",
+                      *rows);
+  }
   auto names = db->prepare("SELECT name FROM sqlite_master WHERE type IN ('table', 'view') ORDER BY name LIMIT 5");
   if (!names) return std::unexpected(names.error());
   std::string listed;
@@ -172,9 +185,9 @@ Status refuse_foreign(const std::string& path, const char* vfs) {
     listed += (listed.empty() ? "" : ", ") + names->text_at(0);
   }
   return fail(ErrorKind::invalid,
-              fmt::format("{}: an SQLite database of another program ({} table(s): {}{}), not homingd's settings; "
+              fmt::format("{}: an SQLite database of another program ({} table(s): {}{}{}), not homingd's settings; "
                           "it was left untouched. Give --db the path of homingd's database, or of a new file",
-                          path, *tables, listed, *tables > 5 ? ", ..." : ""));
+                          path, *tables, listed, *tables > 5 ? ", ..." : "", why));
 }
 
 Result<FoundDatabase> open_or_recover(const std::string& path, const char* vfs, std::int64_t now_ms,

@@ -356,3 +356,36 @@ TEST_CASE("homingd's own database that lost its schema version is not taken for 
   auto store = SettingsStore::open(db, test::defaults(), report, test::options());
   if (!store) CHECK_THAT(store.error().message, !Catch::Contains("another program"));
 }
+
+TEST_CASE("a database of another program with a settings(name, value) table of its own is refused and left as it was",
+          "[persistence][migration]") {
+  test::TempDir dir;
+  const auto db = dir.file("app.db");
+  test::sql_exec(db, "CREATE TABLE settings(name TEXT PRIMARY KEY, value TEXT);"
+                     "INSERT INTO settings VALUES ('theme', 'dark'), ('language', 'de');");
+  const auto bytes = [&] {
+    std::ifstream in(db, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string before = bytes();
+  OpenReport report;
+  auto store = SettingsStore::open(db, test::defaults(), report, test::options());
+  REQUIRE_FALSE(store);
+  CHECK(store.error().kind == ErrorKind::invalid);
+  CHECK_THAT(store.error().message, Catch::Contains("another program") &&
+                                        Catch::Contains("its settings table holds 2 row(s), none of them homingd's"));
+  CHECK(bytes() == before);
+  CHECK(test::sql_int(db, "SELECT count(*) FROM settings") == 2);
+}
+
+TEST_CASE("homingd's own database is still taken for its own when its settings hold only some registers",
+          "[persistence][migration]") {
+  test::TempDir dir;
+  const auto db = dir.file("settings.db");
+  test::sql_exec(db, "CREATE TABLE settings(name TEXT PRIMARY KEY NOT NULL, value INTEGER NOT NULL) WITHOUT ROWID;"
+                     "INSERT INTO settings VALUES ('axis.x.seek_feedrate', 2500); PRAGMA user_version = 1;");
+  OpenReport report;
+  auto store = SettingsStore::open(db, test::defaults(), report, test::options());
+  REQUIRE(store);
+  CHECK(store->value("axis.x.seek_feedrate") == 2500);
+}
