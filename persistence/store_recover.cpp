@@ -164,7 +164,14 @@ Status refuse_foreign(const std::string& path, const char* vfs) {
   std::string why;
   if (*ours == 2) {
     // Another program may keep a settings(name, value) table too: homingd's
-    // holds its registers' names (every one, from the first start on).
+    // holds its registers' names (every one, from the first start on), and
+    // from v2 on it has tables of its own beside it. Either is enough: a
+    // damaged page may hide the rows.
+    auto own_tables = db->query_int("SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name IN ('audit', "
+                                    "'meta', 'homing_runs', 'last_stop')",
+                                    "looking for homingd's tables");
+    if (!own_tables) return std::unexpected(own_tables.error());
+    if (*own_tables > 0) return {};
     auto rows = db->query_int("SELECT count(*) FROM settings", "counting the settings");
     if (!rows) return std::unexpected(rows.error());
     auto mine = db->query_int("SELECT count(*) FROM settings WHERE name LIKE 'axis.%' OR name LIKE 'global.%' OR "
