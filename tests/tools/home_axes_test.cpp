@@ -87,3 +87,31 @@ TEST_CASE("cmd.home_axes refuses on the wire what it cannot start, and changes n
   }
   CHECK(c.read("status.homing") == 0);
 }
+
+TEST_CASE("homingctl unhome forgets an axis's reference and its gantry partner's without moving anything") {
+  Daemon d;
+  Client c = Client::tcp(d.port());
+  REQUIRE(ctl(d, {"set", "axis.z.mode=disabled", "sequence.step1=3", "sequence.step2=0", "axis.y.slave_of=1"}).code() == 0);
+  REQUIRE(ctl(d, {"home"}).code() == 0);
+  REQUIRE(c.read("axis.x.homed") == 1);
+  REQUIRE(c.read("axis.y.homed") == 1);
+  const auto x0 = c.read("sim.x.actual_position"), y0 = c.read("sim.y.actual_position");
+  auto r = ctl(d, {"unhome", "y"});
+  {
+    SHOW(r);
+    REQUIRE(r.code() == 0);
+    CHECK(r.out.find("unhome Y: done; Y and its gantry partner X no longer homed, nothing moved; home the pair again") !=
+          std::string::npos);
+  }
+  CHECK(c.read("axis.x.homed") == 0);
+  CHECK(c.read("axis.y.homed") == 0);
+  CHECK(c.read("sim.x.actual_position") == x0);
+  CHECK(c.read("sim.y.actual_position") == y0);
+  CHECK(c.read("status.last_command_result") == static_cast<int>(homing::CommandResult::accepted));
+  r = ctl(d, {"unhome", "q"});
+  {
+    SHOW(r);
+    CHECK(r.code() == 2);
+    CHECK(r.err.find("'q' is not an axis") != std::string::npos);
+  }
+}

@@ -336,6 +336,25 @@ ActionResult move(Connection& c, const std::string& axis, const std::string& tar
   return s.finished(what, *st);
 }
 
+ActionResult unhome(Connection& c, const std::string& axis, const ActionOptions& o) {
+  const int a = axis_index(axis);
+  if (a < 0) throw std::invalid_argument(fmt::format("unhome: '{}' is not an axis (x, y, z, a, b, c)", axis));
+  const auto i = static_cast<std::size_t>(a);
+  Session s(c, o);
+  const std::string what = fmt::format("unhome {}", homing::kAxisUpper[i]);
+  auto r = s.pulse(fmt::format("cmd.unhome.{}", homing::kAxisLetters[i]));
+  if (!r) return failure(r.error());
+  if (!taken(*r)) return s.refused(what, *r, nullptr, a);
+  ActionResult res = s.finished(what, read_status(c, s.settings), /*alarm_is_failure=*/false);
+  std::string partner;
+  if (const int m = homing::gantry_master(s.settings, i); m >= 0) partner = homing::kAxisUpper[static_cast<std::size_t>(m)];
+  if (const int sl = homing::gantry_slave(s.settings, i); sl >= 0) partner = homing::kAxisUpper[static_cast<std::size_t>(sl)];
+  res.message = fmt::format("{}: done; {}{} no longer homed, nothing moved; home {} again before moving by coordinates",
+                            what, homing::kAxisUpper[i], partner.empty() ? "" : " and its gantry partner " + partner,
+                            partner.empty() ? "it" : "the pair");
+  return res;
+}
+
 ActionResult refcheck(Connection& c, const std::string& axis, const ActionOptions& o) {
   const int a = axis_index(axis);
   if (a < 0) throw std::invalid_argument(fmt::format("refcheck: '{}' is not an axis (x, y, z, a, b, c)", axis));

@@ -42,6 +42,9 @@ ActionResult move(Connection& c, const std::string& axis, const std::string& tar
 // cmd.refcheck.<a>: the reference check after a restart; ok when the axis
 // ends homed by it (trust reference_checked), else refused with the figure.
 ActionResult refcheck(Connection& c, const std::string& axis, const ActionOptions& o);
+// cmd.unhome.<a>: forget an axis's reference (and its gantry partner's)
+// without moving, e.g. after squaring a gantry by hand.
+ActionResult unhome(Connection& c, const std::string& axis, const ActionOptions& o);
 // cmd.measure.<a>: homes the axis, measures its travel to the opposite end and
 // prints the figures; with apply, writes soft_limit_min/max and
 // max_seek_travel through the settings path (checked, audited).

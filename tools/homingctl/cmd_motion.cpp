@@ -1,4 +1,4 @@
-// home, refcheck, measure, abort, reset, jog, move: commands that move (or stop) the machine,
+// home, refcheck, unhome, measure, abort, reset, jog, move: commands that move (or stop) the machine,
 // each waiting for its outcome unless --no-wait.
 #include "actions.hpp"
 #include "cli.hpp"
@@ -41,6 +41,14 @@ void add_motion_commands(Commands& commands, Context& ctx) {
       [refcheck_axis](Context& c) { return c.report(refcheck(c.connection(), *refcheck_axis, c.ao)); });
   refcheck_cmd->add_option("axis", *refcheck_axis, "x y z a b c")->required();
   commands.add_wait_options(refcheck_cmd, ctx);
+
+  auto unhome_axis = std::make_shared<std::string>();
+  auto* unhome_cmd = commands.add(
+      "unhome",
+      "forget an axis's reference (and its gantry partner's) without moving, e.g. after squaring a gantry or moving "
+      "a carriage by hand: unhome y",
+      [unhome_axis](Context& c) { return c.report(unhome(c.connection(), *unhome_axis, c.ao)); });
+  unhome_cmd->add_option("axis", *unhome_axis, "x y z a b c")->required();
 
   auto measure_axis = std::make_shared<std::string>();
   auto measure_apply = std::make_shared<bool>(false);
