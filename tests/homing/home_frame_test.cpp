@@ -77,3 +77,33 @@ SCENARIO("a new home position on a gantry master unhomes its slave too", "[home_
   CHECK_FALSE(r.axis(0).homed);
   CHECK_FALSE(r.axis(1).homed);
 }
+
+SCENARIO("a new switch compensation or pull-off on a gantry slave unhomes its master too", "[home_frame][gantry]") {
+  // Found by a technician: the slave alone was unhomed, and its master went on
+  // moving the half-homed pair by coordinates at jog feedrate.
+  const auto both_unhomed = [](auto change) {
+    Rig r;
+    r.settings.axes[1] = typical_axis();
+    r.settings.axes[1].slave_of = 1;
+    r.settings.axes[1].max_misalignment_mm = 2;
+    REQUIRE(r.home_all());
+    REQUIRE(r.axis(0).homed);
+    REQUIRE(r.axis(1).homed);
+    change(r.settings.axes[1]);
+    r.step();
+    return !r.axis(0).homed && !r.axis(1).homed;
+  };
+  CHECK(both_unhomed([](AxisSettings& s) { s.switch_compensation_mm = -0.3; }));
+  CHECK(both_unhomed([](AxisSettings& s) { s.pull_off_mm = 2.01; }));
+}
+
+SCENARIO("a frame change of an axis outside any pair leaves the other axes homed", "[home_frame]") {
+  Rig r;
+  r.settings.axes[1] = typical_axis();
+  REQUIRE(r.home_all());
+  REQUIRE(r.axis(1).homed);
+  r.settings.axes[0].switch_compensation_mm = 0.2;
+  r.step();
+  CHECK_FALSE(r.axis(0).homed);
+  CHECK(r.axis(1).homed);
+}

@@ -4,6 +4,7 @@
 #include <map>
 
 #include "registers/defaults.hpp"
+#include "homing/gantry.hpp"
 #include "server/frame_changes.hpp"
 
 namespace {
@@ -53,4 +54,35 @@ TEST_CASE("a frame change of an axis with nothing to lose and a change that plac
   status.axes[0].trust = homing::Trust::unknown;
   status.axes[1].trust = homing::Trust::reference_checked;
   CHECK(server::references_lost(before, after, status).empty());
+}
+
+TEST_CASE("a gantry slave's own switch compensation changed unhomes the pair and the master's line names the slave") {
+  homing::Settings before = default_settings();
+  before.axes[1] = before.axes[0];
+  before.axes[1].slave_of = 1;  // Y follows X
+  REQUIRE(homing::gantry_master(before, 1) == 0);
+  homing::Settings after = before;
+  after.axes[1].switch_compensation_mm += 0.3;
+  homing::Status status{};
+  status.axes[0].trust = homing::Trust::homed_this_power_on;
+  status.axes[1].trust = homing::Trust::homed_this_power_on;
+  const auto lines = server::references_lost(before, after, status);
+  REQUIRE(lines.size() == 2);
+  CHECK(lines[0] ==
+        "axis x is no longer homed: its gantry partner y lost its reference (switch_compensation of y changed), and a "
+        "pair shares one; home it again before moving it by coordinates");
+  CHECK(lines[1] ==
+        "axis y is no longer homed: switch_compensation changed, which places its coordinates; home it again before "
+        "moving it by coordinates");
+  // The master's home position, which its slave moves with.
+  after = before;
+  after.axes[0].home_position_mm += 1.0;
+  const auto by_master = server::references_lost(before, after, status);
+  REQUIRE(by_master.size() == 2);
+  CHECK(by_master[0] ==
+        "axis x is no longer homed: home_position changed, which places its coordinates; home it again before moving "
+        "it by coordinates");
+  CHECK(by_master[1] ==
+        "axis y is no longer homed: home_position of its gantry master x changed, which places its coordinates; home "
+        "it again before moving it by coordinates");
 }
