@@ -122,7 +122,7 @@ std::expected<WritePlan, PlannedRefusal> plan_staging(std::span<const registers:
                                                   w.reg->name())));
   if (state.locked)
     return refused(Refusal::because(RefusalReason::locked, about,
-                                    fmt::format("settings are locked (write the unlock code to security.unlock): {} "
+                                    fmt::format("settings are locked (write the unlock code to security.unlock, or to security.unlock32 when above 65535): {} "
                                                 "not staged",
                                                 first.name())));
   WritePlan plan;
@@ -187,11 +187,15 @@ std::expected<WritePlan, PlannedRefusal> plan_decoded_write(std::span<const regi
     unlocks = true;
   }
   if (accepted->changes_persisted()) {
-    plan.about = accepted->changes.empty() ? start : accepted->changes.front().reg->address;
+    // The setting the refusal is about: a move target or heartbeat written in
+    // the same request is no setting, and an HMI marks the register named.
+    const auto first_setting = std::find_if(accepted->changes.begin(), accepted->changes.end(),
+                                            [](const registers::Change& c) { return c.reg->persisted; });
+    plan.about = first_setting != accepted->changes.end() ? first_setting->reg->address : start;
     plan.changes = describe_changes(accepted->changes, registers::kinds_of(accepted->settings));
     if (state.locked && !unlocks)
       return refused(Refusal::because(RefusalReason::locked, plan.about,
-                                      "settings are locked (write the unlock code to security.unlock): " +
+                                      "settings are locked (write the unlock code to security.unlock, or to security.unlock32 when above 65535): " +
                                           plan.changes));
     if (state.machine_check && *state.machine_check) {
       if (auto problem = (*state.machine_check)(accepted->settings))

@@ -371,3 +371,41 @@ TEST_CASE("edit sessions: at most 32 open at once, and a session belongs to its 
   const server::ClientInfo a{1, server::Transport::tcp, "10.0.0.5:40000"}, b{2, server::Transport::tcp, "10.0.0.5:40001"};
   CHECK(server::EditSessions::owner_of(a) != server::EditSessions::owner_of(b));
 }
+
+TEST_CASE("plan_write: a refused block of registers is about the first setting it changes, not a move target before it") {
+  // Found by an integrator: axis.x.target (160) was named, which is no
+  // setting and is accepted alone during a cycle and while locked.
+  const auto& skew = *registers::find_register("axis.x.max_skew_change");         // 158, unchanged
+  const auto& target = *registers::find_register("axis.x.target");                // 160, changed
+  const auto& following = *registers::find_register("axis.x.max_following_error");  // 162, changed
+  REQUIRE(target.address == skew.address + 2);
+  REQUIRE(following.address == target.address + 2);
+  const auto w32 = [](std::int64_t v) {
+    const auto u = static_cast<std::uint32_t>(v);
+    return std::vector<std::uint16_t>{static_cast<std::uint16_t>(u >> 16), static_cast<std::uint16_t>(u & 0xFFFF)};
+  };
+  std::vector<std::uint16_t> block = w32(skew.default_raw);
+  for (const auto v : w32(9000)) block.push_back(v);
+  for (const auto v : w32(following.default_raw + 100)) block.push_back(v);
+  SECTION("while a cycle runs") {
+    World w;
+    w.homing_runs();
+    const auto p = w.plan(Table::holding_register, skew.address, block);
+    CHECK(reason_of(p) == RefusalReason::busy);
+    CHECK(address_of(p) == following.address);
+  }
+  SECTION("while settings are locked") {
+    World w;
+    w.locked = true;
+    const auto p = w.plan(Table::holding_register, skew.address, block);
+    CHECK(reason_of(p) == RefusalReason::locked);
+    CHECK(address_of(p) == following.address);
+    CHECK(p.error().refusal.message.find("security.unlock32 when above 65535") != std::string::npos);
+  }
+  SECTION("accepted") {
+    World w;
+    const auto p = w.plan(Table::holding_register, skew.address, block);
+    REQUIRE(p.has_value());
+    CHECK(p->about == following.address);
+  }
+}
