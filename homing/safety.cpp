@@ -76,7 +76,14 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
     // reset is taken and the jog away from it allowed without re-latching.
     const bool sensor_active = inputs_[a].sensor_active;
     if (run.limit_tripped && run.limit_side == 0 && !sensor_active) run.limit_tripped = false;
-    if (run.alarm || run.in_cycle || !run.homed()) continue;
+    const auto limits = s.soft_limits_enable ? std::optional(std::pair(s.soft_limit_min_mm, s.soft_limit_max_mm))
+                                             : std::nullopt;
+    const bool changed = limits != run.soft_limits_seen;
+    run.soft_limits_seen = limits;
+    if (run.alarm || run.in_cycle || !run.homed()) {
+      run.outside_moved_limits = false;
+      continue;
+    }
     const double pos = run.machine_position_mm();
     if (s.shared_limit && sensor_active && !run.limit_tripped && sensor_channel(settings, a) == static_cast<int>(a)) {
       raise(settings, axis_bit(a), Alarm{AlarmCode::hard_limit, Phase::idle, AxisField::shared_limit, pos, 0});
@@ -88,7 +95,13 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
     // Only moving further out is a fault: an axis left outside tightened
     // limits may still be jogged back in.
     const double v = run.motor.velocity_mm_per_s;
-    if (s.soft_limits_enable && ((pos < s.soft_limit_min_mm - tol && v < 0) || (pos > s.soft_limit_max_mm + tol && v > 0)))
+    const bool outward = limits && ((pos < limits->first - tol && v < 0) || (pos > limits->second + tol && v > 0));
+    // Limits tightened (or switched on) under a jog or move heading out: the
+    // axis did not run past them, they came to it; it brakes to rest there
+    // (run_motion) and only jogs back in from then on.
+    if (changed && outward) run.outside_moved_limits = true;
+    if (!outward) run.outside_moved_limits = false;
+    if (outward && !run.outside_moved_limits)
       raise(settings, axis_bit(a), Alarm{AlarmCode::soft_limit, Phase::idle, AxisField::none, pos, 0});
   }
 }

@@ -230,6 +230,68 @@ SCENARIO("soft_limit: jogging further out of tightened limits moves nothing and 
   CHECK_FALSE(r.status().alarm);
 }
 
+SCENARIO("soft_limit: limits tightened past a jogging axis brake it to rest without an alarm, and it jogs back in",
+         "[alarms][limits]") {
+  // Found by a technician: soft_limit_max written below a jogging axis raised
+  // soft_limit (an overrun: "check the mechanics for lost steps") and, with
+  // alarm_clears_homed, unhomed every axis.
+  Rig r;
+  r.add_axis(1, 1);
+  REQUIRE(r.home_all());
+  REQUIRE(r.axis(1).homed);
+  r.settings.axes[0].soft_limits_enable = true;
+  r.settings.axes[0].soft_limit_min_mm = 0;
+  r.settings.axes[0].soft_limit_max_mm = 300;
+  r.jog(0, +1);
+  r.run_until([&] { return r.axis(0).position_mm > 60; }, 20);
+  REQUIRE(r.axis(0).velocity_mm_per_s > 0);
+  const double at_change = r.axis(0).position_mm;
+  const AxisSettings& s = r.settings.axes[0];
+  const double stop = stop_distance_mm(mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min), s.acceleration_mm_per_s2);
+  r.settings.axes[0].soft_limit_max_mm = 20;
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK_FALSE(r.status().alarm);
+  CHECK(r.axis(0).alarm.code == AlarmCode::none);
+  CHECK(r.axis(0).homed);
+  CHECK(r.axis(1).homed);
+  CHECK(r.axis(0).position_mm <= at_change + stop + 0.1);  // braked from where the limit came
+  // Held on, the button moves nothing further out; a new press out is refused; in runs.
+  const double rest = r.axis(0).position_mm;
+  r.run_for(0.5);
+  CHECK(r.axis(0).position_mm == Approx(rest).margin(1e-9));
+  r.release_jogs();
+  r.step();
+  r.jog(0, +1);
+  r.step();
+  CHECK(r.status().last_command_result == CommandResult::refused_soft_limit);
+  r.release_jogs();
+  r.step();
+  r.jog(0, -1);
+  r.run_for(0.5);
+  CHECK(r.axis(0).position_mm < rest);
+  r.release_jogs();
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK_FALSE(r.status().alarm);
+}
+
+SCENARIO("soft_limit: limits tightened past an axis moving to its target stop the move without an alarm",
+         "[alarms][limits]") {
+  Rig r;
+  REQUIRE(r.home_all());
+  r.settings.axes[0].soft_limits_enable = true;
+  r.settings.axes[0].soft_limit_min_mm = 0;
+  r.settings.axes[0].soft_limit_max_mm = 300;
+  r.move(0, 200);
+  r.run_until([&] { return r.axis(0).position_mm > 60; }, 20);
+  REQUIRE(r.axis(0).phase == Phase::move);
+  r.settings.axes[0].soft_limit_max_mm = 20;
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK_FALSE(r.status().alarm);
+  CHECK(r.axis(0).homed);
+  CHECK(r.axis(0).position_mm < 100);  // stopped, not carried on to 200
+  CHECK(r.axis(0).phase == Phase::idle);
+}
+
 namespace {
 
 // Starts home-all and runs until the seek is at full speed, far from the sensor.
