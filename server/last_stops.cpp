@@ -47,8 +47,11 @@ void log_last_stop(std::size_t a, const persistence::AxisLastStop& s, const homi
                  axis, s.position_mm, unit);
     return;
   }
+  // What cmd.refcheck would say (homing/refcheck.cpp): no offer it then refuses.
+  const bool paired = homing::gantry_partner(settings, a) >= 0 || homing::master_of(settings.axes[a]) >= 0;
   spdlog::info("last stop: {} stopped cleanly at {:.3f} {}: trust last_stop_clean{}", axis, s.position_mm, unit,
-               homing::offers_refcheck(motion.axes[a].mode)
+               paired ? " (one side of a gantry pair cannot be checked alone: home the pair with a full cycle)"
+               : homing::offers_refcheck(motion.axes[a].mode)
                    ? "; a reference check (cmd.refcheck, homingctl refcheck) may home it without a full cycle"
                    : " (its method has no switch edge to check: home it with a full cycle)");
 }

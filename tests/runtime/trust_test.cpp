@@ -14,6 +14,10 @@
 #include "registers/sim_bindings.hpp"
 #include "server/control_loop.hpp"
 #include "server/last_stops.hpp"
+#include "homing/gantry.hpp"
+#include "persistence/settings_store.hpp"
+#include "tests/support/captured_log.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace {
 
@@ -115,4 +119,34 @@ TEST_CASE("a kept last stop carries every setting of its home frame to the datab
   CHECK(back[3].frame == s.frame);
   CHECK(back[3].position_mm == s.position_mm);
   CHECK(back[3].clean);
+}
+
+TEST_CASE("the start's log offers a reference check to a lone switch axis and not to either side of a gantry pair") {
+  test_support::TempDir dir{"runtime-test"};
+  std::vector<persistence::SettingDefault> defaults;
+  for (const auto& [name, value] : registers::persisted_defaults()) defaults.push_back({name, value});
+  persistence::OpenReport report;
+  auto store = persistence::SettingsStore::open(dir.file("settings.db"), defaults, report, persistence::StoreOptions{});
+  REQUIRE(store);
+  homing::Settings settings = default_settings();
+  settings.axes[1].slave_of = 1;  // Y follows X; Z alone
+  REQUIRE(homing::gantry_master(settings, 1) == 0);
+  const homing::Settings motion = homing::motion_settings(settings);
+  homing::LastStops stops{};
+  for (std::size_t a : {0u, 1u, 2u}) {
+    stops[a].clean = true;
+    stops[a].position_mm = 10.0 + static_cast<double>(a);
+    stops[a].frame = homing::home_frame(motion.axes[a]);
+  }
+  REQUIRE(store->record_last_stops(server::to_store(stops)));
+  test_support::CapturedLog log;
+  REQUIRE(server::take_last_stops(*store, settings));
+  const std::string text = log.text();
+  INFO(text);
+  CHECK_THAT(text, Catch::Contains("last stop: X stopped cleanly at 10.000 mm: trust last_stop_clean (one side of a "
+                                   "gantry pair cannot be checked alone: home the pair with a full cycle)"));
+  CHECK_THAT(text, Catch::Contains("last stop: Y stopped cleanly at 11.000 mm: trust last_stop_clean (one side of a "
+                                   "gantry pair cannot be checked alone"));
+  CHECK_THAT(text, Catch::Contains("last stop: Z stopped cleanly at 12.000 mm: trust last_stop_clean; a reference "
+                                   "check (cmd.refcheck, homingctl refcheck) may home it without a full cycle"));
 }
