@@ -151,6 +151,12 @@ std::string what_happened(std::size_t axis, const Alarm& a, const Settings& sett
     case AlarmCode::both_limits_active:
       return fmt::format("{}: both limit switches read active at once (during {})", X, ph);
     case AlarmCode::limit_switch:
+      // An axis at rest in its own phases (idle, or done since its cycle)
+      // moves only with its gantry partner, or coasting: "during done" said nothing.
+      if (a.phase == Phase::idle || a.phase == Phase::done)
+        return fmt::format("{}: {} limit switch tripped at {:.3f} {} while the axis moved outside homing (a jog or "
+                           "move, its own or its gantry partner's)",
+                           X, a.rule == 1 ? "negative" : "positive", a.value, u);
       return fmt::format("{}: {} limit switch tripped during {} at {:.3f} {}", X,
                          a.rule == 1 ? "negative" : "positive", ph, a.value, u);
     case AlarmCode::encoder_reversed:

@@ -355,6 +355,8 @@ SCENARIO("a move that comes to rest on a limit switch in the period it reaches i
   r.run_for(0.01);
   REQUIRE(r.actual(0) >= 100);  // on the switch
   CHECK(r.axis(0).alarm.code == AlarmCode::limit_switch);
+  CHECK_THAT(describe_alarm(0, r.axis(0).alarm, r.settings),
+             Catch::Contains("X: positive limit switch tripped during move at"));
   // Tripped: further onto it is refused, away is allowed.
   r.reset_alarm();
   r.jog(0, +1);
@@ -366,4 +368,15 @@ SCENARIO("a move that comes to rest on a limit switch in the period it reaches i
   r.step();
   CHECK(r.status().last_command_result == CommandResult::accepted);
   r.release_jogs();
+}
+
+SCENARIO("a limit switch tripped by a gantry slave following its master's jog names the jog, not the phase done",
+         "[limits][alarms][gantry]") {
+  // Found by a technician: "B: positive limit switch tripped during done".
+  Rig r;
+  const Alarm tripped{AlarmCode::limit_switch, Phase::done, AxisField::none, 297.951, 2};
+  CHECK(describe_alarm(1, tripped, r.settings).rfind(
+            "Y: positive limit switch tripped at 297.951 mm while the axis moved outside homing (a jog or move, its "
+            "own or its gantry partner's)",
+            0) == 0);
 }
