@@ -176,11 +176,12 @@ struct AxisRun {
   // Which: 0 the shared home sensor (it lies toward `direction`), -1/+1 the
   // limit switch at the negative/positive end.
   std::int8_t limit_side = 0;
-  // The soft limits of the last period (nullopt: off), and whether a change
-  // of them left this moving axis outside: braking to rest there is the
-  // limit moving past the axis, no overrun (safety.cpp).
+  // The soft limits of the last period (nullopt: off). When a change of them
+  // leaves this jogging or moving axis unable to stop inside them: the
+  // machine position its braking may reach, which is no overrun (the limit
+  // came to the axis); nullopt once it rests (safety.cpp).
   std::optional<std::pair<double, double>> soft_limits_seen;
-  bool outside_moved_limits = false;
+  std::optional<double> moved_limits_bound_mm;
   double pair_rel0_mm = 0;      // gantry slave: slave - master motor position at cycle start
   // Gantry slave: slave - master motor position where the pair is square as
   // far as the module knows: when both sides were last assigned their home,

@@ -204,11 +204,17 @@ void Engine::run_motion(const Settings& settings) {
         break;
       }
       case Phase::move: {
-        if (run.outside_moved_limits) {  // soft limits tightened past it: brake, as a jog does
+        const double vel = run.motor.velocity_mm_per_s;
+        const bool heading_out = (vel > 0 && run.target_mm > run.motor.position_mm) ||
+                                 (vel < 0 && run.target_mm < run.motor.position_mm);
+        if (run.moved_limits_bound_mm && heading_out) {  // soft limits tightened past its stop: brake, as a jog does
           run.set_phase(Phase::stopping);
           run.command = stop_command(accel);
           break;
         }
+        // Limits tightened ahead of the target since the move began: it ends at the limit.
+        if (homed && s.soft_limits_enable)
+          run.target_mm = std::clamp(run.target_mm, s.soft_limit_min_mm - run.offset_mm, s.soft_limit_max_mm - run.offset_mm);
         const double v = mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min);
         run.command = move_to_command(run.motor, run.target_mm, v, accel, last_dt_s_);
         if (run.motor.position_mm == run.target_mm && run.motor.velocity_mm_per_s == 0) {
@@ -221,7 +227,7 @@ void Engine::run_motion(const Settings& settings) {
         run.command = stop_command(accel);
         // A jog released while braking onto a soft limit: a late period can leave the
         // motor faster than the jog's braking planned, so keep the limit on the stop.
-        if (homed && s.soft_limits_enable && run.motor.velocity_mm_per_s != 0 && !run.outside_moved_limits) {
+        if (homed && s.soft_limits_enable && run.motor.velocity_mm_per_s != 0 && !run.moved_limits_bound_mm) {
           run.command.has_limit = true;
           run.command.limit_mm =
               (run.motor.velocity_mm_per_s > 0 ? s.soft_limit_max_mm : s.soft_limit_min_mm) - run.offset_mm;

@@ -78,10 +78,10 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
     if (run.limit_tripped && run.limit_side == 0 && !sensor_active) run.limit_tripped = false;
     const auto limits = s.soft_limits_enable ? std::optional(std::pair(s.soft_limit_min_mm, s.soft_limit_max_mm))
                                              : std::nullopt;
-    const bool changed = limits != run.soft_limits_seen;
+    const auto previous = run.soft_limits_seen;
     run.soft_limits_seen = limits;
     if (run.alarm || run.in_cycle || !run.homed()) {
-      run.outside_moved_limits = false;
+      run.moved_limits_bound_mm.reset();
       continue;
     }
     const double pos = run.machine_position_mm();
@@ -95,13 +95,26 @@ void Engine::check_safety(const Settings& settings, const Inputs& inputs) {
     // Only moving further out is a fault: an axis left outside tightened
     // limits may still be jogged back in.
     const double v = run.motor.velocity_mm_per_s;
-    const bool outward = limits && ((pos < limits->first - tol && v < 0) || (pos > limits->second + tol && v > 0));
-    // Limits tightened (or switched on) under a jog or move heading out: the
-    // axis did not run past them, they came to it; it brakes to rest there
-    // (run_motion) and only jogs back in from then on.
-    if (changed && outward) run.outside_moved_limits = true;
-    if (!outward) run.outside_moved_limits = false;
-    if (outward && !run.outside_moved_limits)
+    const auto outward_of = [&](const std::optional<std::pair<double, double>>& l) {
+      return l && ((pos < l->first - tol && v < 0) || (pos > l->second + tol && v > 0));
+    };
+    // Limits tightened (or switched on) under its own jog or move, where it
+    // can no longer stop inside them: the axis does not run past them, they
+    // come to it. It brakes (run_motion) and only jogs back in from where it
+    // rests; beyond where braking takes it, it is an overrun all the same. A
+    // slave following its master, or an axis already out of the old limits,
+    // is not excused.
+    const bool own_motion = run.phase == Phase::jog || run.phase == Phase::move || run.phase == Phase::stopping;
+    if (v == 0 || !own_motion) run.moved_limits_bound_mm.reset();
+    if (limits != previous && limits && v != 0 && own_motion && !outward_of(previous)) {
+      const double sign = v > 0 ? 1.0 : -1.0;
+      const double stop_at =
+          pos + sign * (stop_distance_mm(std::abs(v), s.acceleration_mm_per_s2) + std::abs(v) * last_dt_s_ + 1e-3);
+      if (v > 0 ? stop_at > limits->second : stop_at < limits->first) run.moved_limits_bound_mm = stop_at;
+    }
+    const bool excused =
+        run.moved_limits_bound_mm && (v > 0 ? pos <= *run.moved_limits_bound_mm : pos >= *run.moved_limits_bound_mm);
+    if (outward_of(limits) && !excused)
       raise(settings, axis_bit(a), Alarm{AlarmCode::soft_limit, Phase::idle, AxisField::none, pos, 0});
   }
 }

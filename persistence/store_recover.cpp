@@ -167,8 +167,8 @@ Status refuse_foreign(const std::string& path, const char* vfs) {
     // holds its registers' names (every one, from the first start on), and
     // from v2 on it has tables of its own beside it. Either is enough: a
     // damaged page may hide the rows.
-    auto own_tables = db->query_int("SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name IN ('audit', "
-                                    "'meta', 'homing_runs', 'last_stop')",
+    auto own_tables = db->query_int("SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name IN ("
+                                    "'homing_runs', 'homing_axes', 'last_stop')",
                                     "looking for homingd's tables");
     if (!own_tables) return std::unexpected(own_tables.error());
     if (*own_tables > 0) return {};

@@ -36,6 +36,10 @@ std::vector<std::string> references_lost(const homing::Settings& before, const h
   // Why each axis loses its reference: its own frame, or its gantry
   // partner's (a pair shares one reference, as the engine's keep_home_frames has it).
   std::array<std::string, homing::kAxisCount> why{};
+  const auto homed = [&](std::size_t a) {
+    return status.axes[a].trust == homing::Trust::homed_this_power_on ||
+           status.axes[a].trust == homing::Trust::reference_checked;
+  };
   for (std::size_t a = 0; a < homing::kAxisCount; ++a) {
     const homing::HomeFrame old_frame = homing::home_frame(was.axes[a]);
     const homing::HomeFrame new_frame = homing::home_frame(is.axes[a]);
@@ -51,11 +55,14 @@ std::vector<std::string> references_lost(const homing::Settings& before, const h
           n += fmt::format(" of its gantry master {}", homing::kAxisLetters[mi]);
     }
     why[a] = fmt::format("{} changed, which places its coordinates", fmt::join(names, ", "));
+    // The engine unhomes the partner of an axis that was homed; a clean
+    // stop's offer is withdrawn only by the axis's own frame.
+    if (!homed(a)) continue;
     for (const homing::Settings* s : {&before, &after})
       for (const int p : {homing::gantry_master(*s, a), homing::gantry_slave(*s, a)}) {
         if (p < 0) continue;
         std::string& partner = why[static_cast<std::size_t>(p)];
-        if (partner.empty())
+        if (partner.empty() && homed(static_cast<std::size_t>(p)))
           partner = fmt::format("its gantry partner {} lost its reference ({} of {} changed), and a pair shares one",
                                 homing::kAxisLetters[a], fields, homing::kAxisLetters[a]);
       }

@@ -54,6 +54,9 @@ void RtuServer::run() {
     if (n <= 0) {
       spdlog::error("rtu: reading {} failed ({}); the serial line is no longer served", config_.device,
                     n == 0 ? "end of file" : std::strerror(errno));
+      // An adapter unplugged or a cable fault: no master can release its jog any more.
+      if (handler_.release_jogs(unit_info))
+        spdlog::warn("rtu {}: the jog buttons the master held are released and the jog stopped", config_.device);
       return;
     }
     for (ssize_t i = 0; i < n; ++i)
@@ -79,7 +82,8 @@ void RtuServer::release_if_silent(const ClientInfo& master) {
   // has no disconnect to say so.
   if (handler_.release_jogs(master))
     spdlog::warn("rtu {}: no request from the master for {} ms (--rtu-jog-release-ms {}): the jog buttons it held "
-                 "are released and the jog stopped; press again once the master talks again",
+                 "are released and the jog stopped; it starts again on the master's next press (a master that rewrites a "
+                 "held coil every cycle presses it again with its first request)",
                  config_.device, std::chrono::duration_cast<std::chrono::milliseconds>(silent).count(),
                  config_.jog_release.count());
 }
@@ -99,6 +103,7 @@ void RtuServer::take(const RtuFramer::Result& r, const ClientInfo& broadcast_inf
   silence_handled_ = false;
   const auto pdu = std::span<const std::uint8_t>(r.frame.data() + 1, r.frame.size() - 3);
   const Reply reply = handler_.handle(unit, pdu, unit == 0 ? broadcast_info : unit_info);
+  last_heard_ = Clock::now();  // the time spent answering is no silence of the master
   if (!reply.send || unit == 0) return;  // broadcasts are never answered
   const auto frame = rtu_frame(unit, reply.pdu);
   const int fd = modbus_get_socket(ctx_);

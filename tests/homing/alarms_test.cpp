@@ -292,6 +292,42 @@ SCENARIO("soft_limit: limits tightened past an axis moving to its target stop th
   CHECK(r.axis(0).phase == Phase::idle);
 }
 
+SCENARIO("soft_limit: a limit tightened just ahead of a jog, inside its braking distance, brakes it without an alarm",
+         "[alarms][limits]") {
+  Rig r;
+  REQUIRE(r.home_all());
+  r.settings.axes[0].soft_limits_enable = true;
+  r.settings.axes[0].soft_limit_min_mm = 0;
+  r.settings.axes[0].soft_limit_max_mm = 300;
+  r.settings.axes[0].jog_feedrate_mm_per_min = 3000;  // 50 mm/s: a stop long enough to tighten the limit inside
+  r.jog(0, +1);
+  r.run_until([&] { return r.axis(0).position_mm > 60; }, 20);
+  const AxisSettings& s = r.settings.axes[0];
+  const double stop = stop_distance_mm(mm_per_min_to_mm_per_s(s.jog_feedrate_mm_per_min), s.acceleration_mm_per_s2);
+  REQUIRE(r.axis(0).velocity_mm_per_s == Approx(50));
+  REQUIRE(stop > 0.2);
+  r.settings.axes[0].soft_limit_max_mm = r.axis(0).position_mm + stop / 2;  // it cannot stop before it
+  r.run_until([&] { return !r.any_moving(); }, 5);
+  CHECK_FALSE(r.status().alarm);
+  CHECK(r.axis(0).homed);
+  r.release_jogs();
+}
+
+SCENARIO("soft_limit: a limit tightened ahead of a running move ends the move at the limit without an alarm",
+         "[alarms][limits]") {
+  Rig r;
+  REQUIRE(r.home_all());
+  r.settings.axes[0].soft_limits_enable = true;
+  r.settings.axes[0].soft_limit_min_mm = 0;
+  r.settings.axes[0].soft_limit_max_mm = 300;
+  r.move(0, 200);
+  r.run_until([&] { return r.axis(0).position_mm > 60; }, 20);
+  r.settings.axes[0].soft_limit_max_mm = 150;  // well ahead: room to stop there
+  r.run_until([&] { return !r.any_moving() && r.axis(0).phase == Phase::idle; }, 20);
+  CHECK_FALSE(r.status().alarm);
+  CHECK(r.axis(0).position_mm == Approx(150).margin(1e-6));
+}
+
 namespace {
 
 // Starts home-all and runs until the seek is at full speed, far from the sensor.

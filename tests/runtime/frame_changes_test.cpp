@@ -86,3 +86,20 @@ TEST_CASE("a gantry slave's own switch compensation changed unhomes the pair and
         "axis y is no longer homed: home_position of its gantry master x changed, which places its coordinates; home "
         "it again before moving it by coordinates");
 }
+
+TEST_CASE("a gantry partner is named only when the changed side was homed and the partner is too, as the engine unhomes") {
+  homing::Settings before = default_settings();
+  before.axes[1] = before.axes[0];
+  before.axes[1].slave_of = 1;  // Y follows X
+  homing::Settings after = before;
+  after.axes[1].switch_compensation_mm += 0.3;
+  homing::Status status{};
+  status.axes[0].trust = homing::Trust::homed_this_power_on;  // X homed, Y lost its reference before (a drive fault)
+  status.axes[1].trust = homing::Trust::unknown;
+  CHECK(server::references_lost(before, after, status).empty());
+  status.axes[0].trust = homing::Trust::last_stop_clean;  // after a restart: offers stay with each side's own frame
+  status.axes[1].trust = homing::Trust::last_stop_clean;
+  const auto lines = server::references_lost(before, after, status);
+  REQUIRE(lines.size() == 1);
+  CHECK(lines[0].rfind("axis y: the reference check its clean stop offered is withdrawn", 0) == 0);
+}
