@@ -230,6 +230,17 @@ SCENARIO("soft_limit: jogging further out of tightened limits moves nothing and 
   CHECK_FALSE(r.status().alarm);
 }
 
+namespace {
+
+// X homed, soft limits 0..300 mm: room to jog or move out before they are tightened.
+void limit_x_to_0_300(Rig& r) {
+  r.settings.axes[0].soft_limits_enable = true;
+  r.settings.axes[0].soft_limit_min_mm = 0;
+  r.settings.axes[0].soft_limit_max_mm = 300;
+}
+
+}  // namespace
+
 SCENARIO("soft_limit: limits tightened past a jogging axis brake it to rest without an alarm, and it jogs back in",
          "[alarms][limits]") {
   // Found by a technician: soft_limit_max written below a jogging axis raised
@@ -239,9 +250,7 @@ SCENARIO("soft_limit: limits tightened past a jogging axis brake it to rest with
   r.add_axis(1, 1);
   REQUIRE(r.home_all());
   REQUIRE(r.axis(1).homed);
-  r.settings.axes[0].soft_limits_enable = true;
-  r.settings.axes[0].soft_limit_min_mm = 0;
-  r.settings.axes[0].soft_limit_max_mm = 300;
+  limit_x_to_0_300(r);
   r.jog(0, +1);
   r.run_until([&] { return r.axis(0).position_mm > 60; }, 20);
   REQUIRE(r.axis(0).velocity_mm_per_s > 0);
@@ -278,9 +287,7 @@ SCENARIO("soft_limit: limits tightened past an axis moving to its target stop th
          "[alarms][limits]") {
   Rig r;
   REQUIRE(r.home_all());
-  r.settings.axes[0].soft_limits_enable = true;
-  r.settings.axes[0].soft_limit_min_mm = 0;
-  r.settings.axes[0].soft_limit_max_mm = 300;
+  limit_x_to_0_300(r);
   r.move(0, 200);
   r.run_until([&] { return r.axis(0).position_mm > 60; }, 20);
   REQUIRE(r.axis(0).phase == Phase::move);
@@ -296,9 +303,7 @@ SCENARIO("soft_limit: a limit tightened just ahead of a jog, inside its braking 
          "[alarms][limits]") {
   Rig r;
   REQUIRE(r.home_all());
-  r.settings.axes[0].soft_limits_enable = true;
-  r.settings.axes[0].soft_limit_min_mm = 0;
-  r.settings.axes[0].soft_limit_max_mm = 300;
+  limit_x_to_0_300(r);
   r.settings.axes[0].jog_feedrate_mm_per_min = 3000;  // 50 mm/s: a stop long enough to tighten the limit inside
   r.jog(0, +1);
   r.run_until([&] { return r.axis(0).position_mm > 60; }, 20);
@@ -317,9 +322,7 @@ SCENARIO("soft_limit: a limit tightened ahead of a running move ends the move at
          "[alarms][limits]") {
   Rig r;
   REQUIRE(r.home_all());
-  r.settings.axes[0].soft_limits_enable = true;
-  r.settings.axes[0].soft_limit_min_mm = 0;
-  r.settings.axes[0].soft_limit_max_mm = 300;
+  limit_x_to_0_300(r);
   r.move(0, 200);
   r.run_until([&] { return r.axis(0).position_mm > 60; }, 20);
   r.settings.axes[0].soft_limit_max_mm = 150;  // well ahead: room to stop there
